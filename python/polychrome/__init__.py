@@ -1,0 +1,30 @@
+"""Polychrome: a spectral path tracer (Zhdanov et al. 2011) with a Rust core.
+
+Build a :class:`Scene`, then :func:`render` it::
+
+    import polychrome as pc
+    scene = pc.Scene()
+    ...
+    result = pc.render(scene, samples=64, progress=True)
+    result.save("out.exr")
+"""
+
+__version__ = "0.1.0"
+
+from . import spectra
+from .render import RenderResult, RenderSettings, render
+from .scene import Camera, Diffuse, Emitter, Material, PointLight, Scene, look_at
+
+__all__ = [
+    "Camera",
+    "Diffuse",
+    "Emitter",
+    "Material",
+    "PointLight",
+    "RenderResult",
+    "RenderSettings",
+    "Scene",
+    "look_at",
+    "render",
+    "spectra",
+]

@@ -1,0 +1,154 @@
+"""Rendering a scene: settings with the same names as the CLI and Blender, a progress
+bar, cancellation, and the result as numpy arrays with writers for EXR and PNG."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field, replace
+import json
+from pathlib import Path
+import sys
+import time
+from typing import Any, Callable
+
+import numpy as np
+
+from . import _core
+from .scene import Scene
+
+METHODS = ("POLYCHROMATIC",)
+UPLIFTS = ("LINEAR", "SMOOTH")
+
+
+@dataclass
+class RenderSettings:
+    """Everything that controls a render; names match the CLI flags and ``scene.polychrome``."""
+
+    width: int = 320
+    height: int = 240
+    samples: int = 64
+    method: str = "POLYCHROMATIC"
+    wavelength_count: int = 41
+    wavelength_min: float = 380.0
+    wavelength_max: float = 780.0
+    wavelengths: list[float] | None = None
+    max_bounces: int = 8
+    seed: int = 0
+    threads: int = 0
+    time_limit: float = 0.0
+    uplift: str = "LINEAR"
+    spectral_output: bool = False
+
+    def to_json(self) -> str:
+        d = asdict(self)
+        d["method"] = d["method"].upper()
+        d["uplift"] = d["uplift"].upper()
+        if d["wavelengths"] is not None:
+            d["wavelengths"] = [float(x) for x in d["wavelengths"]]
+        for k in ("width", "height", "samples", "max_bounces", "seed", "threads", "wavelength_count"):
+            if int(d[k]) < 0:
+                raise ValueError(f"setting '{k}': {d[k]} must not be negative")
+        return json.dumps(d)
+
+
+@dataclass
+class RenderResult:
+    """A finished (or cancelled) render. Arrays have row 0 at the top of the image."""
+
+    rgba: np.ndarray
+    depth: np.ndarray
+    normal: np.ndarray
+    albedo: np.ndarray
+    spectral: np.ndarray | None
+    wavelengths: np.ndarray
+    stats: dict[str, Any] = field(default_factory=dict)
+
+    def save(self, path: str | Path, *, passes: bool = False) -> Path:
+        """Writes the image by extension: ``.png`` (sRGB 8-bit) or ``.exr`` (float; with
+        ``passes`` also Depth, Normal, Albedo layers; a spectral render also writes the
+        spectrum in the JCGT 2021 spectral-EXR layout beside the RGB)."""
+        from . import imageio
+
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        ext = path.suffix.lower()
+        if ext == ".png":
+            imageio.write_png(path, self.rgba)
+        elif ext == ".exr":
+            if self.spectral is not None:
+                imageio.write_spectral_exr(path, self.spectral, self.wavelengths, rgba=self.rgba)
+            elif passes:
+                imageio.write_exr_layers(path, {"Combined": self.rgba, "Depth": self.depth[..., None], "Normal": self.normal, "Albedo": self.albedo})
+            else:
+                imageio.write_exr(path, self.rgba)
+        else:
+            raise ValueError(f"{path}: unsupported image type '{ext}' (use .png or .exr)")
+        return path
+
+
+ProgressCallback = Callable[[int, int], Any]
+
+
+def _progress_bar(description: str) -> tuple[ProgressCallback, Callable[[], None]]:
+    """A tqdm bar over pixel samples (falls back to nothing if tqdm is missing)."""
+    try:
+        from tqdm import tqdm
+    except ImportError:  # pragma: no cover
+        return (lambda done, total: None), (lambda: None)
+    bar = tqdm(total=1, desc=description, unit="spp", file=sys.stderr, leave=True, dynamic_ncols=True)
+    state = {"total": 0}
+
+    def update(done: int, total: int) -> None:
+        if total and total != state["total"]:
+            state["total"] = total
+            bar.reset(total=total)
+        bar.n = done
+        bar.refresh()
+
+    return update, bar.close
+
+
+def render(
+    scene: Scene,
+    settings: RenderSettings | None = None,
+    *,
+    progress: bool | ProgressCallback = False,
+    **overrides: Any,
+) -> RenderResult:
+    """Renders ``scene``. Settings come from ``settings`` with keyword overrides, e.g.
+    ``render(scene, samples=256, wavelength_count=81)``.
+
+    ``progress``: True for a progress bar on stderr, or a callable ``f(done, total)``
+    (pixel samples) called about 20 times a second that may return False to cancel.
+    Ctrl-C cancels too (KeyboardInterrupt). Errors in the scene raise ValueError naming
+    the object and the problem.
+    """
+    settings = replace(settings or RenderSettings(), **overrides)
+    if settings.method.upper() not in METHODS:
+        raise ValueError(f"setting 'method': '{settings.method}' is not one of {', '.join(METHODS)}")
+    if settings.uplift.upper() not in UPLIFTS:
+        raise ValueError(f"setting 'uplift': '{settings.uplift}' is not one of {', '.join(UPLIFTS)}")
+    desc, buffers = scene.description()
+    close = None
+    if progress is True:
+        callback, close = _progress_bar("Polychrome")
+    elif callable(progress):
+        callback = progress
+    else:
+        callback = None
+    try:
+        start = time.perf_counter()
+        out = _core.render(json.dumps(desc), buffers, settings.to_json(), callback)
+    finally:
+        if close:
+            close()
+    stats = json.loads(out["stats"])
+    stats["wall_seconds"] = time.perf_counter() - start
+    return RenderResult(
+        rgba=out["rgba"],
+        depth=out["depth"],
+        normal=out["normal"],
+        albedo=out["albedo"],
+        spectral=out["spectral"],
+        wavelengths=out["wavelengths"],
+        stats=stats,
+    )

@@ -1,0 +1,268 @@
+"""Building a scene in Python: meshes from numpy arrays, materials, lights, a camera.
+
+The scene is a plain description; :func:`polychrome.render` hands it to the Rust core
+as JSON plus numpy buffers (no per-triangle Python loops).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+from typing import Any, Sequence
+
+import numpy as np
+
+from . import spectra
+from .spectra import Spectrum, as_spectrum
+
+
+def _matrix(value: Any, what: str) -> list[list[float]]:
+    m = np.asarray(value, dtype=np.float64)
+    if m.shape != (4, 4):
+        raise ValueError(f"{what}: expected a 4×4 matrix, got shape {m.shape}")
+    if not np.all(np.isfinite(m)):
+        raise ValueError(f"{what}: matrix has non-finite entries")
+    return m.tolist()
+
+
+def look_at(position: Sequence[float], target: Sequence[float], up: Sequence[float] = (0.0, 0.0, 1.0)) -> np.ndarray:
+    """Camera → world matrix of a camera at ``position`` looking at ``target`` (Blender's
+    convention: the camera looks down its local −Z with +Y up; the world is Z-up)."""
+    p = np.asarray(position, dtype=np.float64)
+    forward = np.asarray(target, dtype=np.float64) - p
+    n = np.linalg.norm(forward)
+    if n == 0:
+        raise ValueError("look_at: position and target coincide")
+    forward /= n
+    right = np.cross(forward, np.asarray(up, dtype=np.float64))
+    if np.linalg.norm(right) < 1e-9:
+        right = np.cross(forward, [0.0, 1.0, 0.0] if abs(forward[1]) < 0.9 else [1.0, 0.0, 0.0])
+    right /= np.linalg.norm(right)
+    true_up = np.cross(right, forward)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = right, true_up, -forward, p
+    return m
+
+
+@dataclass
+class Camera:
+    """A camera described as Blender describes one (mm lenses, sensor fit, shift, clip)."""
+
+    to_world: Any = field(default_factory=lambda: np.eye(4))
+    projection: str = "PERSPECTIVE"
+    focal_length: float = 50.0
+    sensor_width: float = 36.0
+    sensor_height: float = 24.0
+    sensor_fit: str = "AUTO"
+    ortho_scale: float = 7.314
+    shift_x: float = 0.0
+    shift_y: float = 0.0
+    clip_start: float = 0.1
+    clip_end: float = 1000.0
+    name: str = "Camera"
+
+    @classmethod
+    def looking_at(cls, position, target, up=(0.0, 0.0, 1.0), **kwargs) -> "Camera":
+        return cls(to_world=look_at(position, target, up), **kwargs)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "to_world": _matrix(self.to_world, f"camera '{self.name}'"),
+            "projection": self.projection.upper(),
+            "focal_length": float(self.focal_length),
+            "sensor_width": float(self.sensor_width),
+            "sensor_height": float(self.sensor_height),
+            "sensor_fit": self.sensor_fit.upper(),
+            "ortho_scale": float(self.ortho_scale),
+            "shift_x": float(self.shift_x),
+            "shift_y": float(self.shift_y),
+            "clip_start": float(self.clip_start),
+            "clip_end": float(self.clip_end),
+        }
+
+
+class Material:
+    """Base class of materials: a BSDF and an optional emission."""
+
+    name: str = "Material"
+    emission: Spectrum | None = None
+
+    def bsdf_dict(self) -> dict[str, Any]:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def to_dict(self) -> dict[str, Any]:
+        d: dict[str, Any] = {"name": self.name, "bsdf": self.bsdf_dict()}
+        if self.emission is not None:
+            d["emission"] = self.emission.to_dict()
+        return d
+
+
+class Diffuse(Material):
+    """Lambertian reflectance (a spectrum, a number or an RGB triple), optionally emissive."""
+
+    def __init__(self, reflectance: Any = 0.8, *, emission: Any = None, name: str = "Diffuse"):
+        self.reflectance = as_spectrum(reflectance)
+        self.emission = None if emission is None else as_spectrum(emission)
+        self.name = name
+
+    def bsdf_dict(self) -> dict[str, Any]:
+        return {"type": "diffuse", "reflectance": self.reflectance.to_dict()}
+
+
+class Emitter(Material):
+    """A surface that only emits (radiance ``emission`` times ``strength``, both faces)."""
+
+    def __init__(self, emission: Any = (1.0, 1.0, 1.0), *, strength: float = 1.0, name: str = "Emitter"):
+        self.emission = as_spectrum(emission) * strength
+        self.name = name
+
+    def bsdf_dict(self) -> dict[str, Any]:
+        return {"type": "none"}
+
+
+@dataclass
+class PointLight:
+    """An isotropic point light of ``power`` watts (as Blender gives it) and ``color``.
+
+    The radiant intensity is ``color × power / 4π`` per wavelength; ``color`` may be
+    any spectrum (RGB white gives a D65-shaped spectrum of luminance 1).
+    """
+
+    position: Sequence[float]
+    power: float = 100.0
+    color: Any = (1.0, 1.0, 1.0)
+    name: str = "PointLight"
+
+    def to_dict(self) -> dict[str, Any]:
+        pos = [float(c) for c in self.position]
+        if len(pos) != 3:
+            raise ValueError(f"light '{self.name}': position must have 3 coordinates")
+        intensity = as_spectrum(self.color) * (float(self.power) / (4.0 * math.pi))
+        return {"type": "point", "name": self.name, "position": pos, "intensity": intensity.to_dict()}
+
+
+class Scene:
+    """A scene description: camera, materials, meshes, instances, lights, world."""
+
+    def __init__(self) -> None:
+        self.camera = Camera()
+        self.materials: list[Material] = []
+        self._meshes: list[dict[str, Any]] = []
+        self._buffers: list[np.ndarray] = []
+        self._instances: list[dict[str, Any]] = []
+        self.lights: list[Any] = []
+        self.world: Spectrum | None = None
+
+    # -- materials -------------------------------------------------------------
+    def add_material(self, material: Material) -> int:
+        """Adds a material, returning its index."""
+        if not isinstance(material, Material):
+            raise TypeError(f"expected a polychrome material, got {type(material).__name__}")
+        self.materials.append(material)
+        return len(self.materials) - 1
+
+    def _material_index(self, material: Material | int | None, mesh: str) -> int:
+        if material is None:
+            return 0
+        if isinstance(material, Material):
+            for i, m in enumerate(self.materials):
+                if m is material:
+                    return i
+            return self.add_material(material)
+        index = int(material)
+        if not 0 <= index < max(len(self.materials), 1):
+            raise ValueError(f"mesh '{mesh}': material {index} does not exist ({len(self.materials)} materials)")
+        return index
+
+    def _buffer(self, array: np.ndarray) -> int:
+        self._buffers.append(array)
+        return len(self._buffers) - 1
+
+    # -- geometry --------------------------------------------------------------
+    def add_mesh(
+        self,
+        name: str,
+        vertices: Any,
+        triangles: Any,
+        *,
+        normals: Any = None,
+        uvs: Any = None,
+        material: Material | int | None = None,
+        material_ids: Any = None,
+        transform: Any = None,
+        place: bool = True,
+    ) -> int:
+        """Adds a triangle mesh from arrays: vertices (V, 3), triangles (T, 3) vertex
+        indices, optional per-vertex normals (V, 3) and uvs (V, 2), one material or
+        per-triangle ``material_ids`` (T,). Returns the mesh index. Unless ``place`` is
+        False the mesh is placed once with ``transform`` (4×4, object → world);
+        :meth:`add_instance` places it again."""
+        v = np.ascontiguousarray(vertices, dtype=np.float32)
+        if v.ndim != 2 or v.shape[1] != 3:
+            raise ValueError(f"mesh '{name}': vertices must have shape (V, 3), got {v.shape}")
+        t = np.asarray(triangles)
+        if t.ndim != 2 or t.shape[1] != 3:
+            raise ValueError(f"mesh '{name}': triangles must have shape (T, 3), got {t.shape}")
+        if not np.issubdtype(t.dtype, np.integer) and t.size:
+            raise ValueError(f"mesh '{name}': triangles must be integer vertex indices, got {t.dtype}")
+        if t.size and t.min() < 0:
+            raise ValueError(f"mesh '{name}': triangle {int(np.argwhere(t < 0)[0][0])} has a negative vertex index")
+        entry: dict[str, Any] = {
+            "name": name,
+            "vertices": self._buffer(v.ravel()),
+            "triangles": self._buffer(np.ascontiguousarray(t, dtype=np.uint32).ravel()),
+        }
+        if normals is not None:
+            n = np.ascontiguousarray(normals, dtype=np.float32)
+            if n.shape != v.shape:
+                raise ValueError(f"mesh '{name}': normals must have shape {v.shape}, got {n.shape}")
+            entry["normals"] = self._buffer(n.ravel())
+        if uvs is not None:
+            uv = np.ascontiguousarray(uvs, dtype=np.float32)
+            if uv.shape != (v.shape[0], 2):
+                raise ValueError(f"mesh '{name}': uvs must have shape ({v.shape[0]}, 2), got {uv.shape}")
+            entry["uvs"] = self._buffer(uv.ravel())
+        if material_ids is not None:
+            ids = np.asarray(material_ids)
+            if ids.shape != (t.shape[0],):
+                raise ValueError(f"mesh '{name}': material_ids must have shape ({t.shape[0]},), got {ids.shape}")
+            if ids.size and (ids.min() < 0 or ids.max() >= len(self.materials)):
+                raise ValueError(f"mesh '{name}': material_ids must lie in 0..{len(self.materials) - 1}")
+            entry["material_ids"] = self._buffer(np.ascontiguousarray(ids, dtype=np.uint32))
+        else:
+            entry["material"] = self._material_index(material, name)
+        self._meshes.append(entry)
+        index = len(self._meshes) - 1
+        if place:
+            self.add_instance(index, np.eye(4) if transform is None else transform, name)
+        return index
+
+    def add_instance(self, mesh: int, transform: Any, name: str = "") -> None:
+        """Places mesh ``mesh`` again with ``transform``; instances share the mesh's data."""
+        if not 0 <= mesh < len(self._meshes):
+            raise ValueError(f"instance '{name}': mesh {mesh} does not exist")
+        self._instances.append({"name": name or self._meshes[mesh]["name"], "mesh": int(mesh), "transform": _matrix(transform, f"instance '{name}'")})
+
+    def add_light(self, light: Any) -> None:
+        self.lights.append(light)
+
+    def set_world(self, radiance: Any) -> None:
+        """Uniform radiance from every direction (Blender's world colour); None removes it."""
+        self.world = None if radiance is None else as_spectrum(radiance)
+
+    # -- export to the core ----------------------------------------------------
+    def description(self) -> tuple[dict[str, Any], list[np.ndarray]]:
+        """The JSON-ready description and its buffers, as the core reads them."""
+        desc = {
+            "camera": self.camera.to_dict(),
+            "materials": [m.to_dict() for m in self.materials],
+            "meshes": self._meshes,
+            "instances": self._instances,
+            "lights": [light.to_dict() for light in self.lights],
+            "world": None if self.world is None else {"radiance": self.world.to_dict()},
+        }
+        return desc, self._buffers
+
+
+__all__ = ["Camera", "Material", "Diffuse", "Emitter", "PointLight", "Scene", "look_at", "spectra"]

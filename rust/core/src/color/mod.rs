@@ -1,0 +1,57 @@
+//! Colour: the CIE 1931 observer integrated on the render's grid, RGB working spaces,
+//! and the RGB → spectrum maps (eq. 10) in [`uplift`].
+
+pub mod space;
+pub mod uplift;
+
+use crate::spectrum::named::interpolate;
+use crate::spectrum::{tables, WavelengthGrid};
+
+pub use space::RgbSpace;
+
+/// The CIE 1931 2° colour matching functions on a grid, folded with the grid's
+/// quadrature weights (eq. 6) and normalised by ∫ȳ so that an equal-energy spectrum
+/// of value 1 has Y = 1 on any grid.
+#[derive(Clone, Debug)]
+pub struct Observer {
+    /// x̄(λi)·w_i / Σ ȳ(λj)·w_j, and likewise for y and z.
+    pub x: Vec<f32>,
+    pub y: Vec<f32>,
+    pub z: Vec<f32>,
+}
+
+/// x̄, ȳ, z̄ at `lambda` nm, linearly interpolated in the 1 nm CIE table.
+pub fn cmf(lambda: f32) -> [f32; 3] {
+    let xs = cie_lambdas();
+    [
+        interpolate(xs, &tables::CIE_X, lambda),
+        interpolate(xs, &tables::CIE_Y, lambda),
+        interpolate(xs, &tables::CIE_Z, lambda),
+    ]
+}
+
+fn cie_lambdas() -> &'static [f32] {
+    static L: std::sync::OnceLock<Vec<f32>> = std::sync::OnceLock::new();
+    L.get_or_init(|| {
+        (0..tables::CIE_X.len()).map(|i| tables::CIE_LAMBDA_MIN + tables::CIE_LAMBDA_STEP * i as f32).collect()
+    })
+}
+
+impl Observer {
+    pub fn new(grid: &WavelengthGrid) -> Self {
+        let cmfs: Vec<[f32; 3]> = grid.lambdas().iter().map(|&l| cmf(l)).collect();
+        let y_integral: f64 =
+            cmfs.iter().zip(grid.weights()).map(|(c, &w)| c[1] as f64 * w as f64).sum();
+        let norm = (1.0 / y_integral) as f32;
+        let fold = |k: usize| -> Vec<f32> {
+            cmfs.iter().zip(grid.weights()).map(|(c, &w)| c[k] * w * norm).collect()
+        };
+        Self { x: fold(0), y: fold(1), z: fold(2) }
+    }
+
+    /// XYZ of a spectrum sampled on the grid.
+    pub fn xyz(&self, s: &[f32]) -> [f64; 3] {
+        let dot = |w: &[f32]| s.iter().zip(w).map(|(&a, &b)| a as f64 * b as f64).sum::<f64>();
+        [dot(&self.x), dot(&self.y), dot(&self.z)]
+    }
+}

@@ -1,0 +1,44 @@
+//! Orthonormal shading frames: BSDFs work in a local frame whose z axis is the normal.
+
+use glam::Vec3A;
+
+#[derive(Clone, Copy, Debug)]
+pub struct Frame {
+    pub s: Vec3A,
+    pub t: Vec3A,
+    pub n: Vec3A,
+}
+
+impl Frame {
+    /// Duff et al. 2017, "Building an Orthonormal Basis, Revisited" (branchless, no NaN).
+    pub fn from_normal(n: Vec3A) -> Self {
+        let sign = 1.0f32.copysign(n.z);
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        let s = Vec3A::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+        let t = Vec3A::new(b, sign + n.y * n.y * a, -n.y);
+        Self { s, t, n }
+    }
+    pub fn to_local(&self, v: Vec3A) -> Vec3A {
+        Vec3A::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
+    }
+    pub fn to_world(&self, v: Vec3A) -> Vec3A {
+        self.s * v.x + self.t * v.y + self.n * v.z
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_is_orthonormal_for_any_normal() {
+        for n in [Vec3A::Z, -Vec3A::Z, Vec3A::X, Vec3A::new(0.3, -0.5, 0.8).normalize(), Vec3A::new(1e-8, 0.0, -1.0).normalize()] {
+            let f = Frame::from_normal(n);
+            assert!(f.s.dot(f.t).abs() < 1e-6 && f.s.dot(f.n).abs() < 1e-6 && f.t.dot(f.n).abs() < 1e-6);
+            assert!((f.s.length() - 1.0).abs() < 1e-6 && (f.t.length() - 1.0).abs() < 1e-6);
+            let v = Vec3A::new(0.2, 0.4, 0.6);
+            assert!((f.to_world(f.to_local(v)) - v).length() < 1e-6);
+        }
+    }
+}

@@ -1,0 +1,145 @@
+//! Polychromatic backward path tracing (the paper's method 3, camera side): every path
+//! carries the whole sampled spectrum; next-event estimation and BSDF sampling are
+//! combined with multiple importance sampling (power heuristic); Russian roulette on
+//! the largest throughput over the grid.
+
+use super::Integrator;
+use crate::film::PixelSample;
+use crate::geometry::{offset_ray_origin, Frame, Ray};
+use crate::material::ShadingContext;
+use crate::sampling::{power_heuristic, Rng};
+use crate::scene::Scene;
+use crate::spectrum::SampledSpectrum;
+
+pub struct PathTracer {
+    /// Scattering events after which a path ends (0: direct emission only).
+    pub max_bounces: u32,
+    /// Bounces before Russian roulette may end a path.
+    pub rr_depth: u32,
+}
+
+impl Default for PathTracer {
+    fn default() -> Self {
+        Self { max_bounces: 8, rr_depth: 3 }
+    }
+}
+
+impl Integrator for PathTracer {
+    fn sample(&self, scene: &Scene, x: f32, y: f32, rng: &mut Rng, out: &mut PixelSample) {
+        let n = scene.grid.len();
+        let mut ray = scene.camera.generate_ray(x, y);
+        let mut beta = SampledSpectrum::splat(n, 1.0);
+        let mut f = SampledSpectrum::zeros(n);
+        let mut le = SampledSpectrum::zeros(n);
+        let radiance = &mut out.radiance;
+        let mut ctx = ShadingContext { uv: glam::Vec2::ZERO, grid: &scene.grid, single_wavelength: None };
+        let mut specular = true; // the camera ray counts as specular: no MIS on what it sees
+        let mut prev_pdf = 0.0f32;
+        let mut prev_p = ray.origin;
+        let mut depth = 0u32;
+        loop {
+            let Some(hit) = scene.intersect(&ray) else {
+                if let Some(env) = &scene.environment {
+                    let w = if specular {
+                        1.0
+                    } else {
+                        let pl = scene.light_distribution.pmf(env.light) * scene.lights[env.light].pdf_li(prev_p, ray.direction, f32::INFINITY);
+                        power_heuristic(prev_pdf, pl)
+                    };
+                    radiance.add_product(&beta, &env.radiance, w);
+                }
+                break;
+            };
+            let si = scene.interaction(&ray, &hit);
+            let wo = -ray.direction;
+            // Surfaces are two-sided: shade on the side the ray arrived from.
+            let front = si.ng.dot(wo) >= 0.0;
+            let ng = if front { si.ng } else { -si.ng };
+            let ns = if front { si.ns } else { -si.ns };
+            let material = &scene.materials[si.material as usize];
+            ctx.uv = si.uv;
+            if depth == 0 {
+                out.depth = si.t * ray.direction.dot(scene.camera.forward());
+                out.normal = si.ns;
+                material.bsdf.albedo(&ctx, &mut out.albedo);
+            }
+
+            if let Some(emission) = &material.emission {
+                let w = if specular {
+                    1.0
+                } else {
+                    match scene.triangle_light(si.instance, si.triangle) {
+                        Some(l) => {
+                            let pl = scene.light_distribution.pmf(l) * scene.lights[l].pdf_li(prev_p, ray.direction, si.t);
+                            power_heuristic(prev_pdf, pl)
+                        }
+                        None => 1.0,
+                    }
+                };
+                radiance.add_product(&beta, emission, w);
+            }
+            if depth >= self.max_bounces {
+                break;
+            }
+
+            let frame = Frame::from_normal(ns);
+            let wo_local = frame.to_local(wo);
+            if wo_local.z == 0.0 {
+                break;
+            }
+            let flags = material.bsdf.flags();
+
+            // Next-event estimation: one light chosen ∝ its spectral power (eq. 7).
+            if flags.smooth {
+                if let Some(l) = scene.light_distribution.sample(rng.uniform()) {
+                    let pmf = scene.light_distribution.pmf(l);
+                    let u = rng.uniform2();
+                    if let Some(ls) = scene.lights[l].sample_li(si.p, u, &mut le) {
+                        let wi_local = frame.to_local(ls.wi);
+                        let bsdf_pdf = material.bsdf.eval(&ctx, wo_local, wi_local, &mut f);
+                        let same_side = ls.wi.dot(ng) > 0.0;
+                        if !f.is_black() && same_side {
+                            let origin = offset_ray_origin(si.p, ng);
+                            let tmax = if ls.distance.is_finite() { ls.distance * (1.0 - 1e-4) } else { f32::INFINITY };
+                            if !scene.occluded(&Ray::segment(origin, ls.wi, tmax)) {
+                                let light_pdf = pmf * ls.pdf;
+                                let w = if ls.delta { 1.0 } else { power_heuristic(light_pdf, bsdf_pdf) };
+                                f.mul_assign(&beta);
+                                radiance.add_product(&f, &le, w / light_pdf);
+                            }
+                        }
+                    }
+                }
+            }
+
+            // Continue the path by sampling the BSDF.
+            let u = rng.uniform2();
+            let uc = rng.uniform();
+            let Some(bs) = material.bsdf.sample(&ctx, wo_local, u, uc, &mut beta) else { break };
+            let wi = frame.to_world(bs.wi);
+            // Reject directions whose side disagrees between shading and geometric normals
+            // (they would leak light through the surface).
+            let local_transmit = bs.wi.z * wo_local.z < 0.0;
+            let geometric_transmit = wi.dot(ng) < 0.0;
+            if local_transmit != geometric_transmit || !beta.is_finite() {
+                break;
+            }
+            if let Some(i) = bs.collapsed_to {
+                ctx.single_wavelength = Some(i);
+            }
+            specular = bs.specular;
+            prev_pdf = bs.pdf;
+            prev_p = si.p;
+            ray = Ray::new(offset_ray_origin(si.p, if geometric_transmit { -ng } else { ng }), wi);
+            depth += 1;
+
+            if depth >= self.rr_depth {
+                let q = beta.max_value().min(1.0);
+                if q <= 0.0 || rng.uniform() >= q {
+                    break;
+                }
+                beta.scale(1.0 / q);
+            }
+        }
+    }
+}

@@ -1,0 +1,40 @@
+//! Lights. Integrators see them through the [`Light`] trait; the scene picks one with
+//! probability proportional to its total spectral power over the grid (eq. 7).
+
+pub mod area;
+pub mod environment;
+pub mod point;
+
+use crate::spectrum::SampledSpectrum;
+use glam::{Vec2, Vec3A};
+
+pub use area::AreaTriangle;
+pub use environment::UniformEnvironment;
+pub use point::PointLight;
+
+/// Incident radiance sampled from a light towards a shading point.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    /// Unit direction from the shading point towards the light.
+    pub wi: Vec3A,
+    /// Distance to the sampled point (shadow ray length).
+    pub distance: f32,
+    /// Solid-angle pdf at the shading point (1 for delta lights).
+    pub pdf: f32,
+    /// A point or directional light that BSDF sampling can never hit.
+    pub delta: bool,
+}
+
+pub trait Light: Send + Sync {
+    /// Total emitted power integrated over the grid with its quadrature weights (eq. 7):
+    /// the light-selection weight.
+    fn power(&self, weights: &[f32]) -> f64;
+    /// Samples a direction from `p` towards the light; `le` receives the radiance
+    /// (intensity / distance² for point lights) arriving at `p`.
+    fn sample_li(&self, p: Vec3A, u: Vec2, le: &mut SampledSpectrum) -> Option<LightSample>;
+    /// Solid-angle pdf that `sample_li` from `p` returns the point reached along `wi`
+    /// after `distance` (0 for delta lights, which BSDF sampling never hits).
+    fn pdf_li(&self, _p: Vec3A, _wi: Vec3A, _distance: f32) -> f32 {
+        0.0
+    }
+}

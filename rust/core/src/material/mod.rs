@@ -1,0 +1,98 @@
+//! Materials: a BSDF plus optional emission. Integrators see BSDFs only through the
+//! narrow [`Bsdf`] trait, so adding a material never touches an integrator.
+//!
+//! Conventions: directions are unit vectors in the local shading frame (normal = +z),
+//! both pointing away from the surface; `wo` towards the viewer/previous vertex,
+//! `wi` towards the light/next vertex.
+
+pub mod catalogue;
+pub mod diffuse;
+pub mod param;
+
+use crate::spectrum::{SampledSpectrum, WavelengthGrid};
+use glam::{Vec2, Vec3A};
+
+pub use diffuse::Diffuse;
+pub use param::SpectralParam;
+
+/// What an integrator needs to know about a BSDF without evaluating it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BsdfFlags {
+    /// Has a non-delta component that next-event estimation can evaluate.
+    pub smooth: bool,
+    /// Has a delta (perfectly specular) component.
+    pub specular: bool,
+    /// Its behaviour depends on wavelength in direction (refraction with λ-dependent
+    /// index over the render's grid): polychromatic rays must collapse here (eq. 9).
+    pub dispersive: bool,
+}
+
+/// Per-hit inputs of a BSDF evaluation.
+pub struct ShadingContext<'a> {
+    pub uv: Vec2,
+    pub grid: &'a WavelengthGrid,
+    /// Set when the path carries a single wavelength (grid index): monochromatic rays,
+    /// or a polychromatic ray after it collapsed at a dispersive surface.
+    pub single_wavelength: Option<usize>,
+}
+
+/// The outcome of sampling a BSDF.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfSample {
+    pub wi: Vec3A,
+    /// Solid-angle pdf of `wi` (for a delta lobe: the lobe's selection probability).
+    pub pdf: f32,
+    pub specular: bool,
+    /// The ray collapsed to this grid wavelength (dispersive surfaces, eq. 9).
+    pub collapsed_to: Option<usize>,
+}
+
+pub trait Bsdf: Send + Sync {
+    fn flags(&self) -> BsdfFlags;
+    /// `out` = f(wo, wi)·|cos θi| per wavelength; returns the pdf of sampling `wi`.
+    fn eval(&self, ctx: &ShadingContext, wo: Vec3A, wi: Vec3A, out: &mut SampledSpectrum) -> f32;
+    /// Pdf of sampling `wi` given `wo` (solid angle), for MIS.
+    fn pdf(&self, ctx: &ShadingContext, wo: Vec3A, wi: Vec3A) -> f32;
+    /// Samples `wi`; multiplies `throughput` by f·|cos θi|/pdf. `beta` is the path's
+    /// current throughput before this bounce (dispersive BSDFs choose a wavelength ∝ it).
+    fn sample(
+        &self,
+        ctx: &ShadingContext,
+        wo: Vec3A,
+        u: Vec2,
+        uc: f32,
+        throughput: &mut SampledSpectrum,
+    ) -> Option<BsdfSample>;
+    /// Directional-hemispherical reflectance seen from the normal, for the albedo pass.
+    fn albedo(&self, ctx: &ShadingContext, out: &mut SampledSpectrum);
+}
+
+/// A BSDF that reflects nothing (emission-only surfaces).
+pub struct Black;
+
+impl Bsdf for Black {
+    fn flags(&self) -> BsdfFlags {
+        BsdfFlags::default()
+    }
+    fn eval(&self, _: &ShadingContext, _: Vec3A, _: Vec3A, out: &mut SampledSpectrum) -> f32 {
+        out.fill(0.0);
+        0.0
+    }
+    fn pdf(&self, _: &ShadingContext, _: Vec3A, _: Vec3A) -> f32 {
+        0.0
+    }
+    fn sample(&self, _: &ShadingContext, _: Vec3A, _: Vec2, _: f32, _: &mut SampledSpectrum) -> Option<BsdfSample> {
+        None
+    }
+    fn albedo(&self, _: &ShadingContext, out: &mut SampledSpectrum) {
+        out.fill(0.0);
+    }
+}
+
+/// A surface: how it scatters and what it emits.
+pub struct Material {
+    pub name: String,
+    pub bsdf: Box<dyn Bsdf>,
+    /// Emitted radiance per wavelength (both faces), if the surface is a light.
+    pub emission: Option<SampledSpectrum>,
+}

@@ -1,0 +1,282 @@
+//! The renderable scene: a [`SceneDesc`] compiled against one wavelength grid, with
+//! every spectrum evaluated, every mesh validated, the BVH built and the lights' power
+//! distribution ready.
+
+pub mod desc;
+
+use crate::accel::{Accel, Hit};
+use crate::camera::{affine_from_rows, Camera};
+use crate::color::uplift::{Uplift, UpliftMethod};
+use crate::color::{Observer, RgbSpace};
+use crate::geometry::{Instance, Mesh, Ray};
+use crate::light::{AreaTriangle, Light, PointLight, UniformEnvironment};
+use crate::material::{Black, Bsdf, Diffuse, Material, SpectralParam};
+use crate::sampling::Distribution1D;
+use crate::spectrum::named::{evaluate_for, SpectrumRole};
+use crate::spectrum::{SampledSpectrum, WavelengthGrid};
+use crate::{Error, Result};
+pub use desc::*;
+use glam::{Vec2, Vec3A};
+
+/// What the scene is rendered with that does not belong to the scene itself.
+#[derive(Clone, Debug)]
+pub struct BuildOptions {
+    pub grid: WavelengthGrid,
+    pub space: RgbSpace,
+    pub uplift: UpliftMethod,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// The geometry of a ray's hit, in world space.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceInteraction {
+    pub p: Vec3A,
+    /// Unit geometric normal of the triangle (its winding side).
+    pub ng: Vec3A,
+    /// Unit shading normal, on the same side as `ng`.
+    pub ns: Vec3A,
+    pub uv: Vec2,
+    pub material: u32,
+    pub instance: u32,
+    pub triangle: u32,
+    pub t: f32,
+}
+
+/// The uniform world, kept beside its light for radiance lookups on escaped rays.
+pub struct EnvironmentRef {
+    pub light: usize,
+    pub radiance: SampledSpectrum,
+}
+
+pub struct Scene {
+    pub grid: WavelengthGrid,
+    pub observer: Observer,
+    pub space: RgbSpace,
+    pub uplift: Uplift,
+    pub camera: Camera,
+    pub meshes: Vec<Mesh>,
+    pub instances: Vec<Instance>,
+    pub accel: Accel,
+    pub materials: Vec<Material>,
+    pub lights: Vec<Box<dyn Light>>,
+    pub light_distribution: Distribution1D,
+    /// For instances with emissive triangles: the light index of each triangle
+    /// (u32::MAX where the triangle does not emit), for MIS on BSDF-sampled hits.
+    pub triangle_lights: Vec<Option<Vec<u32>>>,
+    pub environment: Option<EnvironmentRef>,
+    /// Centre and radius of a sphere bounding all geometry.
+    pub bounds_center: Vec3A,
+    pub bounds_radius: f32,
+}
+
+fn buffer_f32<'a>(buffers: &'a [Buffer], i: usize, mesh: &str, what: &str) -> Result<&'a [f32]> {
+    match buffers.get(i) {
+        Some(Buffer::F32(v)) => Ok(v),
+        Some(Buffer::U32(_)) => Err(Error::object("mesh", mesh, format!("{what} buffer {i} holds integers, expected floats"))),
+        None => Err(Error::object("mesh", mesh, format!("{what} buffer {i} does not exist"))),
+    }
+}
+
+fn buffer_u32<'a>(buffers: &'a [Buffer], i: usize, mesh: &str, what: &str) -> Result<&'a [u32]> {
+    match buffers.get(i) {
+        Some(Buffer::U32(v)) => Ok(v),
+        Some(Buffer::F32(_)) => Err(Error::object("mesh", mesh, format!("{what} buffer {i} holds floats, expected integers"))),
+        None => Err(Error::object("mesh", mesh, format!("{what} buffer {i} does not exist"))),
+    }
+}
+
+impl Scene {
+    pub fn build(desc: &SceneDesc, buffers: &[Buffer], opts: &BuildOptions) -> Result<Self> {
+        let grid = opts.grid.clone();
+        let n = grid.len();
+        let uplift = Uplift::new(&grid, &opts.space, opts.uplift)?;
+        let camera = Camera::new(&desc.camera, opts.width, opts.height)?;
+
+        // Materials.
+        let mut materials = Vec::with_capacity(desc.materials.len().max(1));
+        for m in &desc.materials {
+            let spectrum = |d, role, what| -> Result<SampledSpectrum> {
+                Ok(SampledSpectrum::from_slice(&evaluate_for(d, &grid, role, &uplift, "material", &m.name, what)?))
+            };
+            let bsdf: Box<dyn Bsdf> = match &m.bsdf {
+                BsdfDesc::Diffuse { reflectance } => {
+                    let r = spectrum(reflectance, SpectrumRole::Reflectance, "reflectance")?;
+                    if r.max_value() > 1.0 {
+                        return Err(Error::object("material", &m.name, format!("reflectance {} exceeds 1 (not energy conserving)", r.max_value())));
+                    }
+                    Box::new(Diffuse { reflectance: SpectralParam::Constant(r) })
+                }
+                BsdfDesc::None => Box::new(Black),
+            };
+            let emission = match &m.emission {
+                Some(e) => Some(spectrum(e, SpectrumRole::Illuminant, "emission")?).filter(|s| !s.is_black()),
+                None => None,
+            };
+            materials.push(Material { name: m.name.clone(), bsdf, emission });
+        }
+        if materials.is_empty() {
+            let grey = SampledSpectrum::splat(n, 0.8);
+            materials.push(Material { name: "default".into(), bsdf: Box::new(Diffuse { reflectance: SpectralParam::Constant(grey) }), emission: None });
+        }
+
+        // Meshes.
+        let mut meshes = Vec::with_capacity(desc.meshes.len());
+        for md in &desc.meshes {
+            let name = md.name.as_str();
+            let positions = buffer_f32(buffers, md.vertices, name, "vertices")?;
+            let indices = buffer_u32(buffers, md.triangles, name, "triangles")?;
+            let normals = md.normals.map(|i| buffer_f32(buffers, i, name, "normals")).transpose()?;
+            let uvs = md.uvs.map(|i| buffer_f32(buffers, i, name, "uvs")).transpose()?;
+            let nt = indices.len() / 3;
+            let ids: Vec<u32> = match (md.material_ids, md.material) {
+                (Some(i), _) => buffer_u32(buffers, i, name, "material_ids")?.to_vec(),
+                (None, m) => vec![m.unwrap_or(0); nt],
+            };
+            if let Some(&bad) = ids.iter().find(|&&k| k as usize >= materials.len()) {
+                return Err(Error::object("mesh", name, format!("uses material {bad} but the scene has {} materials", materials.len())));
+            }
+            meshes.push(Mesh::from_buffers(name, positions, indices, normals, uvs, &ids)?);
+        }
+
+        // Instances.
+        let instances: Vec<Instance> = match &desc.instances {
+            None => (0..meshes.len()).map(|k| Instance::new(&meshes[k].name, k as u32, glam::Affine3A::IDENTITY)).collect::<Result<_>>()?,
+            Some(list) => list
+                .iter()
+                .map(|i| {
+                    if i.mesh as usize >= meshes.len() {
+                        return Err(Error::object("instance", &i.name, format!("refers to mesh {} but the scene has {}", i.mesh, meshes.len())));
+                    }
+                    Instance::new(&i.name, i.mesh, affine_from_rows(&i.transform))
+                })
+                .collect::<Result<_>>()?,
+        };
+        let accel = Accel::build(&meshes, &instances);
+
+        // Scene bounds, for infinite lights.
+        let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
+        for inst in &instances {
+            for p in &meshes[inst.mesh as usize].positions {
+                let w = inst.to_world.transform_point3a(*p);
+                lo = lo.min(w);
+                hi = hi.max(w);
+            }
+        }
+        let (bounds_center, bounds_radius) = if lo.x <= hi.x { ((lo + hi) * 0.5, (hi - lo).length() * 0.5) } else { (Vec3A::ZERO, 1.0) };
+
+        // Lights: emissive triangles, explicit lights, the world.
+        let mut lights: Vec<Box<dyn Light>> = Vec::new();
+        let mut triangle_lights = vec![None; instances.len()];
+        for (k, inst) in instances.iter().enumerate() {
+            let mesh = &meshes[inst.mesh as usize];
+            if !mesh.material_ids.iter().any(|&m| materials[m as usize].emission.is_some()) {
+                continue;
+            }
+            let mut map = vec![u32::MAX; mesh.indices.len()];
+            for (t, &m) in mesh.material_ids.iter().enumerate() {
+                let Some(e) = &materials[m as usize].emission else { continue };
+                let p = mesh.triangle(t).map(|v| inst.to_world.transform_point3a(v));
+                if let Some(tri) = AreaTriangle::new(p, e.clone()) {
+                    map[t] = lights.len() as u32;
+                    lights.push(Box::new(tri));
+                }
+            }
+            triangle_lights[k] = Some(map);
+        }
+        for l in &desc.lights {
+            match l {
+                LightDesc::Point { name, position, intensity } => {
+                    let position = Vec3A::from(*position);
+                    if !position.is_finite() {
+                        return Err(Error::object("light", name, "position is not finite"));
+                    }
+                    let intensity = evaluate_for(intensity, &grid, SpectrumRole::Illuminant, &uplift, "light", name, "intensity")?;
+                    lights.push(Box::new(PointLight { position, intensity: SampledSpectrum::from_slice(&intensity) }));
+                }
+            }
+        }
+        let environment = match &desc.world {
+            None => None,
+            Some(w) => {
+                let radiance = SampledSpectrum::from_slice(&evaluate_for(&w.radiance, &grid, SpectrumRole::Illuminant, &uplift, "world", "World", "radiance")?);
+                if radiance.is_black() {
+                    None
+                } else {
+                    lights.push(Box::new(UniformEnvironment { radiance: radiance.clone(), scene_radius: bounds_radius }));
+                    Some(EnvironmentRef { light: lights.len() - 1, radiance })
+                }
+            }
+        };
+        let powers: Vec<f64> = lights.iter().map(|l| l.power(grid.weights())).collect();
+        let light_distribution = Distribution1D::new(&powers);
+
+        Ok(Self {
+            observer: Observer::new(&grid),
+            grid,
+            space: opts.space,
+            uplift,
+            camera,
+            meshes,
+            instances,
+            accel,
+            materials,
+            lights,
+            light_distribution,
+            triangle_lights,
+            environment,
+            bounds_center,
+            bounds_radius,
+        })
+    }
+
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.accel.intersect(&self.instances, ray)
+    }
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        self.accel.occluded(&self.instances, ray)
+    }
+
+    /// World-space geometry at a hit.
+    pub fn interaction(&self, ray: &Ray, hit: &Hit) -> SurfaceInteraction {
+        let inst = &self.instances[hit.instance as usize];
+        let mesh = &self.meshes[inst.mesh as usize];
+        let [i0, i1, i2] = mesh.indices[hit.triangle as usize].map(|i| i as usize);
+        let (b1, b2) = (hit.b1, hit.b2);
+        let b0 = 1.0 - b1 - b2;
+        let [p0, p1, p2] = [mesh.positions[i0], mesh.positions[i1], mesh.positions[i2]];
+        let p_obj = p0 * b0 + p1 * b1 + p2 * b2;
+        let p = inst.to_world.transform_point3a(p_obj);
+        let ng = (inst.normal_to_world * (p1 - p0).cross(p2 - p0)).normalize_or_zero();
+        let ns = match &mesh.normals {
+            Some(n) => {
+                let s = (inst.normal_to_world * (n[i0] * b0 + n[i1] * b1 + n[i2] * b2)).normalize_or_zero();
+                if s == Vec3A::ZERO { ng } else if s.dot(ng) < 0.0 { -s } else { s }
+            }
+            None => ng,
+        };
+        let uv = match &mesh.uvs {
+            Some(uv) => uv[i0] * b0 + uv[i1] * b1 + uv[i2] * b2,
+            None => Vec2::new(b1, b2),
+        };
+        // Fall back to the ray's position if the barycentric point lost precision.
+        let p = if p.is_finite() { p } else { ray.at(hit.t) };
+        SurfaceInteraction {
+            p,
+            ng,
+            ns,
+            uv,
+            material: mesh.material_ids[hit.triangle as usize],
+            instance: hit.instance,
+            triangle: hit.triangle,
+            t: hit.t,
+        }
+    }
+
+    /// The light index of an emissive triangle, if it is one.
+    pub fn triangle_light(&self, instance: u32, triangle: u32) -> Option<usize> {
+        let map = self.triangle_lights[instance as usize].as_ref()?;
+        let l = map[triangle as usize];
+        (l != u32::MAX).then_some(l as usize)
+    }
+}

@@ -1,0 +1,12 @@
+//! Spectra: the wavelength grid with its quadrature weights (eq. 6), sampled spectra
+//! sized to the grid, and the named spectra a scene can refer to.
+
+pub mod grid;
+pub mod measured;
+pub mod named;
+pub mod sampled;
+pub mod tables;
+
+pub use grid::WavelengthGrid;
+pub use named::SpectrumDesc;
+pub use sampled::SampledSpectrum;

@@ -1,0 +1,188 @@
+//! `polychrome._core`: the bindings. They turn numpy buffers and JSON descriptions into
+//! core types, release the GIL while rendering, poll progress and cancellation from the
+//! calling thread, and map every error — and, as a last resort, every panic — to a
+//! Python exception with a readable message.
+
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn};
+use polychrome_core::color::uplift::Uplift;
+use polychrome_core::color::{Observer, RgbSpace};
+use polychrome_core::render::{render as core_render, RenderControl, RenderOutput, RenderSettings};
+use polychrome_core::scene::{Buffer, SceneDesc};
+use polychrome_core::spectrum::named::SpectrumRole;
+use polychrome_core::spectrum::SpectrumDesc;
+use polychrome_core::Error;
+use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::time::Duration;
+
+fn to_py_err(e: Error) -> PyErr {
+    PyValueError::new_err(e.to_string())
+}
+
+fn panic_message(p: Box<dyn std::any::Any + Send>) -> String {
+    if let Some(s) = p.downcast_ref::<&str>() {
+        s.to_string()
+    } else if let Some(s) = p.downcast_ref::<String>() {
+        s.clone()
+    } else {
+        "unknown panic".into()
+    }
+}
+
+/// Runs core code, turning a panic into a RuntimeError instead of aborting Python.
+fn guarded<T>(what: &str, f: impl FnOnce() -> Result<T, Error>) -> PyResult<T> {
+    match catch_unwind(AssertUnwindSafe(f)) {
+        Ok(r) => r.map_err(to_py_err),
+        Err(p) => Err(PyRuntimeError::new_err(format!("internal error in {what} (please report): {}", panic_message(p)))),
+    }
+}
+
+fn parse<T: serde::de::DeserializeOwned>(json: &str, what: &str) -> PyResult<T> {
+    serde_json::from_str(json).map_err(|e| PyValueError::new_err(format!("{what}: {e}")))
+}
+
+fn convert_buffers(buffers: Vec<Bound<'_, PyAny>>) -> PyResult<Vec<Buffer>> {
+    buffers
+        .into_iter()
+        .enumerate()
+        .map(|(i, b)| {
+            if let Ok(a) = b.extract::<PyReadonlyArrayDyn<f32>>() {
+                Ok(Buffer::F32(a.as_array().iter().copied().collect()))
+            } else if let Ok(a) = b.extract::<PyReadonlyArrayDyn<u32>>() {
+                Ok(Buffer::U32(a.as_array().iter().copied().collect()))
+            } else {
+                Err(PyTypeError::new_err(format!("buffer {i}: expected a float32 or uint32 numpy array")))
+            }
+        })
+        .collect()
+}
+
+/// render(scene_json, buffers, settings_json, progress=None) -> dict
+///
+/// `progress(done, total)` is called from this thread about 20 times a second; return
+/// False to cancel. Ctrl-C cancels too. The dict holds `rgba` (H, W, 4), `depth`
+/// (H, W), `normal` (H, W, 3), `albedo` (H, W, 3), `spectral` (H, W, N) or None,
+/// `wavelengths` (N,) and `stats` (JSON text).
+#[pyfunction]
+#[pyo3(signature = (scene_json, buffers, settings_json, progress=None))]
+fn render<'py>(
+    py: Python<'py>,
+    scene_json: &str,
+    buffers: Vec<Bound<'py, PyAny>>,
+    settings_json: &str,
+    progress: Option<PyObject>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let desc: SceneDesc = parse(scene_json, "scene description")?;
+    let settings: RenderSettings = parse(settings_json, "render settings")?;
+    let buffers = convert_buffers(buffers)?;
+    let control = RenderControl::new();
+    let mut callback_error: Option<PyErr> = None;
+    let result = py.allow_threads(|| {
+        std::thread::scope(|scope| {
+            let worker = scope.spawn(|| guarded("render", || core_render(&desc, &buffers, &settings, &control)));
+            while !worker.is_finished() {
+                std::thread::sleep(Duration::from_millis(50));
+                Python::with_gil(|py| {
+                    if let Err(e) = py.check_signals() {
+                        callback_error.get_or_insert(e);
+                        control.cancel();
+                        return;
+                    }
+                    if let Some(cb) = &progress {
+                        let (done, total) = control.progress();
+                        match cb.call1(py, (done, total)) {
+                            Ok(r) if r.bind(py).is(&*pyo3::types::PyBool::new(py, false)) => control.cancel(),
+                            Ok(_) => {}
+                            Err(e) => {
+                                callback_error.get_or_insert(e);
+                                control.cancel();
+                            }
+                        }
+                    }
+                });
+            }
+            worker.join().unwrap_or_else(|p| Err(PyRuntimeError::new_err(format!("render thread died: {}", panic_message(p)))))
+        })
+    });
+    if let Some(e) = callback_error {
+        return Err(e);
+    }
+    output_dict(py, result?)
+}
+
+fn output_dict<'py>(py: Python<'py>, out: RenderOutput) -> PyResult<Bound<'py, PyDict>> {
+    let (h, w) = (out.height as usize, out.width as usize);
+    let d = PyDict::new(py);
+    let n = out.wavelengths.len();
+    d.set_item("rgba", PyArray1::from_vec(py, out.images.rgba).reshape([h, w, 4])?)?;
+    d.set_item("depth", PyArray1::from_vec(py, out.images.depth).reshape([h, w])?)?;
+    d.set_item("normal", PyArray1::from_vec(py, out.images.normal).reshape([h, w, 3])?)?;
+    d.set_item("albedo", PyArray1::from_vec(py, out.images.albedo).reshape([h, w, 3])?)?;
+    match out.images.spectral {
+        Some(s) => d.set_item("spectral", PyArray1::from_vec(py, s).reshape([h, w, n])?)?,
+        None => d.set_item("spectral", py.None())?,
+    }
+    d.set_item("wavelengths", PyArray1::from_vec(py, out.wavelengths))?;
+    let stats = serde_json::to_string(&out.stats).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    d.set_item("stats", stats)?;
+    Ok(d)
+}
+
+/// wavelength_grid(settings_json) -> (wavelengths, quadrature weights) of the settings' grid.
+#[pyfunction]
+fn wavelength_grid<'py>(py: Python<'py>, settings_json: &str) -> PyResult<(Bound<'py, PyArray1<f32>>, Bound<'py, PyArray1<f32>>)> {
+    let settings: RenderSettings = parse(settings_json, "render settings")?;
+    let grid = guarded("wavelength_grid", || settings.grid())?;
+    Ok((PyArray1::from_slice(py, grid.lambdas()), PyArray1::from_slice(py, grid.weights())))
+}
+
+fn role_from(role: &str) -> PyResult<SpectrumRole> {
+    match role {
+        "reflectance" => Ok(SpectrumRole::Reflectance),
+        "illuminant" => Ok(SpectrumRole::Illuminant),
+        "unbounded" => Ok(SpectrumRole::Unbounded),
+        _ => Err(PyValueError::new_err(format!("role '{role}': expected reflectance, illuminant or unbounded"))),
+    }
+}
+
+/// spectrum_values(spectrum_json, settings_json, role="illuminant") -> values on the grid.
+#[pyfunction]
+#[pyo3(signature = (spectrum_json, settings_json, role="illuminant"))]
+fn spectrum_values<'py>(py: Python<'py>, spectrum_json: &str, settings_json: &str, role: &str) -> PyResult<Bound<'py, PyArray1<f32>>> {
+    let desc: SpectrumDesc = parse(spectrum_json, "spectrum")?;
+    let settings: RenderSettings = parse(settings_json, "render settings")?;
+    let role = role_from(role)?;
+    let values = guarded("spectrum_values", || {
+        let grid = settings.grid()?;
+        let uplift = Uplift::new(&grid, &RgbSpace::rec709(), settings.uplift)?;
+        desc.evaluate(&grid, role, &uplift).map_err(Error::Description)
+    })?;
+    Ok(PyArray1::from_vec(py, values))
+}
+
+/// spectrum_xyz(spectrum_json, settings_json) -> (X, Y, Z) through the grid's CIE 1931
+/// observer, normalised so that an equal-energy spectrum of 1 has Y = 1.
+#[pyfunction]
+fn spectrum_xyz(spectrum_json: &str, settings_json: &str) -> PyResult<(f64, f64, f64)> {
+    let desc: SpectrumDesc = parse(spectrum_json, "spectrum")?;
+    let settings: RenderSettings = parse(settings_json, "render settings")?;
+    let xyz = guarded("spectrum_xyz", || {
+        let grid = settings.grid()?;
+        let uplift = Uplift::new(&grid, &RgbSpace::rec709(), settings.uplift)?;
+        let v = desc.evaluate(&grid, SpectrumRole::Unbounded, &uplift).map_err(Error::Description)?;
+        Ok(Observer::new(&grid).xyz(&v))
+    })?;
+    Ok((xyz[0], xyz[1], xyz[2]))
+}
+
+#[pymodule]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(render, m)?)?;
+    m.add_function(wrap_pyfunction!(wavelength_grid, m)?)?;
+    m.add_function(wrap_pyfunction!(spectrum_values, m)?)?;
+    m.add_function(wrap_pyfunction!(spectrum_xyz, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}
