@@ -94,7 +94,7 @@ def _progress_bar(description: str) -> tuple[ProgressCallback, Callable[[], None
         from tqdm import tqdm
     except ImportError:  # pragma: no cover
         return (lambda done, total: None), (lambda: None)
-    bar = tqdm(total=1, desc=description, unit="spp", file=sys.stderr, leave=True, dynamic_ncols=True)
+    bar = tqdm(total=1, desc=description, unit=" samples", unit_scale=True, file=sys.stderr, leave=True, dynamic_ncols=True)
     state = {"total": 0}
 
     def update(done: int, total: int) -> None:
