@@ -1,9 +1,36 @@
-"""Polychrome's Blender add-on (render engine POLYCHROME). Registered with register()."""
+"""Polychrome for Blender: the spectral path tracer as render engine ``POLYCHROME``.
+
+``import polychrome_blender; polychrome_blender.register()`` in any process with ``bpy``
+(or install the extension zip); ``unregister()`` undoes it. Both are idempotent.
+Layout follows BlendLuxCore: ``engine``, ``properties``, ``ui``, ``export/``, ``nodes``,
+``passes``.
+"""
+
+_registered = False
 
 
-def register():  # replaced by the full add-on
-    raise NotImplementedError("the Blender add-on is not built yet")
+def register():
+    global _registered
+    if _registered:
+        return
+    from . import engine, nodes, properties, ui
+
+    properties.register()
+    nodes.register()
+    engine.register()
+    ui.register()
+    _registered = True
 
 
 def unregister():
-    pass
+    global _registered
+    if not _registered:
+        return
+    from . import engine, nodes, properties, ui
+
+    for mod in (ui, engine, nodes, properties):
+        try:
+            mod.unregister()
+        except Exception as e:  # noqa: BLE001 - unregister everything we can
+            print(f"polychrome_blender: unregistering {mod.__name__} failed: {e}")
+    _registered = False

@@ -1,0 +1,134 @@
+"""Blender lights → polychrome lights, in Blender's (Cycles') units.
+
+* Point: ``energy`` watts → radiant intensity ``colour × P / 4π`` (``polychrome.PointLight``).
+  The soft-shadow radius is ignored (a true point).
+* Area: Cycles gives a one-sided Lambertian emitter of radiance ``colour × P / (π A)``
+  (checked against Cycles 4.5: irradiance under a small area light matches this to < 1 %,
+  and nothing is emitted behind it). It is exported as an emissive quad/disk (ellipse:
+  a 32-gon) of that radiance, plus a black backing one thousandth of its size behind it,
+  because polychrome's emitters shine from both faces.
+* Spot / Sun: ``polychrome.SpotLight`` / ``polychrome.SunLight`` when available, else a warning.
+* Colour from temperature (``use_temperature``, Blender 5): a blackbody normalised to
+  the luminance of white.
+"""
+
+import math
+
+import numpy as np
+
+DISK_SEGMENTS = 32
+
+
+def _ybar(lam):
+    """CIE 1931 ȳ, Wyman, Sloan & Shirley (2013) multi-lobe fit (for a luminance ratio)."""
+    t1 = (lam - 568.8) * np.where(lam < 568.8, 0.0213, 0.0247)
+    t2 = (lam - 530.9) * np.where(lam < 530.9, 0.0613, 0.0322)
+    return 0.821 * np.exp(-0.5 * t1 * t1) + 0.286 * np.exp(-0.5 * t2 * t2)
+
+
+def blackbody_white(pc, temperature):
+    """Planck's law at ``temperature`` K scaled to luminance 1 (like RGB white)."""
+    lam = np.linspace(380.0, 780.0, 401)
+    x = lam * 1e-9
+    planck = 1.0 / (x**5 * (np.exp(1.4387769e-2 / (x * temperature)) - 1.0))
+    peak_lam = min(max(2.897771955e-3 / temperature, 380e-9), 780e-9)
+    peak = 1.0 / (peak_lam**5 * (math.exp(1.4387769e-2 / (peak_lam * temperature)) - 1.0))
+    y = _ybar(lam)
+    lum = float(np.trapz(y * planck / peak, lam) / np.trapz(y, lam))
+    return pc.spectra.blackbody(float(temperature), 1.0 / lum)
+
+
+def light_colour(pc, ld):
+    col = tuple(float(c) for c in ld.color[:3])
+    if getattr(ld, "use_temperature", False):
+        spec = blackbody_white(pc, float(ld.temperature))
+        return spec, col
+    return pc.spectra.rgb(*col), None
+
+
+def _area_polygon(ld):
+    """Outline in the light's local XY plane (it emits along local −Z)."""
+    sx = float(ld.size)
+    sy = float(ld.size_y) if ld.shape in ("RECTANGLE", "ELLIPSE") else sx
+    if ld.shape in ("SQUARE", "RECTANGLE"):
+        pts = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], np.float64) * [sx / 2, sy / 2]
+    else:
+        a = np.linspace(0.0, 2.0 * math.pi, DISK_SEGMENTS, endpoint=False)
+        pts = np.stack([np.cos(a) * sx / 2, np.sin(a) * sy / 2], axis=1)
+    n = len(pts)
+    x, y = pts[:, 0], pts[:, 1]
+    area = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+    tris = np.stack([np.zeros(n - 2, np.int64), np.arange(1, n - 1), np.arange(2, n)], axis=1)
+    return pts, tris, area, max(sx, sy)
+
+
+def _power(ld, name):
+    p = float(ld.energy)
+    if not math.isfinite(p) or p < 0.0:
+        raise ValueError(f"light '{name}': power {p} W must be finite and non-negative")
+    return p
+
+
+def export_area(pc, scene, ob, ld, name, matrix, warnings):
+    power = _power(ld, name)
+    pts, tris, area, size = _area_polygon(ld)
+    if not area > 0.0 or power == 0.0:
+        return
+    if getattr(ld, "spread", math.pi) < math.pi - 1e-4:
+        warnings.add(("spread", name), f"light '{name}': area light spread is not supported; rendered as 180°")
+    if not getattr(ld, "normalize", True):
+        warnings.add(("normalize", name), f"light '{name}': 'Normalize' off is not supported; power is per area as with Normalize on")
+    spec, tint = light_colour(pc, ld)
+    radiance = spec * (power / (math.pi * area))
+    if tint is not None and tint != (1.0, 1.0, 1.0):
+        warnings.add(("tint", name), f"light '{name}': colour tint on a blackbody temperature is ignored")
+    emitter = pc.Emitter(radiance, name=f"{name} (area light)")
+    verts = np.concatenate([pts, np.zeros((len(pts), 1))], axis=1).astype(np.float32)
+    back = verts.copy()
+    back[:, 2] = 1e-3 * size  # behind: the light shines along local −Z
+    m = scene.add_mesh(f"{name}", verts, tris, material=emitter, place=False)
+    scene.add_instance(m, matrix, name)
+    b = scene.add_mesh(f"{name} (back)", back, tris, material=pc.Diffuse(0.0, name=f"{name} (back)"), place=False)
+    scene.add_instance(b, matrix, f"{name} (back)")
+
+
+def export_lights(pc, depsgraph, scene, warnings):
+    count = 0
+    for inst in depsgraph.object_instances:
+        ob = inst.object
+        if ob.type != "LIGHT":
+            continue
+        ld = ob.data
+        name = ob.original.name
+        m = np.array(inst.matrix_world, dtype=np.float64)
+        if not np.all(np.isfinite(m)):
+            raise ValueError(f"light '{name}': its transform is not finite")
+        pos = m[:3, 3]
+        if ld.type == "POINT":
+            spec, _ = light_colour(pc, ld)
+            scene.add_light(pc.PointLight(pos.tolist(), _power(ld, name), spec, name=name))
+        elif ld.type == "AREA":
+            export_area(pc, scene, ob, ld, name, m, warnings)
+        elif ld.type == "SPOT" and hasattr(pc, "SpotLight"):
+            spec, _ = light_colour(pc, ld)
+            direction = (-m[:3, 2] / np.linalg.norm(m[:3, 2])).tolist()
+            try:
+                scene.add_light(pc.SpotLight(pos.tolist(), direction, power=_power(ld, name), color=spec,
+                                             angle=float(ld.spot_size), blend=float(ld.spot_blend), name=name))
+            except TypeError as e:
+                warnings.add(("spot", name), f"light '{name}': spot light not exported ({e})")
+                continue
+        elif ld.type == "SUN" and hasattr(pc, "SunLight"):
+            spec, _ = light_colour(pc, ld)
+            direction = (-m[:3, 2] / np.linalg.norm(m[:3, 2])).tolist()
+            try:
+                scene.add_light(pc.SunLight(direction, irradiance=float(ld.energy), color=spec,
+                                            angle=float(ld.angle), name=name))
+            except TypeError as e:
+                warnings.add(("sun", name), f"light '{name}': sun light not exported ({e})")
+                continue
+        else:
+            warnings.add(("light", ld.type), f"light '{name}': {ld.type.lower()} lights are not supported yet and are skipped")
+            continue
+        count += 1
+    return count

@@ -1,0 +1,92 @@
+"""Evaluated meshes → polychrome meshes, with numpy ``foreach_get`` only (no per-triangle
+Python loops). The core takes per-vertex normals and uvs, so vertices are split where
+their corners disagree (sharp edges, UV seams)."""
+
+import numpy as np
+
+
+def _corner_keys(cv, cn, uv):
+    """Unique (vertex, normal, uv) corners → (first corner of each new vertex, inverse)."""
+    cols = [cv.view(np.int32)[:, None], np.ascontiguousarray(cn, np.float32).view(np.int32)]
+    if uv is not None:
+        cols.append(np.ascontiguousarray(uv, np.float32).view(np.int32))
+    keys = np.ascontiguousarray(np.concatenate(cols, axis=1))
+    row = keys.view(np.dtype((np.void, keys.dtype.itemsize * keys.shape[1]))).ravel()
+    _, first, inverse = np.unique(row, return_index=True, return_inverse=True)
+    return first, inverse.ravel()
+
+
+def mesh_arrays(ob, name):
+    """Arrays of an evaluated mesh object: vertices, triangles, normals, uvs, slot per triangle."""
+    me = ob.to_mesh()
+    try:
+        me.calc_loop_triangles()
+        nv, nt, nl = len(me.vertices), len(me.loop_triangles), len(me.loops)
+        if nt == 0:
+            return None
+        co = np.empty(nv * 3, np.float32)
+        me.attributes["position"].data.foreach_get("vector", co)
+        co = co.reshape(-1, 3)
+        if not np.all(np.isfinite(co)):
+            bad = int(np.argwhere(~np.isfinite(co).all(axis=1))[0][0])
+            raise ValueError(f"object '{name}': vertex {bad} has a non-finite position")
+        cv = np.empty(nl, np.int32)
+        me.attributes[".corner_vert"].data.foreach_get("value", cv)
+        tl = np.empty(nt * 3, np.int32)
+        me.loop_triangles.foreach_get("loops", tl)
+        tp = np.empty(nt, np.int32)
+        me.loop_triangle_polygons.foreach_get("value", tp)
+        pm = np.zeros(len(me.polygons), np.int32)
+        if "material_index" in me.attributes:
+            me.attributes["material_index"].data.foreach_get("value", pm)
+        tri_slot = pm[tp]
+        cn = np.empty(nl * 3, np.float32)
+        me.corner_normals.foreach_get("vector", cn)
+        cn = cn.reshape(-1, 3)
+        cn[~np.isfinite(cn)] = 0.0
+        uv = None
+        if me.uv_layers.active is not None:
+            uv = np.empty(nl * 2, np.float32)
+            me.uv_layers.active.uv.foreach_get("vector", uv)
+            uv = uv.reshape(-1, 2)
+            uv[~np.isfinite(uv)] = 0.0
+        first, inverse = _corner_keys(cv, cn, uv)
+        vertices = co[cv[first]]
+        normals = cn[first]
+        uvs = None if uv is None else uv[first]
+        triangles = inverse[tl].reshape(-1, 3).astype(np.uint32)
+        return vertices, triangles, normals, uvs, tri_slot
+    finally:
+        ob.to_mesh_clear()
+
+
+def export_meshes(pc, depsgraph, scene, material_for_slot, warnings):
+    """Adds every visible mesh object (instances share one mesh) to ``scene``."""
+    placed = {}
+    count = 0
+    for inst in depsgraph.object_instances:
+        ob = inst.object
+        if ob.type not in ("MESH", "CURVE", "SURFACE", "META", "FONT"):
+            continue
+        key = ob.original.name
+        name = ob.original.name
+        if key not in placed:
+            arrays = mesh_arrays(ob, name)
+            if arrays is None:
+                placed[key] = None
+                continue
+            vertices, triangles, normals, uvs, tri_slot = arrays
+            slots = [material_for_slot(ob, s) for s in range(len(ob.material_slots))] or [material_for_slot(ob, None)]
+            slot_map = np.asarray(slots, dtype=np.int64)
+            ids = slot_map[np.clip(tri_slot, 0, len(slot_map) - 1)]
+            placed[key] = scene.add_mesh(name, vertices, triangles, normals=normals, uvs=uvs,
+                                         material_ids=ids, place=False)
+        mesh = placed[key]
+        if mesh is None:
+            continue
+        m = np.array(inst.matrix_world, dtype=np.float64)
+        if not np.all(np.isfinite(m)):
+            raise ValueError(f"object '{name}': its transform is not finite")
+        scene.add_instance(mesh, m, name)
+        count += 1
+    return count

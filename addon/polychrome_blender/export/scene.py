@@ -1,0 +1,20 @@
+"""The whole export: camera, materials, meshes, lights, world."""
+
+from .camera import export_camera
+from .lights import export_lights
+from .materials import MaterialTable
+from .meshes import export_meshes
+from .warnings import Warnings
+from .world import export_world
+
+
+def export_scene(pc, depsgraph):
+    """Returns ``(polychrome.Scene, [warning messages])``."""
+    warnings = Warnings()
+    scene = pc.Scene()
+    scene.camera = export_camera(pc, depsgraph, warnings)
+    materials = MaterialTable(pc, scene, warnings)
+    export_meshes(pc, depsgraph, scene, materials, warnings)
+    export_lights(pc, depsgraph, scene, warnings)
+    export_world(pc, depsgraph, scene, warnings)
+    return scene, warnings.messages

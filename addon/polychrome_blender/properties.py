@@ -1,0 +1,51 @@
+"""``scene.polychrome``: the render settings, with the same names as
+:class:`polychrome.RenderSettings` (and the CLI flags)."""
+
+import bpy
+from bpy.props import EnumProperty, FloatProperty, IntProperty, PointerProperty
+
+METHOD_ITEMS = [
+    ("POLYCHROMATIC", "Polychromatic Rays", "Every ray carries the whole sampled spectrum (the paper's method, default)"),
+    ("MONOCHROMATIC_RAYS", "Monochromatic Rays", "Every ray carries one wavelength"),
+    ("MONOCHROMATIC_SCENES", "Monochromatic Scenes", "One render per wavelength, summed"),
+    ("RGB", "RGB", "Three-channel rendering, for comparison with the spectral methods"),
+]
+DIRECTION_ITEMS = [
+    ("BACKWARD", "Backward", "Path tracing from the camera with next-event estimation"),
+    ("FORWARD", "Forward", "Light tracing from the lights, splatted onto the film"),
+    ("BIDIRECTIONAL", "Bidirectional", "Backward and forward tracing combined"),
+]
+UPLIFT_ITEMS = [
+    ("LINEAR", "Linear", "The paper's linear RGB to spectrum map (eq. 10)"),
+    ("SMOOTH", "Smooth", "A smooth bounded non-linear uplift"),
+]
+
+
+class PolychromeRenderSettings(bpy.types.PropertyGroup):
+    method: EnumProperty(name="Method", items=METHOD_ITEMS, default="POLYCHROMATIC")
+    direction: EnumProperty(name="Direction", items=DIRECTION_ITEMS, default="BACKWARD")
+    wavelength_count: IntProperty(name="Wavelengths", description="Samples of the 380-780 nm grid",
+                                  default=41, min=4, max=401)
+    samples: IntProperty(name="Samples", description="Samples per pixel", default=64, min=1, soft_max=4096)
+    max_bounces: IntProperty(name="Max Bounces", default=8, min=0, max=1024)
+    seed: IntProperty(name="Seed", description="Same settings and seed give the same pixels", default=0, min=0)
+    time_limit: FloatProperty(name="Time Limit", description="Seconds after which no new pass starts (0: none)",
+                              default=0.0, min=0.0, unit="TIME_ABSOLUTE")
+    uplift: EnumProperty(name="RGB Uplift", items=UPLIFT_ITEMS, default="LINEAR")
+    threads: IntProperty(name="Threads", description="Worker threads (0: every core)", default=0, min=0, max=1024)
+
+
+classes = (PolychromeRenderSettings,)
+
+
+def register():
+    for c in classes:
+        bpy.utils.register_class(c)
+    bpy.types.Scene.polychrome = PointerProperty(type=PolychromeRenderSettings)
+
+
+def unregister():
+    if hasattr(bpy.types.Scene, "polychrome"):
+        del bpy.types.Scene.polychrome
+    for c in reversed(classes):
+        bpy.utils.unregister_class(c)
