@@ -1,0 +1,257 @@
+"""The Blender add-on, driven through bpy in subprocesses (see bhelper.py)."""
+
+import pytest
+
+from .bhelper import check, run_bpy
+
+pytestmark = pytest.mark.blender
+
+
+def test_register_adds_engine_and_unregister_removes_it(tmp_path):
+    proc, res = run_bpy(tmp_path, """
+    def engines():
+        try:
+            bpy.context.scene.render.engine = 'NOPE'
+        except TypeError as e:
+            return str(e).split(' in ', 1)[1]
+        return ''
+    before = engines()
+    has_props = hasattr(bpy.context.scene, 'polychrome')
+    bpy.context.scene.render.engine = 'POLYCHROME'
+    bpy.context.scene.render.engine = 'CYCLES'
+    polychrome_blender.unregister()
+    after = engines()
+    polychrome_blender.register(); polychrome_blender.register()   # idempotent
+    again = engines()
+    emit(before=before, after=after, again=again, has_props=has_props,
+         names=sorted(p.identifier for p in bpy.types.Scene.bl_rna.properties['polychrome'].fixed_type.properties))
+    """)
+    r = check(proc, res)[0]
+    assert "'POLYCHROME'" in r["before"] and "'CYCLES'" in r["before"]
+    assert "POLYCHROME" not in r["after"]
+    assert "'POLYCHROME'" in r["again"]
+    assert r["has_props"]
+    for name in ("method", "direction", "wavelength_count", "samples", "max_bounces", "seed", "time_limit", "uplift", "threads"):
+        assert name in r["names"]
+
+
+def test_default_scene_renders_png_and_multilayer_exr_with_passes(tmp_path):
+    proc, res = run_bpy(tmp_path, """
+    bpy.ops.wm.read_factory_settings()          # the default cube, light and camera
+    sc = bpy.context.scene
+    sc.render.engine = 'POLYCHROME'
+    sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 64, 48, 100
+    sc.polychrome.samples = 4
+    vl = sc.view_layers[0]; vl.use_pass_z = True; vl.use_pass_normal = True
+    sc.render.image_settings.file_format = 'PNG'; sc.render.filepath = os.path.abspath('out.png')
+    png = bpy.ops.render.render(write_still=True)
+    err_png = Engine.last_error
+    sc.render.image_settings.file_format = 'OPEN_EXR_MULTILAYER'; sc.render.filepath = os.path.abspath('out.exr')
+    exr = bpy.ops.render.render(write_still=True)
+    ch = exr_channels('out.exr')
+    cam = sc.camera; cube = bpy.data.objects['Cube']
+    # depth along the view axis of the cube's nearest corner and centre (independent bound)
+    fwd = -np.array(cam.matrix_world.to_3x3().col[2]); cpos = np.array(cam.matrix_world.translation)
+    corners = [np.array(cube.matrix_world @ v.co) for v in cube.data.vertices]
+    zs = [float(np.dot(c - cpos, fwd)) for c in corners]
+    emit(png=list(png), exr=list(exr), err_png=err_png, err=Engine.last_error, stats=Engine.last_stats,
+         channels=sorted(ch), finite={k: bool(np.isfinite(v).all()) for k, v in ch.items()},
+         zmin=min(zs), zmax=max(zs),
+         depth=ch['ViewLayer.Depth.Z'].tolist(), nlen=np.sqrt(sum(ch['ViewLayer.Normal.' + c] ** 2 for c in 'XYZ')).tolist(),
+         combined=float(ch['ViewLayer.Combined.R'].mean()), size=list(ch['ViewLayer.Combined.R'].shape))
+    """)
+    r = check(proc, res)[0]
+    assert r["png"] == ["FINISHED"] and r["exr"] == ["FINISHED"]
+    assert r["err_png"] is None and r["err"] is None
+    assert (tmp_path / "out.png").stat().st_size > 0
+    assert r["size"] == [48, 64]
+    for p in ("Combined.R", "Combined.G", "Combined.B", "Combined.A", "Depth.Z", "Normal.X", "Normal.Y", "Normal.Z",
+              "Albedo.R", "Albedo.G", "Albedo.B"):
+        assert "ViewLayer." + p in r["channels"], r["channels"]
+    assert all(r["finite"].values()), r["finite"]
+    assert r["combined"] > 0.0
+    import numpy as np
+
+    depth = np.array(r["depth"])
+    nlen = np.array(r["nlen"])
+    hit = depth < 1e9
+    assert 0.05 * depth.size < hit.sum() < depth.size          # the cube covers part of the frame
+    # pixels wholly on the cube lie between its nearest and farthest corner along the view axis
+    inner = depth[hit & (depth > 0)]
+    assert np.median(inner) > r["zmin"] - 1e-3 and np.median(inner) < r["zmax"] + 1e-3
+    assert np.median(nlen[hit]) == pytest.approx(1.0, abs=0.05)
+    assert np.all(nlen[~hit] < 1e-6)
+
+
+def test_diffuse_scene_matches_cycles(tmp_path):
+    """Same scene (diffuse floor and cube, one-sided area light + point light, no world)
+    in Cycles CPU and Polychrome: mean CIEDE2000 below 2. Checks the area/point light unit
+    mapping, the camera and the colour pipeline against an independent renderer."""
+    proc, res = run_bpy(tmp_path, """
+    sc = empty_scene(48, 36)
+    sc.world = None
+    bpy.ops.mesh.primitive_plane_add(size=8)
+    bpy.context.object.data.materials.append(diffuse_material('Floor', (0.7, 0.4, 0.2)))
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0, 0, 0.5))
+    bpy.context.object.data.materials.append(diffuse_material('Cube', (0.2, 0.5, 0.7)))
+    ld = bpy.data.lights.new('Area', 'AREA'); ld.energy = 300.0; ld.size = 1.5
+    lo = bpy.data.objects.new('Area', ld); sc.collection.objects.link(lo); lo.location = (0.5, -0.5, 3.0)
+    pd = bpy.data.lights.new('Point', 'POINT'); pd.energy = 150.0; pd.shadow_soft_size = 0.0; pd.color = (1.0, 0.9, 0.8)
+    po = bpy.data.objects.new('Point', pd); sc.collection.objects.link(po); po.location = (-2.0, -1.0, 2.0)
+    add_camera(sc, (4.0, -4.0, 3.0), (0, 0, 0.4), lens=35)
+    sc.render.image_settings.file_format = 'OPEN_EXR'
+    sc.render.engine = 'CYCLES'
+    c = sc.cycles; c.device = 'CPU'; c.samples = 128; c.use_denoising = False; c.use_adaptive_sampling = False
+    c.filter_width = 0.01; c.max_bounces = 8; c.diffuse_bounces = 8
+    c.sample_clamp_indirect = 0.0; c.sample_clamp_direct = 0.0
+    sc.render.filepath = os.path.abspath('cycles.exr'); bpy.ops.render.render(write_still=True)
+    sc.render.engine = 'POLYCHROME'
+    sc.polychrome.samples = 128; sc.polychrome.max_bounces = 8
+    sc.render.filepath = os.path.abspath('poly.exr'); bpy.ops.render.render(write_still=True)
+    a, b = exr_channels('cycles.exr'), exr_channels('poly.exr')
+    import polychrome.colordiff as cd
+    A = np.stack([a['R'], a['G'], a['B']], -1); B = np.stack([b['R'], b['G'], b['B']], -1)
+    white = float(np.percentile(A[..., 1], 99))
+    de = cd.image_delta_e(A, B, white_luminance=white)
+    emit(mean=float(de.mean()), err=Engine.last_error, warn=Engine.last_warnings,
+         ma=A.mean(axis=(0, 1)).tolist(), mb=B.mean(axis=(0, 1)).tolist())
+    """)
+    r = check(proc, res)[0]
+    assert r["err"] is None and r["warn"] == []
+    assert r["mean"] < 2.0, r
+    # mean image colour within 3 % per channel (about 5 standard errors at 128 spp over 1728 pixels)
+    for x, y in zip(r["ma"], r["mb"]):
+        assert y == pytest.approx(x, rel=0.03)
+
+
+def test_cancel_and_time_limit_stop_the_render(tmp_path):
+    proc, res = run_bpy(tmp_path, """
+    bpy.ops.wm.read_factory_settings()
+    sc = bpy.context.scene
+    sc.render.engine = 'POLYCHROME'
+    sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 64, 64, 100
+    sc.polychrome.samples = 1000000
+    calls = []
+    def hook(done, total):
+        calls.append(done)
+        return True                                  # like pressing Esc at the first report
+    Engine.test_break_hook = hook
+    sc.render.image_settings.file_format = 'OPEN_EXR'; sc.render.filepath = os.path.abspath('c.exr')
+    r1 = bpy.ops.render.render(write_still=True)
+    s1 = dict(Engine.last_stats or {}); e1 = Engine.last_error
+    Engine.test_break_hook = None
+    sc.polychrome.time_limit = 0.3
+    r2 = bpy.ops.render.render(write_still=True)
+    s2 = dict(Engine.last_stats or {})
+    emit(r1=list(r1), s1=s1, e1=e1, calls=len(calls), r2=list(r2), s2=s2,
+         finite=bool(all(np.isfinite(v).all() for v in exr_channels('c.exr').values())))
+    """)
+    r = check(proc, res)[0]
+    assert r["r1"] == ["FINISHED"] and r["e1"] is None
+    assert r["calls"] >= 1
+    assert r["s1"]["cancelled"] is True and r["s1"]["samples_per_pixel"] < 1000000
+    assert r["s2"]["time_limited"] is True and r["s2"]["samples_per_pixel"] < 1000000
+    assert r["finite"]
+
+
+def test_non_finite_vertex_is_reported_without_crash(tmp_path):
+    proc, res = run_bpy(tmp_path, """
+    bpy.ops.wm.read_factory_settings()
+    sc = bpy.context.scene
+    sc.render.engine = 'POLYCHROME'
+    sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 32, 24, 100
+    bpy.data.objects['Cube'].data.vertices[0].co = (float('nan'), 0.0, 0.0)
+    sc.render.image_settings.file_format = 'OPEN_EXR'       # the write_still + EXR path that can segfault
+    sc.render.filepath = os.path.abspath('bad.exr')
+    try:
+        bpy.ops.render.render(write_still=True)
+        raised = None
+    except RuntimeError as e:                               # an ERROR report makes the operator raise
+        raised = str(e)
+    emit(raised=raised, err=Engine.last_error, exists=os.path.exists('bad.exr'))
+    """)
+    r = check(proc, res)[0]
+    assert r["err"] is not None
+    assert "Cube" in r["err"] and "finite" in r["err"]
+    assert r["raised"] is not None and "Cube" in r["raised"]
+    assert "Polychrome ERROR" in proc.stdout
+
+
+def test_unsupported_method_and_node_are_reported(tmp_path):
+    proc, res = run_bpy(tmp_path, """
+    from polychrome.render import METHODS
+    bpy.ops.wm.read_factory_settings()
+    sc = bpy.context.scene
+    sc.render.engine = 'POLYCHROME'
+    sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 16, 12, 100
+    sc.polychrome.samples = 2
+    missing = [m for m in ('POLYCHROMATIC', 'MONOCHROMATIC_RAYS', 'MONOCHROMATIC_SCENES', 'RGB') if m not in METHODS]
+    errs = {}
+    for m in missing:
+        sc.polychrome.method = m
+        try:
+            bpy.ops.render.render()
+        except RuntimeError:
+            pass
+        errs[m] = Engine.last_error
+    sc.polychrome.method = 'POLYCHROMATIC'
+    # a node the exporter does not know -> grey diffuse and one warning naming material and node
+    mat = bpy.data.materials['Material']
+    nt = mat.node_tree
+    g = nt.nodes.new('ShaderNodeBsdfToon'); g.name = 'MyToon'
+    nt.links.new(g.outputs[0], nt.nodes['Material Output'].inputs['Surface'])
+    bpy.ops.render.render()
+    emit(errs=errs, err=Engine.last_error, warn=Engine.last_warnings)
+    """)
+    r = check(proc, res)[0]
+    for m, e in r["errs"].items():
+        assert e is not None and m in e
+    assert r["err"] is None
+    assert len(r["warn"]) == 1 and "Material" in r["warn"][0] and "MyToon" in r["warn"][0]
+
+
+def test_mesh_export_matches_blender_triangles_and_instances_share_data(tmp_path):
+    """The split-vertex export gives the same triangle corner positions, normals and UVs
+    as Blender's own loop triangles; linked instances are exported once."""
+    proc, res = run_bpy(tmp_path, """
+    from polychrome_blender.export.meshes import mesh_arrays
+    import polychrome as pc
+    from polychrome_blender.export import export_scene
+    sc = empty_scene(16, 12)
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=12, ring_count=6)
+    ob = bpy.context.object
+    bpy.ops.object.shade_smooth()
+    ob.data.polygons[0].use_smooth = False          # one flat face: its corners split
+    mod = ob.modifiers.new('sub', 'SUBSURF'); mod.levels = 1
+    # a collection instanced twice
+    coll = bpy.data.collections.new('Inst'); sc.collection.children.link(coll)
+    bpy.ops.mesh.primitive_cube_add(size=0.5, location=(3, 0, 0))
+    cube = bpy.context.object
+    for c in cube.users_collection: c.objects.unlink(cube)
+    coll.objects.link(cube)
+    sc.collection.children.unlink(coll)
+    for x in (5.0, 7.0):
+        e = bpy.data.objects.new('E%d' % x, None); e.instance_type = 'COLLECTION'; e.instance_collection = coll
+        e.location = (x, 0, 0); sc.collection.objects.link(e)
+    add_camera(sc, (0, -10, 0))
+    dg = bpy.context.evaluated_depsgraph_get()
+    ev = ob.evaluated_get(dg)
+    v, t, n, uv, slot = mesh_arrays(ev, ob.name)
+    me = ev.to_mesh(); me.calc_loop_triangles()
+    ref_p = np.array([[tuple(me.vertices[i].co) for i in lt.vertices] for lt in me.loop_triangles])
+    ref_n = np.array([[tuple(me.corner_normals[l].vector) for l in lt.loops] for lt in me.loop_triangles])
+    ref_uv = np.array([[tuple(me.uv_layers.active.uv[l].vector) for l in lt.loops] for lt in me.loop_triangles])
+    nv = len(me.vertices)
+    ev.to_mesh_clear()
+    scene, warns = export_scene(pc, dg)
+    desc, bufs = scene.description()
+    emit(dp=float(np.abs(v[t.astype(int)] - ref_p).max()), dn=float(np.abs(n[t.astype(int)] - ref_n).max()),
+         duv=float(np.abs(uv[t.astype(int)] - ref_uv).max()), nv=nv, split=int(len(v)),
+         meshes=[m['name'] for m in desc['meshes']], inst=[i['mesh'] for i in desc['instances']])
+    """)
+    r = check(proc, res)[0]
+    assert r["dp"] < 1e-6 and r["dn"] < 1e-6 and r["duv"] < 1e-6
+    assert r["split"] >= r["nv"]
+    assert sorted(r["meshes"]) == ["Cube", "Sphere"]
+    cube = r["meshes"].index("Cube")
+    assert r["inst"].count(cube) == 2
