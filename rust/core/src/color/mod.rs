@@ -39,6 +39,9 @@ fn cie_lambdas() -> &'static [f32] {
 
 impl Observer {
     pub fn new(grid: &WavelengthGrid) -> Self {
+        if let Some(channels) = grid.rgb() {
+            return channels.observer();
+        }
         let cmfs: Vec<[f32; 3]> = grid.lambdas().iter().map(|&l| cmf(l)).collect();
         let y_integral: f64 =
             cmfs.iter().zip(grid.weights()).map(|(c, &w)| c[1] as f64 * w as f64).sum();

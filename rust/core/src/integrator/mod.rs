@@ -1,5 +1,7 @@
 //! Integrators: how a camera sample's radiance is estimated. One file per method.
 
+pub mod forward;
+pub mod monochromatic;
 pub mod path;
 
 use crate::film::PixelSample;

@@ -10,17 +10,28 @@ use crate::material::ShadingContext;
 use crate::sampling::{power_heuristic, Rng};
 use crate::scene::Scene;
 use crate::spectrum::SampledSpectrum;
+use super::monochromatic::{MonochromaticTracer, PathState, Scratch};
 
 pub struct PathTracer {
     /// Scattering events after which a path ends (0: direct emission only).
     pub max_bounces: u32,
     /// Bounces before Russian roulette may end a path.
     pub rr_depth: u32,
+    /// Deterministic mode at dispersive surfaces: instead of collapsing to one
+    /// wavelength chosen ∝ energy (eq. 9), continue one monochromatic sub-path per
+    /// wavelength that still carries energy.
+    pub dispersion_splitting: bool,
 }
 
 impl Default for PathTracer {
     fn default() -> Self {
-        Self { max_bounces: 8, rr_depth: 3 }
+        Self { max_bounces: 8, rr_depth: 3, dispersion_splitting: false }
+    }
+}
+
+impl PathTracer {
+    fn mono(&self) -> MonochromaticTracer {
+        MonochromaticTracer { max_bounces: self.max_bounces, rr_depth: self.rr_depth }
     }
 }
 
@@ -114,6 +125,35 @@ impl Integrator for PathTracer {
 
             // Continue the path by sampling the BSDF.
             let u = rng.uniform2();
+            // Deterministic (splitting) mode: one monochromatic sub-path per wavelength.
+            if self.dispersion_splitting && flags.dispersive && ctx.single_wavelength.is_none() {
+                let mono = self.mono();
+                let mut scratch = Scratch::new(n);
+                let mut tp = SampledSpectrum::zeros(n);
+                for i in 0..n {
+                    let b = beta.get(i);
+                    if !(b > 0.0) {
+                        continue;
+                    }
+                    ctx.single_wavelength = Some(i);
+                    tp.fill(0.0);
+                    tp.set(i, b);
+                    let u = rng.uniform2();
+                    let uc = rng.uniform();
+                    let Some(bs) = material.bsdf.sample(&ctx, wo_local, u, uc, &mut tp) else { continue };
+                    let wi = frame.to_world(bs.wi);
+                    let geometric_transmit = wi.dot(ng) < 0.0;
+                    if (bs.wi.z * wo_local.z < 0.0) != geometric_transmit {
+                        continue;
+                    }
+                    let ray = Ray::new(offset_ray_origin(si.p, if geometric_transmit { -ng } else { ng }), wi);
+                    let st = PathState { ray, specular: bs.specular, prev_pdf: bs.pdf, prev_p: si.p, depth: depth + 1 };
+                    let l = mono.trace(scene, i, tp.get(i), st, rng, None, &mut scratch);
+                    radiance.set(i, radiance.get(i) + l);
+                }
+                break;
+            }
+
             let uc = rng.uniform();
             let Some(bs) = material.bsdf.sample(&ctx, wo_local, u, uc, &mut beta) else { break };
             let wi = frame.to_world(bs.wi);
@@ -124,9 +164,6 @@ impl Integrator for PathTracer {
             if local_transmit != geometric_transmit || !beta.is_finite() {
                 break;
             }
-            if let Some(i) = bs.collapsed_to {
-                ctx.single_wavelength = Some(i);
-            }
             specular = bs.specular;
             prev_pdf = bs.pdf;
             prev_p = si.p;
@@ -134,6 +171,17 @@ impl Integrator for PathTracer {
             depth += 1;
 
             if depth >= self.rr_depth {
+            if let Some(i) = bs.collapsed_to {
+                if ctx.single_wavelength.is_none() {
+                    // Collapsed (eq. 9): the BSDF chose wavelength i and divided by its
+                    // probability; carry on as a scalar monochromatic path.
+                    let st = PathState { ray, specular, prev_pdf, prev_p, depth };
+                    let l = self.mono().trace(scene, i, beta.get(i), st, rng, None, &mut Scratch::new(n));
+                    radiance.set(i, radiance.get(i) + l);
+                    break;
+                }
+                ctx.single_wavelength = Some(i);
+            }
                 let q = beta.max_value().min(1.0);
                 if q <= 0.0 || rng.uniform() >= q {
                     break;

@@ -1,6 +1,8 @@
 //! One emissive triangle of a mesh (in world space), emitting from both faces.
 
-use super::{Light, LightSample};
+use super::{EmissionSample, Light, LightSample};
+use crate::sampling::cosine_hemisphere;
+use crate::geometry::Frame;
 use crate::sampling::uniform_triangle;
 use crate::spectrum::SampledSpectrum;
 use glam::{Vec2, Vec3A};
@@ -61,5 +63,19 @@ impl Light for AreaTriangle {
     }
     fn pdf_li(&self, _p: Vec3A, wi: Vec3A, distance: f32) -> f32 {
         self.pdf_solid_angle(wi, distance)
+    }
+    fn sample_le(&self, u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
+        let (b1, b2) = uniform_triangle(u_pos);
+        let origin = self.p[0] * (1.0 - b1 - b2) + self.p[1] * b1 + self.p[2] * b2;
+        // Both faces: pick one with probability 1/2 (reusing u_dir.x), cosine about it.
+        let (side, ux) = if u_dir.x < 0.5 { (1.0, u_dir.x * 2.0) } else { (-1.0, (u_dir.x - 0.5) * 2.0) };
+        let n = self.normal * side;
+        let local = cosine_hemisphere(Vec2::new(ux.min(0.999_999_9), u_dir.y));
+        let pdf_dir = 0.5 * local.z / PI;
+        if !(pdf_dir > 0.0) {
+            return None;
+        }
+        le.copy_from(&self.radiance);
+        Some(EmissionSample { origin, direction: Frame::from_normal(n).to_world(local), normal: Some(n), pdf_pos: 1.0 / self.area, pdf_dir, delta_position: false })
     }
 }

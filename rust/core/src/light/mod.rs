@@ -29,6 +29,21 @@ pub trait Light: Send + Sync {
     /// Total emitted power integrated over the grid with its quadrature weights (eq. 7):
     /// the light-selection weight.
     fn power(&self, weights: &[f32]) -> f64;
+/// A ray leaving a light, for forward (light) tracing.
+#[derive(Clone, Copy, Debug)]
+pub struct EmissionSample {
+    pub origin: Vec3A,
+    pub direction: Vec3A,
+    /// Surface normal at the origin (None for point-like lights).
+    pub normal: Option<Vec3A>,
+    /// Area pdf of the origin (1 for delta positions).
+    pub pdf_pos: f32,
+    /// Solid-angle pdf of the direction.
+    pub pdf_dir: f32,
+    /// The position is a delta (point, spot): no camera or BSDF ray can hit it.
+    pub delta_position: bool,
+}
+
     /// Samples a direction from `p` towards the light; `le` receives the radiance
     /// (intensity / distance² for point lights) arriving at `p`.
     fn sample_li(&self, p: Vec3A, u: Vec2, le: &mut SampledSpectrum) -> Option<LightSample>;
@@ -38,3 +53,8 @@ pub trait Light: Send + Sync {
         0.0
     }
 }
+    /// Samples an emitted ray (forward tracing); `le` receives the radiance along it
+    /// (intensity for point-like lights). None: this light cannot start light paths.
+    fn sample_le(&self, _u_pos: Vec2, _u_dir: Vec2, _le: &mut SampledSpectrum) -> Option<EmissionSample> {
+        None
+    }

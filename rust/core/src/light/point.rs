@@ -1,6 +1,7 @@
 //! An isotropic point light.
 
-use super::{Light, LightSample};
+use super::{EmissionSample, Light, LightSample};
+use crate::sampling::uniform_sphere;
 use crate::spectrum::SampledSpectrum;
 use glam::{Vec2, Vec3A};
 use std::f32::consts::PI;
@@ -25,5 +26,9 @@ impl Light for PointLight {
         le.copy_from(&self.intensity);
         le.scale(1.0 / d2);
         Some(LightSample { wi: d / distance, distance, pdf: 1.0, delta: true })
+    }
+    fn sample_le(&self, _u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
+        le.copy_from(&self.intensity);
+        Some(EmissionSample { origin: self.position, direction: uniform_sphere(u_dir), normal: None, pdf_pos: 1.0, pdf_dir: 1.0 / (4.0 * PI), delta_position: true })
     }
 }

@@ -6,6 +6,8 @@
 use crate::color::uplift::UpliftMethod;
 use crate::color::RgbSpace;
 use crate::film::{Film, FilmBuffer, FilmImages, PixelSample};
+use crate::integrator::forward::{ForwardPart, LightTracer, Splat};
+use crate::integrator::monochromatic::{stratified_wavelength, wavelength_distribution, MonochromaticTracer, Scratch};
 use crate::integrator::path::PathTracer;
 use crate::integrator::Integrator;
 use crate::sampling::Rng;
@@ -24,6 +26,29 @@ pub enum Method {
     /// Whole-spectrum rays (the paper's method 3).
     #[default]
     Polychromatic,
+    /// Every path carries one wavelength, stratified over the grid across a pixel's
+    /// samples and weighted by 1/its selection probability (method 2).
+    MonochromaticRays,
+    /// The whole image rendered once per wavelength by a single-wavelength tracer, the
+    /// results summed (method 1).
+    MonochromaticScenes,
+    /// The same transport with three channels holding scene RGB (comparison only).
+    Rgb,
+}
+
+/// Where paths start.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "SCREAMING_SNAKE_CASE")]
+pub enum Direction {
+    /// From the camera: path tracing with next-event estimation and MIS.
+    #[default]
+    Backward,
+    /// From the lights: light tracing, every smooth vertex splatted onto the film.
+    Forward,
+    /// Backward paths for everything they can sample, plus forward light paths for the
+    /// paths backward tracing cannot sample (delta light → specular first vertex:
+    /// caustics of point lights). A partition of path space (weights 0/1), not MIS.
+    Bidirectional,
 }
 
 /// Render settings; the same names are used by the Python API, the CLI and Blender.
@@ -35,6 +60,11 @@ pub struct RenderSettings {
     /// Samples per pixel.
     pub samples: u32,
     pub method: Method,
+    /// Backward (camera), forward (light) or bidirectional tracing.
+    pub direction: Direction,
+    /// POLYCHROMATIC: at the first dispersive surface continue one monochromatic
+    /// sub-path per wavelength instead of choosing one (deterministic mode).
+    pub dispersion_splitting: bool,
     /// Uniform grid size over [wavelength_min, wavelength_max]...
     pub wavelength_count: usize,
     pub wavelength_min: f32,
@@ -59,6 +89,8 @@ impl Default for RenderSettings {
             height: 64,
             samples: 16,
             method: Method::Polychromatic,
+            direction: Direction::Backward,
+            dispersion_splitting: false,
             wavelength_count: 41,
             wavelength_min: 380.0,
             wavelength_max: 780.0,
@@ -129,6 +161,7 @@ pub struct RenderStats {
     pub seconds: f64,
     pub build_seconds: f64,
     pub method: Method,
+    pub direction: Direction,
     pub wavelengths: usize,
     pub threads: usize,
     /// Samples dropped because their value was NaN or infinite.
@@ -175,15 +208,75 @@ fn render_in_pool(
     let build_seconds = start.elapsed().as_secs_f64();
     let n = scene.grid.len();
     let (w, h) = (settings.width, settings.height);
-    control.total.store(w as u64 * h as u64 * settings.samples as u64, Ordering::Relaxed);
+    let mono_scenes = settings.method == Method::MonochromaticScenes;
+    let spectral_method = !matches!(settings.method, Method::Rgb);
+    if settings.dispersion_splitting && settings.method != Method::Polychromatic {
+        return Err(Error::setting("dispersion_splitting", "applies to the POLYCHROMATIC method only"));
+    }
+    if !spectral_method && scene.grid.len() != 3 {
+        return Err(Error::setting("method", "RGB needs the three-channel grid"));
+    }
+    // Outer rounds: one per wavelength for monochromatic scenes, else one.
+    let rounds = if mono_scenes { n } else { 1 };
+    let backward = settings.direction != Direction::Forward;
+    let forward = settings.direction != Direction::Backward;
+    let per_round = w as u64 * h as u64 * settings.samples as u64 * (backward as u64 + forward as u64);
+    control.total.store(per_round * rounds as u64, Ordering::Relaxed);
     control.done.store(0, Ordering::Relaxed);
 
     // A reflectance of 1 under D65 of luminance 1 reads as albedo (1,1,1).
     let d65 = SpectrumDesc::new(SpectrumKind::D65).evaluate(&scene.grid, SpectrumRole::Illuminant, &scene.uplift).map_err(|e| Error::Description(e))?;
+    let grid = match settings.method {
+        Method::Rgb => WavelengthGrid::rgb_channels(&grid, &RgbSpace::rec709())?,
+        _ => grid,
+    };
     let mut albedo_white = SampledSpectrum::from_slice(&d65);
     albedo_white.scale(1.0 / scene.observer.xyz(&d65)[1] as f32);
 
-    let integrator = PathTracer { max_bounces: settings.max_bounces, ..Default::default() };
+    render_built(&scene, settings, control, threads, start, build_seconds)
+}
+
+/// Renders an already compiled scene (built for `settings.width`×`settings.height`; for
+/// the RGB method on a grid from [`WavelengthGrid::rgb_channels`]). Lets tests and tools
+/// swap in their own materials or lights.
+pub fn render_scene(scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> Result<RenderOutput> {
+    settings.validate()?;
+    if scene.camera.width() != settings.width || scene.camera.height() != settings.height {
+        return Err(Error::setting("width", format!("the scene was built for {}×{} pixels, settings ask for {}×{}", scene.camera.width(), scene.camera.height(), settings.width, settings.height)));
+    }
+    if (settings.method == Method::Rgb) != scene.grid.is_rgb() {
+        return Err(Error::setting("method", "RGB renders need a scene built on an RGB grid, spectral methods a spectral one"));
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(settings.threads)
+        .build()
+        .map_err(|e| Error::setting("threads", e.to_string()))?;
+    let threads = pool.current_num_threads();
+    pool.install(|| render_built(scene, settings, control, threads, Instant::now(), 0.0))
+}
+
+/// Light paths per parallel work item of a forward pass (fixed, so the image does not
+/// depend on the thread count).
+const LIGHT_CHUNK: u64 = 1024;
+
+fn render_built(
+    scene: &Scene,
+    settings: &RenderSettings,
+    control: &RenderControl,
+    threads: usize,
+    start: Instant,
+    build_seconds: f64,
+) -> Result<RenderOutput> {
+    let integrator = PathTracer { max_bounces: settings.max_bounces, dispersion_splitting: settings.dispersion_splitting, ..Default::default() };
+    let mono = MonochromaticTracer { max_bounces: settings.max_bounces, ..Default::default() };
+    let light_tracer = LightTracer {
+        max_bounces: settings.max_bounces,
+        rr_depth: 3,
+        part: if settings.direction == Direction::Forward { ForwardPart::All } else { ForwardPart::BackwardUnreachable },
+    };
+    let lambda_dist = wavelength_distribution(scene);
+    let samples = settings.samples;
+    let seed = settings.seed;
     let tiles: Vec<(u32, u32, u32, u32)> = (0..h.div_ceil(TILE))
         .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
         .map(|(x0, y0)| (x0, y0, TILE.min(w - x0), TILE.min(h - y0)))
@@ -191,26 +284,101 @@ fn render_in_pool(
     let mut film = Film::new(w, h, settings.spectral_output.then_some(n));
     let mut done_spp = 0u32;
     let mut time_limited = false;
-    while done_spp < settings.samples && !control.is_cancelled() {
-        if settings.time_limit > 0.0 && done_spp > 0 && start.elapsed().as_secs_f64() >= settings.time_limit {
-            time_limited = true;
-            break;
+    let mut cancelled_mid = false;
+    'rounds: for round in 0..rounds {
+        let mut round_spp = 0u32;
+        while round_spp < samples {
+            if control.is_cancelled() {
+                cancelled_mid = round > 0;
+                break 'rounds;
+            }
+            if settings.time_limit > 0.0 && (done_spp > 0 || round_spp > 0) && start.elapsed().as_secs_f64() >= settings.time_limit {
+                time_limited = true;
+                break 'rounds;
+            }
+            // Passes grow so progress stays smooth early and overhead stays low later.
+            let pass = (round_spp / 4).clamp(1, 16).min(samples - round_spp);
+            let range = round_spp..round_spp + pass;
+            if backward {
+                let sampler = |x: u32, y: u32, pixel: u64, s: u32, ps: &mut PixelSample, scratch: &mut Scratch| {
+                    // Each (round, sample) pair has its own stream.
+                    let mut rng = Rng::for_sample(seed, pixel, s as u64 + round as u64 * samples as u64);
+                    let jitter = rng.uniform2();
+                    let (fx, fy) = (x as f32 + jitter.x, y as f32 + jitter.y);
+                    match settings.method {
+                        Method::Polychromatic | Method::Rgb => integrator.sample(scene, fx, fy, &mut rng, ps),
+                        Method::MonochromaticRays => {
+                            let lambda = stratified_wavelength(&lambda_dist, seed, pixel, s, samples);
+                            let l = mono.sample_camera(scene, fx, fy, lambda, &mut rng, ps, scratch);
+                            ps.radiance.set(lambda, l / lambda_dist.pmf(lambda));
+                        }
+                        Method::MonochromaticScenes => {
+                            // Every wavelength gets all samples; averaging n·L over n·spp
+                            // entries sums the wavelengths.
+                            let l = mono.sample_camera(scene, fx, fy, round, &mut rng, ps, scratch);
+                            ps.radiance.set(round, l * n as f32);
+                        }
+                    }
+                };
+                let results: Vec<Option<FilmBuffer>> = tiles
+                    .par_iter()
+                    .map(|&t| render_tile(scene, &sampler, t, range.clone(), &albedo_white, settings.spectral_output, control))
+                    .collect();
+                if results.iter().any(|r| r.is_none()) {
+                    cancelled_mid = round > 0;
+                    break 'rounds; // cancelled mid-pass: the pass is discarded so every pixel has the same count
+                }
+                for (&(x0, y0, tw, th), r) in tiles.iter().zip(results) {
+                    film.merge_tile(x0, y0, tw, th, &r.expect("checked above"));
+                }
+            }
+            if forward {
+                let paths = w as u64 * h as u64 * pass as u64;
+                let base = (round as u64 * samples as u64 + round_spp as u64) * w as u64 * h as u64;
+                let chunks: Vec<u64> = (0..paths.div_ceil(LIGHT_CHUNK)).collect();
+                let results: Vec<Option<Vec<Splat>>> = chunks
+                    .par_iter()
+                    .map(|&c| {
+                        if control.is_cancelled() {
+                            return None;
+                        }
+                        let mut splats = Vec::new();
+                        let end = ((c + 1) * LIGHT_CHUNK).min(paths);
+                        for k in c * LIGHT_CHUNK..end {
+                            let mut rng = Rng::for_sample(seed ^ 0x4c49_4748_545f_5041, base + k, 0);
+                            let wavelength = match settings.method {
+                                Method::Polychromatic | Method::Rgb => None,
+                                Method::MonochromaticRays => {
+                                    let i = lambda_dist.sample(rng.uniform()).unwrap_or(0);
+                                    Some((i, 1.0 / lambda_dist.pmf(i)))
+                                }
+                                Method::MonochromaticScenes => Some((round, n as f32)),
+                            };
+                            light_tracer.trace(scene, &mut rng, wavelength, &mut splats);
+                        }
+                        control.done.fetch_add(end - c * LIGHT_CHUNK, Ordering::Relaxed);
+                        Some(splats)
+                    })
+                    .collect();
+                if results.iter().any(|r| r.is_none()) {
+                    cancelled_mid = round > 0;
+                    break 'rounds;
+                }
+                // Merged in chunk order: the same sums on any thread count.
+                for splats in results.into_iter().flatten() {
+                    add_splats(&mut film, &splats, &scene.observer);
+                }
+                if !backward {
+                    for c in film.buffer.count.iter_mut() {
+                        *c += pass;
+                    }
+                }
+            }
+            round_spp += pass;
+            if round == 0 || !mono_scenes {
+                done_spp += pass;
+            }
         }
-        // Passes grow so progress stays smooth early and overhead stays low later.
-        let pass = (done_spp / 4).clamp(1, 16).min(settings.samples - done_spp);
-        let results: Vec<Option<FilmBuffer>> = tiles
-            .par_iter()
-            .map(|&(x0, y0, tw, th)| {
-                render_tile(&scene, &integrator, settings.seed, (x0, y0, tw, th), done_spp..done_spp + pass, &albedo_white, settings.spectral_output, control)
-            })
-            .collect();
-        if results.iter().any(|r| r.is_none()) {
-            break; // cancelled mid-pass: the pass is discarded so every pixel has the same count
-        }
-        for (&(x0, y0, tw, th), r) in tiles.iter().zip(results) {
-            film.merge_tile(x0, y0, tw, th, &r.expect("checked above"));
-        }
-        done_spp += pass;
     }
     let stats = RenderStats {
         samples_per_pixel: done_spp,
@@ -222,16 +390,17 @@ fn render_in_pool(
         nonfinite_samples: film.buffer.nonfinite,
         cancelled: control.is_cancelled(),
         time_limited,
+    let _ = cancelled_mid;
         lights: scene.lights.len(),
         triangles: scene.meshes.iter().map(|m| m.indices.len()).sum(),
     };
     Ok(RenderOutput { width: w, height: h, images: film.images(&scene.space), wavelengths: scene.grid.lambdas().to_vec(), stats })
 }
+        direction: settings.direction,
 
 fn render_tile(
     scene: &Scene,
-    integrator: &dyn Integrator,
-    seed: u64,
+    sampler: &Sampler,
     (x0, y0, tw, th): (u32, u32, u32, u32),
     samples: std::ops::Range<u32>,
     albedo_white: &SampledSpectrum,
@@ -239,6 +408,29 @@ fn render_tile(
     control: &RenderControl,
 ) -> Option<FilmBuffer> {
     let n = scene.grid.len();
+/// Adds light-path splats (radiance at a pixel, per light path per pixel) to the film.
+fn add_splats(film: &mut Film, splats: &[Splat], observer: &crate::color::Observer) {
+    for sp in splats {
+        let xyz = observer.xyz(sp.radiance.values());
+        if !(xyz.iter().all(|v| v.is_finite()) && sp.radiance.is_finite()) {
+            film.buffer.nonfinite += 1;
+            continue;
+        }
+        let i = sp.pixel as usize;
+        for k in 0..3 {
+            film.buffer.xyz[i][k] += xyz[k];
+        }
+        if let (Some(dst), Some(n)) = (&mut film.buffer.spectral, film.spectral_len) {
+            for (d, &v) in dst[i * n..(i + 1) * n].iter_mut().zip(sp.radiance.values()) {
+                *d += v as f64;
+            }
+        }
+    }
+}
+
+/// One camera sample: (x, y, pixel index, sample index, output, scratch).
+type Sampler<'a> = dyn Fn(u32, u32, u64, u32, &mut PixelSample, &mut Scratch) + Sync + 'a;
+
     let mut buf = FilmBuffer::new((tw * th) as usize, spectral.then_some(n));
     let mut ps = PixelSample::new(n);
     let width = scene.camera.width() as u64;
@@ -250,10 +442,9 @@ fn render_tile(
             let (x, y) = (x0 + tx, y0 + ty);
             let pixel = y as u64 * width + x as u64;
             for s in samples.clone() {
-                let mut rng = Rng::for_sample(seed, pixel, s as u64);
-                let jitter = rng.uniform2();
+    let mut scratch = Scratch::new(n);
                 ps.reset();
-                integrator.sample(scene, x as f32 + jitter.x, y as f32 + jitter.y, &mut rng, &mut ps);
+                sampler(x, y, pixel, s, &mut ps, &mut scratch);
                 buf.add((ty * tw + tx) as usize, &ps, &scene.observer, albedo_white);
             }
         }
@@ -261,4 +452,3 @@ fn render_tile(
     }
     Some(buf)
 }
-

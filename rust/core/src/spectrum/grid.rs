@@ -18,6 +18,8 @@ pub const MAX_SAMPLES: usize = 401;
 pub struct WavelengthGrid {
     lambdas: Vec<f32>,
     weights: Vec<f32>,
+    /// Set for the RGB method's three-channel "grid" (see `super::rgb_channels`).
+    rgb: Option<Box<super::rgb_channels::RgbChannels>>,
 }
 
 impl Default for WavelengthGrid {
@@ -80,7 +82,24 @@ impl WavelengthGrid {
                 (hi - lo) * 0.5
             })
             .collect();
-        Ok(Self { lambdas, weights })
+        Ok(Self { lambdas, weights, rgb: None })
+    }
+
+    /// The RGB method's grid: three lanes R, G, B at 620, 540, 460 nm (the wavelengths a
+    /// dispersive surface uses per channel), weights = the channels' luminance.
+    pub(crate) fn from_rgb_channels(channels: super::rgb_channels::RgbChannels, luminance: [f32; 3]) -> Self {
+        Self { lambdas: vec![620.0, 540.0, 460.0], weights: luminance.to_vec(), rgb: Some(Box::new(channels)) }
+    }
+    /// The RGB data of an RGB-method grid (None for spectral grids).
+    pub fn rgb(&self) -> Option<&super::rgb_channels::RgbChannels> {
+        self.rgb.as_deref()
+    }
+    pub fn is_rgb(&self) -> bool {
+        self.rgb.is_some()
+    }
+    /// The spectral grid behind this one: itself, or an RGB grid's reference grid.
+    pub fn spectral(&self) -> &WavelengthGrid {
+        self.rgb.as_ref().map_or(self, |c| &c.reference)
     }
 
     pub fn len(&self) -> usize {

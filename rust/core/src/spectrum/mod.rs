@@ -4,6 +4,7 @@
 pub mod grid;
 pub mod measured;
 pub mod named;
+pub mod rgb_channels;
 pub mod sampled;
 pub mod tables;
 

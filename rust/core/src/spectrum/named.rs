@@ -81,6 +81,10 @@ impl SpectrumDesc {
             return Err(format!("spectrum scale {} is not finite", self.scale));
         }
         let mut v: Vec<f32> = match &self.kind {
+        if let Some(channels) = grid.rgb() {
+            // The RGB method's three-lane grid: RGB as given, spectra converted.
+            return channels.evaluate(self, role, uplift);
+        }
             SpectrumKind::Constant { value } => vec![*value; grid.len()],
             SpectrumKind::Blackbody { temperature } => {
                 let t = *temperature;

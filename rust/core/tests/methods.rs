@@ -1,0 +1,562 @@
+//! The four methods and three directions (SPEC §3) against closed forms and against
+//! each other: furnaces (L/(1−a), white furnace), a lit box rendered every way, a
+//! test-only dispersive BSDF for the collapse (eq. 9) and splitting logic, determinism.
+
+mod common;
+
+use common::*;
+use glam::{Vec2, Vec3A};
+use polychrome_core::color::{Observer, RgbSpace};
+use polychrome_core::material::{Bsdf, BsdfFlags, BsdfSample, ShadingContext};
+use polychrome_core::render::{
+    render, render_scene, Direction, Method, RenderControl, RenderSettings,
+};
+use polychrome_core::sampling::cosine_hemisphere;
+use polychrome_core::scene::{
+    BsdfDesc, Buffer, BuildOptions, MaterialDesc, Scene, SceneDesc, WorldDesc,
+};
+use polychrome_core::spectrum::named::{SpectrumKind, SpectrumRole};
+use polychrome_core::spectrum::{SampledSpectrum, SpectrumDesc, WavelengthGrid};
+
+fn diffuse(name: &str, reflectance: SpectrumDesc, emission: Option<SpectrumDesc>) -> MaterialDesc {
+    MaterialDesc {
+        name: name.into(),
+        bsdf: BsdfDesc::Diffuse { reflectance },
+        emission,
+    }
+}
+
+/// A uniform world of `radiance` (through JSON, as every front end builds it).
+fn world(radiance: &SpectrumDesc) -> WorldDesc {
+    serde_json::from_value(serde_json::json!({ "radiance": radiance })).expect("world description")
+}
+
+fn furnace_scene(l: f32, a: f32) -> (SceneDesc, Vec<Buffer>) {
+    let mut desc = SceneDesc::default();
+    let mut buffers = Vec::new();
+    desc.materials.push(diffuse(
+        "furnace",
+        SpectrumDesc::constant(a),
+        Some(SpectrumDesc::constant(l)),
+    ));
+    let (v, t) = uv_sphere([0.0; 3], 2.0, 24, 48);
+    add_mesh(&mut desc, &mut buffers, "sphere", v, t, 0);
+    (desc, buffers)
+}
+
+/// A closed box (inward-facing walls of different spectral reflectances) with a small
+/// emissive quad under the ceiling; the camera inside looks at the back wall.
+fn box_scene() -> (SceneDesc, Vec<Buffer>) {
+    let mut desc = SceneDesc::default();
+    let mut buffers = Vec::new();
+    let refl = |kind| SpectrumDesc { kind, scale: 0.8 };
+    desc.materials
+        .push(diffuse("white", SpectrumDesc::constant(0.75), None));
+    desc.materials.push(diffuse(
+        "red",
+        refl(SpectrumKind::Tabulated {
+            wavelengths: vec![380.0, 560.0, 620.0, 780.0],
+            values: vec![0.05, 0.08, 0.9, 0.95],
+        }),
+        None,
+    ));
+    desc.materials.push(diffuse(
+        "green",
+        refl(SpectrumKind::NarrowBand {
+            center: 530.0,
+            width: 80.0,
+        }),
+        None,
+    ));
+    desc.materials.push(diffuse(
+        "lamp",
+        SpectrumDesc::constant(0.0),
+        Some(SpectrumDesc {
+            kind: SpectrumKind::Blackbody {
+                temperature: 4000.0,
+            },
+            scale: 8.0,
+        }),
+    ));
+    let s = 1.0f32;
+    let quad = |p: [[f32; 3]; 4]| -> (Vec<f32>, Vec<u32>) {
+        (
+            p.iter().flatten().copied().collect(),
+            vec![0, 1, 2, 0, 2, 3],
+        )
+    };
+    // Floor z=-1, ceiling z=1, walls x=±1, back y=1, front y=-1 (behind the camera).
+    let (v, t) = quad([[-s, -s, -s], [s, -s, -s], [s, s, -s], [-s, s, -s]]);
+    add_mesh(&mut desc, &mut buffers, "floor", v, t, 0);
+    let (v, t) = quad([[-s, -s, s], [-s, s, s], [s, s, s], [s, -s, s]]);
+    add_mesh(&mut desc, &mut buffers, "ceiling", v, t, 0);
+    let (v, t) = quad([[-s, -s, -s], [-s, s, -s], [-s, s, s], [-s, -s, s]]);
+    add_mesh(&mut desc, &mut buffers, "left", v, t, 1);
+    let (v, t) = quad([[s, -s, -s], [s, -s, s], [s, s, s], [s, s, -s]]);
+    add_mesh(&mut desc, &mut buffers, "right", v, t, 2);
+    let (v, t) = quad([[-s, s, -s], [s, s, -s], [s, s, s], [-s, s, s]]);
+    add_mesh(&mut desc, &mut buffers, "back", v, t, 0);
+    let (v, t) = quad([[-s, -s, -s], [-s, -s, s], [s, -s, s], [s, -s, -s]]);
+    add_mesh(&mut desc, &mut buffers, "front", v, t, 0);
+    let l = 0.3f32;
+    let (v, t) = quad([[-l, -l, 0.98], [l, -l, 0.98], [l, l, 0.98], [-l, l, 0.98]]);
+    add_mesh(&mut desc, &mut buffers, "lamp", v, t, 3);
+    // Camera at y = −0.95 looking along +y (Blender: local −Z → world +y, local +Y → +z).
+    desc.camera.to_world = [
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, -1.0, -0.95],
+        [0.0, 1.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0, 1.0],
+    ];
+    desc.camera.focal_length = 18.0;
+    (desc, buffers)
+}
+
+/// Mean of each RGB channel over all pixels and its standard error.
+fn channel_means(rgba: &[f32]) -> [(f64, f64); 3] {
+    std::array::from_fn(|c| {
+        let v: Vec<f64> = rgba.chunks_exact(4).map(|p| p[c] as f64).collect();
+        let n = v.len() as f64;
+        let m = v.iter().sum::<f64>() / n;
+        let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
+        (m, (var / n).sqrt())
+    })
+}
+
+/// Means over the four image quadrants of each channel (12 numbers) with standard errors.
+fn quadrant_means(rgba: &[f32], w: usize, h: usize) -> Vec<(f64, f64)> {
+    let mut out = Vec::new();
+    for q in 0..4 {
+        let (qx, qy) = (q % 2, q / 2);
+        let mut px = Vec::new();
+        for y in qy * h / 2..(qy + 1) * h / 2 {
+            for x in qx * w / 2..(qx + 1) * w / 2 {
+                let i = (y * w + x) * 4;
+                px.extend_from_slice(&rgba[i..i + 4]);
+            }
+        }
+        out.extend(channel_means(&px));
+    }
+    out
+}
+
+fn assert_close(a: &[(f64, f64)], b: &[(f64, f64)], what: &str) {
+    for (k, (&(ma, sa), &(mb, sb))) in a.iter().zip(b).enumerate() {
+        let se = (sa * sa + sb * sb).sqrt();
+        assert!(
+            (ma - mb).abs() < 5.0 * se + 2e-3 * mb.abs().max(1e-3),
+            "{what}: value {k}: {ma} vs {mb} (se {se})"
+        );
+    }
+}
+
+#[test]
+fn furnace_forward_and_bidirectional_see_emission_over_one_minus_albedo() {
+    let (l, a) = (0.5f32, 0.6f32);
+    let (desc, buffers) = furnace_scene(l, a);
+    let expected = l as f64 / (1.0 - a as f64);
+    for direction in [Direction::Forward, Direction::Bidirectional] {
+        for method in [Method::Polychromatic, Method::MonochromaticRays] {
+            // Monochromatic light paths are not stratified per pixel: more of them.
+            let samples = if method == Method::MonochromaticRays {
+                64
+            } else {
+                16
+            };
+            let settings = RenderSettings {
+                width: 16,
+                height: 16,
+                samples,
+                max_bounces: 200,
+                method,
+                direction,
+                ..Default::default()
+            };
+            let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
+            let (mean, se) = mean_and_standard_error(&out.images.rgba);
+            assert!(
+                (mean - expected).abs() < 5.0 * se + 2e-3,
+                "{direction:?} {method:?}: mean {mean} expected {expected} (se {se})"
+            );
+            assert!(
+                se < 0.05 * expected,
+                "{direction:?} {method:?}: too noisy: se {se}"
+            );
+            assert_eq!(out.stats.nonfinite_samples, 0);
+        }
+    }
+}
+
+#[test]
+fn furnace_monochromatic_scenes_and_rgb_match_the_closed_form() {
+    let (l, a) = (0.5f32, 0.6f32);
+    let (desc, buffers) = furnace_scene(l, a);
+    let expected = l as f64 / (1.0 - a as f64);
+    for (method, n) in [(Method::MonochromaticScenes, 8usize), (Method::Rgb, 41)] {
+        let settings = RenderSettings {
+            width: 12,
+            height: 12,
+            samples: 8,
+            max_bounces: 200,
+            method,
+            wavelength_count: n,
+            ..Default::default()
+        };
+        let control = RenderControl::new();
+        let out = render(&desc, &buffers, &settings, &control).unwrap();
+        let (mean, se) = mean_and_standard_error(&out.images.rgba);
+        assert!(
+            (mean - expected).abs() < 5.0 * se + 2e-3,
+            "{method:?}: mean {mean} expected {expected} (se {se})"
+        );
+        let (done, total) = control.progress();
+        assert_eq!(done, total);
+        let per_image = 12 * 12 * 8;
+        assert_eq!(
+            total,
+            if method == Method::MonochromaticScenes {
+                per_image * n as u64
+            } else {
+                per_image
+            }
+        );
+    }
+}
+
+#[test]
+fn every_method_and_direction_agrees_with_polychromatic_backward_on_a_lit_box() {
+    let (desc, buffers) = box_scene();
+    let (w, h) = (16usize, 16usize);
+    let base = RenderSettings {
+        width: w as u32,
+        height: h as u32,
+        max_bounces: 6,
+        wavelength_count: 21,
+        ..Default::default()
+    };
+    let reference = render(
+        &desc,
+        &buffers,
+        &RenderSettings {
+            samples: 256,
+            ..base.clone()
+        },
+        &RenderControl::new(),
+    )
+    .unwrap();
+    let reference = quadrant_means(&reference.images.rgba, w, h);
+    assert!(reference.iter().all(|&(m, _)| m > 0.0));
+    let cases = [
+        (Method::MonochromaticRays, Direction::Backward, 128),
+        (Method::MonochromaticScenes, Direction::Backward, 16),
+        (Method::Polychromatic, Direction::Forward, 128),
+        (Method::Polychromatic, Direction::Bidirectional, 64),
+        (Method::MonochromaticRays, Direction::Forward, 256),
+    ];
+    for (method, direction, samples) in cases {
+        let out = render(
+            &desc,
+            &buffers,
+            &RenderSettings {
+                method,
+                direction,
+                samples,
+                ..base.clone()
+            },
+            &RenderControl::new(),
+        )
+        .unwrap();
+        assert_eq!(out.stats.nonfinite_samples, 0);
+        assert_close(
+            &quadrant_means(&out.images.rgba, w, h),
+            &reference,
+            &format!("{method:?} {direction:?}"),
+        );
+    }
+}
+
+#[test]
+fn same_seed_gives_identical_images_on_one_and_two_threads_for_every_method() {
+    let (desc, buffers) = box_scene();
+    for (method, direction) in [
+        (Method::MonochromaticRays, Direction::Backward),
+        (Method::MonochromaticScenes, Direction::Backward),
+        (Method::Polychromatic, Direction::Forward),
+        (Method::Rgb, Direction::Bidirectional),
+    ] {
+        let base = RenderSettings {
+            width: 20,
+            height: 14,
+            samples: 3,
+            seed: 7,
+            method,
+            direction,
+            wavelength_count: 8,
+            ..Default::default()
+        };
+        let one = render(
+            &desc,
+            &buffers,
+            &RenderSettings {
+                threads: 1,
+                ..base.clone()
+            },
+            &RenderControl::new(),
+        )
+        .unwrap();
+        let two = render(
+            &desc,
+            &buffers,
+            &RenderSettings {
+                threads: 2,
+                ..base.clone()
+            },
+            &RenderControl::new(),
+        )
+        .unwrap();
+        assert_eq!(one.images.rgba, two.images.rgba, "{method:?} {direction:?}");
+        assert!(one.images.rgba.iter().any(|&v| v > 0.0));
+    }
+}
+
+/// A test-only dispersive BSDF: a white (albedo 1) cosine reflector that, like a
+/// dispersive dielectric, must collapse a polychromatic path to one wavelength (eq. 9):
+/// the wavelength is chosen ∝ the path's energy (throughput × grid weight), the
+/// throughput becomes that sample divided by its probability, and the sampled direction
+/// depends on the wavelength (rotated about the normal by an angle ∝ λ).
+struct TestDispersive;
+
+impl Bsdf for TestDispersive {
+    fn flags(&self) -> BsdfFlags {
+        BsdfFlags {
+            smooth: false,
+            specular: true,
+            dispersive: true,
+        }
+    }
+    fn eval(&self, _: &ShadingContext, _: Vec3A, _: Vec3A, out: &mut SampledSpectrum) -> f32 {
+        out.fill(0.0);
+        0.0
+    }
+    fn pdf(&self, _: &ShadingContext, _: Vec3A, _: Vec3A) -> f32 {
+        0.0
+    }
+    fn sample(
+        &self,
+        ctx: &ShadingContext,
+        wo: Vec3A,
+        u: Vec2,
+        uc: f32,
+        throughput: &mut SampledSpectrum,
+    ) -> Option<BsdfSample> {
+        let i = match ctx.single_wavelength {
+            Some(i) => {
+                throughput.keep_only(i);
+                i
+            }
+            None => {
+                let w = ctx.grid.weights();
+                let energy: Vec<f32> = (0..throughput.len())
+                    .map(|k| throughput.get(k).max(0.0) * w[k])
+                    .collect();
+                let total: f32 = energy.iter().sum();
+                if !(total > 0.0) {
+                    return None;
+                }
+                let mut acc = 0.0;
+                let mut i = energy.len() - 1;
+                for (k, e) in energy.iter().enumerate() {
+                    acc += e / total;
+                    if uc < acc {
+                        i = k;
+                        break;
+                    }
+                }
+                let p = energy[i] / total;
+                if !(p > 0.0) {
+                    return None;
+                }
+                throughput.keep_only(i);
+                throughput.scale(1.0 / p);
+                i
+            }
+        };
+        let d = cosine_hemisphere(u);
+        let angle = ctx.grid.lambdas()[i] * 0.05;
+        let (s, c) = angle.sin_cos();
+        let mut wi = Vec3A::new(c * d.x - s * d.y, s * d.x + c * d.y, d.z);
+        if wo.z < 0.0 {
+            wi.z = -wi.z;
+        }
+        Some(BsdfSample {
+            wi,
+            pdf: 1.0,
+            specular: true,
+            collapsed_to: Some(i),
+        })
+    }
+    fn albedo(&self, _: &ShadingContext, out: &mut SampledSpectrum) {
+        out.fill(1.0);
+    }
+}
+
+/// White furnace with dispersion: an albedo-1 dispersive sphere inside a uniform,
+/// strongly coloured environment is invisible, whatever the method: every pixel sees the
+/// environment's colour. Proves the collapse weight (and splitting) is unbiased.
+#[test]
+fn dispersive_white_sphere_vanishes_in_a_uniform_environment_in_every_method() {
+    let mut desc = SceneDesc::default();
+    let mut buffers = Vec::new();
+    desc.materials
+        .push(diffuse("glass", SpectrumDesc::constant(1.0), None));
+    let (v, t) = uv_sphere([0.0, 0.0, -4.0], 1.5, 16, 32);
+    add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
+    let env = SpectrumDesc {
+        kind: SpectrumKind::Blackbody {
+            temperature: 2500.0,
+        },
+        scale: 1.0,
+    };
+    desc.world = Some(world(&env));
+    let (w, h) = (12u32, 12u32);
+    let grid = WavelengthGrid::uniform(21, 380.0, 780.0).unwrap();
+    for (method, splitting) in [
+        (Method::Polychromatic, false),
+        (Method::Polychromatic, true),
+        (Method::MonochromaticRays, false),
+        (Method::MonochromaticScenes, false),
+        (Method::Rgb, false),
+    ] {
+        let g = if method == Method::Rgb {
+            WavelengthGrid::rgb_channels(&grid, &RgbSpace::rec709()).unwrap()
+        } else {
+            grid.clone()
+        };
+        let opts = BuildOptions {
+            grid: g.clone(),
+            space: RgbSpace::rec709(),
+            uplift: Default::default(),
+            width: w,
+            height: h,
+        };
+        let mut scene = Scene::build(&desc, &buffers, &opts).unwrap();
+        scene.materials[0].bsdf = Box::new(TestDispersive);
+        let samples = if method == Method::MonochromaticScenes {
+            8
+        } else {
+            64
+        };
+        let settings = RenderSettings {
+            width: w,
+            height: h,
+            samples,
+            max_bounces: 64,
+            method,
+            dispersion_splitting: splitting,
+            wavelength_count: 21,
+            ..Default::default()
+        };
+        let out = render_scene(&scene, &settings, &RenderControl::new()).unwrap();
+        // Reference: the environment's colour through the CIE observer (or as RGB).
+        let env_values = env
+            .evaluate(&g, SpectrumRole::Illuminant, &NoRgbConv)
+            .unwrap();
+        let expected = RgbSpace::rec709().xyz_to_rgb(Observer::new(&g).xyz(&env_values));
+        let means = channel_means(&out.images.rgba);
+        for c in 0..3 {
+            let (m, se) = means[c];
+            assert!(
+                (m - expected[c]).abs() < 5.0 * se + 2e-3 * expected[c].abs(),
+                "{method:?} split={splitting} channel {c}: {m} vs {} (se {se})",
+                expected[c]
+            );
+        }
+        assert_eq!(out.stats.nonfinite_samples, 0);
+    }
+}
+
+struct NoRgbConv;
+impl polychrome_core::spectrum::named::RgbToSpectrum for NoRgbConv {
+    fn convert(&self, _: [f32; 3], _: SpectrumRole) -> Vec<f32> {
+        Vec::new()
+    }
+}
+
+/// SPEC §1 (a): a narrow-band red light on a green sphere. RGB mode multiplies RGBs and
+/// gets a very different colour from the spectral product.
+#[test]
+fn rgb_mode_differs_from_spectral_under_narrow_band_light() {
+    let mut desc = SceneDesc::default();
+    let mut buffers = Vec::new();
+    let green = SpectrumDesc {
+        kind: SpectrumKind::NarrowBand {
+            center: 540.0,
+            width: 60.0,
+        },
+        scale: 0.9,
+    };
+    desc.materials.push(diffuse("green", green, None));
+    desc.world = Some(world(&SpectrumDesc {
+        kind: SpectrumKind::NarrowBand {
+            center: 610.0,
+            width: 20.0,
+        },
+        scale: 1.0,
+    }));
+    let (v, t) = uv_sphere([0.0, 0.0, -4.0], 3.0, 16, 32);
+    add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
+    let base = RenderSettings {
+        width: 8,
+        height: 8,
+        samples: 16,
+        max_bounces: 1,
+        ..Default::default()
+    };
+    let spectral = render(&desc, &buffers, &base, &RenderControl::new()).unwrap();
+    let rgb = render(
+        &desc,
+        &buffers,
+        &RenderSettings {
+            method: Method::Rgb,
+            ..base
+        },
+        &RenderControl::new(),
+    )
+    .unwrap();
+    // Centre pixel: the spectral product of a 610 nm band and a 540 nm reflectance is
+    // far dimmer than RGB's red × green-channel product predicts, and differently hued.
+    let i = (4 * 8 + 4) * 4;
+    let s = &spectral.images.rgba[i..i + 3];
+    let r = &rgb.images.rgba[i..i + 3];
+    assert!(s.iter().chain(r).all(|v| v.is_finite()));
+    let ys = luminance(&spectral.images.rgba[i..i + 4]);
+    let yr = luminance(&rgb.images.rgba[i..i + 4]);
+    assert!(
+        (ys - yr).abs() > 0.3 * ys.max(yr),
+        "spectral {s:?} vs rgb {r:?}"
+    );
+}
+
+#[test]
+fn bad_combinations_are_reported_as_settings() {
+    let (desc, buffers) = furnace_scene(0.5, 0.5);
+    let s = RenderSettings {
+        width: 4,
+        height: 4,
+        samples: 1,
+        method: Method::MonochromaticRays,
+        dispersion_splitting: true,
+        ..Default::default()
+    };
+    let err = render(&desc, &buffers, &s, &RenderControl::new())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(err.contains("dispersion_splitting"), "{err}");
+    let json = r#"{"method": "MONOCHROMATIC_SCENES", "direction": "BIDIRECTIONAL", "dispersion_splitting": false}"#;
+    let parsed: RenderSettings = serde_json::from_str(json).unwrap();
+    assert_eq!(
+        (parsed.method, parsed.direction),
+        (Method::MonochromaticScenes, Direction::Bidirectional)
+    );
+}
