@@ -14,6 +14,7 @@ __version__ = "0.1.0"
 from . import spectra
 from .render import RenderResult, RenderSettings, render
 from .scene import Camera, Diffuse, Emitter, Material, PointLight, Scene, look_at
+from .texture import Texture
 
 __all__ = [
     "Camera",
@@ -24,6 +25,7 @@ __all__ = [
     "RenderResult",
     "RenderSettings",
     "Scene",
+    "Texture",
     "look_at",
     "render",
     "spectra",

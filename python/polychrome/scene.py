@@ -14,6 +14,7 @@ import numpy as np
 
 from . import spectra
 from .spectra import Spectrum, as_spectrum
+from .texture import Texture
 
 
 def _matrix(value: Any, what: str) -> list[list[float]]:
@@ -99,10 +100,11 @@ class Material:
 
 
 class Diffuse(Material):
-    """Lambertian reflectance (a spectrum, a number or an RGB triple), optionally emissive."""
+    """Lambertian reflectance (a spectrum, a number, an RGB triple or a
+    :class:`~polychrome.Texture`, converted per hit), optionally emissive."""
 
     def __init__(self, reflectance: Any = 0.8, *, emission: Any = None, name: str = "Diffuse"):
-        self.reflectance = as_spectrum(reflectance)
+        self.reflectance = reflectance if isinstance(reflectance, Texture) else as_spectrum(reflectance)
         self.emission = None if emission is None else as_spectrum(emission)
         self.name = name
 
@@ -153,6 +155,7 @@ class Scene:
         self._instances: list[dict[str, Any]] = []
         self.lights: list[Any] = []
         self.world: Spectrum | None = None
+        self.world_texture: dict[str, Any] | None = None
 
     # -- materials -------------------------------------------------------------
     def add_material(self, material: Material) -> int:
@@ -247,8 +250,29 @@ class Scene:
     def add_light(self, light: Any) -> None:
         self.lights.append(light)
 
-    def set_world(self, radiance: Any) -> None:
-        """Uniform radiance from every direction (Blender's world colour); None removes it."""
+    def set_world(
+        self,
+        radiance: Any = None,
+        *,
+        texture: Texture | None = None,
+        strength: float = 1.0,
+        rotation: float = 0.0,
+        importance_sampling: bool = True,
+    ) -> None:
+        """Uniform radiance from every direction (Blender's world colour), or an
+        equirectangular HDRI ``texture`` (Blender's Environment Texture, Z-up) times
+        ``strength``, turned by ``rotation`` radians about +Z (the Mapping node's Z
+        rotation). With neither, the world is removed."""
+        self.world_texture = None
+        if texture is not None:
+            if not isinstance(texture, Texture):
+                raise TypeError(f"world: texture must be a polychrome.Texture, got {type(texture).__name__}")
+            s, r = float(strength), float(rotation)
+            if not (math.isfinite(s) and s >= 0.0) or not math.isfinite(r):
+                raise ValueError(f"world: strength {strength} must be finite and non-negative, rotation {rotation} finite")
+            self.world = None
+            self.world_texture = {"texture": texture, "strength": s, "rotation": r, "importance_sampling": bool(importance_sampling)}
+            return
         self.world = None if radiance is None else as_spectrum(radiance)
 
     # -- export to the core ----------------------------------------------------
@@ -262,7 +286,41 @@ class Scene:
             "lights": [light.to_dict() for light in self.lights],
             "world": None if self.world is None else {"radiance": self.world.to_dict()},
         }
-        return desc, self._buffers
+        return self._resolve_textures(desc, self._buffers)
+
+    def _resolve_textures(self, desc: dict[str, Any], buffers: list[np.ndarray]) -> tuple[dict[str, Any], list[np.ndarray]]:
+        """Replaces Texture objects in the description by indices into a ``textures``
+        list whose pixels go into new numbered buffers (float32 or uint8)."""
+        textures: list[Texture] = []
+        buffers = list(buffers)
+        entries: list[dict[str, Any]] = []
+
+        def index(t: Texture) -> int:
+            for i, known in enumerate(textures):
+                if known is t:
+                    return i
+            textures.append(t)
+            buffers.append(t.pixels.ravel())
+            entries.append({
+                "name": t.name, "width": t.width, "height": t.height, "channels": int(t.pixels.shape[2]),
+                "buffer": len(buffers) - 1, "encoding": t.encoding, "wrap": t.wrap,
+            })
+            return len(textures) - 1
+
+        def walk(value: Any) -> Any:
+            if isinstance(value, dict):
+                return {k: (index(v) if isinstance(v, Texture) else walk(v)) for k, v in value.items()}
+            if isinstance(value, list):
+                return [walk(v) for v in value]
+            return value
+
+        desc = walk(desc)
+        world_texture = getattr(self, "world_texture", None)
+        if world_texture is not None:
+            desc["world"] = {**world_texture, "texture": index(world_texture["texture"])}
+        if textures:
+            desc["textures"] = entries
+        return desc, buffers
 
 
-__all__ = ["Camera", "Material", "Diffuse", "Emitter", "PointLight", "Scene", "look_at", "spectra"]
+__all__ = ["Camera", "Material", "Diffuse", "Emitter", "PointLight", "Scene", "Texture", "look_at", "spectra"]

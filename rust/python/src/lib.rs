@@ -8,7 +8,7 @@ use polychrome_core::color::uplift::Uplift;
 use polychrome_core::color::{Observer, RgbSpace};
 use polychrome_core::render::{render as core_render, RenderControl, RenderOutput, RenderSettings};
 use polychrome_core::scene::{Buffer, SceneDesc};
-use polychrome_core::spectrum::named::SpectrumRole;
+use polychrome_core::spectrum::named::{RgbToSpectrum, SpectrumRole};
 use polychrome_core::spectrum::SpectrumDesc;
 use polychrome_core::Error;
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
@@ -52,8 +52,10 @@ fn convert_buffers(buffers: Vec<Bound<'_, PyAny>>) -> PyResult<Vec<Buffer>> {
                 Ok(Buffer::F32(a.as_array().iter().copied().collect()))
             } else if let Ok(a) = b.extract::<PyReadonlyArrayDyn<u32>>() {
                 Ok(Buffer::U32(a.as_array().iter().copied().collect()))
+            } else if let Ok(a) = b.extract::<PyReadonlyArrayDyn<u8>>() {
+                Ok(Buffer::U8(a.as_array().iter().copied().collect()))
             } else {
-                Err(PyTypeError::new_err(format!("buffer {i}: expected a float32 or uint32 numpy array")))
+                Err(PyTypeError::new_err(format!("buffer {i}: expected a float32, uint32 or uint8 numpy array")))
             }
         })
         .collect()
@@ -177,12 +179,45 @@ fn spectrum_xyz(spectrum_json: &str, settings_json: &str) -> PyResult<(f64, f64,
     Ok((xyz[0], xyz[1], xyz[2]))
 }
 
+/// uplift(rgb, role, settings_json) -> (..., N) spectra of the (..., 3) float32 RGB
+/// array on the settings' grid, through the same code path textures and HDRIs use at a
+/// hit: role "reflectance" (clamped to [0,1]) or "illuminant" (unbounded).
+#[pyfunction]
+fn uplift<'py>(py: Python<'py>, rgb: PyReadonlyArrayDyn<'py, f32>, role: &str, settings_json: &str) -> PyResult<Bound<'py, numpy::PyArrayDyn<f32>>> {
+    let settings: RenderSettings = parse(settings_json, "render settings")?;
+    let role = role_from(role)?;
+    let shape = rgb.as_array().shape().to_vec();
+    if shape.last() != Some(&3) {
+        return Err(PyValueError::new_err(format!("uplift: rgb must have shape (..., 3), got {shape:?}")));
+    }
+    let values: Vec<f32> = rgb.as_array().iter().copied().collect();
+    let (n, out) = guarded("uplift", || {
+        let grid = settings.grid()?;
+        let up = Uplift::new(&grid, &RgbSpace::rec709(), settings.uplift)?;
+        let n = grid.len();
+        let mut out = vec![0.0f32; values.len() / 3 * n];
+        for (c, o) in values.chunks_exact(3).zip(out.chunks_exact_mut(n)) {
+            let c = [c[0], c[1], c[2]];
+            match role {
+                SpectrumRole::Reflectance => up.reflectance_into(c, o),
+                SpectrumRole::Illuminant => up.illuminant_into(c, o),
+                SpectrumRole::Unbounded => o.copy_from_slice(&RgbToSpectrum::convert(&up, c, role)),
+            }
+        }
+        Ok((n, out))
+    })?;
+    let mut out_shape = shape;
+    *out_shape.last_mut().expect("checked above") = n;
+    PyArray1::from_vec(py, out).reshape(out_shape)
+}
+
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add_function(wrap_pyfunction!(wavelength_grid, m)?)?;
     m.add_function(wrap_pyfunction!(spectrum_values, m)?)?;
     m.add_function(wrap_pyfunction!(spectrum_xyz, m)?)?;
+    m.add_function(wrap_pyfunction!(uplift, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -57,7 +57,8 @@ impl Integrator for PathTracer {
                         let pl = scene.light_distribution.pmf(env.light) * scene.lights[env.light].pdf_li(prev_p, ray.direction, f32::INFINITY);
                         power_heuristic(prev_pdf, pl)
                     };
-                    radiance.add_product(&beta, &env.radiance, w);
+                    let l = env.radiance_along(ray.direction, &mut le);
+                    radiance.add_product(&beta, l, w);
                 }
                 break;
             };

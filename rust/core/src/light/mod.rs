@@ -9,7 +9,7 @@ use crate::spectrum::SampledSpectrum;
 use glam::{Vec2, Vec3A};
 
 pub use area::AreaTriangle;
-pub use environment::UniformEnvironment;
+pub use environment::{ImageEnvironment, UniformEnvironment};
 pub use point::PointLight;
 
 /// Incident radiance sampled from a light towards a shading point.

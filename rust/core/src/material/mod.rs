@@ -8,12 +8,14 @@
 pub mod catalogue;
 pub mod diffuse;
 pub mod param;
+pub mod texture;
 
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 use glam::{Vec2, Vec3A};
 
 pub use diffuse::Diffuse;
 pub use param::SpectralParam;
+pub use texture::{Texture, Wrap};
 
 /// What an integrator needs to know about a BSDF without evaluating it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -1,19 +1,33 @@
 //! A spectral material parameter: a spectrum fixed when the scene is built, looked up
 //! per hit. Textures (kept RGB, converted at hit time) plug in here.
 
+use super::texture::Texture;
 use super::ShadingContext;
+use crate::color::uplift::Uplift;
 use crate::spectrum::SampledSpectrum;
+use std::sync::Arc;
 
 pub enum SpectralParam {
     Constant(SampledSpectrum),
+    /// An RGB image texture converted to a reflectance at each hit (deferred conversion,
+    /// SPEC §4): the bilinear RGB at the hit's uv goes through `uplift.reflectance_into`,
+    /// then is multiplied by `scale`. The uplift is shared (one per scene), not copied.
+    Texture { texture: Arc<Texture>, uplift: Arc<Uplift>, scale: f32 },
 }
 
 impl SpectralParam {
     /// Writes the parameter's spectrum at this hit into `out`.
     #[inline]
-    pub fn evaluate_into(&self, _ctx: &ShadingContext, out: &mut SampledSpectrum) {
+    pub fn evaluate_into(&self, ctx: &ShadingContext, out: &mut SampledSpectrum) {
         match self {
             SpectralParam::Constant(s) => out.copy_from(s),
+            SpectralParam::Texture { texture, uplift, scale } => {
+                let rgb = texture.lookup(ctx.uv);
+                uplift.reflectance_into(rgb, out.values_mut());
+                if *scale != 1.0 {
+                    out.scale(*scale);
+                }
+            }
         }
     }
 }

@@ -170,6 +170,8 @@ pub struct RenderStats {
     pub time_limited: bool,
     pub lights: usize,
     pub triangles: usize,
+    /// Bytes held by textures and HDRIs (RGB texels + environment sampling tables).
+    pub texture_bytes: usize,
 }
 
 pub struct RenderOutput {
@@ -393,6 +395,7 @@ fn render_built(
     let _ = cancelled_mid;
         lights: scene.lights.len(),
         triangles: scene.meshes.iter().map(|m| m.indices.len()).sum(),
+        texture_bytes: scene.texture_bytes,
     };
     Ok(RenderOutput { width: w, height: h, images: film.images(&scene.space), wavelengths: scene.grid.lambdas().to_vec(), stats })
 }

@@ -11,6 +11,8 @@ use serde::{Deserialize, Serialize};
 pub enum Buffer {
     F32(Vec<f32>),
     U32(Vec<u32>),
+    /// Bytes (8-bit sRGB texture pixels).
+    U8(Vec<u8>),
 }
 
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -23,7 +25,45 @@ pub struct SceneDesc {
     pub instances: Option<Vec<InstanceDesc>>,
     pub lights: Vec<LightDesc>,
     pub world: Option<WorldDesc>,
+    /// RGB images, kept RGB and converted to spectra when a ray hits them (SPEC §4).
+    /// Referenced by index: `{"type": "texture", "texture": i}` in a diffuse
+    /// reflectance, `world.texture` for an HDRI environment.
+    pub textures: Vec<TextureDesc>,
 }
+
+/// How a texture's pixels are encoded in its buffer.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TextureEncoding {
+    /// f32 linear RGB(A) values (an F32 buffer).
+    #[default]
+    Linear,
+    /// 8-bit sRGB-encoded RGB(A) bytes (a U8 buffer), decoded on lookup.
+    Srgb,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TextureDesc {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    /// 3 (RGB) or 4 (RGBA; alpha is ignored).
+    #[serde(default = "three")]
+    pub channels: u32,
+    /// Buffer of height × width × channels values, top row first.
+    pub buffer: usize,
+    #[serde(default)]
+    pub encoding: TextureEncoding,
+    /// REPEAT, CLIP or EXTEND (Blender's names).
+    #[serde(default)]
+    pub wrap: crate::material::texture::Wrap,
+}
+
+fn three() -> u32 {
+    3
+}
+
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -100,6 +140,28 @@ impl LightDesc {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct WorldDesc {
-    /// Radiance arriving from every direction not blocked by geometry.
-    pub radiance: SpectrumDesc,
+    /// Radiance arriving from every direction not blocked by geometry...
+    #[serde(default)]
+    pub radiance: Option<SpectrumDesc>,
+    /// ...or an equirectangular RGB image (index into `textures`), Blender's
+    /// Environment Texture in a Z-up world, which takes precedence.
+    #[serde(default)]
+    pub texture: Option<usize>,
+    /// Multiplies the image's radiance (Blender's Background strength).
+    #[serde(default = "one_f32")]
+    pub strength: f32,
+    /// Rotation of the image lookup about +Z in radians (Blender's Mapping node Z).
+    #[serde(default)]
+    pub rotation: f32,
+    /// Sample the image ∝ luminance × sin θ (default); false samples uniformly.
+    #[serde(default = "yes")]
+    pub importance_sampling: bool,
+}
+
+fn one_f32() -> f32 {
+    1.0
+}
+
+fn yes() -> bool {
+    true
 }

@@ -9,10 +9,11 @@ use crate::camera::{affine_from_rows, Camera};
 use crate::color::uplift::{Uplift, UpliftMethod};
 use crate::color::{Observer, RgbSpace};
 use crate::geometry::{Instance, Mesh, Ray};
-use crate::light::{AreaTriangle, Light, PointLight, UniformEnvironment};
-use crate::material::{Black, Bsdf, Diffuse, Material, SpectralParam};
+use crate::light::{AreaTriangle, ImageEnvironment, Light, PointLight, UniformEnvironment};
+use crate::material::{Black, Bsdf, Diffuse, Material, SpectralParam, Texture};
 use crate::sampling::Distribution1D;
-use crate::spectrum::named::{evaluate_for, SpectrumRole};
+use crate::spectrum::named::{evaluate_for, SpectrumKind, SpectrumRole};
+use std::sync::Arc;
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 use crate::{Error, Result};
 pub use desc::*;
@@ -46,7 +47,37 @@ pub struct SurfaceInteraction {
 /// The uniform world, kept beside its light for radiance lookups on escaped rays.
 pub struct EnvironmentRef {
     pub light: usize,
+    /// The uniform world's radiance (zero when `image` is set).
     pub radiance: SampledSpectrum,
+    /// An HDRI world (converted to radiance per lookup), shared with its light.
+    pub image: Option<Arc<ImageEnvironment>>,
+}
+
+impl EnvironmentRef {
+    /// Radiance arriving from direction `d` (an escaped ray's direction): the uniform
+    /// radiance, or the image's, converted into `scratch`.
+    #[inline]
+    pub fn radiance_along<'a>(&'a self, d: Vec3A, scratch: &'a mut SampledSpectrum) -> &'a SampledSpectrum {
+        match &self.image {
+            None => &self.radiance,
+            Some(img) => {
+                img.radiance_into(d, scratch);
+                scratch
+            }
+        }
+    }
+
+    /// Radiance from direction `d` at grid wavelength `i` (monochromatic paths).
+    pub fn radiance_at(&self, d: Vec3A, i: usize) -> f32 {
+        match &self.image {
+            None => self.radiance.get(i),
+            Some(img) => {
+                let mut s = SampledSpectrum::zeros(self.radiance.len());
+                img.radiance_into(d, &mut s);
+                s.get(i)
+            }
+        }
+    }
 }
 
 pub struct Scene {
@@ -65,6 +96,8 @@ pub struct Scene {
     /// (u32::MAX where the triangle does not emit), for MIS on BSDF-sampled hits.
     pub triangle_lights: Vec<Option<Vec<u32>>>,
     pub environment: Option<EnvironmentRef>,
+    /// Bytes held by textures and HDRIs (texels plus importance-sampling tables).
+    pub texture_bytes: usize,
     /// Centre and radius of a sphere bounding all geometry.
     pub bounds_center: Vec3A,
     pub bounds_radius: f32,
@@ -74,6 +107,7 @@ fn buffer_f32<'a>(buffers: &'a [Buffer], i: usize, mesh: &str, what: &str) -> Re
     match buffers.get(i) {
         Some(Buffer::F32(v)) => Ok(v),
         Some(Buffer::U32(_)) => Err(Error::object("mesh", mesh, format!("{what} buffer {i} holds integers, expected floats"))),
+        Some(Buffer::U8(_)) => Err(Error::object("mesh", mesh, format!("{what} buffer {i} holds bytes, expected floats"))),
         None => Err(Error::object("mesh", mesh, format!("{what} buffer {i} does not exist"))),
     }
 }
@@ -82,6 +116,7 @@ fn buffer_u32<'a>(buffers: &'a [Buffer], i: usize, mesh: &str, what: &str) -> Re
     match buffers.get(i) {
         Some(Buffer::U32(v)) => Ok(v),
         Some(Buffer::F32(_)) => Err(Error::object("mesh", mesh, format!("{what} buffer {i} holds floats, expected integers"))),
+        Some(Buffer::U8(_)) => Err(Error::object("mesh", mesh, format!("{what} buffer {i} holds bytes, expected 32-bit integers"))),
         None => Err(Error::object("mesh", mesh, format!("{what} buffer {i} does not exist"))),
     }
 }
@@ -91,7 +126,11 @@ impl Scene {
         let grid = opts.grid.clone();
         let n = grid.len();
         let uplift = Uplift::new(&grid, &opts.space, opts.uplift)?;
+        let shared_uplift = Some(Arc::new(uplift.clone()));
         let camera = Camera::new(&desc.camera, opts.width, opts.height)?;
+
+        // Textures: kept RGB, converted at each hit (SPEC §4).
+        let textures: Vec<Arc<Texture>> = desc.textures.iter().map(|t| Texture::from_desc(t, buffers).map(Arc::new)).collect::<Result<_>>()?;
 
         // Materials.
         let mut materials = Vec::with_capacity(desc.materials.len().max(1));
@@ -100,6 +139,18 @@ impl Scene {
                 Ok(SampledSpectrum::from_slice(&evaluate_for(d, &grid, role, &uplift, "material", &m.name, what)?))
             };
             let bsdf: Box<dyn Bsdf> = match &m.bsdf {
+                BsdfDesc::Diffuse { reflectance } if matches!(reflectance.kind, SpectrumKind::Texture { .. }) => {
+                    let SpectrumKind::Texture { texture: t } = reflectance.kind else { unreachable!() };
+                    let texture = textures.get(t).ok_or_else(|| Error::object("material", &m.name, format!("reflectance: texture {t} does not exist ({} textures)", textures.len())))?;
+                    let Some(up) = &shared_uplift else {
+                        return Err(Error::object("material", &m.name, format!("reflectance: texture '{}' cannot be used on this wavelength grid (no RGB → spectrum map)", texture.name)));
+                    };
+                    let scale = reflectance.scale;
+                    if !(scale.is_finite() && (0.0..=1.0).contains(&scale)) {
+                        return Err(Error::object("material", &m.name, format!("reflectance: texture scale {scale} must be in 0..1 (energy conserving)")));
+                    }
+                    Box::new(Diffuse { reflectance: SpectralParam::Texture { texture: texture.clone(), uplift: up.clone(), scale } })
+                }
                 BsdfDesc::Diffuse { reflectance } => {
                     let r = spectrum(reflectance, SpectrumRole::Reflectance, "reflectance")?;
                     if r.max_value() > 1.0 {
@@ -198,16 +249,37 @@ impl Scene {
         }
         let environment = match &desc.world {
             None => None,
-            Some(w) => {
-                let radiance = SampledSpectrum::from_slice(&evaluate_for(&w.radiance, &grid, SpectrumRole::Illuminant, &uplift, "world", "World", "radiance")?);
-                if radiance.is_black() {
-                    None
-                } else {
-                    lights.push(Box::new(UniformEnvironment { radiance: radiance.clone(), scene_radius: bounds_radius }));
-                    Some(EnvironmentRef { light: lights.len() - 1, radiance })
+            Some(w) => match w.texture {
+                Some(t) => {
+                    let texture = textures.get(t).ok_or_else(|| Error::object("world", "World", format!("texture {t} does not exist ({} textures)", textures.len())))?;
+                    let Some(up) = &shared_uplift else {
+                        return Err(Error::object("world", "World", format!("texture '{}': RGB images cannot be used on this wavelength grid (no RGB → spectrum map)", texture.name)));
+                    };
+                    if !(w.strength.is_finite() && w.strength >= 0.0) || !w.rotation.is_finite() {
+                        return Err(Error::object("world", "World", format!("strength {} must be finite and non-negative, rotation {} finite", w.strength, w.rotation)));
+                    }
+                    let img = Arc::new(ImageEnvironment::new(texture.clone(), up.clone(), w.strength, w.rotation, bounds_radius, w.importance_sampling));
+                    if w.strength == 0.0 {
+                        None
+                    } else {
+                        lights.push(Box::new(img.clone()));
+                        Some(EnvironmentRef { light: lights.len() - 1, radiance: SampledSpectrum::zeros(n), image: Some(img) })
+                    }
                 }
-            }
+                None => {
+                    let d = w.radiance.clone().unwrap_or_else(|| crate::spectrum::SpectrumDesc::constant(0.0));
+                    let radiance = SampledSpectrum::from_slice(&evaluate_for(&d, &grid, SpectrumRole::Illuminant, &uplift, "world", "World", "radiance")?);
+                    if radiance.is_black() {
+                        None
+                    } else {
+                        lights.push(Box::new(UniformEnvironment { radiance: radiance.clone(), scene_radius: bounds_radius }));
+                        Some(EnvironmentRef { light: lights.len() - 1, radiance, image: None })
+                    }
+                }
+            },
         };
+        let texture_bytes = textures.iter().map(|t| t.bytes()).sum::<usize>()
+            + environment.as_ref().and_then(|e| e.image.as_ref()).map_or(0, |i| i.bytes() - i.texture.bytes());
         let powers: Vec<f64> = lights.iter().map(|l| l.power(grid.weights())).collect();
         let light_distribution = Distribution1D::new(&powers);
 
@@ -225,6 +297,7 @@ impl Scene {
             light_distribution,
             triangle_lights,
             environment,
+            texture_bytes,
             bounds_center,
             bounds_radius,
         })

@@ -44,6 +44,10 @@ pub enum SpectrumKind {
     Tabulated { wavelengths: Vec<f32>, values: Vec<f32> },
     /// Scene RGB, converted by the render's RGB → spectrum map (eq. 10).
     Rgb { rgb: [f32; 3] },
+    /// Texture `texture` of the scene's `textures` list, kept RGB and converted at each
+    /// hit (SPEC §4). Only parameters that vary over a surface accept it (a diffuse
+    /// reflectance); elsewhere it is an error.
+    Texture { texture: usize },
 }
 
 /// What a spectrum stands for, which decides how RGB converts and what values are legal.
@@ -140,6 +144,9 @@ impl SpectrumDesc {
                     return Err(format!("RGB {rgb:?} is not finite"));
                 }
                 uplift.convert(*rgb, role)
+            }
+            SpectrumKind::Texture { texture } => {
+                return Err(format!("texture {texture} cannot be used here (only a diffuse reflectance or the world accepts a texture)"));
             }
         };
         for x in v.iter_mut() {

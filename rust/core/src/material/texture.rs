@@ -1,0 +1,251 @@
+//! Image textures kept as RGB in memory (SPEC §4, deferred conversion): no per-texel
+//! spectra are ever stored. A lookup returns linear RGB; the caller converts it to a
+//! spectrum with the render's uplift (eq. 10) at the hit.
+//!
+//! Storage is either linear `f32` RGB (12 bytes per texel) or 8-bit sRGB-encoded RGB
+//! (3 bytes per texel, decoded through a 256-entry table on lookup). An alpha channel in
+//! the input is dropped.
+//!
+//! Conventions (Blender's): the pixel buffer is row-major with the *top* row first (as
+//! numpy, Pillow and OpenEXR give images), texture coordinate `v = 0` is the bottom edge,
+//! texel centres sit at `((i + ½)/w, (j + ½)/h)`, and lookups are bilinear.
+
+use crate::scene::{Buffer, TextureDesc, TextureEncoding};
+use crate::{Error, Result};
+use glam::Vec2;
+use serde::{Deserialize, Serialize};
+
+/// What a lookup outside [0,1]² returns (Blender's Image Texture extension modes).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "SCREAMING_SNAKE_CASE")]
+pub enum Wrap {
+    /// Tile the image.
+    #[default]
+    Repeat,
+    /// Black outside the image (texels beyond the edge count as black when filtering).
+    Clip,
+    /// Repeat the edge texels.
+    Extend,
+}
+
+/// How the texels are stored.
+#[derive(Clone, Debug)]
+pub enum TexelData {
+    /// Linear RGB, 3 floats per texel.
+    Linear(Vec<f32>),
+    /// sRGB-encoded RGB, 3 bytes per texel.
+    Srgb8(Vec<u8>),
+}
+
+/// An RGB image texture.
+#[derive(Clone, Debug)]
+pub struct Texture {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    pub wrap: Wrap,
+    data: TexelData,
+}
+
+/// The sRGB transfer function, decoded for every byte value.
+fn srgb_table() -> &'static [f32; 256] {
+    static T: std::sync::OnceLock<[f32; 256]> = std::sync::OnceLock::new();
+    T.get_or_init(|| {
+        std::array::from_fn(|i| {
+            let c = i as f64 / 255.0;
+            let l = if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) };
+            l as f32
+        })
+    })
+}
+
+/// Decodes one sRGB-encoded byte to linear.
+pub fn srgb_decode(byte: u8) -> f32 {
+    srgb_table()[byte as usize]
+}
+
+fn check_shape(name: &str, width: u32, height: u32, channels: u32, len: usize) -> Result<usize> {
+    if width == 0 || height == 0 {
+        return Err(Error::object("texture", name, format!("size {width}×{height} must be at least 1×1")));
+    }
+    if !(channels == 3 || channels == 4) {
+        return Err(Error::object("texture", name, format!("{channels} channels: expected 3 (RGB) or 4 (RGBA)")));
+    }
+    let texels = width as usize * height as usize;
+    let expected = texels.checked_mul(channels as usize).ok_or_else(|| Error::object("texture", name, "size overflows"))?;
+    if len != expected {
+        return Err(Error::object(
+            "texture",
+            name,
+            format!("buffer holds {len} values, expected {width}×{height}×{channels} = {expected}"),
+        ));
+    }
+    Ok(texels)
+}
+
+#[inline]
+fn lerp(a: f32, b: f32, t: f32) -> f32 {
+    // Exact when a == b (a constant image filters to exactly its value).
+    a + (b - a) * t
+}
+
+impl Texture {
+    /// Builds texture `index` of a scene description from its numbered buffer.
+    pub fn from_desc(d: &TextureDesc, buffers: &[Buffer]) -> Result<Self> {
+        let name = d.name.as_str();
+        match (d.encoding, buffers.get(d.buffer)) {
+            (TextureEncoding::Linear, Some(Buffer::F32(v))) => Self::from_linear(name, d.width, d.height, d.channels, v, d.wrap),
+            (TextureEncoding::Srgb, Some(Buffer::U8(v))) => Self::from_srgb8(name, d.width, d.height, d.channels, v, d.wrap),
+            (TextureEncoding::Linear, Some(_)) => {
+                Err(Error::object("texture", name, format!("encoding 'linear' needs float32 pixels but buffer {} holds another type", d.buffer)))
+            }
+            (TextureEncoding::Srgb, Some(_)) => {
+                Err(Error::object("texture", name, format!("encoding 'srgb' needs uint8 pixels but buffer {} holds another type", d.buffer)))
+            }
+            (_, None) => Err(Error::object("texture", name, format!("buffer {} does not exist", d.buffer))),
+        }
+    }
+
+    /// A texture from linear float pixels (`channels` = 3 or 4, top row first).
+    /// Non-finite texels are an error naming the texture and the texel.
+    pub fn from_linear(name: &str, width: u32, height: u32, channels: u32, pixels: &[f32], wrap: Wrap) -> Result<Self> {
+        let texels = check_shape(name, width, height, channels, pixels.len())?;
+        let mut data = Vec::with_capacity(texels * 3);
+        for (k, px) in pixels.chunks_exact(channels as usize).enumerate() {
+            let rgb = &px[..3];
+            if let Some(v) = rgb.iter().find(|v| !v.is_finite()) {
+                let (x, y) = (k % width as usize, k / width as usize);
+                return Err(Error::object("texture", name, format!("texel ({x}, {y}) has the non-finite value {v}")));
+            }
+            data.extend_from_slice(rgb);
+        }
+        Ok(Self { name: name.into(), width, height, wrap, data: TexelData::Linear(data) })
+    }
+
+    /// A texture from 8-bit sRGB-encoded pixels (`channels` = 3 or 4, top row first).
+    pub fn from_srgb8(name: &str, width: u32, height: u32, channels: u32, pixels: &[u8], wrap: Wrap) -> Result<Self> {
+        let texels = check_shape(name, width, height, channels, pixels.len())?;
+        let data = if channels == 3 {
+            pixels.to_vec()
+        } else {
+            let mut d = Vec::with_capacity(texels * 3);
+            for px in pixels.chunks_exact(4) {
+                d.extend_from_slice(&px[..3]);
+            }
+            d
+        };
+        Ok(Self { name: name.into(), width, height, wrap, data: TexelData::Srgb8(data) })
+    }
+
+    /// Bytes of texel storage held (the raw RGB size).
+    pub fn bytes(&self) -> usize {
+        match &self.data {
+            TexelData::Linear(v) => v.len() * std::mem::size_of::<f32>(),
+            TexelData::Srgb8(v) => v.len(),
+        }
+    }
+
+    /// Linear RGB of the texel at column `x`, row `y` (row 0 = top), inside the image.
+    #[inline]
+    pub fn texel(&self, x: usize, y: usize) -> [f32; 3] {
+        let k = 3 * (y * self.width as usize + x);
+        match &self.data {
+            TexelData::Linear(v) => [v[k], v[k + 1], v[k + 2]],
+            TexelData::Srgb8(v) => {
+                let t = srgb_table();
+                [t[v[k] as usize], t[v[k + 1] as usize], t[v[k + 2] as usize]]
+            }
+        }
+    }
+
+    /// Maps an integer texel coordinate through a wrap mode; None = outside (black).
+    #[inline]
+    fn wrap_index(i: i64, n: u32, wrap: Wrap) -> Option<usize> {
+        let n = n as i64;
+        match wrap {
+            Wrap::Repeat => Some(i.rem_euclid(n) as usize),
+            Wrap::Extend => Some(i.clamp(0, n - 1) as usize),
+            Wrap::Clip => (0..n).contains(&i).then_some(i as usize),
+        }
+    }
+
+    /// Bilinearly filtered linear RGB at texture coordinates `uv` with this texture's
+    /// wrap mode in both directions.
+    #[inline]
+    pub fn lookup(&self, uv: Vec2) -> [f32; 3] {
+        self.lookup_with(uv, self.wrap, self.wrap)
+    }
+
+    /// Bilinearly filtered linear RGB with explicit wrap modes along u and v.
+    pub fn lookup_with(&self, uv: Vec2, wrap_u: Wrap, wrap_v: Wrap) -> [f32; 3] {
+        if !(uv.x.is_finite() && uv.y.is_finite()) {
+            return [0.0; 3];
+        }
+        // Continuous texel coordinates with texel centres at integers (row 0 = top).
+        let x = uv.x as f64 * self.width as f64 - 0.5;
+        let y = (1.0 - uv.y as f64) * self.height as f64 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
+        // Clamp far-away coordinates so the integer conversion cannot overflow.
+        let (x0, y0) = (x0.clamp(-4e15, 4e15) as i64, y0.clamp(-4e15, 4e15) as i64);
+        let xs = [Self::wrap_index(x0, self.width, wrap_u), Self::wrap_index(x0 + 1, self.width, wrap_u)];
+        let ys = [Self::wrap_index(y0, self.height, wrap_v), Self::wrap_index(y0 + 1, self.height, wrap_v)];
+        let at = |xi: Option<usize>, yi: Option<usize>| match (xi, yi) {
+            (Some(a), Some(b)) => self.texel(a, b),
+            _ => [0.0; 3],
+        };
+        let (c00, c10, c01, c11) = (at(xs[0], ys[0]), at(xs[1], ys[0]), at(xs[0], ys[1]), at(xs[1], ys[1]));
+        std::array::from_fn(|c| lerp(lerp(c00[c], c10[c], fx), lerp(c01[c], c11[c], fx), fy))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bilinear_hits_texel_centres_and_midpoints() {
+        // 2×1 image: left texel red 1, right texel red 3.
+        let t = Texture::from_linear("t", 2, 1, 3, &[1.0, 0.0, 0.0, 3.0, 0.0, 0.0], Wrap::Extend).unwrap();
+        assert_eq!(t.lookup(Vec2::new(0.25, 0.5))[0], 1.0);
+        assert_eq!(t.lookup(Vec2::new(0.75, 0.5))[0], 3.0);
+        assert!((t.lookup(Vec2::new(0.5, 0.5))[0] - 2.0).abs() < 1e-6);
+        // Extend: beyond the edge stays at the edge texel.
+        assert_eq!(t.lookup(Vec2::new(-3.0, 0.5))[0], 1.0);
+        // Repeat: u = 0 is halfway between the last and the first texel.
+        let r = Texture { wrap: Wrap::Repeat, ..t.clone() };
+        assert!((r.lookup(Vec2::new(0.0, 0.5))[0] - 2.0).abs() < 1e-6);
+        assert!((r.lookup(Vec2::new(1.25, 0.5))[0] - 1.0).abs() < 1e-6);
+        // Clip: black outside, half-faded at the edge.
+        let c = Texture { wrap: Wrap::Clip, ..t };
+        assert_eq!(c.lookup(Vec2::new(-1.0, 0.5)), [0.0; 3]);
+        assert!((c.lookup(Vec2::new(0.0, 0.5))[0] - 0.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn top_row_is_v_one() {
+        // 1×2: top texel 1, bottom texel 0.
+        let t = Texture::from_linear("t", 1, 2, 3, &[1.0, 1.0, 1.0, 0.0, 0.0, 0.0], Wrap::Extend).unwrap();
+        assert_eq!(t.lookup(Vec2::new(0.5, 0.75))[1], 1.0);
+        assert_eq!(t.lookup(Vec2::new(0.5, 0.25))[1], 0.0);
+    }
+
+    #[test]
+    fn srgb_bytes_decode_and_alpha_is_dropped() {
+        let t = Texture::from_srgb8("s", 1, 1, 4, &[255, 128, 0, 7], Wrap::Repeat).unwrap();
+        assert_eq!(t.bytes(), 3);
+        let c = t.lookup(Vec2::new(0.3, 0.9));
+        assert_eq!(c[0], 1.0);
+        assert!((c[1] - 0.215_860_5).abs() < 1e-6, "{}", c[1]);
+        assert_eq!(c[2], 0.0);
+    }
+
+    #[test]
+    fn bad_textures_are_reported_by_name() {
+        let e = Texture::from_linear("wood", 2, 2, 3, &[0.0; 11], Wrap::Repeat).unwrap_err().to_string();
+        assert!(e.contains("wood") && e.contains("12"), "{e}");
+        let e = Texture::from_linear("sky", 1, 1, 3, &[0.0, f32::NAN, 0.0], Wrap::Repeat).unwrap_err().to_string();
+        assert!(e.contains("sky") && e.contains("non-finite"), "{e}");
+        assert!(Texture::from_srgb8("x", 1, 1, 2, &[0, 0], Wrap::Repeat).is_err());
+    }
+}
