@@ -31,12 +31,26 @@ def _surface_node(mat):
     return node
 
 
-def _input_colour(mat, node, name, warnings, pc):
-    """A constant colour input; linked inputs fall back (Image Texture → its mean colour)."""
+_TEXTURES = {}
+
+
+def _input_colour(mat, node, name, warnings, pc, allow_texture=False):
+    """A constant colour input. A linked Image Texture gives a ``polychrome.Texture``
+    where ``allow_texture`` and the installed polychrome has textures, else its mean colour."""
     sock = node.inputs[name]
     if not sock.is_linked:
         return _rgb(sock.default_value)
     src = sock.links[0].from_node
+    if src.type == "TEX_IMAGE" and src.image is not None and allow_texture and hasattr(pc, "Texture"):
+        from .textures import blender_texture
+
+        if src.inputs["Vector"].is_linked:
+            warnings.add(("vec", mat.name, src.name),
+                         f"material '{mat.name}': the Vector input of '{src.name}' is ignored (the active UV map is used)")
+        tex = blender_texture(pc, src, f"material '{mat.name}'", warnings, _TEXTURES)
+        if tex is not None:
+            return tex
+        return _rgb(sock.default_value)
     if src.type == "TEX_IMAGE" and src.image is not None:
         import numpy as np
 
@@ -61,7 +75,7 @@ def _input_value(node, name):
 
 
 def _principled(pc, mat, node, warnings):
-    base = _input_colour(mat, node, "Base Color", warnings, pc)
+    base = _input_colour(mat, node, "Base Color", warnings, pc, allow_texture=True)
     emission = None
     strength = _input_value(node, "Emission Strength")
     ecol = _input_colour(mat, node, "Emission Color", warnings, pc)
@@ -98,7 +112,7 @@ def export_material(pc, mat, warnings):
     if t == "BSDF_PRINCIPLED":
         return _principled(pc, mat, node, warnings)
     if t == "BSDF_DIFFUSE":
-        return pc.Diffuse(_input_colour(mat, node, "Color", warnings, pc), name=mat.name)
+        return pc.Diffuse(_input_colour(mat, node, "Color", warnings, pc, allow_texture=True), name=mat.name)
     if t == "EMISSION":
         col = _input_colour(mat, node, "Color", warnings, pc)
         return pc.Emitter(pc.spectra.rgb(*col), strength=_input_value(node, "Strength"), name=mat.name)
@@ -116,6 +130,7 @@ class MaterialTable:
     def __init__(self, pc, scene, warnings):
         self.pc, self.scene, self.warnings = pc, scene, warnings
         self.index = {}
+        _TEXTURES.clear()  # images are converted once per export
 
     def __call__(self, ob, slot):
         mat = None

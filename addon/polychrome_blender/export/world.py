@@ -1,9 +1,38 @@
 """Blender world → uniform world radiance (``scene.set_world``).
 
-Background colour × strength. An Environment Texture is rendered as its mean colour
-(with a warning) until polychrome has HDRI lights."""
+Background colour × strength, or an Environment Texture (equirectangular HDRI, Z rotation
+of a Mapping node) when polychrome has HDRI worlds; otherwise its mean colour, with a
+warning."""
 
 import numpy as np
+
+
+def _hdri(pc, scene, world, bg, env, strength, warnings):
+    """Environment Texture → ``scene.set_world(texture=...)`` when polychrome has HDRIs."""
+    import inspect
+
+    if not hasattr(pc, "Texture") or "texture" not in inspect.signature(scene.set_world).parameters:
+        return False
+    from .textures import blender_texture
+
+    tex = blender_texture(pc, env, f"world '{world.name}'", warnings, {})
+    if tex is None:
+        return False
+    rotation = 0.0
+    vec = env.inputs["Vector"]
+    if vec.is_linked:
+        m = vec.links[0].from_node
+        if m.type == "MAPPING" and not m.inputs["Rotation"].is_linked:
+            rot = m.inputs["Rotation"].default_value
+            rotation = float(rot[2])
+            if abs(rot[0]) > 1e-6 or abs(rot[1]) > 1e-6:
+                warnings.add(("world", "rot"), f"world '{world.name}': only the Z rotation of '{m.name}' is used")
+        else:
+            warnings.add(("world", "vec"), f"world '{world.name}': the Vector input of '{env.name}' is ignored")
+    if env.projection != "EQUIRECTANGULAR":
+        warnings.add(("world", "proj"), f"world '{world.name}': {env.projection} projection is not supported; equirectangular is used")
+    scene.set_world(texture=tex, strength=strength, rotation=rotation)
+    return True
 
 
 def export_world(pc, depsgraph, scene, warnings):
@@ -26,6 +55,8 @@ def export_world(pc, depsgraph, scene, warnings):
         colour = tuple(float(c) for c in csock.default_value[:3])
         if csock.is_linked:
             src = csock.links[0].from_node
+            if src.type == "TEX_ENVIRONMENT" and src.image is not None and _hdri(pc, scene, world, bg, src, strength, warnings):
+                return
             if src.type == "TEX_ENVIRONMENT" and src.image is not None and src.image.size[0] > 0:
                 img = src.image
                 buf = np.empty(img.size[0] * img.size[1] * img.channels, np.float32)

@@ -1,0 +1,68 @@
+"""Image Texture and Environment Texture export, against closed forms: a large diffuse
+plane under a uniform white world (radiance 1) has radiance equal to its albedo; a camera
+looking into a constant HDRI sees colour × strength."""
+
+import numpy as np
+import pytest
+
+from .bhelper import check, run_bpy
+
+pytestmark = pytest.mark.blender
+
+
+def srgb_to_linear(v):
+    v = np.asarray(v, dtype=np.float64)
+    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+
+
+def test_image_texture_and_hdri_world(tmp_path):
+    proc, res = run_bpy(tmp_path, """
+    import polychrome as pc
+    if not hasattr(pc, 'Texture'):
+        emit(skip='polychrome has no Texture'); raise SystemExit(0)
+    sc = empty_scene(32, 16)
+    sc.render.engine = 'POLYCHROME'; sc.polychrome.samples = 64
+    # 8-bit sRGB image (large enough that bilinear filtering only blends the middle columns): left half (0.8, 0.3, 0.2), right half (0.1, 0.4, 0.9), sRGB-encoded
+    img = bpy.data.images.new('Halves', 64, 64)
+    px = np.zeros((64, 64, 4), np.float32); px[..., 3] = 1
+    px[:, :32, :3] = (0.8, 0.3, 0.2); px[:, 32:, :3] = (0.1, 0.4, 0.9)
+    img.pixels.foreach_set(px.ravel())
+    bpy.ops.mesh.primitive_plane_add(size=20)
+    plane = bpy.context.object
+    m = diffuse_material('Tex', (1, 1, 1)); nt = m.node_tree
+    tex = nt.nodes.new('ShaderNodeTexImage'); tex.image = img; tex.interpolation = 'Closest'
+    nt.links.new(tex.outputs['Color'], nt.nodes['Diffuse BSDF'].inputs['Color'])
+    plane.data.materials.append(m)
+    cd = bpy.data.cameras.new('C'); cd.type = 'ORTHO'; cd.ortho_scale = 4.0
+    cam = bpy.data.objects.new('C', cd); sc.collection.objects.link(cam); sc.camera = cam
+    cam.location = (0, 0, 5)
+    world = bpy.data.worlds.new('W'); world.use_nodes = True; sc.world = world
+    bg = world.node_tree.nodes['Background']
+    bg.inputs['Color'].default_value = (1, 1, 1, 1); bg.inputs['Strength'].default_value = 1.0
+    sc.render.image_settings.file_format = 'OPEN_EXR'
+    sc.render.filepath = os.path.abspath('tex.exr'); bpy.ops.render.render(write_still=True)
+    e1, w1 = Engine.last_error, Engine.last_warnings
+    ch = exr_channels('tex.exr')
+    rgb = np.stack([ch['R'], ch['G'], ch['B']], -1)
+    left = rgb[:, 2:12].reshape(-1, 3).mean(0).tolist(); right = rgb[:, 20:30].reshape(-1, 3).mean(0).tolist()
+    # constant float HDRI, strength 2, seen straight up
+    hdr = bpy.data.images.new('Sky', 16, 8, float_buffer=True)
+    hp = np.zeros((8, 16, 4), np.float32); hp[..., :3] = (0.2, 0.4, 0.8); hp[..., 3] = 1
+    hdr.pixels.foreach_set(hp.ravel())
+    env = world.node_tree.nodes.new('ShaderNodeTexEnvironment'); env.image = hdr
+    world.node_tree.links.new(env.outputs['Color'], bg.inputs['Color']); bg.inputs['Strength'].default_value = 2.0
+    cam.rotation_euler = (math.pi, 0, 0)
+    sc.render.filepath = os.path.abspath('sky.exr'); bpy.ops.render.render(write_still=True)
+    ch = exr_channels('sky.exr')
+    sky = [float(ch[c].mean()) for c in 'RGB']
+    emit(e1=e1, w1=w1, left=left, right=right, e2=Engine.last_error, w2=Engine.last_warnings, sky=sky)
+    """)
+    r = check(proc, res)[0]
+    if "skip" in r:
+        pytest.skip(r["skip"])
+    assert r["e1"] is None and r["w1"] == [], r
+    assert r["e2"] is None and r["w2"] == [], r
+    # the uplift reproduces reflectance RGB under a D65-white world to within a few per cent
+    for got, want in ((r["left"], srgb_to_linear([0.8, 0.3, 0.2])), (r["right"], srgb_to_linear([0.1, 0.4, 0.9]))):
+        assert np.allclose(got, want, rtol=0.03, atol=0.005), (got, want.tolist())
+    assert np.allclose(r["sky"], [0.4, 0.8, 1.6], rtol=0.03), r["sky"]
