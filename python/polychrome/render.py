@@ -15,7 +15,8 @@ import numpy as np
 from . import _core
 from .scene import Scene
 
-METHODS = ("POLYCHROMATIC",)
+METHODS = ("POLYCHROMATIC", "MONOCHROMATIC_RAYS", "MONOCHROMATIC_SCENES", "RGB")
+DIRECTIONS = ("BACKWARD", "FORWARD", "BIDIRECTIONAL")
 UPLIFTS = ("LINEAR", "SMOOTH")
 
 
@@ -27,6 +28,11 @@ class RenderSettings:
     height: int = 240
     samples: int = 64
     method: str = "POLYCHROMATIC"
+    #: BACKWARD (from the camera), FORWARD (light tracing) or BIDIRECTIONAL.
+    direction: str = "BACKWARD"
+    #: POLYCHROMATIC only: split into one monochromatic path per wavelength at the
+    #: first dispersive surface instead of choosing one (deterministic mode).
+    dispersion_splitting: bool = False
     wavelength_count: int = 41
     wavelength_min: float = 380.0
     wavelength_max: float = 780.0
@@ -41,6 +47,8 @@ class RenderSettings:
     def to_json(self) -> str:
         d = asdict(self)
         d["method"] = d["method"].upper()
+        d["direction"] = d["direction"].upper()
+        d["dispersion_splitting"] = bool(d["dispersion_splitting"])
         d["uplift"] = d["uplift"].upper()
         if d["wavelengths"] is not None:
             d["wavelengths"] = [float(x) for x in d["wavelengths"]]
@@ -125,6 +133,8 @@ def render(
     settings = replace(settings or RenderSettings(), **overrides)
     if settings.method.upper() not in METHODS:
         raise ValueError(f"setting 'method': '{settings.method}' is not one of {', '.join(METHODS)}")
+    if settings.direction.upper() not in DIRECTIONS:
+        raise ValueError(f"setting 'direction': '{settings.direction}' is not one of {', '.join(DIRECTIONS)}")
     if settings.uplift.upper() not in UPLIFTS:
         raise ValueError(f"setting 'uplift': '{settings.uplift}' is not one of {', '.join(UPLIFTS)}")
     desc, buffers = scene.description()
