@@ -14,10 +14,18 @@ __version__ = "0.1.0"
 from . import spectra
 from .render import RenderResult, RenderSettings, render
 from .scene import Camera, Diffuse, Emitter, Material, PointLight, Scene, look_at
+from . import ior
+from .scene import Conductor, Dielectric, Glossy, SpotLight, SunLight
 from .texture import Texture
 
 __all__ = [
     "Camera",
+    "Conductor",
+    "Dielectric",
+    "Glossy",
+    "SpotLight",
+    "SunLight",
+    "ior",
     "Diffuse",
     "Emitter",
     "Material",

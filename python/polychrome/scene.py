@@ -144,6 +144,118 @@ class PointLight:
         return {"type": "point", "name": self.name, "position": pos, "intensity": intensity.to_dict()}
 
 
+def _roughness(value: Any, name: str) -> float:
+    r = float(value)
+    if not (math.isfinite(r) and 0.0 <= r <= 1.0):
+        raise ValueError(f"material '{name}': roughness {value} must be in 0..1")
+    return r
+
+
+class Dielectric(Material):
+    """Glass (Blender's Glass BSDF): an index of refraction — a number, a glass name or a
+    model from :mod:`polychrome.ior` (``cauchy``, ``sellmeier``, ``abbe``, ``named``) —
+    and a roughness (0: smooth; otherwise GGX with alpha = roughness²). A glass whose
+    index varies over the wavelength grid disperses light."""
+
+    def __init__(self, ior: Any = 1.5, *, roughness: float = 0.0, name: str = "Glass"):
+        from .ior import as_ior
+
+        self.ior = as_ior(ior)
+        self.roughness = _roughness(roughness, name)
+        self.name = name
+
+    def bsdf_dict(self) -> dict[str, Any]:
+        return {"type": "dielectric", "ior": self.ior.to_dict(), "roughness": self.roughness}
+
+
+class Conductor(Material):
+    """A metal: a measured one by name (``metal="gold"``, "silver", "copper",
+    "aluminium") or a complex index ``eta`` + i ``k`` (numbers or spectra), with GGX
+    ``roughness`` as Blender's (alpha = roughness²)."""
+
+    def __init__(self, metal: str | None = None, *, eta: Any = None, k: Any = None, roughness: float = 0.0, name: str = "Metal"):
+        if metal is None and (eta is None or k is None):
+            raise ValueError(f"material '{name}': give metal=... or both eta and k")
+        if metal is not None and (eta is not None or k is not None):
+            raise ValueError(f"material '{name}': give metal=... or eta and k, not both")
+        self.metal = metal
+        self.eta = None if eta is None else as_spectrum(eta)
+        self.k = None if k is None else as_spectrum(k)
+        self.roughness = _roughness(roughness, name)
+        self.name = name
+
+    def bsdf_dict(self) -> dict[str, Any]:
+        d: dict[str, Any] = {"type": "conductor", "roughness": self.roughness}
+        if self.metal is not None:
+            d["metal"] = str(self.metal)
+        else:
+            d["eta"] = self.eta.to_dict()
+            d["k"] = self.k.to_dict()
+        return d
+
+
+class Glossy(Material):
+    """Blender's Glossy BSDF: GGX reflection whose Fresnel (Schlick) is tinted by
+    ``reflectance`` (the colour at normal incidence)."""
+
+    def __init__(self, reflectance: Any = 0.8, *, roughness: float = 0.5, name: str = "Glossy"):
+        self.reflectance = as_spectrum(reflectance)
+        self.roughness = _roughness(roughness, name)
+        self.name = name
+
+    def bsdf_dict(self) -> dict[str, Any]:
+        return {"type": "glossy", "reflectance": self.reflectance.to_dict(), "roughness": self.roughness}
+
+
+@dataclass
+class SpotLight:
+    """Blender's spot light: ``power`` watts and ``color`` as for a point light
+    (intensity ``color × power / 4π`` on the axis), shining along ``direction`` within a
+    cone of full angle ``spot_size`` radians, its edge softened over ``spot_blend``."""
+
+    position: Sequence[float]
+    direction: Sequence[float] = (0.0, 0.0, -1.0)
+    power: float = 100.0
+    color: Any = (1.0, 1.0, 1.0)
+    spot_size: float = math.radians(45.0)
+    spot_blend: float = 0.15
+    name: str = "SpotLight"
+
+    def to_dict(self) -> dict[str, Any]:
+        pos = [float(c) for c in self.position]
+        d = [float(c) for c in self.direction]
+        if len(pos) != 3 or len(d) != 3:
+            raise ValueError(f"light '{self.name}': position and direction must have 3 coordinates")
+        intensity = as_spectrum(self.color) * (float(self.power) / (4.0 * math.pi))
+        return {
+            "type": "spot",
+            "name": self.name,
+            "position": pos,
+            "direction": d,
+            "intensity": intensity.to_dict(),
+            "spot_size": float(self.spot_size),
+            "spot_blend": float(self.spot_blend),
+        }
+
+
+@dataclass
+class SunLight:
+    """Blender's sun: parallel light travelling along ``direction`` (the lamp's −Z) with
+    irradiance ``strength`` W/m² times ``color`` on a surface facing it."""
+
+    direction: Sequence[float] = (0.0, 0.0, -1.0)
+    strength: float = 1.0
+    color: Any = (1.0, 1.0, 1.0)
+    name: str = "Sun"
+
+    def to_dict(self) -> dict[str, Any]:
+        d = [float(c) for c in self.direction]
+        if len(d) != 3:
+            raise ValueError(f"light '{self.name}': direction must have 3 coordinates")
+        irradiance = as_spectrum(self.color) * float(self.strength)
+        return {"type": "distant", "name": self.name, "direction": d, "irradiance": irradiance.to_dict()}
+
+
 class Scene:
     """A scene description: camera, materials, meshes, instances, lights, world."""
 
@@ -324,3 +436,4 @@ class Scene:
 
 
 __all__ = ["Camera", "Material", "Diffuse", "Emitter", "PointLight", "Scene", "Texture", "look_at", "spectra"]
+__all__ += ["Dielectric", "Conductor", "Glossy", "SpotLight", "SunLight"]

@@ -43,7 +43,7 @@ impl Integrator for PathTracer {
         let mut f = SampledSpectrum::zeros(n);
         let mut le = SampledSpectrum::zeros(n);
         let radiance = &mut out.radiance;
-        let mut ctx = ShadingContext { uv: glam::Vec2::ZERO, grid: &scene.grid, single_wavelength: None };
+        let mut ctx = ShadingContext::new(&scene.grid);
         let mut specular = true; // the camera ray counts as specular: no MIS on what it sees
         let mut prev_pdf = 0.0f32;
         let mut prev_p = ray.origin;
@@ -70,6 +70,7 @@ impl Integrator for PathTracer {
             let ns = if front { si.ns } else { -si.ns };
             let material = &scene.materials[si.material as usize];
             ctx.uv = si.uv;
+            ctx.front_face = front;
             if depth == 0 {
                 out.depth = si.t * ray.direction.dot(scene.camera.forward());
                 out.normal = si.ns;
@@ -124,8 +125,6 @@ impl Integrator for PathTracer {
                 }
             }
 
-            // Continue the path by sampling the BSDF.
-            let u = rng.uniform2();
             // Deterministic (splitting) mode: one monochromatic sub-path per wavelength.
             if self.dispersion_splitting && flags.dispersive && ctx.single_wavelength.is_none() {
                 let mono = self.mono();
@@ -155,6 +154,8 @@ impl Integrator for PathTracer {
                 break;
             }
 
+            // Continue the path by sampling the BSDF.
+            let u = rng.uniform2();
             let uc = rng.uniform();
             let Some(bs) = material.bsdf.sample(&ctx, wo_local, u, uc, &mut beta) else { break };
             let wi = frame.to_world(bs.wi);
@@ -170,8 +171,6 @@ impl Integrator for PathTracer {
             prev_p = si.p;
             ray = Ray::new(offset_ray_origin(si.p, if geometric_transmit { -ng } else { ng }), wi);
             depth += 1;
-
-            if depth >= self.rr_depth {
             if let Some(i) = bs.collapsed_to {
                 if ctx.single_wavelength.is_none() {
                     // Collapsed (eq. 9): the BSDF chose wavelength i and divided by its
@@ -183,6 +182,8 @@ impl Integrator for PathTracer {
                 }
                 ctx.single_wavelength = Some(i);
             }
+
+            if depth >= self.rr_depth {
                 let q = beta.max_value().min(1.0);
                 if q <= 0.0 || rng.uniform() >= q {
                     break;

@@ -2,15 +2,19 @@
 //! probability proportional to its total spectral power over the grid (eq. 7).
 
 pub mod area;
+pub mod distant;
 pub mod environment;
 pub mod point;
+pub mod spot;
 
 use crate::spectrum::SampledSpectrum;
 use glam::{Vec2, Vec3A};
 
 pub use area::AreaTriangle;
 pub use environment::{ImageEnvironment, UniformEnvironment};
+pub use distant::DistantLight;
 pub use point::PointLight;
+pub use spot::SpotLight;
 
 /// Incident radiance sampled from a light towards a shading point.
 #[derive(Clone, Copy, Debug)]
@@ -25,10 +29,6 @@ pub struct LightSample {
     pub delta: bool,
 }
 
-pub trait Light: Send + Sync {
-    /// Total emitted power integrated over the grid with its quadrature weights (eq. 7):
-    /// the light-selection weight.
-    fn power(&self, weights: &[f32]) -> f64;
 /// A ray leaving a light, for forward (light) tracing.
 #[derive(Clone, Copy, Debug)]
 pub struct EmissionSample {
@@ -44,6 +44,10 @@ pub struct EmissionSample {
     pub delta_position: bool,
 }
 
+pub trait Light: Send + Sync {
+    /// Total emitted power integrated over the grid with its quadrature weights (eq. 7):
+    /// the light-selection weight.
+    fn power(&self, weights: &[f32]) -> f64;
     /// Samples a direction from `p` towards the light; `le` receives the radiance
     /// (intensity / distance² for point lights) arriving at `p`.
     fn sample_li(&self, p: Vec3A, u: Vec2, le: &mut SampledSpectrum) -> Option<LightSample>;
@@ -52,9 +56,9 @@ pub struct EmissionSample {
     fn pdf_li(&self, _p: Vec3A, _wi: Vec3A, _distance: f32) -> f32 {
         0.0
     }
-}
     /// Samples an emitted ray (forward tracing); `le` receives the radiance along it
     /// (intensity for point-like lights). None: this light cannot start light paths.
     fn sample_le(&self, _u_pos: Vec2, _u_dir: Vec2, _le: &mut SampledSpectrum) -> Option<EmissionSample> {
         None
     }
+}

@@ -6,14 +6,22 @@
 //! `wi` towards the light/next vertex.
 
 pub mod catalogue;
+pub mod conductor;
+pub mod dielectric;
 pub mod diffuse;
+pub mod dispersion;
+pub mod fresnel;
+pub mod microfacet;
 pub mod param;
 pub mod texture;
 
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 use glam::{Vec2, Vec3A};
 
+pub use conductor::{Conductor, Glossy};
+pub use dielectric::{Dielectric, RoughDielectric};
 pub use diffuse::Diffuse;
+pub use dispersion::{IndexOfRefraction, IorDesc};
 pub use param::SpectralParam;
 pub use texture::{Texture, Wrap};
 
@@ -36,6 +44,30 @@ pub struct ShadingContext<'a> {
     /// Set when the path carries a single wavelength (grid index): monochromatic rays,
     /// or a polychromatic ray after it collapsed at a dispersive surface.
     pub single_wavelength: Option<usize>,
+    /// The ray arrived on the side the geometric normal points to (from outside a closed
+    /// mesh). The local frame is flipped to the arriving side, so refracting BSDFs need
+    /// this to know whether they are entered or left.
+    pub front_face: bool,
+    /// What the path carries: radiance (camera paths) or importance (light paths).
+    /// Refraction scales radiance by 1/η² but not importance (Veach 1997, §5.2).
+    pub mode: TransportMode,
+}
+
+/// Which quantity a path transports, for the non-symmetric scattering of refraction.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TransportMode {
+    /// Camera paths (backward tracing).
+    #[default]
+    Radiance,
+    /// Light paths (forward tracing).
+    Importance,
+}
+
+impl<'a> ShadingContext<'a> {
+    /// A context for a camera path (radiance, all wavelengths, front face).
+    pub fn new(grid: &'a WavelengthGrid) -> Self {
+        Self { uv: Vec2::ZERO, grid, single_wavelength: None, front_face: true, mode: TransportMode::Radiance }
+    }
 }
 
 /// The outcome of sampling a BSDF.

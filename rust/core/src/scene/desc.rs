@@ -64,7 +64,6 @@ fn three() -> u32 {
     3
 }
 
-
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialDesc {
@@ -82,6 +81,31 @@ pub enum BsdfDesc {
     Diffuse { reflectance: SpectrumDesc },
     /// Reflects nothing (an emission-only surface).
     None,
+    /// Glass: smooth (roughness 0) or GGX-rough; dispersive when the index varies.
+    Dielectric {
+        #[serde(default)]
+        ior: crate::material::IorDesc,
+        #[serde(default)]
+        roughness: f32,
+    },
+    /// A metal: a named measured metal ("gold", "silver", "copper", "aluminium") or
+    /// a user complex index η + ik; GGX roughness as Blender's (alpha = roughness²).
+    Conductor {
+        #[serde(default)]
+        metal: Option<String>,
+        #[serde(default)]
+        eta: Option<SpectrumDesc>,
+        #[serde(default)]
+        k: Option<SpectrumDesc>,
+        #[serde(default)]
+        roughness: f32,
+    },
+    /// Blender's Glossy BSDF: GGX with Schlick's Fresnel tinted by `reflectance`.
+    Glossy {
+        reflectance: SpectrumDesc,
+        #[serde(default)]
+        roughness: f32,
+    },
 }
 
 impl Default for BsdfDesc {
@@ -127,12 +151,37 @@ pub struct InstanceDesc {
 pub enum LightDesc {
     /// Radiant intensity per wavelength (W·sr⁻¹·nm⁻¹ in scene units) from a point.
     Point { name: String, position: [f32; 3], intensity: SpectrumDesc },
+    /// Blender's spot light: radiant intensity on the axis, cone of full angle
+    /// `spot_size` (radians, default 45°), edge softened over `spot_blend` (default 0.15).
+    Spot {
+        name: String,
+        position: [f32; 3],
+        /// The direction light travels (the lamp's −Z axis in Blender).
+        direction: [f32; 3],
+        intensity: SpectrumDesc,
+        #[serde(default = "default_spot_size")]
+        spot_size: f32,
+        #[serde(default = "default_spot_blend")]
+        spot_blend: f32,
+    },
+    /// A sun: parallel light travelling along `direction` with spectral irradiance.
+    Distant { name: String, direction: [f32; 3], irradiance: SpectrumDesc },
+}
+
+fn default_spot_size() -> f32 {
+    std::f32::consts::FRAC_PI_4
+}
+
+fn default_spot_blend() -> f32 {
+    0.15
 }
 
 impl LightDesc {
     pub fn name(&self) -> &str {
         match self {
             LightDesc::Point { name, .. } => name,
+            LightDesc::Spot { name, .. } => name,
+            LightDesc::Distant { name, .. } => name,
         }
     }
 }

@@ -3,6 +3,7 @@
 //! distribution ready.
 
 pub mod desc;
+pub mod optics;
 
 use crate::accel::{Accel, Hit};
 use crate::camera::{affine_from_rows, Camera};
@@ -159,6 +160,13 @@ impl Scene {
                     Box::new(Diffuse { reflectance: SpectralParam::Constant(r) })
                 }
                 BsdfDesc::None => Box::new(Black),
+                BsdfDesc::Dielectric { ior, roughness } => optics::build_dielectric(&m.name, ior, *roughness, &grid)?,
+                BsdfDesc::Conductor { metal, eta, k, roughness } => {
+                    let eta = eta.as_ref().map(|d| spectrum(d, SpectrumRole::Unbounded, "eta")).transpose()?;
+                    let k = k.as_ref().map(|d| spectrum(d, SpectrumRole::Unbounded, "k")).transpose()?;
+                    optics::build_conductor(&m.name, metal.as_deref(), eta, k, *roughness, &grid)?
+                }
+                BsdfDesc::Glossy { reflectance, roughness } => optics::build_glossy(&m.name, spectrum(reflectance, SpectrumRole::Reflectance, "reflectance")?, *roughness)?,
             };
             let emission = match &m.emission {
                 Some(e) => Some(spectrum(e, SpectrumRole::Illuminant, "emission")?).filter(|s| !s.is_black()),
@@ -244,6 +252,14 @@ impl Scene {
                     }
                     let intensity = evaluate_for(intensity, &grid, SpectrumRole::Illuminant, &uplift, "light", name, "intensity")?;
                     lights.push(Box::new(PointLight { position, intensity: SampledSpectrum::from_slice(&intensity) }));
+                }
+                LightDesc::Spot { name, position, direction, intensity, spot_size, spot_blend } => {
+                    let intensity = evaluate_for(intensity, &grid, SpectrumRole::Illuminant, &uplift, "light", name, "intensity")?;
+                    lights.push(optics::build_spot(name, *position, *direction, SampledSpectrum::from_slice(&intensity), *spot_size, *spot_blend)?);
+                }
+                LightDesc::Distant { name, direction, irradiance } => {
+                    let irradiance = evaluate_for(irradiance, &grid, SpectrumRole::Illuminant, &uplift, "light", name, "irradiance")?;
+                    lights.push(optics::build_distant(name, *direction, SampledSpectrum::from_slice(&irradiance), bounds_center, bounds_radius)?);
                 }
             }
         }

@@ -1,0 +1,431 @@
+//! Glass: smooth and rough (GGX) dielectrics, with or without dispersion.
+//!
+//! The local frame's normal points to the side the ray arrived from; the relative
+//! index crossed is `n` when the ray arrives from outside the object
+//! (`ctx.front_face`) and `1/n` from inside.
+//!
+//! Polychromatic rays (SPEC §3, eq. 9): reflection sends every wavelength the same
+//! way, so the lobe is chosen by the energy-weighted spectral mean of the Fresnel
+//! reflectance R̄ and the ray keeps all its wavelengths (weight R_λ/R̄). Refraction
+//! through a dispersive glass has no common direction: the ray collapses to one grid
+//! wavelength i chosen with probability p_i ∝ β_i·w_i·T_i (the denormalised energy the
+//! refracted ray carries at λi: throughput × quadrature weight × transmittance),
+//! keeps lane i only with weight T_i/((1 − R̄)·p_i), and reports `collapsed_to`.
+//! A non-dispersive glass (index constant over the grid) never collapses. With
+//! `ctx.single_wavelength = Some(i)` only n(λi) is used.
+//!
+//! Radiance crossing an interface is scaled by 1/η² (TransportMode::Radiance, Veach
+//! 1997 §5.2); importance is not.
+
+use super::dispersion::IndexOfRefraction;
+use super::fresnel::{fresnel_dielectric, reflect, refract};
+use super::microfacet::Ggx;
+use super::{Bsdf, BsdfFlags, BsdfSample, ShadingContext, TransportMode};
+use crate::spectrum::SampledSpectrum;
+use glam::{Vec2, Vec3A};
+
+/// Relative index crossed from the arriving side.
+#[inline]
+fn relative(n: f32, ctx: &ShadingContext) -> f32 {
+    if ctx.front_face { n } else { 1.0 / n }
+}
+
+#[inline]
+fn radiance_scale(ctx: &ShadingContext, etap: f32) -> f32 {
+    match ctx.mode {
+        TransportMode::Radiance => 1.0 / (etap * etap),
+        TransportMode::Importance => 1.0,
+    }
+}
+
+/// The index to use for every lane, or None when the ray must collapse.
+fn common_index(ior: &IndexOfRefraction, ctx: &ShadingContext) -> Option<f32> {
+    match ctx.single_wavelength {
+        Some(i) => Some(ior.at(i)),
+        None if !ior.dispersive => Some(ior.at(0)),
+        None => None,
+    }
+}
+
+/// Picks a lane with probability ∝ `weights` using `u`; returns (lane, probability).
+fn pick_lane(weights: &[f32], u: f32) -> Option<(usize, f32)> {
+    let total: f32 = weights.iter().sum();
+    if !(total > 0.0 && total.is_finite()) {
+        return None;
+    }
+    let target = u * total;
+    let mut acc = 0.0f32;
+    let mut last = None;
+    for (i, &w) in weights.iter().enumerate() {
+        if w <= 0.0 {
+            continue;
+        }
+        acc += w;
+        last = Some(i);
+        if target < acc {
+            return Some((i, w / total));
+        }
+    }
+    last.map(|i| (i, weights[i] / total))
+}
+
+/// A perfectly smooth dielectric interface.
+pub struct Dielectric {
+    pub ior: IndexOfRefraction,
+}
+
+impl Bsdf for Dielectric {
+    fn flags(&self) -> BsdfFlags {
+        BsdfFlags { smooth: false, specular: true, dispersive: self.ior.dispersive }
+    }
+    fn eval(&self, _: &ShadingContext, _: Vec3A, _: Vec3A, out: &mut SampledSpectrum) -> f32 {
+        out.fill(0.0);
+        0.0
+    }
+    fn pdf(&self, _: &ShadingContext, _: Vec3A, _: Vec3A) -> f32 {
+        0.0
+    }
+    fn sample(&self, ctx: &ShadingContext, wo: Vec3A, _u: Vec2, uc: f32, throughput: &mut SampledSpectrum) -> Option<BsdfSample> {
+        if wo.z == 0.0 {
+            return None;
+        }
+        let mirror = Vec3A::new(-wo.x, -wo.y, wo.z);
+        if let Some(n) = common_index(&self.ior, ctx) {
+            let eta = relative(n, ctx);
+            let r = fresnel_dielectric(wo.z, eta);
+            if uc < r {
+                return Some(BsdfSample { wi: mirror, pdf: r, specular: true, collapsed_to: None });
+            }
+            let (wi, etap) = refract(wo, Vec3A::Z, eta)?;
+            throughput.scale(radiance_scale(ctx, etap));
+            return Some(BsdfSample { wi, pdf: 1.0 - r, specular: true, collapsed_to: None });
+        }
+        // Dispersive glass, polychromatic ray.
+        let len = throughput.len();
+        let weights = ctx.grid.weights();
+        let mut r = vec![0.0f32; len];
+        let mut energy_r = 0.0f32;
+        let mut energy = 0.0f32;
+        let mut transmitted = vec![0.0f32; len];
+        for i in 0..len {
+            r[i] = fresnel_dielectric(wo.z, relative(self.ior.at(i), ctx));
+            let e = throughput.get(i).max(0.0) * weights[i];
+            energy += e;
+            energy_r += e * r[i];
+            transmitted[i] = e * (1.0 - r[i]);
+        }
+        if !(energy > 0.0) {
+            return None;
+        }
+        let r_mean = (energy_r / energy).clamp(0.0, 1.0);
+        if uc < r_mean {
+            for (i, v) in throughput.values_mut().iter_mut().enumerate() {
+                *v *= r[i] / r_mean;
+            }
+            return Some(BsdfSample { wi: mirror, pdf: r_mean, specular: true, collapsed_to: None });
+        }
+        let u2 = ((uc - r_mean) / (1.0 - r_mean)).clamp(0.0, 0.999_999_9);
+        let (i, p) = pick_lane(&transmitted, u2)?;
+        let (wi, etap) = refract(wo, Vec3A::Z, relative(self.ior.at(i), ctx))?;
+        let w = (1.0 - r[i]) / ((1.0 - r_mean) * p) * radiance_scale(ctx, etap);
+        throughput.keep_only(i);
+        throughput.set(i, throughput.get(i) * w);
+        Some(BsdfSample { wi, pdf: (1.0 - r_mean) * p, specular: true, collapsed_to: Some(i) })
+    }
+    fn albedo(&self, _: &ShadingContext, out: &mut SampledSpectrum) {
+        out.fill(1.0);
+    }
+}
+
+/// A rough dielectric interface (GGX microfacets; Walter et al. 2007, pbrt-v4 §9.7).
+///
+/// When dispersive and carrying the whole spectrum, `eval` returns zero (no next-event
+/// estimation through this vertex) and `sample` reports `specular: true`, so the
+/// integrator counts light reached by the sampled direction in full without MIS: the
+/// direction's density differs per wavelength and a single MIS weight would be biased.
+/// Once collapsed, the path sees an ordinary single-wavelength rough dielectric.
+pub struct RoughDielectric {
+    pub ior: IndexOfRefraction,
+    pub distribution: Ggx,
+}
+
+impl RoughDielectric {
+    /// f·|cos θi| and the pdf for a relative index `eta` (pbrt-v4 DielectricBxDF::f/PDF).
+    fn eval_eta(&self, ctx: &ShadingContext, eta: f32, wo: Vec3A, wi: Vec3A) -> (f32, f32) {
+        let (cos_o, cos_i) = (wo.z, wi.z);
+        if cos_o == 0.0 || cos_i == 0.0 {
+            return (0.0, 0.0);
+        }
+        let reflect = cos_o * cos_i > 0.0;
+        let etap = if reflect { 1.0 } else if cos_o > 0.0 { eta } else { 1.0 / eta };
+        let mut wm = wi * etap + wo;
+        if wm.length_squared() == 0.0 {
+            return (0.0, 0.0);
+        }
+        wm = wm.normalize();
+        if wm.z < 0.0 {
+            wm = -wm;
+        }
+        // Discard back-facing microfacets.
+        if wm.dot(wi) * cos_i < 0.0 || wm.dot(wo) * cos_o < 0.0 {
+            return (0.0, 0.0);
+        }
+        let g = &self.distribution;
+        let r = fresnel_dielectric(wo.dot(wm), eta);
+        let t = 1.0 - r;
+        let dvis = g.g1(wo) / cos_o.abs() * g.d(wm) * wo.dot(wm).abs();
+        let (f, pdf) = if reflect {
+            let f = g.d(wm) * g.g(wo, wi) * r / (4.0 * cos_i * cos_o).abs();
+            (f, dvis / (4.0 * wo.dot(wm).abs()) * r)
+        } else {
+            let denom = (wi.dot(wm) + wo.dot(wm) / etap).powi(2);
+            if denom == 0.0 {
+                return (0.0, 0.0);
+            }
+            let f = g.d(wm) * t * g.g(wo, wi) * (wi.dot(wm) * wo.dot(wm) / (cos_i * cos_o * denom)).abs() * radiance_scale(ctx, etap);
+            (f, dvis * wi.dot(wm).abs() / denom * t)
+        };
+        let fc = f * cos_i.abs();
+        if fc.is_finite() && pdf.is_finite() { (fc, pdf) } else { (0.0, 0.0) }
+    }
+}
+
+impl Bsdf for RoughDielectric {
+    fn flags(&self) -> BsdfFlags {
+        BsdfFlags { smooth: true, specular: false, dispersive: self.ior.dispersive }
+    }
+    fn eval(&self, ctx: &ShadingContext, wo: Vec3A, wi: Vec3A, out: &mut SampledSpectrum) -> f32 {
+        let Some(n) = common_index(&self.ior, ctx) else {
+            out.fill(0.0);
+            return 0.0;
+        };
+        let (f, pdf) = self.eval_eta(ctx, relative(n, ctx), wo, wi);
+        out.fill(f);
+        pdf
+    }
+    fn pdf(&self, ctx: &ShadingContext, wo: Vec3A, wi: Vec3A) -> f32 {
+        match common_index(&self.ior, ctx) {
+            Some(n) => self.eval_eta(ctx, relative(n, ctx), wo, wi).1,
+            None => 0.0,
+        }
+    }
+    fn sample(&self, ctx: &ShadingContext, wo: Vec3A, u: Vec2, uc: f32, throughput: &mut SampledSpectrum) -> Option<BsdfSample> {
+        if wo.z == 0.0 {
+            return None;
+        }
+        let g = &self.distribution;
+        let wm = g.sample_wm(wo, u);
+        let c = wo.dot(wm);
+        let dvis = g.g1(wo) / wo.z.abs() * g.d(wm) * c.abs();
+        if !(dvis > 0.0 && dvis.is_finite()) {
+            return None;
+        }
+        if let Some(n) = common_index(&self.ior, ctx) {
+            let eta = relative(n, ctx);
+            let r = fresnel_dielectric(c, eta);
+            if uc < r {
+                let wi = reflect(wo, wm);
+                if wi.z * wo.z <= 0.0 {
+                    return None;
+                }
+                throughput.scale(g.g(wo, wi) / g.g1(wo));
+                return Some(BsdfSample { wi, pdf: dvis / (4.0 * c.abs()) * r, specular: false, collapsed_to: None });
+            }
+            let (wi, etap) = refract(wo, wm, eta)?;
+            if wi.z * wo.z >= 0.0 || wi.z == 0.0 {
+                return None;
+            }
+            let denom = (wi.dot(wm) + c / etap).powi(2);
+            let pdf = dvis * wi.dot(wm).abs() / denom * (1.0 - r);
+            if !(pdf > 0.0 && pdf.is_finite()) {
+                return None;
+            }
+            throughput.scale(g.g(wo, wi) / g.g1(wo) * radiance_scale(ctx, etap));
+            return Some(BsdfSample { wi, pdf, specular: false, collapsed_to: None });
+        }
+        // Dispersive glass, polychromatic ray: same lobe choice as the smooth case, on
+        // the sampled microfacet.
+        let len = throughput.len();
+        let weights = ctx.grid.weights();
+        let mut r = vec![0.0f32; len];
+        let mut transmitted = vec![0.0f32; len];
+        let (mut energy, mut energy_r) = (0.0f32, 0.0f32);
+        for i in 0..len {
+            r[i] = fresnel_dielectric(c, relative(self.ior.at(i), ctx));
+            let e = throughput.get(i).max(0.0) * weights[i];
+            energy += e;
+            energy_r += e * r[i];
+            transmitted[i] = e * (1.0 - r[i]);
+        }
+        if !(energy > 0.0) {
+            return None;
+        }
+        let r_mean = (energy_r / energy).clamp(0.0, 1.0);
+        if uc < r_mean {
+            let wi = reflect(wo, wm);
+            if wi.z * wo.z <= 0.0 {
+                return None;
+            }
+            let gr = g.g(wo, wi) / g.g1(wo);
+            for (i, v) in throughput.values_mut().iter_mut().enumerate() {
+                *v *= gr * r[i] / r_mean;
+            }
+            let pdf = dvis / (4.0 * c.abs()) * r_mean;
+            return Some(BsdfSample { wi, pdf, specular: true, collapsed_to: None });
+        }
+        let u2 = ((uc - r_mean) / (1.0 - r_mean)).clamp(0.0, 0.999_999_9);
+        let (i, p) = pick_lane(&transmitted, u2)?;
+        let (wi, etap) = refract(wo, wm, relative(self.ior.at(i), ctx))?;
+        if wi.z * wo.z >= 0.0 || wi.z == 0.0 {
+            return None;
+        }
+        let w = g.g(wo, wi) / g.g1(wo) * (1.0 - r[i]) / ((1.0 - r_mean) * p) * radiance_scale(ctx, etap);
+        if !w.is_finite() {
+            return None;
+        }
+        throughput.keep_only(i);
+        throughput.set(i, throughput.get(i) * w);
+        let denom = (wi.dot(wm) + c / etap).powi(2);
+        let pdf = dvis * wi.dot(wm).abs() / denom * (1.0 - r_mean) * p;
+        Some(BsdfSample { wi, pdf, specular: true, collapsed_to: Some(i) })
+    }
+    fn albedo(&self, _: &ShadingContext, out: &mut SampledSpectrum) {
+        out.fill(1.0);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::dispersion::IorDesc;
+    use crate::sampling::Rng;
+    use crate::spectrum::WavelengthGrid;
+
+    fn glass(grid: &WavelengthGrid, desc: IorDesc) -> IndexOfRefraction {
+        IndexOfRefraction::build(&desc, grid, "glass").unwrap()
+    }
+
+    /// Energy: reflected + transmitted importance (no 1/η² scaling) averages to 1 for
+    /// a smooth interface, and the split matches Fresnel.
+    #[test]
+    fn smooth_split_matches_fresnel() {
+        let grid = WavelengthGrid::default();
+        let m = Dielectric { ior: glass(&grid, IorDesc::Constant { ior: 1.5 }) };
+        assert!(!m.flags().dispersive);
+        let mut ctx = ShadingContext::new(&grid);
+        ctx.mode = TransportMode::Importance;
+        let wo = Vec3A::new(0.6f32.sin(), 0.0, 0.6f32.cos());
+        let r = fresnel_dielectric(wo.z, 1.5);
+        let mut rng = Rng::new(1, 2);
+        let (mut refl, n) = (0usize, 20_000usize);
+        for _ in 0..n {
+            let mut tp = SampledSpectrum::splat(grid.len(), 1.0);
+            let s = m.sample(&ctx, wo, rng.uniform2(), rng.uniform(), &mut tp).unwrap();
+            assert!(s.collapsed_to.is_none());
+            assert!((tp.get(3) - 1.0).abs() < 1e-6);
+            if s.wi.z > 0.0 {
+                refl += 1;
+            }
+        }
+        let frac = refl as f64 / n as f64;
+        let se = (r as f64 * (1.0 - r as f64) / n as f64).sqrt();
+        assert!((frac - r as f64).abs() < 5.0 * se, "{frac} vs {r}");
+    }
+
+    /// Collapse at a dispersive glass keeps every lane's expected throughput equal to
+    /// R_λ + T_λ/η_λ² (unbiased), and each collapse keeps one lane.
+    #[test]
+    fn collapse_is_unbiased_per_wavelength() {
+        let grid = WavelengthGrid::uniform(9, 380.0, 780.0).unwrap();
+        let ior = glass(&grid, IorDesc::Named { name: "N-SF11".into() });
+        let m = Dielectric { ior: ior.clone() };
+        assert!(m.flags().dispersive);
+        let ctx = ShadingContext::new(&grid);
+        let wo = Vec3A::new(0.8f32.sin(), 0.0, 0.8f32.cos());
+        let beta: Vec<f32> = (0..9).map(|i| 0.2 + 0.1 * i as f32).collect();
+        let mut sum = vec![0.0f64; 9];
+        let mut rng = Rng::new(3, 4);
+        let n = 200_000;
+        let mut collapses = 0;
+        for _ in 0..n {
+            let mut tp = SampledSpectrum::from_slice(&beta);
+            let s = m.sample(&ctx, wo, rng.uniform2(), rng.uniform(), &mut tp).unwrap();
+            if let Some(i) = s.collapsed_to {
+                collapses += 1;
+                assert!(tp.values().iter().enumerate().all(|(k, &v)| k == i || v == 0.0));
+                assert!(s.wi.z < 0.0);
+            } else {
+                assert!(s.wi.z > 0.0);
+            }
+            for k in 0..9 {
+                sum[k] += tp.get(k) as f64;
+            }
+        }
+        assert!(collapses > n / 2);
+        for k in 0..9 {
+            let eta = ior.at(k);
+            let r = fresnel_dielectric(wo.z, eta) as f64;
+            let expected = beta[k] as f64 * (r + (1.0 - r) / (eta as f64 * eta as f64));
+            let got = sum[k] / n as f64;
+            assert!((got - expected).abs() < 0.02 * expected, "lane {k}: {got} vs {expected}");
+        }
+        // Single-wavelength mode refracts with that lane's index and never collapses.
+        let mut ctx1 = ShadingContext::new(&grid);
+        ctx1.single_wavelength = Some(2);
+        let mut tp = SampledSpectrum::splat(9, 1.0);
+        let s = m.sample(&ctx1, wo, Vec2::ZERO, 0.99, &mut tp).unwrap();
+        assert!(s.collapsed_to.is_none());
+        let sin_t = (s.wi.x * s.wi.x + s.wi.y * s.wi.y).sqrt();
+        assert!((wo.x - ior.at(2) * sin_t).abs() < 1e-5);
+    }
+
+    /// White furnace for the rough dielectric: reflected + transmitted importance ≤ 1,
+    /// and the sampled estimate agrees with a quadrature of eval over the sphere.
+    #[test]
+    fn rough_dielectric_energy_at_most_one_and_sampling_matches_eval() {
+        let grid = WavelengthGrid::uniform(4, 400.0, 700.0).unwrap();
+        for &front in &[true, false] {
+            let mut ctx = ShadingContext::new(&grid);
+            ctx.mode = TransportMode::Importance;
+            ctx.front_face = front;
+            for &roughness in &[0.3f32, 0.7] {
+                let m = RoughDielectric { ior: IndexOfRefraction::constant(4, 1.5), distribution: Ggx::from_roughness(roughness) };
+                for &theta in &[0.2f32, 0.9, 1.4] {
+                    let wo = Vec3A::new(theta.sin(), 0.0, theta.cos());
+                    let mut rng = Rng::new(9, theta.to_bits() as u64);
+                    let n = 40_000;
+                    let (mut s1, mut s2) = (0.0f64, 0.0f64);
+                    for _ in 0..n {
+                        let mut tp = SampledSpectrum::splat(4, 1.0);
+                        if let Some(s) = m.sample(&ctx, wo, rng.uniform2(), rng.uniform(), &mut tp) {
+                            assert!(tp.is_finite() && s.pdf > 0.0);
+                            // The returned pdf is the one pdf() reports.
+                            let p = m.pdf(&ctx, wo, s.wi);
+                            assert!((p - s.pdf).abs() <= 1e-3 * s.pdf.max(1.0), "{p} vs {}", s.pdf);
+                            let v = tp.get(0) as f64;
+                            s1 += v;
+                            s2 += v * v;
+                        }
+                    }
+                    let mean = s1 / n as f64;
+                    let se = ((s2 / n as f64 - mean * mean) / n as f64).sqrt();
+                    assert!(mean <= 1.0 + 4.0 * se + 1e-3, "front {front} r {roughness} θ {theta}: {mean}");
+                    let (nt, np) = (2000, 400);
+                    let mut q = 0.0f64;
+                    let mut f = SampledSpectrum::zeros(4);
+                    for i in 0..nt {
+                        let c = -1.0 + 2.0 * (i as f32 + 0.5) / nt as f32;
+                        for j in 0..np {
+                            let phi = 6.2831855 * (j as f32 + 0.5) / np as f32;
+                            let s = (1.0 - c * c).max(0.0).sqrt();
+                            let wi = Vec3A::new(s * phi.cos(), s * phi.sin(), c);
+                            m.eval(&ctx, wo, wi, &mut f);
+                            q += f.get(0) as f64 * 4.0 * std::f64::consts::PI / (nt * np) as f64;
+                        }
+                    }
+                    assert!((q - mean).abs() < 5.0 * se + 0.02, "front {front} r {roughness} θ {theta}: sampled {mean} ± {se}, quadrature {q}");
+                }
+            }
+        }
+    }
+}
