@@ -117,6 +117,7 @@ class PolychromeDispersionNode(bpy.types.Node):
     named: EnumProperty(name="Material", items=NAMED_ITEMS, default="N_BK7")
     abbe_nd: FloatProperty(name="IOR (nd)", default=1.5168, min=1.0, soft_max=3.0, precision=4)
     abbe_vd: FloatProperty(name="Abbe (Vd)", default=64.17, min=1.0, soft_max=100.0, precision=2)
+    roughness: FloatProperty(name="Roughness", default=0.0, min=0.0, max=1.0, subtype="FACTOR")
 
     poll = classmethod(_tree_poll)
 
@@ -150,9 +151,19 @@ class PolychromeDispersionNode(bpy.types.Node):
             col.prop(self, "named", text="")
         else:
             col.prop(self, "abbe_nd"); col.prop(self, "abbe_vd")  # noqa: E702
+        layout.prop(self, "roughness")
         box = layout.box().column(align=True)
         for label, lam in (("F 486", LINE_F), ("d 588", LINE_D), ("C 656", LINE_C)):
             box.label(text=f"n({label} nm) = {self.ior(lam):.5f}")
+
+    def polychrome_ior(self, pc):
+        if self.model == "CAUCHY":
+            return pc.ior.cauchy(self.cauchy_a, self.cauchy_b, self.cauchy_c)
+        if self.model == "SELLMEIER":
+            return pc.ior.sellmeier(list(self.sellmeier_b), list(self.sellmeier_c))
+        if self.model == "NAMED":
+            return pc.ior.named(self.named_material())
+        return pc.ior.abbe(self.abbe_nd, self.abbe_vd)
 
     def dispersion_dict(self):
         if self.model == "CAUCHY":
@@ -169,14 +180,10 @@ class PolychromeDispersionNode(bpy.types.Node):
             if not (math.isfinite(n) and n >= 1.0):
                 raise ValueError(f"material '{mat.name}': Dispersion node '{self.name}' gives index {n:.4g} at {lam} nm "
                                  "(below 1, near a Sellmeier pole or undefined)")
-        if hasattr(pc, "Dielectric"):
-            try:
-                return pc.Dielectric(dispersion=self.dispersion_dict(), name=mat.name)
-            except (TypeError, ValueError) as e:
-                warnings.add(("disp", mat.name), f"material '{mat.name}': Dispersion node '{self.name}' not exported ({e})")
-        else:
-            warnings.add(("disp", mat.name), f"material '{mat.name}': Dispersion node '{self.name}' needs polychrome.Dielectric, "
-                                             "which this polychrome lacks; rendered as grey diffuse")
+        if hasattr(pc, "Dielectric") and hasattr(pc, "ior"):
+            return pc.Dielectric(self.polychrome_ior(pc), roughness=self.roughness, name=mat.name)
+        warnings.add(("disp", mat.name), f"material '{mat.name}': Dispersion node '{self.name}' needs polychrome.Dielectric, "
+                                         "which this polychrome lacks; rendered as grey diffuse")
         return pc.Diffuse((0.8, 0.8, 0.8), name=mat.name)
 
 

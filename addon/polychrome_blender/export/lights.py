@@ -7,7 +7,9 @@
   and nothing is emitted behind it). It is exported as an emissive quad/disk (ellipse:
   a 32-gon) of that radiance, plus a black backing one thousandth of its size behind it,
   because polychrome's emitters shine from both faces.
-* Spot / Sun: ``polychrome.SpotLight`` / ``polychrome.SunLight`` when available, else a warning.
+* Spot: ``polychrome.SpotLight`` — intensity ``colour × P / 4π`` on the axis, cone
+  ``spot_size`` and ``spot_blend`` as Blender's (the radius is ignored).
+* Sun: ``polychrome.SunLight`` — irradiance ``colour × strength`` W/m² (its angle is ignored).
 * Colour from temperature (``use_temperature``, Blender 5): a blackbody normalised to
   the luminance of white.
 """
@@ -27,11 +29,12 @@ def _ybar(lam):
 
 
 def blackbody_white(pc, temperature):
-    """Planck's law at ``temperature`` K scaled to luminance 1 (like RGB white)."""
+    """Planck's law at ``temperature`` K (the core's ``blackbody``: 1 at Wien's peak) scaled
+    to luminance 1, as Cycles normalises its Blackbody colour."""
     lam = np.linspace(380.0, 780.0, 401)
     x = lam * 1e-9
     planck = 1.0 / (x**5 * (np.exp(1.4387769e-2 / (x * temperature)) - 1.0))
-    peak_lam = min(max(2.897771955e-3 / temperature, 380e-9), 780e-9)
+    peak_lam = 2.897771955e-3 / temperature  # Wien: the core normalises at the true peak
     peak = 1.0 / (peak_lam**5 * (math.exp(1.4387769e-2 / (peak_lam * temperature)) - 1.0))
     y = _ybar(lam)
     lum = float(np.trapz(y * planck / peak, lam) / np.trapz(y, lam))
@@ -92,6 +95,15 @@ def export_area(pc, scene, ob, ld, name, matrix, warnings):
     scene.add_instance(b, matrix, f"{name} (back)")
 
 
+def _axis(m, name):
+    """The lamp's −Z axis in world space (where spot and sun lights point)."""
+    d = -m[:3, 2]
+    n = float(np.linalg.norm(d))
+    if not n > 0.0:
+        raise ValueError(f"light '{name}': its transform is degenerate")
+    return (d / n).tolist()
+
+
 def export_lights(pc, depsgraph, scene, warnings):
     count = 0
     for inst in depsgraph.object_instances:
@@ -111,22 +123,13 @@ def export_lights(pc, depsgraph, scene, warnings):
             export_area(pc, scene, ob, ld, name, m, warnings)
         elif ld.type == "SPOT" and hasattr(pc, "SpotLight"):
             spec, _ = light_colour(pc, ld)
-            direction = (-m[:3, 2] / np.linalg.norm(m[:3, 2])).tolist()
-            try:
-                scene.add_light(pc.SpotLight(pos.tolist(), direction, power=_power(ld, name), color=spec,
-                                             angle=float(ld.spot_size), blend=float(ld.spot_blend), name=name))
-            except TypeError as e:
-                warnings.add(("spot", name), f"light '{name}': spot light not exported ({e})")
-                continue
+            scene.add_light(pc.SpotLight(pos.tolist(), _axis(m, name), power=_power(ld, name), color=spec,
+                                         spot_size=float(ld.spot_size), spot_blend=float(ld.spot_blend), name=name))
         elif ld.type == "SUN" and hasattr(pc, "SunLight"):
             spec, _ = light_colour(pc, ld)
-            direction = (-m[:3, 2] / np.linalg.norm(m[:3, 2])).tolist()
-            try:
-                scene.add_light(pc.SunLight(direction, irradiance=float(ld.energy), color=spec,
-                                            angle=float(ld.angle), name=name))
-            except TypeError as e:
-                warnings.add(("sun", name), f"light '{name}': sun light not exported ({e})")
-                continue
+            if float(getattr(ld, "angle", 0.0)) > 1e-3:
+                warnings.add(("sun", name), f"light '{name}': the sun's angular diameter is ignored (sharp shadows)")
+            scene.add_light(pc.SunLight(_axis(m, name), strength=_power(ld, name), color=spec, name=name))
         else:
             warnings.add(("light", ld.type), f"light '{name}': {ld.type.lower()} lights are not supported yet and are skipped")
             continue

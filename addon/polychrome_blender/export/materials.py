@@ -1,9 +1,9 @@
 """Blender materials → polychrome materials.
 
-Supported: Principled BSDF (base colour, emission colour × strength), Diffuse BSDF,
-Emission, Polychrome's own nodes (see ``nodes.py``). Metallic / transmission use
-``polychrome.Conductor`` / ``polychrome.Dielectric`` when the installed polychrome has
-them. Anything else becomes a grey diffuse with one warning naming material and node.
+Supported: Principled BSDF (base colour, emission colour × strength; metallic ≥ 0.5 →
+``polychrome.Glossy`` tinted by base colour, transmission ≥ 0.5 → ``polychrome.Dielectric``
+with IOR and roughness), Diffuse, Glossy, Glass BSDF, Emission (colour or Blackbody),
+Image Texture on a colour, Polychrome's own nodes (see ``nodes.py``). Anything else becomes a grey diffuse with one warning naming material and node.
 """
 
 GREY = (0.8, 0.8, 0.8)
@@ -70,32 +70,53 @@ def _input_colour(mat, node, name, warnings, pc, allow_texture=False):
     return _rgb(sock.default_value)
 
 
+def _emission_spectrum(pc, mat, node, name, warnings):
+    """An emission colour input as a spectrum: a linked Blackbody node gives Planck's law
+    at its temperature (luminance 1, as Cycles normalises it), else RGB."""
+    sock = node.inputs[name]
+    if sock.is_linked and sock.links[0].from_node.type == "BLACKBODY":
+        bb = sock.links[0].from_node
+        from .lights import blackbody_white
+
+        return blackbody_white(pc, float(bb.inputs["Temperature"].default_value))
+    return pc.spectra.rgb(*_input_colour(mat, node, name, warnings, pc))
+
+
 def _input_value(node, name):
     return float(node.inputs[name].default_value)
+
+
+def _ior(node, mat):
+    n = _input_value(node, "IOR")
+    if not (n >= 1.0 and n < 1e3):
+        raise ValueError(f"material '{mat.name}': IOR {n} of '{node.name}' must be at least 1")
+    return n
 
 
 def _principled(pc, mat, node, warnings):
     base = _input_colour(mat, node, "Base Color", warnings, pc, allow_texture=True)
     emission = None
     strength = _input_value(node, "Emission Strength")
-    ecol = _input_colour(mat, node, "Emission Color", warnings, pc)
-    if strength > 0.0 and max(ecol) > 0.0:
-        emission = pc.spectra.rgb(*ecol) * strength
+    if strength > 0.0:
+        espec = _emission_spectrum(pc, mat, node, "Emission Color", warnings)
+        if espec.kind != "rgb" or max(espec.params["rgb"]) > 0.0:
+            emission = espec * strength
     metallic = _input_value(node, "Metallic")
     transmission = _input_value(node, "Transmission Weight")
-    if transmission > 0.5 and hasattr(pc, "Dielectric"):
-        try:
-            return pc.Dielectric(ior=_input_value(node, "IOR"), name=mat.name)
-        except TypeError:
-            pass
-    if metallic > 0.5 and hasattr(pc, "Conductor"):
-        try:
-            return pc.Conductor(base, roughness=_input_value(node, "Roughness"), name=mat.name)
-        except TypeError:
-            pass
-    if transmission > 0.0 or metallic > 0.0:
+    roughness = min(max(_input_value(node, "Roughness"), 0.0), 1.0)
+    if 0.0 < metallic < 1.0 or 0.0 < transmission < 1.0:
         warnings.add(("principled", mat.name),
-                     f"material '{mat.name}': metallic/transmission of '{node.name}' are not supported yet; rendered as diffuse")
+                     f"material '{mat.name}': '{node.name}' mixes metallic/transmission partially; "
+                     "rendered as the dominant lobe (threshold 0.5)")
+    if transmission >= 0.5 and hasattr(pc, "Dielectric"):
+        return pc.Dielectric(_ior(node, mat), roughness=roughness, name=mat.name)
+    if metallic >= 0.5 and hasattr(pc, "Glossy"):
+        if isinstance(base, tuple):
+            return pc.Glossy(base, roughness=roughness, name=mat.name)
+        warnings.add(("metal-tex", mat.name), f"material '{mat.name}': a textured metallic colour is not supported; diffuse is used")
+    elif (transmission >= 0.5 or metallic >= 0.5):
+        warnings.add(("principled-missing", mat.name),
+                     f"material '{mat.name}': metallic/transmission of '{node.name}' are not supported by this polychrome; rendered as diffuse")
     return pc.Diffuse(base, emission=emission, name=mat.name)
 
 
@@ -113,9 +134,17 @@ def export_material(pc, mat, warnings):
         return _principled(pc, mat, node, warnings)
     if t == "BSDF_DIFFUSE":
         return pc.Diffuse(_input_colour(mat, node, "Color", warnings, pc, allow_texture=True), name=mat.name)
+    if t == "BSDF_GLOSSY" and hasattr(pc, "Glossy"):
+        roughness = min(max(_input_value(node, "Roughness"), 0.0), 1.0)
+        return pc.Glossy(_input_colour(mat, node, "Color", warnings, pc), roughness=roughness, name=mat.name)
+    if t == "BSDF_GLASS" and hasattr(pc, "Dielectric"):
+        if _input_colour(mat, node, "Color", warnings, pc) != (1.0, 1.0, 1.0):
+            warnings.add(("glass-tint", mat.name), f"material '{mat.name}': the colour of '{node.name}' is ignored (clear glass)")
+        roughness = min(max(_input_value(node, "Roughness"), 0.0), 1.0)
+        return pc.Dielectric(_ior(node, mat), roughness=roughness, name=mat.name)
     if t == "EMISSION":
-        col = _input_colour(mat, node, "Color", warnings, pc)
-        return pc.Emitter(pc.spectra.rgb(*col), strength=_input_value(node, "Strength"), name=mat.name)
+        spec = _emission_spectrum(pc, mat, node, "Color", warnings)
+        return pc.Emitter(spec, strength=_input_value(node, "Strength"), name=mat.name)
     export_custom = getattr(node, "polychrome_export", None)
     if export_custom is not None:
         return export_custom(pc, mat, warnings)
