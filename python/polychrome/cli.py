@@ -32,6 +32,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     _add_diff_parser(subparsers)
+    _add_render_parser(subparsers)
     return parser
 
 
@@ -79,6 +80,162 @@ def _format_diff_table(stats: dict, heatmap=None) -> str:
     if heatmap:
         lines.append(f"heat map written to {heatmap}")
     return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------- render
+
+USD_SUFFIXES = (".usd", ".usda", ".usdc", ".usdz")
+EXIT_INTERRUPTED = 130
+
+
+def _add_render_parser(subparsers) -> None:
+    """Declare `polychrome render SCENE -o OUT [--samples N] [--method M] [--wavelengths N]
+    [--seed S] [--threads T] [--time-limit SEC] [--width W --height H]`."""
+    p = subparsers.add_parser(
+        "render",
+        help="render a USD stage or a .blend file to .exr/.png",
+        description="Render a USD stage (.usd/.usda/.usdc/.usdz) or a .blend file (needs bpy). "
+        "Settings stored in the scene are used unless a flag overrides them.",
+    )
+    p.add_argument("scene", metavar="SCENE", help="scene file: .usd, .usda, .usdc, .usdz or .blend")
+    p.add_argument("-o", "--output", metavar="OUT", required=True, help="image to write: .exr or .png")
+    p.add_argument("--samples", type=int, metavar="N", help="samples per pixel")
+    p.add_argument("--method", metavar="M", help="POLYCHROMATIC, MONOCHROMATIC_RAYS, MONOCHROMATIC_SCENES or RGB")
+    p.add_argument("--wavelengths", type=int, metavar="N", help="number of wavelength samples (380-780 nm)")
+    p.add_argument("--seed", type=int, metavar="S", help="random seed (same seed, same pixels)")
+    p.add_argument("--threads", type=int, metavar="T", help="worker threads (0: every core)")
+    p.add_argument("--time-limit", type=float, metavar="SEC", help="seconds after which no new pass starts (0: none)")
+    p.add_argument("--width", type=int, metavar="W", help="image width in pixels")
+    p.add_argument("--height", type=int, metavar="H", help="image height in pixels")
+    p.add_argument("--passes", action="store_true", help="EXR only: also write Depth, Normal and Albedo layers")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(handler=cmd_render)
+
+
+def _render_overrides(args: argparse.Namespace) -> dict:
+    """RenderSettings fields given on the command line."""
+    pairs = {
+        "samples": args.samples,
+        "method": None if args.method is None else args.method.upper(),
+        "wavelength_count": args.wavelengths,
+        "seed": args.seed,
+        "threads": args.threads,
+        "time_limit": args.time_limit,
+        "width": args.width,
+        "height": args.height,
+    }
+    for key in ("samples", "wavelength_count", "width", "height"):
+        if pairs[key] is not None and pairs[key] <= 0:
+            raise ValueError(f"--{key.replace('_count', 's').replace('_', '-')} must be positive, got {pairs[key]}")
+    for key in ("seed", "threads"):
+        if pairs[key] is not None and pairs[key] < 0:
+            raise ValueError(f"--{key} must not be negative, got {pairs[key]}")
+    if pairs["time_limit"] is not None and not pairs["time_limit"] >= 0:
+        raise ValueError(f"--time-limit must not be negative, got {pairs['time_limit']}")
+    return {k: v for k, v in pairs.items() if v is not None}
+
+
+def _merge_size(stored: dict, overrides: dict) -> dict:
+    """Flags win; one of --width/--height alone keeps the stored aspect ratio."""
+    merged = {**stored, **overrides}
+    if ("width" in overrides) != ("height" in overrides) and "width" in stored and "height" in stored:
+        aspect = stored["width"] / stored["height"]
+        if "width" in overrides:
+            merged["height"] = max(1, round(overrides["width"] / aspect))
+        else:
+            merged["width"] = max(1, round(overrides["height"] * aspect))
+    return merged
+
+
+def _settings_from(values: dict):
+    import dataclasses
+
+    from .render import RenderSettings
+
+    known = {f.name for f in dataclasses.fields(RenderSettings)}
+    return RenderSettings(**{k: v for k, v in values.items() if k in known})
+
+
+def _load_usd(path: str, overrides: dict):
+    from . import usd
+
+    stored = usd.read_settings(path)
+    settings = _settings_from(_merge_size(stored, overrides))
+    scene = usd.read_stage(path, resolution=(settings.width, settings.height))
+    return scene, settings
+
+
+def _load_blend(path: str, overrides: dict):
+    """Opens a .blend with bpy and exports it with the add-on's exporter."""
+    import os
+
+    try:
+        import bpy
+    except ImportError:
+        raise ValueError(f"{path}: rendering a .blend needs the bpy module (pip install 'polychrome[blender]')") from None
+    if not os.path.isfile(path):
+        raise ValueError(f"{path}: no such file")
+    try:
+        import polychrome_blender
+        from polychrome_blender.export import export_scene
+        from polychrome_blender.export.camera import render_size
+    except ImportError as e:
+        raise ValueError(f"{path}: the polychrome_blender add-on (with its exporter) is not installed ({e})") from None
+    import polychrome as pc
+
+    polychrome_blender.register()  # before opening, so scene.polychrome is read back
+    try:
+        bpy.ops.wm.open_mainfile(filepath=os.path.abspath(path))
+        depsgraph = bpy.context.evaluated_depsgraph_get()
+        bscene = depsgraph.scene
+        width, height = render_size(bscene)
+        stored = {"width": width, "height": height}
+        props = getattr(bscene, "polychrome", None)
+        if props is not None:
+            from polychrome_blender.engine import settings_from_scene
+
+            base = settings_from_scene(pc, props, width, height)
+            import dataclasses
+
+            stored = dataclasses.asdict(base)
+        scene, messages = export_scene(pc, depsgraph)
+        for message in messages:
+            print(f"polychrome render: warning: {message}", file=sys.stderr)
+        return scene, _settings_from(_merge_size(stored, overrides))
+    finally:
+        polychrome_blender.unregister()
+
+
+def cmd_render(args: argparse.Namespace) -> int:
+    """Render a scene file and write the image."""
+    import time
+    from pathlib import Path
+
+    out = Path(args.output)
+    if out.suffix.lower() not in (".exr", ".png"):
+        raise ValueError(f"{out}: unsupported image type '{out.suffix}' (use .exr or .png)")
+    overrides = _render_overrides(args)
+    suffix = Path(args.scene).suffix.lower()
+    if suffix in USD_SUFFIXES:
+        scene, settings = _load_usd(args.scene, overrides)
+    elif suffix == ".blend":
+        scene, settings = _load_blend(args.scene, overrides)
+    else:
+        raise ValueError(f"{args.scene}: unsupported scene type '{suffix}' (use {', '.join(USD_SUFFIXES)} or .blend)")
+    from .render import render
+
+    start = time.perf_counter()
+    try:
+        result = render(scene, settings, progress=not args.quiet)
+    except KeyboardInterrupt:
+        print("polychrome render: cancelled", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    result.save(out, passes=args.passes)
+    print(
+        f"wrote {out} ({settings.width}x{settings.height}, {settings.samples} samples, "
+        f"{settings.method}, {settings.wavelength_count} wavelengths, {time.perf_counter() - start:.1f} s)"
+    )
+    return EXIT_OK
 
 
 # --------------------------------------------------------------------------- entry point

@@ -1,0 +1,950 @@
+"""Reads any USD stage into a :class:`polychrome.Scene` (``read_stage``).
+
+What is read: UsdGeom meshes (polygons fan-triangulated, holes dropped, GeomSubsets per
+material, normals and ``st`` per vertex or face-varying), transforms
+(``ComputeLocalToWorldTransform`` through an XformCache), instanceable prims and
+PointInstancers, one UsdGeom.Camera, UsdLux sphere / rect / disk / distant / dome lights,
+UsdPreviewSurface materials and the ``polychrome:`` attributes (which win). Units are
+converted to metres (``metersPerUnit``) and Y-up stages rotated to Z-up.
+
+Unsupported prims are skipped with one ``warnings.warn`` each naming the prim; malformed
+data raises ``ValueError`` naming the file and the prim.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+import warnings
+
+import numpy as np
+
+from ..scene import Material
+from . import attributes as A
+
+#: Segments of the polygon standing in for a DiskLight.
+DISK_SEGMENTS = 32
+#: UsdPreviewSurface's fallback diffuseColor, used for unbound meshes without displayColor.
+FALLBACK_GREY = (0.18, 0.18, 0.18)
+
+_SILENT_TYPES = {
+    "", "Xform", "Scope", "Material", "Shader", "NodeGraph", "GeomSubset", "RenderSettings",
+    "RenderProduct", "RenderVar", "RenderPass", "SkelRoot", "Skeleton", "SkelAnimation",
+    "BlendShape", "PhysicsScene", "Backdrop",
+}
+_LIGHTS_SKIPPED = {"CylinderLight", "GeometryLight", "PortalLight", "PluginLight", "MeshLight", "VolumeLight"}
+
+
+class DescribedLight:
+    """A light kept as the core's description (a type without a Python class here)."""
+
+    def __init__(self, description: dict[str, Any]):
+        self.description = dict(description)
+        self.name = str(self.description.get("name", "Light"))
+
+    def to_dict(self) -> dict[str, Any]:
+        return dict(self.description)
+
+    def __repr__(self) -> str:
+        return f"DescribedLight({self.description!r})"
+
+
+class DescribedMaterial(Material):
+    """A material kept as the core's description: any BSDF type the stage names,
+    including ones this Python package has no class for."""
+
+    def __init__(self, description: dict[str, Any]):
+        self.description = dict(description)
+        self.name = str(self.description.get("name", "Material"))
+        self.emission = None
+
+    def bsdf_dict(self) -> dict[str, Any]:
+        return dict(self.description.get("bsdf") or {"type": "none"})
+
+    def to_dict(self) -> dict[str, Any]:
+        return dict(self.description)
+
+    def __repr__(self) -> str:
+        return f"DescribedMaterial({self.description!r})"
+
+
+def _pxr():
+    try:
+        from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdRender, UsdShade
+    except ImportError as e:  # pragma: no cover
+        raise ImportError("polychrome.usd needs usd-core: pip install 'polychrome[usd]'") from e
+    return Gf, Sdf, Usd, UsdGeom, UsdLux, UsdRender, UsdShade
+
+
+def _spectrum_from_dict(d: dict[str, Any]):
+    from ..spectra import Spectrum
+
+    d = dict(d)
+    kind = d.pop("type")
+    scale = float(d.pop("scale", 1.0))
+    return Spectrum(str(kind), d, scale)
+
+
+class _Reader:
+    def __init__(self, path: Path, resolution=None):
+        Gf, Sdf, Usd, UsdGeom, UsdLux, UsdRender, UsdShade = _pxr()
+        self.Gf, self.Sdf, self.Usd, self.UsdGeom, self.UsdLux, self.UsdRender, self.UsdShade = (
+            Gf, Sdf, Usd, UsdGeom, UsdLux, UsdRender, UsdShade)
+        self.path = path
+        self.stage = open_stage(path)
+        self.time = Usd.TimeCode.EarliestTime()
+        self.cache = UsdGeom.XformCache(self.time)
+        self.mpu = float(UsdGeom.GetStageMetersPerUnit(self.stage))
+        if not (math.isfinite(self.mpu) and self.mpu > 0):
+            raise ValueError(f"{path}: metersPerUnit {self.mpu} must be positive")
+        up = UsdGeom.GetStageUpAxis(self.stage)
+        c = np.eye(4) * self.mpu
+        c[3, 3] = 1.0
+        if up == UsdGeom.Tokens.y:
+            rot = np.array([[1, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 1]], dtype=np.float64)
+            c = rot @ c
+        self.correction = c
+        self.identity_correction = bool(np.array_equal(c, np.eye(4)))
+        self.resolution = resolution
+        self.warned: set[str] = set()
+        # Collected, then turned into a Scene at the end.
+        self.materials: list[Any] = []
+        self.material_index: dict[str, int] = {}
+        self.default_materials: dict[tuple, int] = {}
+        self.meshes: dict[str, dict[str, Any]] = {}
+        self.instances: list[tuple[str, np.ndarray, str]] = []
+        self.lights: list[Any] = []
+        self.world = None
+        self.cameras: list[Any] = []
+        self.black_backing: int | None = None
+
+    # -- helpers ------------------------------------------------------------------
+    def error(self, prim_or_path, problem: str) -> ValueError:
+        where = prim_or_path if isinstance(prim_or_path, str) else str(prim_or_path.GetPath())
+        return ValueError(f"{self.path}: prim {where}: {problem}")
+
+    def warn(self, key: str, message: str) -> None:
+        if key in self.warned:
+            return
+        self.warned.add(key)
+        warnings.warn(f"{self.path}: {message}", stacklevel=4)
+
+    def world_matrix(self, prim) -> np.ndarray:
+        """Object → world as polychrome wants it: column vectors, metres, Z up."""
+        m = np.array(self.cache.GetLocalToWorldTransform(prim), dtype=np.float64).T
+        if not self.identity_correction:
+            m = self.correction @ m
+        if not np.all(np.isfinite(m)):
+            raise self.error(prim, "its transform is not finite")
+        return m
+
+    def get(self, attr, default=None):
+        if not attr or not attr.HasAuthoredValue() and not attr.HasFallbackValue():
+            return default
+        v = attr.Get(self.time)
+        return default if v is None else v
+
+    def custom(self, prim, name: str, default=None):
+        attr = prim.GetAttribute(name)
+        if not attr or not attr.HasAuthoredValue():
+            return default
+        v = attr.Get(self.time)
+        return default if v is None else v
+
+    def json_attr(self, prim, name: str):
+        text = self.custom(prim, name)
+        if text is None:
+            return None
+        try:
+            return json.loads(str(text))
+        except json.JSONDecodeError as e:
+            raise self.error(prim, f"{name} is not valid JSON ({e.msg})") from None
+
+    def spectrum_attr(self, prim, name: str):
+        """A spectrum from ``name`` (JSON) or ``name:wavelengths`` + ``name:values``."""
+        from ..spectra import tabulated
+
+        d = self.json_attr(prim, name)
+        if d is not None:
+            if not isinstance(d, dict) or "type" not in d:
+                raise self.error(prim, f"{name} must be a JSON spectrum description with a 'type'")
+            return _spectrum_from_dict(d)
+        wl, vals = self.custom(prim, name + ":wavelengths"), self.custom(prim, name + ":values")
+        if wl is None or vals is None:
+            return None
+        wl, vals = np.asarray(wl, np.float64), np.asarray(vals, np.float64)
+        if wl.shape != vals.shape or wl.size < 1 or not (np.all(np.isfinite(wl)) and np.all(np.isfinite(vals))):
+            raise self.error(prim, f"{name}:wavelengths and {name}:values must be finite arrays of one length")
+        if np.any(np.diff(wl) <= 0):
+            raise self.error(prim, f"{name}:wavelengths must be ascending")
+        return tabulated(wl, vals)
+
+    @staticmethod
+    def key_of(prim) -> str:
+        return str(prim.GetPrimInPrototype().GetPath() if prim.IsInstanceProxy() else prim.GetPath())
+
+    # -- materials -------------------------------------------------------------------
+    def add_material(self, material) -> int:
+        self.materials.append(material)
+        return len(self.materials) - 1
+
+    def material_for(self, mat_prim) -> int:
+        key = self.key_of(mat_prim)
+        if key not in self.material_index:
+            self.material_index[key] = self.add_material(self.read_material(mat_prim))
+        return self.material_index[key]
+
+    def default_material(self, prim) -> int:
+        from .. import Diffuse
+        from ..spectra import rgb
+
+        colour = FALLBACK_GREY
+        pv = self.UsdGeom.PrimvarsAPI(prim).GetPrimvar("displayColor")
+        if pv and pv.HasValue():
+            c = pv.ComputeFlattened(self.time)
+            if c is not None and len(c):
+                arr = np.asarray(c, np.float64).reshape(-1, 3)
+                if np.all(np.isfinite(arr)):
+                    colour = tuple(float(x) for x in arr.mean(axis=0))
+        if colour not in self.default_materials:
+            self.default_materials[colour] = self.add_material(Diffuse(rgb(*colour), name=f"displayColor {colour}"))
+        return self.default_materials[colour]
+
+    def bound_material(self, prim) -> int:
+        mat, _ = self.UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
+        if mat and mat.GetPrim().IsValid():
+            return self.material_for(mat.GetPrim())
+        return self.default_material(prim)
+
+    def shader_input(self, shader, name: str, default, material_prim):
+        inp = shader.GetInput(name)
+        if not inp:
+            return default
+        if inp.HasConnectedSource():
+            source = inp.GetConnectedSources()[0]
+            src = source[0].source if source else None
+            fallback = None
+            if src is not None:
+                fb = src.GetInput("fallback")
+                fallback = fb.Get(self.time) if fb else None
+            self.warn(f"tex:{material_prim.GetPath()}:{name}", f"prim {material_prim.GetPath()}: input '{name}' is connected to a texture or node, which is not supported yet; its fallback value is used")
+            if fallback is not None:
+                return tuple(fallback)[:3] if isinstance(default, tuple) else float(tuple(fallback)[0] if hasattr(fallback, "__len__") else fallback)
+            return default
+        v = inp.Get(self.time)
+        if v is None:
+            return default
+        return tuple(float(x) for x in v) if isinstance(default, tuple) else float(v)
+
+    def read_material(self, prim):
+        import polychrome as pc
+        from ..spectra import rgb
+
+        name = str(self.custom(prim, A.NAME, str(prim.GetPath())))
+        kind = self.custom(prim, A.BSDF)
+        reflectance = self.spectrum_attr(prim, A.REFLECTANCE)
+        emission = self.spectrum_attr(prim, A.EMISSION)
+        ior = self.read_ior(prim)
+        extra = self.json_attr(prim, A.BSDF_EXTRA)
+        if extra is not None and not isinstance(extra, dict):
+            raise self.error(prim, f"{A.BSDF_EXTRA} must be a JSON object")
+        if kind is not None:
+            kind = str(kind)
+            bsdf: dict[str, Any] = {"type": kind, **(extra or {})}
+            if reflectance is not None:
+                bsdf["reflectance"] = reflectance.to_dict()
+            if ior is not None:
+                bsdf["ior"] = {**ior, **(bsdf.get("ior") or {})}
+            if kind == "diffuse" and set(bsdf) == {"type", "reflectance"}:
+                return pc.Diffuse(reflectance, emission=emission, name=name)
+            if kind == "none" and emission is not None and set(bsdf) == {"type"}:
+                return pc.Emitter(emission, name=name)
+            d = {"name": name, "bsdf": bsdf}
+            if emission is not None:
+                d["emission"] = emission.to_dict()
+            return DescribedMaterial(d)
+
+        # Plain UsdPreviewSurface, with polychrome spectra where given.
+        diffuse, emissive, opacity, ior_value, metallic, roughness = FALLBACK_GREY, (0.0, 0.0, 0.0), 1.0, 1.5, 0.0, 0.5
+        shader = None
+        surface = self.UsdShade.Material(prim).ComputeSurfaceSource()
+        if surface and surface[0]:
+            shader = surface[0]
+            shader_id = shader.GetShaderId()
+            if shader_id != "UsdPreviewSurface":
+                self.warn(f"shader:{self.key_of(prim)}", f"prim {prim.GetPath()}: surface shader '{shader_id}' is not supported; rendered as grey diffuse")
+                shader = None
+        if shader is not None:
+            diffuse = self.shader_input(shader, "diffuseColor", FALLBACK_GREY, prim)
+            emissive = self.shader_input(shader, "emissiveColor", (0.0, 0.0, 0.0), prim)
+            opacity = self.shader_input(shader, "opacity", 1.0, prim)
+            ior_value = self.shader_input(shader, "ior", 1.5, prim)
+            metallic = self.shader_input(shader, "metallic", 0.0, prim)
+            roughness = self.shader_input(shader, "roughness", 0.5, prim)
+        values = [*diffuse, *emissive, opacity, ior_value, metallic, roughness]
+        if not all(math.isfinite(v) for v in values):
+            raise self.error(prim, "its UsdPreviewSurface inputs are not finite")
+        if emission is None and max(emissive) > 0.0:
+            emission = rgb(*emissive)
+        if reflectance is None:
+            reflectance = rgb(*(min(max(c, 0.0), 1.0) for c in diffuse))
+        if ior is not None or opacity < 1.0:
+            if hasattr(pc, "Dielectric"):
+                try:
+                    return pc.Dielectric(ior=ior if ior is not None else float(ior_value), name=name)
+                except (TypeError, ValueError):
+                    if ior is not None:
+                        return DescribedMaterial({"name": name, "bsdf": {"type": "dielectric", "ior": ior}})
+            self.warn(f"glass:{self.key_of(prim)}", f"prim {prim.GetPath()}: transparency/ior is not supported by this polychrome; rendered as diffuse")
+        elif metallic > 0.5:
+            if hasattr(pc, "Conductor"):
+                try:
+                    return pc.Conductor(tuple(diffuse), roughness=float(roughness), name=name)
+                except (TypeError, ValueError):
+                    pass
+            self.warn(f"metal:{self.key_of(prim)}", f"prim {prim.GetPath()}: metallic is not supported by this polychrome; rendered as diffuse")
+        return pc.Diffuse(reflectance, emission=emission, name=name)
+
+    def read_ior(self, prim) -> dict[str, Any] | None:
+        model = self.custom(prim, A.IOR_MODEL)
+        if model is None:
+            return None
+        model = str(model)
+        coeffs = self.custom(prim, A.IOR_COEFFICIENTS)
+        c = None if coeffs is None else [float(x) for x in coeffs]
+        if c is not None and not all(math.isfinite(x) for x in c):
+            raise self.error(prim, f"{A.IOR_COEFFICIENTS} are not finite")
+        need = {"constant": 1, "cauchy": 3, "sellmeier": 6, "abbe": 2}
+        if model in need and (c is None or len(c) != need[model]):
+            raise self.error(prim, f"{A.IOR_COEFFICIENTS} of the {model} model needs {need[model]} values, got {0 if c is None else len(c)}")
+        if model == "constant":
+            return {"type": "constant", "ior": c[0]}
+        if model == "cauchy":
+            return {"type": "cauchy", "a": c[0], "b": c[1], "c": c[2]}
+        if model == "sellmeier":
+            return {"type": "sellmeier", "b": c[:3], "c": c[3:]}
+        if model == "abbe":
+            return {"type": "abbe", "nd": c[0], "vd": c[1]}
+        if model == "named":
+            glass = self.custom(prim, A.IOR_NAME)
+            if glass is None:
+                raise self.error(prim, f"the named ior model needs {A.IOR_NAME}")
+            return {"type": "named", "name": str(glass)}
+        d: dict[str, Any] = {"type": model}
+        if c is not None:
+            d["coefficients"] = c
+        return d
+
+    # -- meshes ------------------------------------------------------------------------
+    def primvar(self, prim, name: str, what: str, n_points: int, n_corners: int, n_faces: int, width: int):
+        """(array, interpolation) of a primvar, flattened; None when absent or unusable."""
+        pv = self.UsdGeom.PrimvarsAPI(prim).GetPrimvar(name)
+        if not pv or not pv.HasValue():
+            return None
+        value = pv.ComputeFlattened(self.time)
+        if value is None:
+            return None
+        arr = np.asarray(value, dtype=np.float32)
+        if arr.size == 0:
+            return None
+        arr = arr.reshape(-1, width) if arr.size % width == 0 else None
+        if arr is None:
+            raise self.error(prim, f"{what} has a size that is not a multiple of {width}")
+        return self.check_interp(prim, arr, pv.GetInterpolation(), what, n_points, n_corners, n_faces)
+
+    def check_interp(self, prim, arr, interp, what, n_points, n_corners, n_faces):
+        expected = {"vertex": n_points, "varying": n_points, "faceVarying": n_corners, "uniform": n_faces, "constant": 1}.get(str(interp))
+        if expected is None:
+            return None
+        if len(arr) != expected:
+            raise self.error(prim, f"{what} has {len(arr)} values for {interp} interpolation; expected {expected}")
+        if not np.all(np.isfinite(arr)):
+            bad = int(np.argwhere(~np.all(np.isfinite(arr), axis=1))[0][0])
+            raise self.error(prim, f"{what}[{bad}] is not finite")
+        if interp in ("uniform", "constant"):
+            return None  # flat data: the geometric normal / no texture variation does the same
+        return arr, ("corner" if interp == "faceVarying" else "vertex")
+
+    def mesh_arrays(self, prim) -> dict[str, Any] | None:
+        UsdGeom = self.UsdGeom
+        mesh = UsdGeom.Mesh(prim)
+        where = prim.GetPath()
+        points = mesh.GetPointsAttr().Get(self.time)
+        counts = mesh.GetFaceVertexCountsAttr().Get(self.time)
+        indices = mesh.GetFaceVertexIndicesAttr().Get(self.time)
+        if points is None or counts is None or indices is None or len(points) == 0 or len(counts) == 0:
+            return None
+        pts = np.asarray(points, dtype=np.float32).reshape(-1, 3)
+        if not np.all(np.isfinite(pts)):
+            bad = int(np.argwhere(~np.all(np.isfinite(pts), axis=1))[0][0])
+            raise self.error(where.pathString, f"point {bad} is not finite")
+        counts = np.asarray(counts, dtype=np.int64)
+        idx = np.asarray(indices, dtype=np.int64)
+        if counts.min() < 0:
+            raise self.error(where.pathString, f"faceVertexCounts[{int(np.argmin(counts))}] is negative")
+        if int(counts.sum()) != len(idx):
+            raise self.error(where.pathString, f"faceVertexCounts add up to {int(counts.sum())} but there are {len(idx)} faceVertexIndices")
+        if len(idx) and (idx.min() < 0 or idx.max() >= len(pts)):
+            bad = int(np.argwhere((idx < 0) | (idx >= len(pts)))[0][0])
+            raise self.error(where.pathString, f"faceVertexIndices[{bad}] = {int(idx[bad])} is out of range (the mesh has {len(pts)} points)")
+        n_faces, n_corners = len(counts), len(idx)
+        first = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        keep = counts >= 3
+        holes = mesh.GetHoleIndicesAttr().Get(self.time)
+        if holes is not None and len(holes):
+            h = np.asarray(holes, dtype=np.int64)
+            keep[h[(h >= 0) & (h < n_faces)]] = False
+        # Fan triangulation, vectorised: face f gives (c0, ck, ck+1) for k = 1 .. n−2.
+        ntri = np.where(keep, counts - 2, 0)
+        total = int(ntri.sum())
+        if total == 0:
+            return None
+        face_of_tri = np.repeat(np.arange(n_faces), ntri)
+        tri_start = np.cumsum(ntri) - ntri
+        k = np.arange(total) - np.repeat(tri_start, ntri) + 1
+        base = first[face_of_tri]
+        corners = np.stack([base, base + k, base + k + 1], axis=1)
+        if self.get(mesh.GetOrientationAttr(), "rightHanded") == "leftHanded":
+            corners = corners[:, [0, 2, 1]]
+
+        # Normals (primvars:normals wins over normals) and texture coordinates.
+        normals = self.primvar(prim, "normals", "primvars:normals", len(pts), n_corners, n_faces, 3)
+        if normals is None:
+            attr = mesh.GetNormalsAttr()
+            raw = attr.Get(self.time) if attr and attr.HasAuthoredValue() else None
+            if raw is not None and len(raw):
+                arr = np.asarray(raw, np.float32).reshape(-1, 3)
+                normals = self.check_interp(prim, arr, mesh.GetNormalsInterpolation(), "normals", len(pts), n_corners, n_faces)
+        uv_name = "st"
+        if not self.UsdGeom.PrimvarsAPI(prim).HasPrimvar("st"):
+            for pv in self.UsdGeom.PrimvarsAPI(prim).GetPrimvars():
+                if pv.GetTypeName() in (self.Sdf.ValueTypeNames.TexCoord2fArray, self.Sdf.ValueTypeNames.Float2Array):
+                    uv_name = pv.GetPrimvarName()
+                    break
+        uvs = self.primvar(prim, uv_name, f"primvars:{uv_name}", len(pts), n_corners, n_faces, 2)
+
+        if (normals is not None and normals[1] == "corner") or (uvs is not None and uvs[1] == "corner"):
+            # Split vertices whose corners disagree (as Blender's exporter does).
+            cols = [idx.astype(np.int64)[:, None].view(np.int32).reshape(n_corners, 2)]
+            corner_n = corner_uv = None
+            if normals is not None:
+                corner_n = normals[0] if normals[1] == "corner" else normals[0][idx]
+                cols.append(np.ascontiguousarray(corner_n).view(np.int32))
+            if uvs is not None:
+                corner_uv = uvs[0] if uvs[1] == "corner" else uvs[0][idx]
+                cols.append(np.ascontiguousarray(corner_uv).view(np.int32))
+            keys = np.ascontiguousarray(np.concatenate(cols, axis=1))
+            row = keys.view(np.dtype((np.void, keys.dtype.itemsize * keys.shape[1]))).ravel()
+            _, first_corner, inverse = np.unique(row, return_index=True, return_inverse=True)
+            vertices = pts[idx[first_corner]]
+            tris = inverse.ravel()[corners]
+            out_n = None if corner_n is None else corner_n[first_corner]
+            out_uv = None if corner_uv is None else corner_uv[first_corner]
+        else:
+            vertices = pts
+            tris = idx[corners]
+            out_n = None if normals is None else normals[0]
+            out_uv = None if uvs is None else uvs[0]
+
+        # Materials: GeomSubsets of the materialBind family, else the prim's binding.
+        binding = self.UsdShade.MaterialBindingAPI(prim)
+        subsets = binding.GetMaterialBindSubsets()
+        material_ids = None
+        material = None
+        if subsets:
+            face_material = np.full(n_faces, -1, dtype=np.int64)
+            for subset in subsets:
+                faces = subset.GetIndicesAttr().Get(self.time)
+                if faces is None or len(faces) == 0:
+                    continue
+                f = np.asarray(faces, dtype=np.int64)
+                if f.min() < 0 or f.max() >= n_faces:
+                    bad = int(f[(f < 0) | (f >= n_faces)][0])
+                    raise self.error(subset.GetPrim(), f"face index {bad} is out of range (the mesh has {n_faces} faces)")
+                face_material[f] = self.bound_material(subset.GetPrim())
+            if np.any(face_material < 0):
+                face_material[face_material < 0] = self.bound_material(prim)
+            material_ids = face_material[face_of_tri]
+        else:
+            material = self.bound_material(prim)
+        return {
+            "name": str(self.custom(prim, A.NAME, str(prim.GetPath()))),
+            "order": self.custom(prim, A.MESH_INDEX),
+            "vertices": vertices,
+            "triangles": tris,
+            "normals": out_n,
+            "uvs": out_uv,
+            "material_ids": material_ids,
+            "material": material,
+        }
+
+    def mesh_key(self, prim) -> str | None:
+        key = self.key_of(prim)
+        if key not in self.meshes:
+            arrays = self.mesh_arrays(prim)
+            self.meshes[key] = arrays  # type: ignore[assignment]
+        return key if self.meshes[key] is not None else None
+
+    def instance_name(self, prim) -> str:
+        p = prim
+        while p and p.IsValid() and not p.IsPseudoRoot():
+            name = self.custom(p, A.INSTANCE_NAME)
+            if name is not None:
+                return str(name)
+            if p.IsInstance() or not p.IsInstanceProxy():
+                break
+            p = p.GetParent()
+        return str(prim.GetPath())
+
+    def read_mesh(self, prim) -> None:
+        key = self.mesh_key(prim)
+        if key is None:
+            return
+        self.instances.append((key, self.world_matrix(prim), self.instance_name(prim)))
+
+    def read_point_instancer(self, prim) -> None:
+        UsdGeom, Usd = self.UsdGeom, self.Usd
+        pi = UsdGeom.PointInstancer(prim)
+        protos = pi.GetPrototypesRel().GetForwardedTargets()
+        proto_indices = pi.GetProtoIndicesAttr().Get(self.time)
+        if proto_indices is None or len(proto_indices) == 0 or not protos:
+            return
+        pidx = np.asarray(proto_indices, dtype=np.int64)
+        if pidx.min() < 0 or pidx.max() >= len(protos):
+            bad = int(np.argwhere((pidx < 0) | (pidx >= len(protos)))[0][0])
+            raise self.error(prim, f"protoIndices[{bad}] = {int(pidx[bad])} is out of range ({len(protos)} prototypes)")
+        PI = UsdGeom.PointInstancer
+        xforms = pi.ComputeInstanceTransformsAtTime(self.time, self.time, PI.IncludeProtoXform, PI.IgnoreMask)
+        if xforms is None or len(xforms) != len(pidx):
+            raise self.error(prim, "its instance transforms cannot be computed (positions missing or of the wrong length?)")
+        inst = np.asarray(xforms, dtype=np.float64).reshape(-1, 4, 4)
+        keep = np.ones(len(pidx), dtype=bool)
+        mask = pi.ComputeMaskAtTime(self.time)
+        if mask is not None and len(mask) == len(pidx):
+            keep &= np.asarray(mask, dtype=bool)
+        invisible = pi.GetInvisibleIdsAttr().Get(self.time)
+        if invisible is not None and len(invisible):
+            ids = pi.GetIdsAttr().Get(self.time)
+            ids = np.arange(len(pidx)) if ids is None or len(ids) != len(pidx) else np.asarray(ids, dtype=np.int64)
+            keep &= ~np.isin(ids, np.asarray(invisible, dtype=np.int64))
+        if not np.all(np.isfinite(inst[keep])):
+            raise self.error(prim, "its instance positions, orientations or scales are not finite")
+        w = np.array(self.cache.GetLocalToWorldTransform(prim), dtype=np.float64)
+        for p, target in enumerate(protos):
+            root = self.stage.GetPrimAtPath(target)
+            if not root:
+                raise self.error(prim, f"prototype {target} does not exist")
+            which = np.nonzero((pidx == p) & keep)[0]
+            if len(which) == 0:
+                continue
+            for sub in Usd.PrimRange(root, Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)):
+                if sub.GetTypeName() != "Mesh":
+                    if sub.GetTypeName() not in _SILENT_TYPES:
+                        self.warn(f"proto:{sub.GetPath()}", f"prim {sub.GetPath()}: {sub.GetTypeName()} inside a PointInstancer prototype is not supported and is skipped")
+                    continue
+                key = self.mesh_key(sub)
+                if key is None:
+                    continue
+                rel, _ = self.cache.ComputeRelativeTransform(sub, root) if sub != root else (self.Gf.Matrix4d(1.0), False)
+                rel = np.array(rel, dtype=np.float64)
+                mats = rel[None] @ inst[which] @ w[None]  # row vectors: local → prototype → instancer → world
+                mats = np.transpose(mats, (0, 2, 1))
+                if not self.identity_correction:
+                    mats = self.correction[None] @ mats
+                for j, m in zip(which, mats):
+                    self.instances.append((key, m, f"{prim.GetPath()}[{int(j)}]{str(sub.GetPath())[len(str(root.GetPath())):]}"))
+
+    # -- lights ---------------------------------------------------------------------------
+    def light_rgb(self, prim, light) -> tuple[float, tuple[float, float, float], Any]:
+        """(scalar intensity × 2^exposure, rgb colour, blackbody spectrum or None)."""
+        intensity = float(self.get(light.GetIntensityAttr(), 1.0))
+        exposure = float(self.get(light.GetExposureAttr(), 0.0))
+        colour = tuple(float(c) for c in self.get(light.GetColorAttr(), (1.0, 1.0, 1.0)))
+        scalar = intensity * 2.0**exposure
+        if not (math.isfinite(scalar) and all(math.isfinite(c) for c in colour)):
+            raise self.error(prim, "its intensity, exposure or colour is not finite")
+        blackbody = None
+        if self.get(light.GetEnableColorTemperatureAttr(), False):
+            t = float(self.get(light.GetColorTemperatureAttr(), 6500.0))
+            if not (math.isfinite(t) and t > 0):
+                raise self.error(prim, f"colour temperature {t} K must be positive")
+            blackbody = _blackbody_white(t)
+            if colour != (1.0, 1.0, 1.0):
+                self.warn(f"tint:{prim.GetPath()}", f"prim {prim.GetPath()}: a colour tint on a colour temperature is ignored")
+        return scalar, colour, blackbody
+
+    def emitted(self, scalar, colour, blackbody):
+        from ..spectra import rgb
+
+        if blackbody is not None:
+            return blackbody * scalar
+        return rgb(*colour) * scalar
+
+    def read_sphere_light(self, prim) -> None:
+        from ..scene import PointLight
+
+        m = self.world_matrix(prim)
+        pos = [float(x) for x in m[:3, 3]]
+        name = str(self.custom(prim, A.NAME, str(prim.GetPath())))
+        described = self.json_attr(prim, A.LIGHT)
+        power = self.custom(prim, A.POWER)
+        colour_spec = self.spectrum_attr(prim, A.COLOR)
+        if power is not None and colour_spec is not None:
+            self.lights.append(PointLight(pos, power=float(power), color=colour_spec, name=name))
+            return
+        intensity_spec = self.spectrum_attr(prim, A.INTENSITY)
+        if intensity_spec is not None:
+            self.lights.append(PointLight(pos, power=4.0 * math.pi, color=intensity_spec, name=name))
+            return
+        if described is not None and described.get("type") != "point":
+            self.lights.append(DescribedLight(described))
+            return
+        light = self.UsdLux.SphereLight(prim)
+        scalar, colour, blackbody = self.light_rgb(prim, light)
+        radius = float(self.get(light.GetRadiusAttr(), 0.5))
+        scale = float(np.cbrt(abs(np.linalg.det(m[:3, :3])))) if np.linalg.det(m[:3, :3]) != 0 else 0.0
+        r = radius * scale  # metres
+        normalize = bool(self.get(light.GetNormalizeAttr(), False))
+        treat_as_point = bool(self.get(light.GetTreatAsPointAttr(), False))
+        # Radiant intensity of a sphere of radiance L and radius r is L·πr²; normalised,
+        # L = intensity/(4πr²) and the intensity is intensity/4 for any radius. A zero
+        # radius without normalisation takes intensity as the radiant intensity itself.
+        if normalize:
+            factor = 0.25
+        elif r > 0:
+            factor = math.pi * r * r
+        else:
+            factor = 1.0
+        if not treat_as_point and r > 0:
+            self.warn(f"sphere:{prim.GetPath()}", f"prim {prim.GetPath()}: sphere light of radius {r:g} m is rendered as a point light of the same power")
+        if prim.HasAPI(self.UsdLux.ShapingAPI):
+            self.warn(f"shaping:{prim.GetPath()}", f"prim {prim.GetPath()}: light shaping (spot cone, IES) is not supported and is ignored")
+        self.lights.append(PointLight(pos, power=4.0 * math.pi, color=self.emitted(scalar * factor, colour, blackbody), name=name))
+
+    def add_emitter_polygon(self, prim, pts2d: np.ndarray, size: float, normalize: bool, scalar, colour, blackbody) -> None:
+        """An emissive polygon in the light's local XY plane shining along −Z, with a black
+        backing behind it (polychrome's emitters shine from both faces)."""
+        from .. import Diffuse, Emitter
+
+        m = self.world_matrix(prim)
+        n = len(pts2d)
+        verts = np.concatenate([pts2d, np.zeros((n, 1))], axis=1).astype(np.float32)
+        tris = np.stack([np.zeros(n - 2, np.int64), np.arange(1, n - 1), np.arange(2, n)], axis=1)
+        world = (m[:3, :3] @ verts.T.astype(np.float64)).T
+        area = 0.5 * float(np.linalg.norm(np.cross(world[tris[:, 1]] - world[tris[:, 0]], world[tris[:, 2]] - world[tris[:, 0]]), axis=1).sum())
+        if not area > 0.0 or scalar == 0.0:
+            return
+        if normalize:
+            scalar = scalar / area
+        name = str(self.custom(prim, A.NAME, str(prim.GetPath())))
+        emitter = self.add_material(Emitter(self.emitted(scalar, colour, blackbody), name=name))
+        key = f"light:{prim.GetPath()}"
+        self.meshes[key] = {"name": name, "order": None, "vertices": verts, "triangles": tris, "normals": None, "uvs": None, "material_ids": None, "material": emitter}
+        self.instances.append((key, m, name))
+        if self.black_backing is None:
+            self.black_backing = self.add_material(Diffuse(0.0, name="light backing"))
+        back = verts.copy()
+        back[:, 2] = 1e-3 * size
+        self.meshes[key + " (back)"] = {**self.meshes[key], "name": name + " (back)", "vertices": back, "material": self.black_backing}
+        self.instances.append((key + " (back)", m, name + " (back)"))
+
+    def read_rect_light(self, prim) -> None:
+        light = self.UsdLux.RectLight(prim)
+        scalar, colour, blackbody = self.light_rgb(prim, light)
+        w = float(self.get(light.GetWidthAttr(), 1.0))
+        h = float(self.get(light.GetHeightAttr(), 1.0))
+        if not (math.isfinite(w) and math.isfinite(h)):
+            raise self.error(prim, "its width or height is not finite")
+        if self.get(light.GetTextureFileAttr()) :
+            self.warn(f"recttex:{prim.GetPath()}", f"prim {prim.GetPath()}: rect light textures are not supported; its colour is used")
+        pts = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], np.float64) * [w / 2, h / 2]
+        self.add_emitter_polygon(prim, pts, max(w, h), bool(self.get(light.GetNormalizeAttr(), False)), scalar, colour, blackbody)
+
+    def read_disk_light(self, prim) -> None:
+        light = self.UsdLux.DiskLight(prim)
+        scalar, colour, blackbody = self.light_rgb(prim, light)
+        r = float(self.get(light.GetRadiusAttr(), 0.5))
+        if not math.isfinite(r):
+            raise self.error(prim, "its radius is not finite")
+        a = np.linspace(0.0, 2.0 * math.pi, DISK_SEGMENTS, endpoint=False)
+        pts = np.stack([np.cos(a), np.sin(a)], axis=1) * r
+        self.add_emitter_polygon(prim, pts, 2 * r, bool(self.get(light.GetNormalizeAttr(), False)), scalar, colour, blackbody)
+
+    def read_distant_light(self, prim) -> None:
+        import polychrome as pc
+
+        described = self.json_attr(prim, A.LIGHT)
+        if described is not None:
+            self.lights.append(DescribedLight(described))
+            return
+        light = self.UsdLux.DistantLight(prim)
+        if hasattr(pc, "SunLight"):
+            scalar, colour, blackbody = self.light_rgb(prim, light)
+            m = self.world_matrix(prim)
+            d = -m[:3, 2]
+            d = d / np.linalg.norm(d)
+            angle = math.radians(float(self.get(light.GetAngleAttr(), 0.53)))
+            # Normalised: intensity is the irradiance; else it is the radiance of the sun disk.
+            if not self.get(light.GetNormalizeAttr(), False) and angle > 0:
+                scalar *= math.pi * math.sin(angle / 2) ** 2
+            try:
+                self.lights.append(pc.SunLight(d.tolist(), irradiance=1.0, color=self.emitted(scalar, colour, blackbody), angle=angle,
+                                               name=str(prim.GetPath())))
+                return
+            except TypeError:
+                pass
+        self.warn(f"distant:{prim.GetPath()}", f"prim {prim.GetPath()}: DistantLight is not supported by this polychrome and is skipped")
+
+    def read_dome_light(self, prim) -> None:
+        radiance = self.spectrum_attr(prim, A.RADIANCE)
+        if self.world is not None:
+            self.warn(f"dome:{prim.GetPath()}", f"prim {prim.GetPath()}: only one DomeLight is used; this one is skipped")
+            return
+        if radiance is not None:
+            self.world = radiance
+            return
+        light = self.UsdLux.DomeLight(prim) if prim.GetTypeName() == "DomeLight" else self.UsdLux.DomeLight_1(prim)
+        scalar, colour, blackbody = self.light_rgb(prim, light)
+        tex = self.get(light.GetTextureFileAttr())
+        if tex is not None and str(tex.path if hasattr(tex, "path") else tex):
+            self.warn(f"dometex:{prim.GetPath()}", f"prim {prim.GetPath()}: dome light texture {tex} is not supported yet; its colour × intensity is used")
+        self.world = self.emitted(scalar, colour, blackbody)
+
+    # -- camera --------------------------------------------------------------------------
+    def read_camera(self, prim, resolution):
+        from ..scene import Camera
+
+        m = self.world_matrix(prim)
+        for k in range(3):
+            n = np.linalg.norm(m[:3, k])
+            if not n > 0:
+                raise self.error(prim, "its transform is singular")
+            if abs(n - 1.0) > 1e-9:  # camera scale does not change the view (as in Blender)
+                m[:3, k] /= n
+        fields = self.json_attr(prim, A.CAMERA)
+        if fields is not None:
+            if not isinstance(fields, dict):
+                raise self.error(prim, f"{A.CAMERA} must be a JSON object")
+            known = set(Camera.__dataclass_fields__) - {"to_world"}
+            try:
+                return Camera(to_world=m, **{k: v for k, v in fields.items() if k in known})
+            except TypeError as e:
+                raise self.error(prim, f"{A.CAMERA}: {e}") from None
+        cam = self.UsdGeom.Camera(prim)
+        ortho = self.get(cam.GetProjectionAttr(), "perspective") == "orthographic"
+        focal = float(self.get(cam.GetFocalLengthAttr(), 50.0))
+        ax = float(self.get(cam.GetHorizontalApertureAttr(), 20.955))
+        ay = float(self.get(cam.GetVerticalApertureAttr(), 15.2908))
+        ox = float(self.get(cam.GetHorizontalApertureOffsetAttr(), 0.0))
+        oy = float(self.get(cam.GetVerticalApertureOffsetAttr(), 0.0))
+        clip = tuple(float(x) for x in self.get(cam.GetClippingRangeAttr(), (1.0, 1000000.0)))
+        values = [focal, ax, ay, ox, oy, *clip]
+        if not all(math.isfinite(v) for v in values):
+            raise self.error(prim, "its lens, aperture or clipping range is not finite")
+        if not (ax > 0 and ay > 0 and (ortho or focal > 0)):
+            raise self.error(prim, f"focal length {focal} and apertures {ax} × {ay} must be positive")
+        w, h = resolution if resolution else (ax, ay)
+        # UsdRender's default conform policy, expandAperture: the whole aperture stays visible.
+        horizontal = ax / ay >= w / h
+        film_w, film_h = (ax, ax * h / w) if horizontal else (ay * w / h, ay)
+        largest = max(film_w, film_h)
+        mm = 100.0 * self.mpu  # tenths of a scene unit → mm
+        return Camera(
+            to_world=m,
+            projection="ORTHOGRAPHIC" if ortho else "PERSPECTIVE",
+            focal_length=focal * mm,
+            sensor_width=ax * mm,
+            sensor_height=ay * mm,
+            sensor_fit="HORIZONTAL" if horizontal else "VERTICAL",
+            ortho_scale=(ax if horizontal else ay) * 0.1 * self.mpu,
+            shift_x=ox / largest,
+            shift_y=oy / largest,
+            clip_start=clip[0] * self.mpu,
+            clip_end=clip[1] * self.mpu,
+            name=str(prim.GetPath()),
+        )
+
+    # -- the whole stage ------------------------------------------------------------------
+    def read(self):
+        from ..scene import Camera, Scene
+
+        Usd, UsdGeom = self.Usd, self.UsdGeom
+        # Every material first, in stage order (keeps the order of a round trip).
+        for prim in Usd.PrimRange(self.stage.GetPseudoRoot(), Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)):
+            if prim.GetTypeName() == "Material":
+                self.material_for(prim)
+
+        it = iter(Usd.PrimRange(self.stage.GetPseudoRoot(), Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)))
+        for prim in it:
+            if prim.IsPseudoRoot():
+                continue
+            t = str(prim.GetTypeName())
+            img = UsdGeom.Imageable(prim)
+            if img and (img.ComputeVisibility(self.time) == UsdGeom.Tokens.invisible
+                        or img.ComputePurpose() in (UsdGeom.Tokens.guide, UsdGeom.Tokens.proxy)):
+                it.PruneChildren()
+                continue
+            if t == "Mesh":
+                self.read_mesh(prim)
+            elif t == "PointInstancer":
+                self.read_point_instancer(prim)
+                it.PruneChildren()
+            elif t == "Camera":
+                self.cameras.append(prim)
+            elif t == "SphereLight":
+                self.read_sphere_light(prim)
+            elif t == "RectLight":
+                self.read_rect_light(prim)
+            elif t == "DiskLight":
+                self.read_disk_light(prim)
+            elif t == "DistantLight":
+                self.read_distant_light(prim)
+            elif t in ("DomeLight", "DomeLight_1"):
+                self.read_dome_light(prim)
+            elif t in ("Material", "RenderSettings", "RenderProduct", "RenderVar", "RenderPass"):
+                it.PruneChildren()
+            elif t in _SILENT_TYPES:
+                continue
+            else:
+                key = self.key_of(prim)
+                what = "light" if t in _LIGHTS_SKIPPED else "prim type"
+                self.warn(f"type:{key}", f"prim {prim.GetPath()}: {what} '{t}' is not supported and is skipped")
+
+        scene = Scene()
+        scene.materials = list(self.materials)
+        settings = read_settings_from_stage(self.stage, self.path)
+        resolution = self.resolution or ((settings["width"], settings["height"]) if "width" in settings else None)
+        cam_prim = None
+        cam_path = settings.get("_camera")
+        if cam_path:
+            cam_prim = self.stage.GetPrimAtPath(cam_path)
+            if not cam_prim or cam_prim.GetTypeName() != "Camera":
+                raise ValueError(f"{self.path}: prim {settings['_settings_prim']}: camera {cam_path} is not a UsdGeom.Camera")
+        elif self.cameras:
+            cam_prim = self.cameras[0]
+        if cam_prim is not None:
+            scene.camera = self.read_camera(cam_prim, resolution)
+        else:
+            self.warn("camera", "the stage has no UsdGeom.Camera; the default camera at the origin looking down −Z is used")
+            scene.camera = Camera()
+
+        order = sorted(self.meshes, key=lambda k: (self.meshes[k] is None, float("inf") if self.meshes[k] is None or self.meshes[k]["order"] is None else self.meshes[k]["order"]))
+        index: dict[str, int] = {}
+        for key in order:
+            m = self.meshes[key]
+            if m is None:
+                continue
+            index[key] = scene.add_mesh(
+                m["name"], m["vertices"], m["triangles"], normals=m["normals"], uvs=m["uvs"],
+                material=m["material"], material_ids=m["material_ids"], place=False)
+        for key, matrix, name in self.instances:
+            scene.add_instance(index[key], matrix, name)
+        for light in self.lights:
+            scene.add_light(light)
+        if self.world is not None:
+            scene.set_world(self.world)
+        return scene
+
+
+def _blackbody_white(temperature: float):
+    """Planck's law at ``temperature`` K scaled to luminance 1 (as RGB white is)."""
+    from .. import _core
+    from ..spectra import blackbody
+
+    spec = blackbody(temperature)
+    settings = json.dumps({"wavelength_count": 81})
+    y = _core.spectrum_xyz(json.dumps(spec.to_dict()), settings)[1]
+    return spec * (1.0 / y if y > 0 else 1.0)
+
+
+def open_stage(path):
+    """Opens ``path`` as a USD stage; ValueError naming the file when it cannot."""
+    _, _, Usd, _, _, _, _ = _pxr()
+    p = Path(path)
+    if not p.is_file():
+        raise ValueError(f"{p}: no such file")
+    try:
+        stage = Usd.Stage.Open(str(p))
+    except Exception as e:  # noqa: BLE001 - pxr raises Tf.ErrorException
+        first = str(e).strip().splitlines()
+        detail = next((line.strip() for line in first if line.strip() and "Error in" not in line), "unreadable")
+        raise ValueError(f"{p}: not a readable USD stage ({detail[:200]})") from None
+    if stage is None:
+        raise ValueError(f"{p}: not a readable USD stage")
+    return stage
+
+
+def read_settings_from_stage(stage, path) -> dict[str, Any]:
+    """RenderSettings fields stored in the stage: the prim named by the stage's
+    ``renderSettingsPrimPath``, else /Render/PolychromeSettings, else the first
+    UsdRender.Settings. Keys ``_camera`` / ``_settings_prim`` give its camera."""
+    from pxr import UsdRender
+
+    prim = None
+    meta = stage.GetMetadata("renderSettingsPrimPath") if stage.HasAuthoredMetadata("renderSettingsPrimPath") else None
+    for candidate in (meta, A.RENDER_SETTINGS_PATH):
+        if candidate:
+            p = stage.GetPrimAtPath(candidate)
+            if p and p.IsA(UsdRender.Settings):
+                prim = p
+                break
+    if prim is None:
+        for p in stage.Traverse():
+            if p.IsA(UsdRender.Settings):
+                prim = p
+                break
+    out: dict[str, Any] = {}
+    if prim is None:
+        return out
+    rs = UsdRender.Settings(prim)
+    out["_settings_prim"] = str(prim.GetPath())
+    res_attr = rs.GetResolutionAttr()
+    if res_attr and res_attr.HasAuthoredValue():
+        res = res_attr.Get()
+        if res is None or res[0] <= 0 or res[1] <= 0:
+            raise ValueError(f"{path}: prim {prim.GetPath()}: resolution {res} must be positive")
+        out["width"], out["height"] = int(res[0]), int(res[1])
+    targets = rs.GetCameraRel().GetForwardedTargets()
+    if targets:
+        out["_camera"] = str(targets[0])
+    import dataclasses
+
+    from ..render import RenderSettings
+
+    fields = {f.name for f in dataclasses.fields(RenderSettings)} - set(A.NOT_STORED)
+    for attr in prim.GetAttributes():
+        name = attr.GetName()
+        field = name[len(A.NAMESPACE) + 1:] if name.startswith(A.NAMESPACE + ":") else None
+        if field not in fields or not attr.HasAuthoredValue():
+            continue
+        v = attr.Get()
+        if v is None:
+            continue
+        if hasattr(v, "__len__") and not isinstance(v, str):
+            v = [float(x) for x in v]
+            if not all(math.isfinite(x) for x in v):
+                raise ValueError(f"{path}: prim {prim.GetPath()}: {name} is not finite")
+        elif isinstance(v, float) and not math.isfinite(v):
+            raise ValueError(f"{path}: prim {prim.GetPath()}: {name} is not finite")
+        elif not isinstance(v, (bool, int, float)):
+            v = str(v)
+        out[field] = v
+    return out
+
+
+def read_stage(path, *, resolution=None):
+    """Reads the USD stage at ``path`` into a :class:`polychrome.Scene`.
+
+    ``resolution`` (width, height) decides how the camera's aperture is conformed to the
+    image (UsdRender's expandAperture); by default the stage's render settings' resolution,
+    else the aperture's own aspect."""
+    return _Reader(Path(path), resolution).read()
+
+
+def read_settings(path) -> dict[str, Any]:
+    """The :class:`polychrome.RenderSettings` fields a stage stores (its UsdRender.Settings
+    resolution and ``polychrome:`` attributes), as a dict ready for ``RenderSettings(**d)``."""
+    stage = open_stage(path)
+    return {k: v for k, v in read_settings_from_stage(stage, Path(path)).items() if not k.startswith("_")}

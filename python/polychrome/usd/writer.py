@@ -1,0 +1,423 @@
+"""Writes a :class:`polychrome.Scene` as a USD stage (``write_stage``).
+
+Layout of a written stage (Z up, metres)::
+
+    /World                         Xform (default prim)
+        Looks/<material>           UsdShade.Material + UsdPreviewSurface, polychrome:* spectra
+        <instance>                 UsdGeom.Mesh when its mesh is placed once, with xformOp:transform
+        <instance>                 Xform, instanceable, referencing /Prototypes/<mesh> when shared
+        Camera                     UsdGeom.Camera, polychrome:camera
+        Lights/<light>             UsdLux SphereLight (treatAsPoint) / DomeLight (the world)
+    /Prototypes                    class prim (not rendered by itself): shared meshes
+    /Render/PolychromeSettings     UsdRender.Settings with polychrome:* render settings
+
+Meshes keep their triangles in order, per-vertex normals and ``primvars:st``, and one
+GeomSubset per material when they have per-triangle materials. The standard USD values
+(preview surface colours, UsdLux intensities, camera lens) are written for other tools;
+the ``polychrome:`` attributes (``attributes.py``) keep the spectral data exactly.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+import warnings
+
+import numpy as np
+
+from . import attributes as A
+
+# Linear Rec.709 from CIE XYZ (D65 white), IEC 61966-2-1.
+_XYZ_TO_REC709 = np.array(
+    [
+        [3.2404542, -1.5371385, -0.4985314],
+        [-0.9692660, 1.8760108, 0.0415560],
+        [0.0556434, -0.2040259, 1.0572252],
+    ]
+)
+#: Radius given to point lights so that renderers without point lights still see them.
+POINT_LIGHT_RADIUS = 0.05
+
+
+def _pxr():
+    try:
+        from pxr import Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdRender, UsdShade, Vt
+    except ImportError as e:  # pragma: no cover - depends on the install
+        raise ImportError("polychrome.usd needs usd-core: pip install 'polychrome[usd]'") from e
+    return Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdRender, UsdShade, Vt
+
+
+# --------------------------------------------------------------------------- colours
+
+
+class _Rgb:
+    """RGB previews of spectrum descriptions through the core's own CIE observer."""
+
+    def __init__(self, settings_json: str):
+        from .. import _core
+
+        self._core = _core
+        self._settings = settings_json
+        grid, _ = _core.wavelength_grid(settings_json)
+        self._lambdas = np.asarray(grid, dtype=np.float64)
+        d65 = {"type": "d65", "scale": 1.0}
+        self._d65 = np.asarray(_core.spectrum_values(json.dumps(d65), settings_json, "illuminant"), np.float64)
+        xyz = np.array(_core.spectrum_xyz(json.dumps(d65), settings_json))
+        self._white = _XYZ_TO_REC709 @ xyz  # RGB of D65: reflectance 1 and emission "white" map to 1
+        self._white_lum = self._white / xyz[1]
+
+    def _rgb_of(self, values: np.ndarray) -> np.ndarray:
+        tab = {"type": "tabulated", "wavelengths": self._lambdas.tolist(), "values": values.tolist(), "scale": 1.0}
+        return _XYZ_TO_REC709 @ np.array(self._core.spectrum_xyz(json.dumps(tab), self._settings))
+
+    def reflectance(self, spec: dict[str, Any]) -> tuple[float, float, float]:
+        kind, scale = spec.get("type"), float(spec.get("scale", 1.0))
+        if kind == "rgb":
+            return tuple(float(c) * scale for c in spec["rgb"])  # type: ignore[return-value]
+        if kind == "constant":
+            return (float(spec["value"]) * scale,) * 3  # type: ignore[return-value]
+        try:
+            v = np.asarray(self._core.spectrum_values(json.dumps(spec), self._settings, "reflectance"), np.float64)
+            rgb = self._rgb_of(v * self._d65) / self._white
+        except Exception:  # noqa: BLE001 - a preview colour is never worth failing the export
+            return (0.18, 0.18, 0.18)
+        return tuple(float(c) for c in np.clip(np.nan_to_num(rgb), 0.0, None))  # type: ignore[return-value]
+
+    def emission(self, spec: dict[str, Any]) -> tuple[float, float, float]:
+        kind, scale = spec.get("type"), float(spec.get("scale", 1.0))
+        if kind == "rgb":
+            return tuple(float(c) * scale for c in spec["rgb"])  # type: ignore[return-value]
+        try:
+            xyz = np.array(self._core.spectrum_xyz(json.dumps(spec), self._settings))
+            rgb = (_XYZ_TO_REC709 @ xyz) / self._white_lum
+        except Exception:  # noqa: BLE001
+            return (1.0, 1.0, 1.0)
+        return tuple(float(c) for c in np.clip(np.nan_to_num(rgb), 0.0, None))  # type: ignore[return-value]
+
+
+def _intensity_colour(rgb) -> tuple[float, tuple[float, float, float]]:
+    """UsdLux style: a scalar intensity times a colour whose largest channel is 1."""
+    peak = max(float(c) for c in rgb)
+    if not peak > 0.0 or not math.isfinite(peak):
+        return 0.0, (1.0, 1.0, 1.0)
+    return peak, tuple(float(c) / peak for c in rgb)  # type: ignore[return-value]
+
+
+def _ior_nd(ior: dict[str, Any]) -> float:
+    """The index at 587.56 nm, for UsdPreviewSurface's ``ior`` input."""
+    kind = ior.get("type")
+    lam = 0.58756
+    try:
+        if kind == "constant":
+            return float(ior["ior"])
+        if kind == "cauchy":
+            return float(ior["a"]) + float(ior["b"]) / lam**2 + float(ior.get("c", 0.0)) / lam**4
+        if kind == "sellmeier":
+            l2 = lam * lam
+            return math.sqrt(1.0 + sum(b * l2 / (l2 - c) for b, c in zip(ior["b"], ior["c"])))
+        if kind == "abbe":
+            return float(ior["nd"])
+    except (KeyError, TypeError, ValueError, ZeroDivisionError):
+        pass
+    return 1.5
+
+
+_IOR_FIELDS = {"constant": ["ior"], "cauchy": ["a", "b", "c"], "abbe": ["nd", "vd"]}
+
+
+def _ior_coefficients(ior: dict[str, Any]) -> list[float] | None:
+    kind = ior.get("type")
+    if kind == "sellmeier":
+        return [float(x) for x in list(ior["b"]) + list(ior["c"])]
+    if kind in _IOR_FIELDS:
+        return [float(ior.get(k, 0.0)) for k in _IOR_FIELDS[kind]]
+    return None
+
+
+# --------------------------------------------------------------------------- names
+
+
+class _Names:
+    """Valid, unique USD prim names under one parent."""
+
+    def __init__(self, Tf):
+        self._Tf = Tf
+        self._used: set[str] = set()
+
+    def __call__(self, name: str, fallback: str) -> str:
+        base = self._Tf.MakeValidIdentifier(name) if name else fallback
+        if not base or base == "_":
+            base = fallback
+        out, k = base, 1
+        while out in self._used:
+            out = f"{base}_{k}"
+            k += 1
+        self._used.add(out)
+        return out
+
+
+# --------------------------------------------------------------------------- writer
+
+
+def _matrix_to_usd(Gf, m) -> Any:
+    """polychrome's column-vector 4×4 (translation in the last column) → USD's row-vector matrix."""
+    return Gf.Matrix4d(np.asarray(m, dtype=np.float64).T.tolist())
+
+
+def _sensor_apertures(cam: dict[str, Any], width: int, height: int) -> tuple[float, float, float]:
+    """(horizontal, vertical, largest) film extent in mm (perspective) or scene units
+    (orthographic) that polychrome's camera shows for a ``width`` × ``height`` image."""
+    fit = cam["sensor_fit"]
+    horizontal = width >= height if fit == "AUTO" else fit == "HORIZONTAL"
+    if cam["projection"] == "ORTHOGRAPHIC":
+        fitted = cam["ortho_scale"]
+    else:
+        fitted = cam["sensor_height"] if fit == "VERTICAL" else cam["sensor_width"]
+    if horizontal:
+        w, h = fitted, fitted * height / width
+    else:
+        w, h = fitted * width / height, fitted
+    return w, h, max(w, h)
+
+
+def write_stage(scene, path, settings=None) -> Path:
+    """Writes ``scene`` (a :class:`polychrome.Scene`) as a USD stage at ``path``
+    (``.usda`` text, ``.usdc`` or ``.usd`` binary). ``settings`` (a
+    :class:`polychrome.RenderSettings`, default: the defaults) go to
+    ``/Render/PolychromeSettings``; its image size also sets the camera's apertures.
+    Returns the path."""
+    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdRender, UsdShade, Vt = _pxr()
+    from ..render import RenderSettings
+    from ..scene import PointLight
+
+    path = Path(path)
+    if path.suffix.lower() not in (".usd", ".usda", ".usdc"):
+        raise ValueError(f"{path}: a USD stage must end in .usd, .usda or .usdc")
+    settings = settings or RenderSettings()
+    settings_json = settings.to_json()
+    desc, buffers = scene.description()
+    for key, value in desc.items():
+        if key not in ("camera", "materials", "meshes", "instances", "lights", "world") and value:
+            warnings.warn(f"{path}: the scene's '{key}' cannot be written to USD yet and is left out", stacklevel=2)
+    rgb = _Rgb(settings_json)
+
+    stage = Usd.Stage.CreateInMemory()
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    world = UsdGeom.Xform.Define(stage, "/World")
+    stage.SetDefaultPrim(world.GetPrim())
+    world_names = _Names(Tf)
+    for reserved in ("Looks", "Camera", "Lights"):
+        world_names(reserved, reserved)
+
+    # -- materials ------------------------------------------------------------
+    materials = []
+    UsdGeom.Scope.Define(stage, "/World/Looks")
+    look_names = _Names(Tf)
+    for i, m in enumerate(desc["materials"]):
+        mp = Sdf.Path("/World/Looks").AppendChild(look_names(m.get("name", ""), f"Material{i}"))
+        mat = UsdShade.Material.Define(stage, mp)
+        prim = mat.GetPrim()
+        prim.CreateAttribute(A.NAME, Sdf.ValueTypeNames.String).Set(str(m.get("name", "")))
+        bsdf = dict(m.get("bsdf") or {"type": "diffuse", "reflectance": {"type": "constant", "value": 0.8, "scale": 1.0}})
+        kind = str(bsdf.pop("type", "diffuse"))
+        prim.CreateAttribute(A.BSDF, Sdf.ValueTypeNames.Token).Set(kind)
+        shader = UsdShade.Shader.Define(stage, mp.AppendChild("PreviewSurface"))
+        shader.CreateIdAttr("UsdPreviewSurface")
+        inp = lambda n, t, v: shader.CreateInput(n, t).Set(v)  # noqa: E731
+        reflectance = bsdf.pop("reflectance", None)
+        if reflectance is not None:
+            prim.CreateAttribute(A.REFLECTANCE, Sdf.ValueTypeNames.String).Set(json.dumps(reflectance))
+            inp("diffuseColor", Sdf.ValueTypeNames.Color3f, Gf.Vec3f(*rgb.reflectance(reflectance)))
+        elif kind == "none":
+            inp("diffuseColor", Sdf.ValueTypeNames.Color3f, Gf.Vec3f(0.0, 0.0, 0.0))
+        ior = bsdf.pop("ior", None)
+        if isinstance(ior, dict):
+            prim.CreateAttribute(A.IOR_MODEL, Sdf.ValueTypeNames.Token).Set(str(ior.get("type", "")))
+            coeffs = _ior_coefficients(ior)
+            if coeffs is not None:
+                prim.CreateAttribute(A.IOR_COEFFICIENTS, Sdf.ValueTypeNames.DoubleArray).Set(Vt.DoubleArray(coeffs))
+            if "name" in ior:
+                prim.CreateAttribute(A.IOR_NAME, Sdf.ValueTypeNames.String).Set(str(ior["name"]))
+            extra_ior = {k: v for k, v in ior.items() if k not in ("type", "name") and k not in _IOR_FIELDS.get(str(ior.get("type")), []) and not (ior.get("type") == "sellmeier" and k in ("b", "c"))}
+            if extra_ior:
+                bsdf["ior"] = extra_ior  # unknown fields of a future model: kept in extra
+            inp("ior", Sdf.ValueTypeNames.Float, float(_ior_nd(ior)))
+            inp("opacity", Sdf.ValueTypeNames.Float, 0.0)
+        elif ior is not None:
+            bsdf["ior"] = ior
+        if kind == "diffuse":
+            inp("roughness", Sdf.ValueTypeNames.Float, 1.0)
+        if bsdf:
+            prim.CreateAttribute(A.BSDF_EXTRA, Sdf.ValueTypeNames.String).Set(json.dumps(bsdf))
+        emission = m.get("emission")
+        if emission is not None:
+            prim.CreateAttribute(A.EMISSION, Sdf.ValueTypeNames.String).Set(json.dumps(emission))
+            inp("emissiveColor", Sdf.ValueTypeNames.Color3f, Gf.Vec3f(*rgb.emission(emission)))
+        mat.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
+        materials.append(mat)
+
+    # -- meshes and instances ---------------------------------------------------
+    instances = desc["instances"]
+    uses = np.zeros(len(desc["meshes"]), dtype=np.int64)
+    for inst in instances:
+        uses[inst["mesh"]] += 1
+    proto_names = _Names(Tf)
+    proto_paths: dict[int, Any] = {}
+
+    def fill_mesh(mp, index: int):
+        md = desc["meshes"][index]
+        mesh = UsdGeom.Mesh.Define(stage, mp)
+        prim = mesh.GetPrim()
+        v = np.ascontiguousarray(np.asarray(buffers[md["vertices"]], dtype=np.float32).reshape(-1, 3))
+        t = np.ascontiguousarray(np.asarray(buffers[md["triangles"]]).reshape(-1, 3).astype(np.int32))
+        mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(v))
+        mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(t), 3, dtype=np.int32)))
+        mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(t.ravel()))
+        mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+        mesh.CreateDoubleSidedAttr(True)
+        if len(v):
+            mesh.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*map(float, v.min(axis=0))), Gf.Vec3f(*map(float, v.max(axis=0)))]))
+        if md.get("normals") is not None:
+            n = np.ascontiguousarray(np.asarray(buffers[md["normals"]], dtype=np.float32).reshape(-1, 3))
+            mesh.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(n))
+            mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
+        if md.get("uvs") is not None:
+            uv = np.ascontiguousarray(np.asarray(buffers[md["uvs"]], dtype=np.float32).reshape(-1, 2))
+            pv = UsdGeom.PrimvarsAPI(prim).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex)
+            pv.Set(Vt.Vec2fArray.FromNumpy(uv))
+        prim.CreateAttribute(A.NAME, Sdf.ValueTypeNames.String).Set(str(md.get("name", "")))
+        prim.CreateAttribute(A.MESH_INDEX, Sdf.ValueTypeNames.Int).Set(int(index))
+        binding = UsdShade.MaterialBindingAPI.Apply(prim)
+        if md.get("material_ids") is not None:
+            ids = np.asarray(buffers[md["material_ids"]]).astype(np.int64)
+            order = np.argsort(ids, kind="stable")
+            sorted_ids = ids[order]
+            present = np.unique(sorted_ids)
+            starts = np.searchsorted(sorted_ids, present, side="left")
+            ends = np.searchsorted(sorted_ids, present, side="right")
+            for mat_index, s, e in zip(present.tolist(), starts, ends):
+                faces = np.sort(order[s:e]).astype(np.int32)
+                subset = binding.CreateMaterialBindSubset(f"material_{mat_index}", Vt.IntArray.FromNumpy(faces), UsdGeom.Tokens.face)
+                UsdShade.MaterialBindingAPI.Apply(subset.GetPrim()).Bind(materials[mat_index])
+            binding.SetMaterialBindSubsetsFamilyType(UsdGeom.Tokens.partition)
+        elif materials:
+            binding.Bind(materials[int(md.get("material") or 0)])
+        return mesh
+
+    for index, count in enumerate(uses):
+        if count >= 2:
+            if not stage.GetPrimAtPath("/Prototypes"):
+                stage.CreateClassPrim("/Prototypes")
+            root = Sdf.Path("/Prototypes").AppendChild(proto_names(desc["meshes"][index].get("name", ""), f"Mesh{index}"))
+            UsdGeom.Xform.Define(stage, root)
+            fill_mesh(root.AppendChild("mesh"), index)
+            proto_paths[index] = root
+
+    for k, inst in enumerate(instances):
+        index = int(inst["mesh"])
+        ip = Sdf.Path("/World").AppendChild(world_names(inst.get("name", ""), f"Instance{k}"))
+        if index in proto_paths:
+            xf = UsdGeom.Xform.Define(stage, ip)
+            xf.GetPrim().GetReferences().AddInternalReference(proto_paths[index])
+            xf.GetPrim().SetInstanceable(True)
+            xformable = xf
+        else:
+            xformable = fill_mesh(ip, index)
+        xformable.AddTransformOp().Set(_matrix_to_usd(Gf, inst["transform"]))
+        xformable.GetPrim().CreateAttribute(A.INSTANCE_NAME, Sdf.ValueTypeNames.String).Set(str(inst.get("name", "")))
+
+    # -- camera ---------------------------------------------------------------------
+    cam = desc["camera"]
+    camera = UsdGeom.Camera.Define(stage, "/World/Camera")
+    camera.AddTransformOp().Set(_matrix_to_usd(Gf, cam["to_world"]))
+    ortho = cam["projection"] == "ORTHOGRAPHIC"
+    camera.CreateProjectionAttr(UsdGeom.Tokens.orthographic if ortho else UsdGeom.Tokens.perspective)
+    # Lens and filmback are in tenths of a scene unit (UsdGeomCamera, "Units of Measure
+    # for Camera Properties"): with metersPerUnit = 1 that is 100 mm per unit.
+    w, h, largest = _sensor_apertures(cam, settings.width, settings.height)
+    # Orthographic extents are scene units (×10 tenths); perspective ones are mm (÷100).
+    to_tenths = (lambda x: x * 10.0) if ortho else (lambda x: x / 100.0)
+    camera.CreateFocalLengthAttr(float(cam["focal_length"]) / 100.0)
+    camera.CreateHorizontalApertureAttr(float(to_tenths(w)))
+    camera.CreateVerticalApertureAttr(float(to_tenths(h)))
+    camera.CreateHorizontalApertureOffsetAttr(float(to_tenths(cam["shift_x"] * largest)))
+    camera.CreateVerticalApertureOffsetAttr(float(to_tenths(cam["shift_y"] * largest)))
+    camera.CreateClippingRangeAttr(Gf.Vec2f(float(cam["clip_start"]), float(cam["clip_end"])))
+    camera_fields = {k: v for k, v in cam.items() if k != "to_world"}
+    camera.GetPrim().CreateAttribute(A.CAMERA, Sdf.ValueTypeNames.String).Set(json.dumps(camera_fields))
+
+    # -- lights -----------------------------------------------------------------------
+    UsdGeom.Scope.Define(stage, "/World/Lights")
+    light_names = _Names(Tf)
+    for i, (light, ld) in enumerate(zip(scene.lights, desc["lights"])):
+        lp = Sdf.Path("/World/Lights").AppendChild(light_names(ld.get("name", ""), f"Light{i}"))
+        if ld.get("type") == "point":
+            sl = UsdLux.SphereLight.Define(stage, lp)
+            sl.CreateTreatAsPointAttr(True)
+            sl.CreateRadiusAttr(POINT_LIGHT_RADIUS)
+            # Normalised sphere of radius r: radiance intensity/(4πr²), radiant intensity
+            # L·πr² = intensity/4, whatever the radius (docs/usd.md, "Lights").
+            sl.CreateNormalizeAttr(True)
+            peak, colour = _intensity_colour(rgb.emission(ld["intensity"]))
+            sl.CreateIntensityAttr(4.0 * peak)
+            sl.CreateColorAttr(Gf.Vec3f(*colour))
+            sl.AddTranslateOp().Set(Gf.Vec3d(*[float(c) for c in ld["position"]]))
+            prim = sl.GetPrim()
+            if isinstance(light, PointLight):
+                prim.CreateAttribute(A.POWER, Sdf.ValueTypeNames.Double).Set(float(light.power))
+                from ..spectra import as_spectrum
+
+                prim.CreateAttribute(A.COLOR, Sdf.ValueTypeNames.String).Set(json.dumps(as_spectrum(light.color).to_dict()))
+            else:
+                prim.CreateAttribute(A.INTENSITY, Sdf.ValueTypeNames.String).Set(json.dumps(ld["intensity"]))
+        else:
+            # A light type without a UsdLux mapping yet: kept whole in polychrome:light.
+            if "position" in ld:
+                lt = UsdLux.SphereLight.Define(stage, lp)
+                lt.CreateTreatAsPointAttr(True)
+                lt.AddTranslateOp().Set(Gf.Vec3d(*[float(c) for c in ld["position"]]))
+            else:
+                lt = UsdLux.DistantLight.Define(stage, lp)
+            prim = lt.GetPrim()
+            prim.CreateAttribute(A.LIGHT, Sdf.ValueTypeNames.String).Set(json.dumps(ld))
+        prim.CreateAttribute(A.NAME, Sdf.ValueTypeNames.String).Set(str(ld.get("name", "")))
+
+    if desc.get("world") is not None and desc["world"].get("radiance") is not None:
+        radiance = desc["world"]["radiance"]
+        dome = UsdLux.DomeLight.Define(stage, "/World/Lights/World")
+        peak, colour = _intensity_colour(rgb.emission(radiance))
+        dome.CreateIntensityAttr(peak)
+        dome.CreateColorAttr(Gf.Vec3f(*colour))
+        dome.GetPrim().CreateAttribute(A.RADIANCE, Sdf.ValueTypeNames.String).Set(json.dumps(radiance))
+        extra = {k: v for k, v in desc["world"].items() if k != "radiance"}
+        if extra:
+            dome.GetPrim().CreateAttribute(A.LIGHT, Sdf.ValueTypeNames.String).Set(json.dumps(extra))
+
+    # -- render settings ----------------------------------------------------------------
+    UsdGeom.Scope.Define(stage, "/Render")
+    rs = UsdRender.Settings.Define(stage, A.RENDER_SETTINGS_PATH)
+    rs.CreateResolutionAttr(Gf.Vec2i(int(settings.width), int(settings.height)))
+    rs.CreateCameraRel().SetTargets([camera.GetPath()])
+    for field, value in A.settings_items(settings):
+        if isinstance(value, bool):
+            vtype = Sdf.ValueTypeNames.Bool
+        elif isinstance(value, int):
+            vtype = Sdf.ValueTypeNames.Int
+        elif isinstance(value, float):
+            vtype = Sdf.ValueTypeNames.Double
+        elif isinstance(value, str):
+            vtype, value = Sdf.ValueTypeNames.Token, value.upper()
+        elif isinstance(value, (list, tuple)):
+            vtype, value = Sdf.ValueTypeNames.DoubleArray, Vt.DoubleArray([float(x) for x in value])
+        else:
+            continue
+        rs.GetPrim().CreateAttribute(A.NAMESPACE + ":" + field, vtype).Set(value)
+    stage.SetMetadata("renderSettingsPrimPath", A.RENDER_SETTINGS_PATH)
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if not stage.GetRootLayer().Export(str(path)):
+        raise OSError(f"{path}: USD could not write the stage")
+    return path

@@ -1,0 +1,505 @@
+"""USD: polychrome.usd.write_stage / read_stage, and `polychrome render` on stages.
+
+References: the round trip is compared with the scene's own description (every field
+and buffer); stages written by hand with pxr are checked against closed forms (a point
+and a rectangular light over a Lambertian floor), against colour-science (the preview
+colour of a measured reflectance) and against USD's own GfCamera (field of view).
+"""
+
+import json
+import math
+import os
+import subprocess
+import sys
+import textwrap
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pxr = pytest.importorskip("pxr")
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdRender, UsdShade, Vt  # noqa: E402
+
+import polychrome as pc  # noqa: E402
+from polychrome import cli, usd  # noqa: E402
+from conftest import luminance  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def uv_sphere(radius=1.0, rings=6, segments=12):
+    theta = np.linspace(0, np.pi, rings + 1)
+    phi = np.linspace(0, 2 * np.pi, segments + 1)
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    v = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], -1).reshape(-1, 3) * radius
+    row = segments + 1
+    r, s = np.meshgrid(np.arange(rings), np.arange(segments), indexing="ij")
+    a = (r * row + s).ravel()
+    b = a + row
+    tris = np.concatenate([np.stack([a, b, a + 1], 1), np.stack([a + 1, b, b + 1], 1)])
+    return v, tris
+
+
+def spectral_scene():
+    """Every kind of spectrum, a mesh with normals and uvs, per-triangle materials, a
+    mesh placed three times, a camera with shift, point lights and a world."""
+    scene = pc.Scene()
+    paint = scene.add_material(pc.Diffuse(pc.spectra.tabulated([400, 450, 500, 550, 600, 650, 700], [0.05, 0.1, 0.6, 0.8, 0.3, 0.1, 0.05]), name="green paint"))
+    red = scene.add_material(pc.Diffuse((0.8, 0.2, 0.1), name="red"))
+    grey = scene.add_material(pc.Diffuse(0.5, name="grey"))
+    scene.add_material(pc.Emitter(pc.spectra.blackbody(3200), strength=8.0, name="lamp"))
+    scene.add_material(pc.Diffuse(pc.spectra.narrow_band(550, 20) * 0.7, emission=pc.spectra.fluorescent(11, 0.5), name="glow"))
+    v, t = uv_sphere(1.0)
+    normals = v / np.linalg.norm(v, axis=1, keepdims=True)
+    uvs = np.stack([np.arange(len(v)) % 13 / 13.0, np.arange(len(v)) // 13 / 13.0], 1)
+    scene.add_mesh("ball", v, t, normals=normals, uvs=uvs, material=paint)
+    floor = np.array([[-4, -4, -1], [4, -4, -1], [4, 4, -1], [-4, 4, -1]], float)
+    scene.add_mesh("floor", floor, [[0, 1, 2], [0, 2, 3]], material_ids=[grey, red])
+    small = scene.add_mesh("pebble", v * 0.2, t, material=4, place=False)
+    for k in range(3):
+        m = np.eye(4)
+        c, s = math.cos(k), math.sin(k)
+        m[:3, :3] = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]) * (1 + 0.5 * k)
+        m[:3, 3] = [2.0 * k - 2, 2.0, -0.5]
+        scene.add_instance(small, m, f"pebble {k}")
+    lamp = scene.add_mesh("lamp", v * 0.3, t, material=3, place=False)
+    scene.add_instance(lamp, np.array([[1, 0, 0, 1.5], [0, 1, 0, -1.5], [0, 0, 1, 2.0], [0, 0, 0, 1]]), "lamp")
+    scene.camera = pc.Camera.looking_at((0.5, -6, 2), (0, 0, 0), focal_length=35.0, shift_x=0.05, shift_y=-0.02, clip_start=0.05, name="Shot cam")
+    scene.add_light(pc.PointLight((2, -2, 3), power=40.0, color=pc.spectra.blackbody(4500), name="key"))
+    scene.add_light(pc.PointLight((-3, -1, 2), power=15.0, color=(0.2, 0.4, 1.0), name="fill"))
+    scene.set_world(pc.spectra.d65(0.05))
+    return scene
+
+
+def expanded(scene):
+    """The description with buffer indices replaced by the buffers' values."""
+    desc, buffers = scene.description()
+    desc = json.loads(json.dumps(desc))
+    for m in desc["meshes"]:
+        for key in ("vertices", "triangles", "normals", "uvs", "material_ids"):
+            if m.get(key) is not None:
+                m[key] = np.asarray(buffers[m[key]]).tolist()
+    return desc
+
+
+SETTINGS = pc.RenderSettings(width=24, height=16, samples=4, max_bounces=3, seed=7, wavelength_count=21)
+
+
+@pytest.mark.parametrize("suffix", [".usda", ".usdc"])
+def test_round_trip_keeps_every_spectrum_mesh_transform_camera_and_light(tmp_path, suffix):
+    scene = spectral_scene()
+    path = usd.write_stage(scene, tmp_path / f"scene{suffix}", SETTINGS)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # our own stage must read without any warning
+        back = usd.read_stage(path)
+    a, b = expanded(scene), expanded(back)
+    for key in a:
+        assert a[key] == b[key], key
+    assert a == b
+    assert [type(m).__name__ for m in back.materials] == ["Diffuse", "Diffuse", "Diffuse", "Emitter", "Diffuse"]
+    stored = usd.read_settings(path)
+    assert {k: stored[k] for k in ("width", "height", "samples", "max_bounces", "seed", "wavelength_count", "method")} == {
+        "width": 24, "height": 16, "samples": 4, "max_bounces": 3, "seed": 7, "wavelength_count": 21, "method": "POLYCHROMATIC"}
+
+
+def test_written_stage_follows_the_usd_schemas(tmp_path):
+    scene = spectral_scene()
+    path = usd.write_stage(scene, tmp_path / "scene.usda", SETTINGS)
+    stage = Usd.Stage.Open(str(path))
+    assert UsdGeom.GetStageUpAxis(stage) == UsdGeom.Tokens.z
+    assert UsdGeom.GetStageMetersPerUnit(stage) == 1.0
+    # Camera lens and filmback in tenths of a scene unit: 35 mm = 0.035 m = 0.35 tenths.
+    cam = UsdGeom.Camera(stage.GetPrimAtPath("/World/Camera"))
+    assert cam.GetFocalLengthAttr().Get() == pytest.approx(0.35, rel=1e-6)
+    assert cam.GetHorizontalApertureAttr().Get() == pytest.approx(0.36, rel=1e-6)  # 36 mm, landscape AUTO fit
+    assert cam.GetVerticalApertureAttr().Get() == pytest.approx(0.36 * 16 / 24, rel=1e-6)
+    fov = cam.GetCamera(Usd.TimeCode.Default()).GetFieldOfView(Gf.Camera.FOVHorizontal)
+    assert fov == pytest.approx(math.degrees(2 * math.atan(18 / 35)), rel=1e-5)
+    # Shared meshes are instanceable references; the pebble prims are instances.
+    pebbles = [p for p in stage.Traverse() if p.IsInstance()]
+    assert len(pebbles) == 3
+    # Per-triangle materials are GeomSubsets bound to the right materials.
+    floor = stage.GetPrimAtPath("/World/floor")
+    subsets = UsdShade.MaterialBindingAPI(floor).GetMaterialBindSubsets()
+    bound = {tuple(s.GetIndicesAttr().Get()): UsdShade.MaterialBindingAPI(s.GetPrim()).ComputeBoundMaterial()[0].GetPath().name for s in subsets}
+    assert bound == {(0,): "grey", (1,): "red"}
+    # Lights and world.
+    key = UsdLux.SphereLight(stage.GetPrimAtPath("/World/Lights/key"))
+    assert key.GetTreatAsPointAttr().Get() is True
+    assert UsdLux.DomeLight(stage.GetPrimAtPath("/World/Lights/World"))
+    rs = UsdRender.Settings(stage.GetPrimAtPath("/Render/PolychromeSettings"))
+    assert tuple(rs.GetResolutionAttr().Get()) == (24, 16)
+
+
+def test_preview_colour_of_a_measured_reflectance_matches_colour_science(tmp_path):
+    colour = pytest.importorskip("colour")
+    wl = np.arange(400, 701, 50.0)
+    refl = np.array([0.05, 0.1, 0.6, 0.8, 0.3, 0.1, 0.05])
+    scene = pc.Scene()
+    scene.add_material(pc.Diffuse(pc.spectra.tabulated(wl, refl), name="paint"))
+    scene.add_mesh("tri", [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
+    path = usd.write_stage(scene, tmp_path / "paint.usda", pc.RenderSettings(wavelength_count=81))
+    stage = Usd.Stage.Open(str(path))
+    shader = UsdShade.Shader(stage.GetPrimAtPath("/World/Looks/paint/PreviewSurface"))
+    got = np.array(shader.GetInput("diffuseColor").Get())
+    fine = np.arange(380, 781, 5.0)
+    sd = colour.SpectralDistribution(dict(zip(fine, np.interp(fine, wl, refl))))  # constant beyond the ends
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
+    xyz = colour.sd_to_XYZ(sd, cmfs, colour.SDS_ILLUMINANTS["D65"]) / 100
+    want = colour.XYZ_to_RGB(xyz, colour.RGB_COLOURSPACES["sRGB"], apply_cctf_encoding=False)
+    assert np.allclose(got, want, atol=0.02), (got, want)
+
+
+def test_round_tripped_scene_renders_identically(tmp_path):
+    scene = spectral_scene()
+    back = usd.read_stage(usd.write_stage(scene, tmp_path / "scene.usdc", SETTINGS))
+    a = pc.render(scene, SETTINGS)
+    b = pc.render(back, SETTINGS)
+    assert np.array_equal(a.rgba, b.rgba)
+    assert luminance(a.rgba).mean() > 0.0
+
+
+# ---------------------------------------------------------------------------- hand-written stages
+
+
+def new_stage(path, up="Z", mpu=1.0):
+    stage = Usd.Stage.CreateNew(str(path))
+    UsdGeom.SetStageUpAxis(stage, up)
+    UsdGeom.SetStageMetersPerUnit(stage, mpu)
+    return stage
+
+
+def preview_material(stage, path, rgb):
+    mat = UsdShade.Material.Define(stage, path)
+    sh = UsdShade.Shader.Define(stage, path + "/Surface")
+    sh.CreateIdAttr("UsdPreviewSurface")
+    sh.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(*rgb))
+    mat.CreateSurfaceOutput().ConnectToSource(sh.ConnectableAPI(), "surface")
+    return mat
+
+
+def floor_mesh(stage, path, half, material=None, up="Z", scale=1.0):
+    """A square floor as ONE quad polygon (fan-triangulated by the reader)."""
+    pts = np.array([[-half, -half, 0], [half, -half, 0], [half, half, 0], [-half, half, 0]], float)
+    if up == "Y":
+        pts = pts[:, [0, 2, 1]] * [1, 1, -1]
+    mesh = UsdGeom.Mesh.Define(stage, path)
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy((pts * scale).astype(np.float32)))
+    mesh.CreateFaceVertexCountsAttr([4])
+    mesh.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
+    if material is not None:
+        UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(material)
+    return mesh
+
+
+def top_camera(stage, path, height, ortho_width, up="Z", scale=1.0):
+    cam = UsdGeom.Camera.Define(stage, path)
+    cam.CreateProjectionAttr("orthographic")
+    cam.CreateHorizontalApertureAttr(ortho_width * scale * 10.0)  # tenths of a scene unit
+    cam.CreateVerticalApertureAttr(ortho_width * scale * 10.0)
+    cam.CreateClippingRangeAttr(Gf.Vec2f(0.01 * scale, 100.0 * scale))
+    if up == "Z":
+        cam.AddTranslateOp().Set(Gf.Vec3d(0, 0, height * scale))
+    else:  # looking down −Y: rotate the camera's −Z onto −Y
+        cam.AddTranslateOp().Set(Gf.Vec3d(0, height * scale, 0))
+        cam.AddRotateXOp().Set(-90.0)
+    return cam
+
+
+def pixel_footprint_mean(fn, px, py, n, width, samples=32):
+    """Mean of fn(x, y) over pixel (px, py) of an n×n ortho view `width` wide at the origin."""
+    u = (px + (np.arange(samples) + 0.5) / samples) / n * width - width / 2
+    v = width / 2 - (py + (np.arange(samples) + 0.5) / samples) / n * width
+    x, y = np.meshgrid(u, v)
+    return float(np.mean(fn(x, y)))
+
+
+def test_plain_usd_stage_renders_with_sensible_defaults(tmp_path):
+    """UsdGeom + UsdPreviewSurface + UsdLux only: a grey quad lit by a point-like
+    SphereLight matches ρ/π · I cosθ / d² with I = intensity/4 (normalised sphere)."""
+    rho, h, intensity = 0.5, 1.5, 60.0
+    path = tmp_path / "plain.usda"
+    stage = new_stage(path)
+    UsdGeom.Xform.Define(stage, "/World")
+    mat = preview_material(stage, "/World/Looks/grey", (rho, rho, rho))
+    floor_mesh(stage, "/World/floor", 5.0, mat)
+    light = UsdLux.SphereLight.Define(stage, "/World/bulb")
+    light.CreateTreatAsPointAttr(True)
+    light.CreateNormalizeAttr(True)
+    light.CreateIntensityAttr(intensity)
+    light.AddTranslateOp().Set(Gf.Vec3d(0, 0, h))
+    top_camera(stage, "/World/cam", 4.0, 2.0)
+    stage.Save()
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        scene = usd.read_stage(path)
+    n = 15
+    result = pc.render(scene, width=n, height=n, samples=64, max_bounces=1)
+    assert result.stats["nonfinite_samples"] == 0
+    I = intensity / 4.0
+    for px, py in [(7, 7), (0, 0), (14, 3)]:
+        want = pixel_footprint_mean(lambda x, y: rho / math.pi * I * h / (x * x + y * y + h * h) ** 1.5, px, py, n, 2.0)
+        got = luminance(result.rgba[py, px])
+        assert abs(got - want) < 0.02 * want, (px, py, got, want)
+    # Light where expected: the centre is brighter than the corners.
+    y = luminance(result.rgba)
+    assert y[7, 7] > 1.3 * y[0, 0]
+
+
+def test_rect_light_shines_down_only_with_its_closed_form_irradiance(tmp_path):
+    rho, h, a, b, radiance = 0.8, 1.0, 0.6, 0.4, 5.0
+    path = tmp_path / "rect.usda"
+    stage = new_stage(path)
+    mat = preview_material(stage, "/Looks/white", (rho, rho, rho))
+    floor_mesh(stage, "/floor", 5.0, mat)
+    rect = UsdLux.RectLight.Define(stage, "/panel")  # emits along its local −Z: down
+    rect.CreateWidthAttr(a)
+    rect.CreateHeightAttr(b)
+    rect.CreateIntensityAttr(radiance)
+    rect.AddTranslateOp().Set(Gf.Vec3d(0, 0, h))
+    ceiling = floor_mesh(stage, "/ceiling", 5.0, mat)
+    ceiling.AddTranslateOp().Set(Gf.Vec3d(0, 0, 2 * h))
+    top_camera(stage, "/cam", 0.5, 0.2)  # under the panel, looking down at the floor
+    stage.Save()
+    scene = usd.read_stage(path)
+    result = pc.render(scene, width=5, height=5, samples=256, max_bounces=1)
+
+    def corner(x, y):  # E of an x×y rectangle with a corner above the point, radiance 1
+        return 0.5 * (x / math.hypot(x, h) * math.atan(y / math.hypot(x, h)) + y / math.hypot(y, h) * math.atan(x / math.hypot(y, h)))
+
+    irradiance = radiance * 4 * corner(a / 2, b / 2)
+    want = rho / math.pi * irradiance
+    got = luminance(result.rgba[2, 2])
+    assert abs(got - want) < 0.03 * want, (got, want)
+
+
+def test_y_up_centimetre_stage_lands_where_its_z_up_metre_twin_does(tmp_path):
+    def build(path, up, mpu):
+        scale = 1.0 / mpu
+        stage = new_stage(path, up, mpu)
+        mat = preview_material(stage, "/Looks/grey", (0.5, 0.5, 0.5))
+        floor_mesh(stage, "/floor", 2.0, mat, up=up, scale=scale)
+        box = UsdGeom.Mesh.Define(stage, "/marker")  # a triangle off-centre, up in the air
+        p = np.array([[0.5, 0.2, 0.3], [1.0, 0.2, 0.3], [0.5, 0.7, 0.6]])
+        if up == "Y":
+            p = p[:, [0, 2, 1]] * [1, 1, -1]
+        box.CreatePointsAttr(Vt.Vec3fArray.FromNumpy((p * scale).astype(np.float32)))
+        box.CreateFaceVertexCountsAttr([3])
+        box.CreateFaceVertexIndicesAttr([0, 1, 2])
+        xf = box.AddTranslateOp()
+        xf.Set(Gf.Vec3d(*(np.array([0.1, 0.3, 0.2] if up == "Z" else [0.1, 0.2, -0.3]) * scale)))
+        light = UsdLux.SphereLight.Define(stage, "/bulb")
+        light.CreateNormalizeAttr(True)
+        light.CreateTreatAsPointAttr(True)
+        light.CreateIntensityAttr(40.0)
+        light.CreateRadiusAttr(0.05 * scale)
+        light.AddTranslateOp().Set(Gf.Vec3d(*(np.array([0.3, -0.2, 1.2] if up == "Z" else [0.3, 1.2, 0.2]) * scale)))
+        top_camera(stage, "/cam", 3.0, 3.0, up=up, scale=scale)
+        stage.Save()
+        return usd.read_stage(path)
+
+    z = build(tmp_path / "z.usda", "Z", 1.0)
+    y = build(tmp_path / "y.usda", "Y", 0.01)
+
+    def world_points(scene):
+        desc, buffers = scene.description()
+        out = []
+        for inst in desc["instances"]:
+            v = np.asarray(buffers[desc["meshes"][inst["mesh"]]["vertices"]], np.float64).reshape(-1, 3)
+            m = np.asarray(inst["transform"])
+            out.append(v @ m[:3, :3].T + m[:3, 3])
+        return np.concatenate(out)
+
+    assert np.allclose(world_points(z), world_points(y), atol=1e-5)
+    assert np.allclose(z.camera.to_dict()["to_world"], y.camera.to_dict()["to_world"], atol=1e-6)
+    assert z.camera.ortho_scale == pytest.approx(y.camera.ortho_scale, rel=1e-6)
+    assert z.camera.clip_end == pytest.approx(y.camera.clip_end, rel=1e-6)
+    lz, ly = z.lights[0].to_dict(), y.lights[0].to_dict()
+    assert np.allclose(lz["position"], ly["position"], atol=1e-6)
+    assert lz["intensity"]["scale"] == pytest.approx(ly["intensity"]["scale"], rel=1e-9)
+    a = pc.render(z, width=12, height=12, samples=4, seed=3, max_bounces=2)
+    b = pc.render(y, width=12, height=12, samples=4, seed=3, max_bounces=2)
+    assert np.allclose(a.rgba, b.rgba, rtol=1e-3, atol=1e-4)
+    assert luminance(a.rgba).max() > 0
+
+
+def test_polygons_face_varying_data_and_instancing(tmp_path):
+    path = tmp_path / "poly.usda"
+    stage = new_stage(path)
+    # A hexagon and a quad sharing an edge; face-varying uvs split the shared vertices.
+    hexagon = [[math.cos(k * math.pi / 3), math.sin(k * math.pi / 3), 0.0] for k in range(6)]
+    pts = np.array(hexagon + [[2.0, 0.0, 0.0], [2.0, 1.0, 0.0]], np.float32)
+    proto_root = UsdGeom.Xform.Define(stage, "/Instancer/Prototypes/tile")
+    mesh = UsdGeom.Mesh.Define(stage, "/Instancer/Prototypes/tile/shape")
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(pts))
+    mesh.CreateFaceVertexCountsAttr([6, 4])
+    mesh.CreateFaceVertexIndicesAttr([0, 1, 2, 3, 4, 5, 0, 6, 7, 1])
+    st = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.faceVarying)
+    st.Set(Vt.Vec2fArray.FromNumpy(np.arange(20, dtype=np.float32).reshape(10, 2) / 20))
+    inst = UsdGeom.PointInstancer.Define(stage, "/Instancer")
+    inst.CreatePrototypesRel().SetTargets([proto_root.GetPath()])
+    inst.CreateProtoIndicesAttr([0, 0, 0])
+    inst.CreatePositionsAttr(Vt.Vec3fArray([Gf.Vec3f(0, 0, 0), Gf.Vec3f(0, 5, 0), Gf.Vec3f(0, 10, 1)]))
+    top_camera(stage, "/cam", 5.0, 12.0)
+    stage.Save()
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        scene = usd.read_stage(path)
+    desc, buffers = scene.description()
+    assert len(desc["meshes"]) == 1 and len(desc["instances"]) == 3
+    m = desc["meshes"][0]
+    v = np.asarray(buffers[m["vertices"]]).reshape(-1, 3)
+    t = np.asarray(buffers[m["triangles"]]).reshape(-1, 3)
+    assert len(t) == 4 + 2  # fan: n − 2 triangles per polygon
+    assert len(v) == 10  # every corner has its own uv
+    area = 0.5 * np.linalg.norm(np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]]), axis=1).sum()
+    hex_area = 3 * math.sqrt(3) / 2
+    quad = np.array([pts[0], pts[6], pts[7], pts[1]], np.float64)
+    quad_area = 0.5 * abs(np.dot(quad[:, 0], np.roll(quad[:, 1], -1)) - np.dot(quad[:, 1], np.roll(quad[:, 0], -1)))
+    assert area == pytest.approx(hex_area + quad_area, rel=1e-6)
+    offsets = sorted(tuple(np.round(np.asarray(i["transform"])[:3, 3], 6)) for i in desc["instances"])
+    assert offsets == [(0.0, 0.0, 0.0), (0.0, 5.0, 0.0), (0.0, 10.0, 1.0)]
+
+
+# ---------------------------------------------------------------------------- errors and warnings
+
+
+def bad_mesh_stage(path, points=None, indices=None, counts=None):
+    stage = new_stage(path)
+    mesh = UsdGeom.Mesh.Define(stage, "/World/broken")
+    mesh.CreatePointsAttr(points if points is not None else [(0, 0, 0), (1, 0, 0), (0, 1, 0)])
+    mesh.CreateFaceVertexCountsAttr(counts if counts is not None else [3])
+    mesh.CreateFaceVertexIndicesAttr(indices if indices is not None else [0, 1, 2])
+    top_camera(stage, "/World/cam", 2.0, 2.0)
+    stage.Save()
+    return path
+
+
+def test_missing_and_malformed_files_raise_value_error_naming_the_file(tmp_path):
+    with pytest.raises(ValueError, match="nothere.usda"):
+        usd.read_stage(tmp_path / "nothere.usda")
+    junk = tmp_path / "junk.usda"
+    junk.write_text("#usda 1.0\ndef Xform \"World\" {\n  float3 x = (1, 2\n")
+    with pytest.raises(ValueError, match="junk.usda"):
+        usd.read_stage(junk)
+    binary = tmp_path / "noise.usdc"
+    binary.write_bytes(os.urandom(256))
+    with pytest.raises(ValueError, match="noise.usdc"):
+        usd.read_stage(binary)
+
+
+@pytest.mark.parametrize(
+    "kwargs, problem",
+    [
+        (dict(points=[(0, 0, 0), (1, float("nan"), 0), (0, 1, 0)]), "point 1 is not finite"),
+        (dict(points=[(0, 0, 0), (1, 0, 0), (0, float("inf"), 0)]), "point 2 is not finite"),
+        (dict(indices=[0, 1, 7]), r"faceVertexIndices\[2\] = 7 is out of range"),
+        (dict(indices=[0, -1, 2]), r"faceVertexIndices\[1\] = -1 is out of range"),
+        (dict(counts=[4]), "faceVertexCounts add up to 4"),
+    ],
+)
+def test_bad_mesh_data_raises_value_error_naming_file_and_prim(tmp_path, kwargs, problem):
+    path = bad_mesh_stage(tmp_path / "bad.usda", **kwargs)
+    with pytest.raises(ValueError, match=rf"bad\.usda: prim /World/broken: {problem}"):
+        usd.read_stage(path)
+
+
+def test_bad_subset_and_instancer_indices_raise_value_error(tmp_path):
+    path = bad_mesh_stage(tmp_path / "subset.usda")
+    stage = Usd.Stage.Open(str(path))
+    mesh = stage.GetPrimAtPath("/World/broken")
+    api = UsdShade.MaterialBindingAPI.Apply(mesh)
+    sub = api.CreateMaterialBindSubset("s", Vt.IntArray([0, 3]), UsdGeom.Tokens.face)
+    UsdShade.MaterialBindingAPI.Apply(sub.GetPrim()).Bind(preview_material(stage, "/Looks/m", (1, 1, 1)))
+    stage.Save()
+    with pytest.raises(ValueError, match=r"subset\.usda: prim /World/broken/s: face index 3 is out of range"):
+        usd.read_stage(path)
+
+    path = tmp_path / "instancer.usda"
+    stage = new_stage(path)
+    UsdGeom.Xform.Define(stage, "/I/proto")
+    inst = UsdGeom.PointInstancer.Define(stage, "/I")
+    inst.CreatePrototypesRel().SetTargets([Sdf.Path("/I/proto")])
+    inst.CreateProtoIndicesAttr([0, 2])
+    inst.CreatePositionsAttr([(0, 0, 0), (1, 0, 0)])
+    stage.Save()
+    with pytest.raises(ValueError, match=r"instancer\.usda: prim /I: protoIndices\[1\] = 2 is out of range"):
+        usd.read_stage(path)
+
+
+def test_unsupported_prim_warns_once_and_the_render_still_works(tmp_path):
+    path = bad_mesh_stage(tmp_path / "extra.usda")
+    stage = Usd.Stage.Open(str(path))
+    UsdGeom.Sphere.Define(stage, "/World/ball")
+    UsdGeom.BasisCurves.Define(stage, "/World/hair")
+    UsdLux.CylinderLight.Define(stage, "/World/tube")
+    stage.Save()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scene = usd.read_stage(path)
+    messages = [str(w.message) for w in caught]
+    for prim in ("/World/ball", "/World/hair", "/World/tube"):
+        assert sum(prim in m for m in messages) == 1, messages
+    assert len(messages) == 3, messages
+    result = pc.render(scene, width=8, height=8, samples=2)
+    assert np.all(np.isfinite(result.rgba))
+
+
+# ---------------------------------------------------------------------------- CLI
+
+
+def test_cli_renders_usda_to_exr_and_png_with_stage_settings_and_flag_overrides(tmp_path, capsys):
+    from polychrome import imageio
+
+    scene = spectral_scene()
+    stage = usd.write_stage(scene, tmp_path / "shot.usda", pc.RenderSettings(width=20, height=10, samples=2, seed=3))
+    exr, png = tmp_path / "out.exr", tmp_path / "out.png"
+    assert cli.main(["render", str(stage), "-o", str(exr)]) == 0
+    err = capsys.readouterr().err
+    assert "Polychrome" in err  # the progress bar
+    img = imageio.read_image(exr)
+    assert img.shape[:2] == (10, 20) and np.all(np.isfinite(img)) and img[..., :3].max() > 0
+    assert cli.main(["render", str(stage), "-o", str(png), "--width", "12", "--samples", "1", "--wavelengths", "16", "--quiet"]) == 0
+    from PIL import Image
+
+    with Image.open(png) as im:
+        assert im.size == (12, 6)  # --width alone keeps the stage's 2:1 aspect
+
+
+def test_cli_reports_bad_input_with_exit_2_and_one_line(tmp_path, capsys):
+    path = bad_mesh_stage(tmp_path / "bad.usda", points=[(0, 0, 0), (1, float("nan"), 0), (0, 1, 0)])
+    assert cli.main(["render", str(path), "-o", str(tmp_path / "x.png"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "bad.usda" in err[0] and "/World/broken" in err[0], err
+    assert cli.main(["render", str(tmp_path / "missing.usdc"), "-o", str(tmp_path / "x.png")]) == 2
+    assert "missing.usdc" in capsys.readouterr().err
+    assert cli.main(["render", str(path), "-o", str(tmp_path / "x.jpg")]) == 2
+    assert cli.main(["render", str(tmp_path / "scene.obj"), "-o", str(tmp_path / "x.png")]) == 2
+    assert cli.main(["render", str(path), "-o", str(tmp_path / "x.png"), "--samples", "0"]) == 2
+
+
+@pytest.mark.blender
+def test_cli_renders_a_blend_file(tmp_path):
+    pytest.importorskip("bpy")
+    blend = tmp_path / "cube.blend"
+    png = tmp_path / "cube.png"
+    script = textwrap.dedent(f"""
+        import sys
+        sys.path.insert(0, {str(ROOT / 'python')!r})
+        import bpy
+        bpy.ops.wm.read_factory_settings()
+        bpy.context.scene.render.resolution_x, bpy.context.scene.render.resolution_y = 32, 24
+        bpy.ops.wm.save_as_mainfile(filepath={str(blend)!r})
+        from polychrome import cli
+        sys.exit(cli.main(["render", {str(blend)!r}, "-o", {str(png)!r}, "--samples", "2", "--quiet"]))
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    from PIL import Image
+
+    with Image.open(png) as im:
+        assert im.size == (32, 24)
+        assert np.asarray(im).astype(float)[..., :3].mean() > 1.0  # the default cube is lit
