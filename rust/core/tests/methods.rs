@@ -792,3 +792,46 @@ fn look_at(eye: [f32; 3], target: [f32; 3]) -> [[f32; 4]; 4] {
         [0.0, 0.0, 0.0, 1.0],
     ]
 }
+
+#[test]
+fn forward_needs_a_perspective_camera_and_time_limited_mono_scenes_say_so() {
+    let (mut desc, buffers) = furnace_scene(0.5, 0.5);
+    desc.camera.projection = polychrome_core::camera::Projection::Orthographic;
+    let s = RenderSettings {
+        width: 4,
+        height: 4,
+        samples: 1,
+        direction: Direction::Forward,
+        ..Default::default()
+    };
+    let err = render(&desc, &buffers, &s, &RenderControl::new())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        err.contains("direction") && err.contains("perspective"),
+        "{err}"
+    );
+    let (desc, buffers) = furnace_scene(0.5, 0.5);
+    let s = RenderSettings {
+        width: 8,
+        height: 8,
+        samples: 64,
+        method: Method::MonochromaticScenes,
+        time_limit: 1e-9,
+        ..Default::default()
+    };
+    let out = render(&desc, &buffers, &s, &RenderControl::new()).unwrap();
+    assert!(out.stats.time_limited && out.stats.incomplete_spectrum);
+    let s = RenderSettings {
+        samples: 2,
+        time_limit: 0.0,
+        ..s
+    };
+    assert!(
+        !render(&desc, &buffers, &s, &RenderControl::new())
+            .unwrap()
+            .stats
+            .incomplete_spectrum
+    );
+}

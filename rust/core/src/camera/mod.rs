@@ -193,6 +193,11 @@ pub struct CameraConnection {
 }
 
 impl Camera {
+    /// Light tracing can connect to this camera (a pinhole).
+    pub fn is_perspective(&self) -> bool {
+        self.projection == Projection::Perspective
+    }
+
     /// Connects a world point to the pinhole (perspective cameras only; None for
     /// orthographic ones, behind the camera, outside the image or the clip range).
     pub fn connect(&self, p: Vec3A) -> Option<CameraConnection> {

@@ -162,6 +162,9 @@ pub struct RenderStats {
     pub build_seconds: f64,
     pub method: Method,
     pub direction: Direction,
+    /// MONOCHROMATIC_SCENES only: the render stopped before every wavelength's image was
+    /// done, so the colour is missing part of the spectrum.
+    pub incomplete_spectrum: bool,
     pub wavelengths: usize,
     pub threads: usize,
     /// Samples dropped because their value was NaN or infinite.
@@ -205,36 +208,13 @@ fn render_in_pool(
     threads: usize,
 ) -> Result<RenderOutput> {
     let start = Instant::now();
-    let opts = BuildOptions { grid, space: RgbSpace::rec709(), uplift: settings.uplift, width: settings.width, height: settings.height };
-    let scene = Scene::build(desc, buffers, &opts)?;
-    let build_seconds = start.elapsed().as_secs_f64();
-    let n = scene.grid.len();
-    let (w, h) = (settings.width, settings.height);
-    let mono_scenes = settings.method == Method::MonochromaticScenes;
-    let spectral_method = !matches!(settings.method, Method::Rgb);
-    if settings.dispersion_splitting && settings.method != Method::Polychromatic {
-        return Err(Error::setting("dispersion_splitting", "applies to the POLYCHROMATIC method only"));
-    }
-    if !spectral_method && scene.grid.len() != 3 {
-        return Err(Error::setting("method", "RGB needs the three-channel grid"));
-    }
-    // Outer rounds: one per wavelength for monochromatic scenes, else one.
-    let rounds = if mono_scenes { n } else { 1 };
-    let backward = settings.direction != Direction::Forward;
-    let forward = settings.direction != Direction::Backward;
-    let per_round = w as u64 * h as u64 * settings.samples as u64 * (backward as u64 + forward as u64);
-    control.total.store(per_round * rounds as u64, Ordering::Relaxed);
-    control.done.store(0, Ordering::Relaxed);
-
-    // A reflectance of 1 under D65 of luminance 1 reads as albedo (1,1,1).
-    let d65 = SpectrumDesc::new(SpectrumKind::D65).evaluate(&scene.grid, SpectrumRole::Illuminant, &scene.uplift).map_err(|e| Error::Description(e))?;
     let grid = match settings.method {
         Method::Rgb => WavelengthGrid::rgb_channels(&grid, &RgbSpace::rec709())?,
         _ => grid,
     };
-    let mut albedo_white = SampledSpectrum::from_slice(&d65);
-    albedo_white.scale(1.0 / scene.observer.xyz(&d65)[1] as f32);
-
+    let opts = BuildOptions { grid, space: RgbSpace::rec709(), uplift: settings.uplift, width: settings.width, height: settings.height };
+    let scene = Scene::build(desc, buffers, &opts)?;
+    let build_seconds = start.elapsed().as_secs_f64();
     render_built(&scene, settings, control, threads, start, build_seconds)
 }
 
@@ -286,12 +266,13 @@ fn render_built(
     let mut film = Film::new(w, h, settings.spectral_output.then_some(n));
     let mut done_spp = 0u32;
     let mut time_limited = false;
-    let mut cancelled_mid = false;
+    // MONOCHROMATIC_SCENES stopped (cancel, time limit) after some wavelength images.
+    let mut incomplete_spectrum = false;
     'rounds: for round in 0..rounds {
         let mut round_spp = 0u32;
         while round_spp < samples {
             if control.is_cancelled() {
-                cancelled_mid = round > 0;
+                incomplete_spectrum = mono_scenes && (round > 0 || round_spp > 0);
                 break 'rounds;
             }
             if settings.time_limit > 0.0 && (done_spp > 0 || round_spp > 0) && start.elapsed().as_secs_f64() >= settings.time_limit {
@@ -327,9 +308,10 @@ fn render_built(
                     .map(|&t| render_tile(scene, &sampler, t, range.clone(), &albedo_white, settings.spectral_output, control))
                     .collect();
                 if results.iter().any(|r| r.is_none()) {
-                    cancelled_mid = round > 0;
+                    incomplete_spectrum = mono_scenes && (round > 0 || round_spp > 0);
                     break 'rounds; // cancelled mid-pass: the pass is discarded so every pixel has the same count
                 }
+                incomplete_spectrum = mono_scenes;
                 for (&(x0, y0, tw, th), r) in tiles.iter().zip(results) {
                     film.merge_tile(x0, y0, tw, th, &r.expect("checked above"));
                 }
@@ -363,7 +345,7 @@ fn render_built(
                     })
                     .collect();
                 if results.iter().any(|r| r.is_none()) {
-                    cancelled_mid = round > 0;
+                    incomplete_spectrum = mono_scenes && (round > 0 || round_spp > 0);
                     break 'rounds;
                 }
                 // Merged in chunk order: the same sums on any thread count.
@@ -392,25 +374,13 @@ fn render_built(
         nonfinite_samples: film.buffer.nonfinite,
         cancelled: control.is_cancelled(),
         time_limited,
-    let _ = cancelled_mid;
         lights: scene.lights.len(),
         triangles: scene.meshes.iter().map(|m| m.indices.len()).sum(),
         texture_bytes: scene.texture_bytes,
     };
     Ok(RenderOutput { width: w, height: h, images: film.images(&scene.space), wavelengths: scene.grid.lambdas().to_vec(), stats })
 }
-        direction: settings.direction,
 
-fn render_tile(
-    scene: &Scene,
-    sampler: &Sampler,
-    (x0, y0, tw, th): (u32, u32, u32, u32),
-    samples: std::ops::Range<u32>,
-    albedo_white: &SampledSpectrum,
-    spectral: bool,
-    control: &RenderControl,
-) -> Option<FilmBuffer> {
-    let n = scene.grid.len();
 /// Adds light-path splats (radiance at a pixel, per light path per pixel) to the film.
 fn add_splats(film: &mut Film, splats: &[Splat], observer: &crate::color::Observer) {
     for sp in splats {
@@ -421,6 +391,8 @@ fn add_splats(film: &mut Film, splats: &[Splat], observer: &crate::color::Observ
         }
         let i = sp.pixel as usize;
         for k in 0..3 {
+        direction: settings.direction,
+        incomplete_spectrum,
             film.buffer.xyz[i][k] += xyz[k];
         }
         if let (Some(dst), Some(n)) = (&mut film.buffer.spectral, film.spectral_len) {
@@ -445,7 +417,6 @@ type Sampler<'a> = dyn Fn(u32, u32, u64, u32, &mut PixelSample, &mut Scratch) + 
             let (x, y) = (x0 + tx, y0 + ty);
             let pixel = y as u64 * width + x as u64;
             for s in samples.clone() {
-    let mut scratch = Scratch::new(n);
                 ps.reset();
                 sampler(x, y, pixel, s, &mut ps, &mut scratch);
                 buf.add((ty * tw + tx) as usize, &ps, &scene.observer, albedo_white);
@@ -455,3 +426,14 @@ type Sampler<'a> = dyn Fn(u32, u32, u64, u32, &mut PixelSample, &mut Scratch) + 
     }
     Some(buf)
 }
+fn render_tile(
+    scene: &Scene,
+    sampler: &Sampler,
+    (x0, y0, tw, th): (u32, u32, u32, u32),
+    samples: std::ops::Range<u32>,
+    albedo_white: &SampledSpectrum,
+    spectral: bool,
+    control: &RenderControl,
+) -> Option<FilmBuffer> {
+    let n = scene.grid.len();
+    let mut scratch = Scratch::new(n);
