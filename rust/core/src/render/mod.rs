@@ -13,7 +13,7 @@ use crate::integrator::Integrator;
 use crate::sampling::Rng;
 use crate::scene::{Buffer, BuildOptions, Scene, SceneDesc};
 use crate::spectrum::{SampledSpectrum, SpectrumDesc, WavelengthGrid};
-use crate::spectrum::named::{SpectrumKind, SpectrumRole};
+use crate::spectrum::named::{RgbToSpectrum, SpectrumKind, SpectrumRole};
 use crate::{Error, Result};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -187,6 +187,14 @@ pub struct RenderOutput {
 
 const TILE: u32 = 16;
 
+/// For evaluating named spectra that never ask for RGB conversion.
+struct NoRgb;
+impl RgbToSpectrum for NoRgb {
+    fn convert(&self, _: [f32; 3], _: SpectrumRole) -> Vec<f32> {
+        Vec::new()
+    }
+}
+
 /// Renders a scene description. Cancelling returns the samples finished so far.
 pub fn render(desc: &SceneDesc, buffers: &[Buffer], settings: &RenderSettings, control: &RenderControl) -> Result<RenderOutput> {
     settings.validate()?;
@@ -249,6 +257,32 @@ fn render_built(
     start: Instant,
     build_seconds: f64,
 ) -> Result<RenderOutput> {
+    let n = scene.grid.len();
+    let (w, h) = (settings.width, settings.height);
+    let mono_scenes = settings.method == Method::MonochromaticScenes;
+    let spectral_method = !matches!(settings.method, Method::Rgb);
+    if settings.dispersion_splitting && settings.method != Method::Polychromatic {
+        return Err(Error::setting("dispersion_splitting", "applies to the POLYCHROMATIC method only"));
+    }
+    if !spectral_method && scene.grid.len() != 3 {
+        return Err(Error::setting("method", "RGB needs the three-channel grid"));
+    }
+    if settings.direction == Direction::Forward && !scene.camera.is_perspective() {
+        return Err(Error::setting("direction", "FORWARD (light tracing) needs a perspective camera: light paths cannot connect to an orthographic one"));
+    }
+    // Outer rounds: one per wavelength for monochromatic scenes, else one.
+    let rounds = if mono_scenes { n } else { 1 };
+    let backward = settings.direction != Direction::Forward;
+    let forward = settings.direction != Direction::Backward;
+    let per_round = w as u64 * h as u64 * settings.samples as u64 * (backward as u64 + forward as u64);
+    control.total.store(per_round * rounds as u64, Ordering::Relaxed);
+    control.done.store(0, Ordering::Relaxed);
+
+    // A reflectance of 1 under D65 of luminance 1 reads as albedo (1,1,1).
+    let d65 = SpectrumDesc::new(SpectrumKind::D65).evaluate(&scene.grid, SpectrumRole::Illuminant, &NoRgb).map_err(Error::Description)?;
+    let mut albedo_white = SampledSpectrum::from_slice(&d65);
+    albedo_white.scale(1.0 / scene.observer.xyz(&d65)[1] as f32);
+
     let integrator = PathTracer { max_bounces: settings.max_bounces, dispersion_splitting: settings.dispersion_splitting, ..Default::default() };
     let mono = MonochromaticTracer { max_bounces: settings.max_bounces, ..Default::default() };
     let light_tracer = LightTracer {
@@ -277,6 +311,7 @@ fn render_built(
             }
             if settings.time_limit > 0.0 && (done_spp > 0 || round_spp > 0) && start.elapsed().as_secs_f64() >= settings.time_limit {
                 time_limited = true;
+                incomplete_spectrum = mono_scenes;
                 break 'rounds;
             }
             // Passes grow so progress stays smooth early and overhead stays low later.
@@ -311,7 +346,6 @@ fn render_built(
                     incomplete_spectrum = mono_scenes && (round > 0 || round_spp > 0);
                     break 'rounds; // cancelled mid-pass: the pass is discarded so every pixel has the same count
                 }
-                incomplete_spectrum = mono_scenes;
                 for (&(x0, y0, tw, th), r) in tiles.iter().zip(results) {
                     film.merge_tile(x0, y0, tw, th, &r.expect("checked above"));
                 }
@@ -369,6 +403,8 @@ fn render_built(
         seconds: start.elapsed().as_secs_f64(),
         build_seconds,
         method: settings.method,
+        direction: settings.direction,
+        incomplete_spectrum,
         wavelengths: n,
         threads,
         nonfinite_samples: film.buffer.nonfinite,
@@ -391,8 +427,6 @@ fn add_splats(film: &mut Film, splats: &[Splat], observer: &crate::color::Observ
         }
         let i = sp.pixel as usize;
         for k in 0..3 {
-        direction: settings.direction,
-        incomplete_spectrum,
             film.buffer.xyz[i][k] += xyz[k];
         }
         if let (Some(dst), Some(n)) = (&mut film.buffer.spectral, film.spectral_len) {
@@ -406,8 +440,19 @@ fn add_splats(film: &mut Film, splats: &[Splat], observer: &crate::color::Observ
 /// One camera sample: (x, y, pixel index, sample index, output, scratch).
 type Sampler<'a> = dyn Fn(u32, u32, u64, u32, &mut PixelSample, &mut Scratch) + Sync + 'a;
 
+fn render_tile(
+    scene: &Scene,
+    sampler: &Sampler,
+    (x0, y0, tw, th): (u32, u32, u32, u32),
+    samples: std::ops::Range<u32>,
+    albedo_white: &SampledSpectrum,
+    spectral: bool,
+    control: &RenderControl,
+) -> Option<FilmBuffer> {
+    let n = scene.grid.len();
     let mut buf = FilmBuffer::new((tw * th) as usize, spectral.then_some(n));
     let mut ps = PixelSample::new(n);
+    let mut scratch = Scratch::new(n);
     let width = scene.camera.width() as u64;
     for ty in 0..th {
         if control.is_cancelled() {
@@ -426,14 +471,3 @@ type Sampler<'a> = dyn Fn(u32, u32, u64, u32, &mut PixelSample, &mut Scratch) + 
     }
     Some(buf)
 }
-fn render_tile(
-    scene: &Scene,
-    sampler: &Sampler,
-    (x0, y0, tw, th): (u32, u32, u32, u32),
-    samples: std::ops::Range<u32>,
-    albedo_white: &SampledSpectrum,
-    spectral: bool,
-    control: &RenderControl,
-) -> Option<FilmBuffer> {
-    let n = scene.grid.len();
-    let mut scratch = Scratch::new(n);
