@@ -81,14 +81,14 @@ impl SpectrumDesc {
         role: SpectrumRole,
         uplift: &dyn RgbToSpectrum,
     ) -> std::result::Result<Vec<f32>, String> {
-        if !self.scale.is_finite() {
-            return Err(format!("spectrum scale {} is not finite", self.scale));
-        }
-        let mut v: Vec<f32> = match &self.kind {
         if let Some(channels) = grid.rgb() {
             // The RGB method's three-lane grid: RGB as given, spectra converted.
             return channels.evaluate(self, role, uplift);
         }
+        if !self.scale.is_finite() {
+            return Err(format!("spectrum scale {} is not finite", self.scale));
+        }
+        let mut v: Vec<f32> = match &self.kind {
             SpectrumKind::Constant { value } => vec![*value; grid.len()],
             SpectrumKind::Blackbody { temperature } => {
                 let t = *temperature;
