@@ -503,3 +503,36 @@ def test_cli_renders_a_blend_file(tmp_path):
     with Image.open(png) as im:
         assert im.size == (32, 24)
         assert np.asarray(im).astype(float)[..., :3].mean() > 1.0  # the default cube is lit
+
+
+@pytest.mark.blender
+def test_blender_export_operator_writes_a_stage_polychrome_reads_back(tmp_path):
+    pytest.importorskip("bpy")
+    stage = tmp_path / "default.usda"
+    script = textwrap.dedent(f"""
+        import json, sys
+        sys.path.insert(0, {str(ROOT / 'python')!r})
+        import bpy
+        import polychrome_blender
+        polychrome_blender.register()
+        try:
+            bpy.ops.wm.read_factory_settings()
+            polychrome_blender.unregister(); polychrome_blender.register()
+            sc = bpy.context.scene
+            sc.render.resolution_x, sc.render.resolution_y = 40, 30
+            sc.polychrome.samples = 5
+            assert 'FINISHED' in bpy.ops.export_scene.polychrome_usd(filepath={str(stage)!r})
+            from polychrome import usd
+            scene = usd.read_stage({str(stage)!r})
+            desc, _ = scene.description()
+            print("RESULT " + json.dumps({{"meshes": [m["name"] for m in desc["meshes"]],
+                                          "lights": len(desc["lights"]), "settings": usd.read_settings({str(stage)!r})}}))
+        finally:
+            polychrome_blender.unregister()
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    res = json.loads(next(line[7:] for line in proc.stdout.splitlines() if line.startswith("RESULT ")))
+    assert res["meshes"] == ["Cube"]
+    assert res["lights"] == 1
+    assert res["settings"]["samples"] == 5 and (res["settings"]["width"], res["settings"]["height"]) == (40, 30)

@@ -19,6 +19,9 @@ def register():
     nodes.register()
     engine.register()
     ui.register()
+    from . import usd_export
+
+    usd_export.register()
     _registered = True
 
 
@@ -26,9 +29,9 @@ def unregister():
     global _registered
     if not _registered:
         return
-    from . import engine, nodes, properties, ui
+    from . import engine, nodes, properties, ui, usd_export
 
-    for mod in (ui, engine, nodes, properties):
+    for mod in (usd_export, ui, engine, nodes, properties):
         try:
             mod.unregister()
         except Exception as e:  # noqa: BLE001 - unregister everything we can
