@@ -57,7 +57,7 @@ def slab_scene(glass: pc.Material) -> pc.Scene:
     return scene
 
 
-@pytest.mark.parametrize("n", [1.5, 4.0])
+@pytest.mark.parametrize("n", [1.0001, 1.5, 4.0])
 def test_glass_slab_transmits_fresnel(n):
     """Looking through a slab at normal incidence: T = (1 − R)/(1 + R) with
     R = ((n − 1)/(n + 1))² (all internal reflections summed)."""

@@ -29,13 +29,16 @@ impl Light for DistantLight {
         Some(LightSample { wi: -self.direction, distance: f32::INFINITY, pdf: 1.0, delta: true })
     }
     /// Light paths start on the disk of the bounding sphere facing the light; the
-    /// direction is a delta (pdf_dir = 1), `le` is the irradiance.
+    /// direction is a delta (pdf_dir = 1), `le` is the irradiance, so `le/pdf_pos` is
+    /// the flux through the disk. No normal (the start disk is not a surface a camera
+    /// could see) and `delta_position: true`: like a point light, no camera or BSDF ray
+    /// can ever reach a distant light, so caustics from it belong to forward tracing.
     fn sample_le(&self, u_pos: Vec2, _u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
         let r = self.scene_radius.max(1e-3);
         let d = concentric_disk(u_pos) * r;
         let f = Frame::from_normal(self.direction);
         let origin = self.scene_center - self.direction * r + f.s * d.x + f.t * d.y;
         le.copy_from(&self.irradiance);
-        Some(EmissionSample { origin, direction: self.direction, normal: Some(self.direction), pdf_pos: 1.0 / (PI * r * r), pdf_dir: 1.0, delta_position: false })
+        Some(EmissionSample { origin, direction: self.direction, normal: None, pdf_pos: 1.0 / (PI * r * r), pdf_dir: 1.0, delta_position: true })
     }
 }
