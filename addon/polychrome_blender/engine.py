@@ -72,7 +72,8 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
             self._report("ERROR", msg)
         finally:
             try:
-                result = self.begin_result(0, 0, width, height)
+                layer = depsgraph.view_layer.name if depsgraph.view_layer else ""
+                result = self.begin_result(0, 0, width, height, layer=layer)
                 passes.fill_result(result, arrays if arrays is not None else passes.pass_arrays(None, width, height))
             except Exception as e:  # noqa: BLE001
                 cls.last_error = cls.last_error or f"writing the render result failed: {e}"

@@ -255,3 +255,47 @@ def test_mesh_export_matches_blender_triangles_and_instances_share_data(tmp_path
     assert sorted(r["meshes"]) == ["Cube", "Sphere"]
     cube = r["meshes"].index("Cube")
     assert r["inst"].count(cube) == 2
+
+
+def test_geometry_node_instances_keep_their_own_mesh(tmp_path):
+    """Geometry-node instances carry the instancer's name; each must export its own
+    geometry (the instanced ico sphere, not the instancer's realised mesh), shared once."""
+    proc, res = run_bpy(tmp_path, """
+    import polychrome as pc
+    from polychrome_blender.export import export_scene
+    sc = empty_scene(8, 8)
+    add_camera(sc, (0, -10, 3))
+    bpy.ops.mesh.primitive_plane_add(size=4)
+    pl = bpy.context.object
+    ng = bpy.data.node_groups.new('GN', 'GeometryNodeTree')
+    ng.interface.new_socket('Geometry', in_out='INPUT', socket_type='NodeSocketGeometry')
+    ng.interface.new_socket('Geometry', in_out='OUTPUT', socket_type='NodeSocketGeometry')
+    gi = ng.nodes.new('NodeGroupInput'); go = ng.nodes.new('NodeGroupOutput')
+    iop = ng.nodes.new('GeometryNodeInstanceOnPoints')
+    ico = ng.nodes.new('GeometryNodeMeshIcoSphere'); ico.inputs['Radius'].default_value = 0.2
+    cone = ng.nodes.new('GeometryNodeMeshCone')
+    join = ng.nodes.new('GeometryNodeJoinGeometry')
+    ng.links.new(gi.outputs[0], iop.inputs['Points']); ng.links.new(ico.outputs['Mesh'], iop.inputs['Instance'])
+    ng.links.new(iop.outputs[0], join.inputs[0]); ng.links.new(cone.outputs['Mesh'], join.inputs[0])
+    ng.links.new(join.outputs[0], go.inputs[0])
+    pl.modifiers.new('GN', 'NODES').node_group = ng
+    dg = bpy.context.evaluated_depsgraph_get()
+    ref = {}
+    for inst in dg.object_instances:
+        if inst.object.type == 'MESH':
+            ref.setdefault(inst.is_instance, set()).add(len(inst.object.data.vertices))
+    scene, warns = export_scene(pc, dg)
+    desc, bufs = scene.description()
+    nverts = [len(np.unique(bufs[m['triangles']])) for m in desc['meshes']]
+    emit(inst=[i['mesh'] for i in desc['instances']], nverts=nverts, ref_inst=sorted(ref[True]), ref_base=sorted(ref[False]))
+    """)
+    r = check(proc, res)[0]
+    from collections import Counter
+
+    assert r["ref_inst"] == [12] and len(r["nverts"]) == 2       # ico sphere + the instancer's realised mesh
+    counts = Counter(r["inst"])
+    shared = [m for m, c in counts.items() if c == 4]             # one per plane vertex, sharing one mesh
+    base = [m for m, c in counts.items() if c == 1]
+    assert len(shared) == 1 and len(base) == 1, r
+    assert r["nverts"][shared[0]] in (12, 60)                     # 12 vertices, or 20 flat faces × 3 split
+    assert r["nverts"][base[0]] not in (12, 60)

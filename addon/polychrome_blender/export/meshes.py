@@ -68,10 +68,20 @@ def export_meshes(pc, depsgraph, scene, material_for_slot, warnings):
         ob = inst.object
         if ob.type not in ("MESH", "CURVE", "SURFACE", "META", "FONT"):
             continue
-        key = ob.original.name
         name = ob.original.name
+        # Instances of one geometry share the evaluated data block; geometry-node instances
+        # of different meshes share the instancer's name, so the data pointer is the key.
+        data = getattr(ob, "data", None)
+        key = (data.as_pointer() if data is not None else name,
+               tuple(s.material.original.name if s.material else "" for s in ob.material_slots))
         if key not in placed:
-            arrays = mesh_arrays(ob, name)
+            try:
+                arrays = mesh_arrays(ob, name)
+            except RuntimeError as e:  # e.g. a curve with no geometry
+                if ob.type == "MESH":
+                    raise ValueError(f"object '{name}': cannot read its mesh ({e})") from e
+                warnings.add(("mesh", name), f"object '{name}': skipped, its {ob.type.lower()} has no mesh ({e})")
+                arrays = None
             if arrays is None:
                 placed[key] = None
                 continue
