@@ -27,6 +27,21 @@ def settings_from_scene(pc, props, width, height):
     return pc.RenderSettings(**values)
 
 
+def border_rect(scene, width, height):
+    """Blender's render border in pixels (x0, y0, x1, y1), y from the bottom; the whole
+    frame when the border is off. Polychrome renders the whole frame and crops."""
+    r = scene.render
+    if not r.use_border:
+        return 0, 0, width, height
+    x0 = min(max(int(round(r.border_min_x * width)), 0), width)
+    x1 = min(max(int(round(r.border_max_x * width)), x0), width)
+    y0 = min(max(int(round(r.border_min_y * height)), 0), height)
+    y1 = min(max(int(round(r.border_max_y * height)), y0), height)
+    if x1 - x0 < 1 or y1 - y0 < 1:
+        return 0, 0, width, height
+    return x0, y0, x1, y1
+
+
 class PolychromeRenderEngine(bpy.types.RenderEngine):
     bl_idname = "POLYCHROME"
     bl_label = "Polychrome"
@@ -73,8 +88,14 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
         finally:
             try:
                 layer = depsgraph.view_layer.name if depsgraph.view_layer else ""
-                result = self.begin_result(0, 0, width, height, layer=layer)
-                passes.fill_result(result, arrays if arrays is not None else passes.pass_arrays(None, width, height))
+                if arrays is None:
+                    arrays = passes.pass_arrays(None, width, height)
+                x0, y0, x1, y1 = border_rect(scene, width, height)
+                if (x0, y0, x1, y1) != (0, 0, width, height):
+                    arrays = {k: v[y0:y1, x0:x1] for k, v in arrays.items()}  # rows already bottom-up
+                # with a border, Blender's result covers only the border, from its corner
+                result = self.begin_result(0, 0, x1 - x0, y1 - y0, layer=layer)
+                passes.fill_result(result, arrays)
             except Exception as e:  # noqa: BLE001
                 cls.last_error = cls.last_error or f"writing the render result failed: {e}"
                 traceback.print_exc()

@@ -299,3 +299,35 @@ def test_geometry_node_instances_keep_their_own_mesh(tmp_path):
     assert len(shared) == 1 and len(base) == 1, r
     assert r["nverts"][shared[0]] in (12, 60)                     # 12 vertices, or 20 flat faces × 3 split
     assert r["nverts"][base[0]] not in (12, 60)
+
+
+def test_border_render_places_the_region(tmp_path):
+    """Border render, cropped and not: the region's pixels sit where Blender puts the
+    border (x 0.25-0.75, y 0-0.5 from the bottom) and equal the whole frame's pixels
+    there (same seed); outside an uncropped border Blender leaves zeros."""
+    proc, res = run_bpy(tmp_path, """
+    bpy.ops.wm.read_factory_settings()
+    sc = bpy.context.scene; r = sc.render
+    r.engine = 'POLYCHROME'; r.resolution_x, r.resolution_y, r.resolution_percentage = 64, 48, 100
+    sc.polychrome.samples = 4
+    r.image_settings.file_format = 'OPEN_EXR'
+    r.filepath = os.path.abspath('full.exr'); bpy.ops.render.render(write_still=True)
+    r.use_border = True
+    r.border_min_x, r.border_max_x, r.border_min_y, r.border_max_y = 0.25, 0.75, 0.0, 0.5
+    out = {}
+    for crop in (False, True):
+        r.use_crop_to_border = crop
+        r.filepath = os.path.abspath(f'b{int(crop)}.exr'); bpy.ops.render.render(write_still=True)
+        out[f'err{int(crop)}'] = Engine.last_error
+    full, b0, b1 = (exr_channels(p)['G'] for p in ('full.exr', 'b0.exr', 'b1.exr'))
+    region = full[24:48, 16:48]                      # file rows start at the top
+    outside = b0.copy(); outside[24:48, 16:48] = 0
+    emit(shape0=list(b0.shape), shape1=list(b1.shape), d_crop=float(np.abs(b1 - region).max()),
+         d_uncrop=float(np.abs(b0[24:48, 16:48] - region).max()), outside=float(np.abs(outside).max()),
+         region_mean=float(region.mean()), **out)
+    """)
+    r = check(proc, res)[0]
+    assert r["err0"] is None and r["err1"] is None
+    assert r["shape0"] == [48, 64] and r["shape1"] == [24, 32]
+    assert r["region_mean"] > 0
+    assert r["d_crop"] < 1e-6 and r["d_uncrop"] < 1e-6 and r["outside"] == 0.0
