@@ -331,3 +331,48 @@ def test_border_render_places_the_region(tmp_path):
     assert r["shape0"] == [48, 64] and r["shape1"] == [24, 32]
     assert r["region_mean"] > 0
     assert r["d_crop"] < 1e-6 and r["d_uncrop"] < 1e-6 and r["outside"] == 0.0
+
+
+def test_emissive_mesh_with_blackbody_matches_cycles(tmp_path):
+    """A mesh light (Emission shader, strength 30, Blackbody 4000 K) in Cycles CPU and
+    Polychrome: same emission units (radiance = strength × colour, both faces) and the
+    same luminance normalisation of Blackbody. The colours may differ slightly — Cycles
+    multiplies RGB, Polychrome spectra (the paper's point) — so mean ΔE00 < 2 and mean
+    luminance within 5 %."""
+    proc, res = run_bpy(tmp_path, """
+    sc = empty_scene(48, 36)
+    sc.world = None
+    bpy.ops.mesh.primitive_plane_add(size=8)
+    bpy.context.object.data.materials.append(diffuse_material('Floor', (0.7, 0.4, 0.2)))
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0, 0, 0.5))
+    bpy.context.object.data.materials.append(diffuse_material('Cube', (0.2, 0.5, 0.7)))
+    bpy.ops.mesh.primitive_plane_add(size=1.0, location=(0.5, -0.5, 3.0))
+    lamp = bpy.context.object
+    m = bpy.data.materials.new('Lamp'); m.use_nodes = True; nt = m.node_tree
+    for n in list(nt.nodes):
+        if n.type != 'OUTPUT_MATERIAL': nt.nodes.remove(n)
+    e = nt.nodes.new('ShaderNodeEmission'); e.inputs['Strength'].default_value = 30.0
+    bb = nt.nodes.new('ShaderNodeBlackbody'); bb.inputs['Temperature'].default_value = 4000.0
+    nt.links.new(bb.outputs[0], e.inputs['Color'])
+    nt.links.new(e.outputs[0], nt.nodes['Material Output'].inputs['Surface'])
+    lamp.data.materials.append(m)
+    add_camera(sc, (4.0, -4.0, 3.0), (0, 0, 0.4), lens=35)
+    sc.render.image_settings.file_format = 'OPEN_EXR'
+    sc.render.engine = 'CYCLES'
+    c = sc.cycles; c.device = 'CPU'; c.samples = 128; c.use_denoising = False; c.use_adaptive_sampling = False
+    c.filter_width = 0.01; c.max_bounces = 8; c.diffuse_bounces = 8; c.sample_clamp_indirect = 0.0; c.sample_clamp_direct = 0.0
+    sc.render.filepath = os.path.abspath('cycles.exr'); bpy.ops.render.render(write_still=True)
+    sc.render.engine = 'POLYCHROME'
+    sc.polychrome.samples = 128; sc.polychrome.max_bounces = 8
+    sc.render.filepath = os.path.abspath('poly.exr'); bpy.ops.render.render(write_still=True)
+    a, b = exr_channels('cycles.exr'), exr_channels('poly.exr')
+    import polychrome.colordiff as cd
+    A = np.stack([a['R'], a['G'], a['B']], -1); B = np.stack([b['R'], b['G'], b['B']], -1)
+    de = cd.image_delta_e(A, B, white_luminance=float(np.percentile(A[..., 1], 99)))
+    emit(mean=float(de.mean()), err=Engine.last_error, warn=Engine.last_warnings,
+         ya=float((A.mean(axis=(0, 1)) @ [0.2126, 0.7152, 0.0722])), yb=float((B.mean(axis=(0, 1)) @ [0.2126, 0.7152, 0.0722])))
+    """)
+    r = check(proc, res)[0]
+    assert r["err"] is None and r["warn"] == []
+    assert r["mean"] < 2.0, r
+    assert r["yb"] == pytest.approx(r["ya"], rel=0.05), r
