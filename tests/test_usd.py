@@ -536,3 +536,107 @@ def test_blender_export_operator_writes_a_stage_polychrome_reads_back(tmp_path):
     assert res["meshes"] == ["Cube"]
     assert res["lights"] == 1
     assert res["settings"]["samples"] == 5 and (res["settings"]["width"], res["settings"]["height"]) == (40, 30)
+
+
+# ---------------------------------------------------------------------------- glass, metals, spots, suns, textures
+
+
+def test_round_trip_of_glass_metals_spot_sun_and_textures(tmp_path):
+    from polychrome import ior
+
+    scene = pc.Scene()
+    rng = np.random.default_rng(5)
+    srgb = pc.Texture.from_array(rng.integers(0, 256, (6, 8, 3), dtype=np.uint8), "srgb", "CLIP", name="bytes.png")
+    linear = pc.Texture.from_array(rng.random((4, 5, 3)).astype(np.float32) * 2, "linear", "EXTEND", name="floats")
+    scene.add_material(pc.Diffuse(srgb, name="printed"))
+    scene.add_material(pc.Diffuse(linear, emission=pc.spectra.rgb(0.1, 0.2, 0.3), name="lit print"))
+    scene.add_material(pc.Dielectric(ior.sellmeier([1.03961212, 0.231792344, 1.01046945], [0.00600069867, 0.0200179144, 103.560653]), roughness=0.1, name="bk7"))
+    scene.add_material(pc.Dielectric(ior.abbe(1.5, 40.0), name="abbe glass"))
+    scene.add_material(pc.Dielectric("Diamond", name="diamond"))
+    scene.add_material(pc.Dielectric(ior.cauchy(1.5, 0.0042), name="cauchy"))
+    scene.add_material(pc.Conductor("gold", roughness=0.3, name="gold"))
+    scene.add_material(pc.Conductor(eta=pc.spectra.constant(0.2), k=pc.spectra.tabulated([400, 700], [3.0, 4.0]), name="nk"))
+    scene.add_material(pc.Glossy((0.9, 0.5, 0.2), roughness=0.4, name="glossy"))
+    v, t = uv_sphere(0.5)
+    uvs = np.stack([np.linspace(0, 1, len(v)), np.linspace(1, 0, len(v))], 1)
+    for i in range(len(scene.materials)):
+        m = np.eye(4)
+        m[:3, 3] = [i % 3 - 1.0, 0.0, i // 3 - 1.0]
+        scene.add_mesh(f"ball{i}", v, t, uvs=uvs, material=i, transform=m)
+    scene.add_light(pc.SpotLight((0, -3, 3), (0, 1, -1), power=80, color=pc.spectra.blackbody(3000), spot_size=0.7, spot_blend=0.3, name="spot"))
+    scene.add_light(pc.SunLight((0.2, 0.3, -1.0), strength=2.5, color=pc.spectra.d65(), name="sun"))
+    hdri = pc.Texture.from_array(rng.random((8, 16, 3)).astype(np.float32), name="sky.exr")
+    scene.set_world(texture=hdri, strength=1.5, rotation=0.4, importance_sampling=False)
+    scene.camera = pc.Camera.looking_at((0, -5, 0), (0, 0, 0))
+
+    path = usd.write_stage(scene, tmp_path / "mix.usda", SETTINGS)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        back = usd.read_stage(path)
+    a, b = expanded(scene), expanded(back)
+    da, ba = scene.description()
+    db, bb = back.description()
+    for key in ("materials", "lights", "world", "instances", "meshes"):
+        assert a[key] == b[key], key
+    assert [{k: v for k, v in t.items() if k != "buffer"} for t in da["textures"]] == [{k: v for k, v in t.items() if k != "buffer"} for t in db["textures"]]
+    for ta, tb in zip(da["textures"], db["textures"]):
+        assert np.array_equal(np.asarray(ba[ta["buffer"]]), np.asarray(bb[tb["buffer"]])), ta["name"]
+    assert [type(m).__name__ for m in back.materials] == ["Diffuse", "Diffuse", "Dielectric", "Dielectric", "Dielectric", "Dielectric", "Conductor", "Conductor", "Glossy"]
+    assert [type(light).__name__ for light in back.lights] == ["SpotLight", "SunLight"]
+    r1 = pc.render(scene, SETTINGS)
+    r2 = pc.render(back, SETTINGS)
+    assert np.array_equal(r1.rgba, r2.rgba)
+
+    # Other tools see standard values: glass is transparent with its nd, gold is metallic,
+    # the spot has a cone of half its full angle, the texture is a UsdUVTexture.
+    stage = Usd.Stage.Open(str(path))
+    glass = UsdShade.Shader(stage.GetPrimAtPath("/World/Looks/abbe_glass/PreviewSurface"))
+    assert glass.GetInput("opacity").Get() == 0.0 and glass.GetInput("ior").Get() == pytest.approx(1.5)
+    assert UsdShade.Shader(stage.GetPrimAtPath("/World/Looks/gold/PreviewSurface")).GetInput("metallic").Get() == 1.0
+    spot = UsdLux.ShapingAPI(stage.GetPrimAtPath("/World/Lights/spot"))
+    assert spot.GetShapingConeAngleAttr().Get() == pytest.approx(math.degrees(0.35), rel=1e-6)
+    tex = UsdShade.Shader(stage.GetPrimAtPath("/World/Looks/printed/Texture"))
+    assert tex.GetShaderId() == "UsdUVTexture" and tex.GetInput("wrapS").Get() == "black"
+    assert (tmp_path / "mix_textures" / "bytes.png").is_file()
+
+
+def test_foreign_dome_texture_lands_where_usd_puts_it(tmp_path):
+    """OpenEXR/USD latlong (ImfEnvmap.cpp: u = 0.5 − atan2(x, z)/2π, top = +Y): the
+    image centre faces the dome's +Z; a dome oriented to a
+    Z-up stage (OrientToStageUpAxis: rotateX 90) therefore puts it towards world −Y,
+    and its left quarter (u = 0.25, +X in the dome) towards world +X."""
+    from polychrome import imageio
+
+    h, w = 32, 64
+    img = np.full((h, w, 3), 0.01, np.float32)
+    img[12:20, 30:34] = [4.0, 0.0, 0.0]  # red patch at the centre (u = 0.5)
+    img[12:20, 14:18] = [0.0, 0.0, 4.0]  # blue patch at u = 0.25
+    imageio.write_exr(tmp_path / "env.exr", img)
+    path = tmp_path / "dome.usda"
+    stage = new_stage(path)
+    dome = UsdLux.DomeLight.Define(stage, "/Sky")
+    dome.CreateTextureFileAttr("./env.exr")
+    dome.CreateTextureFormatAttr("latlong")
+    dome.OrientToStageUpAxis()
+    cam = UsdGeom.Camera.Define(stage, "/cam")
+    cam.CreateFocalLengthAttr(5.0)  # narrow view: 50 mm on a 20.955 mm aperture, in tenths of a unit
+    cam.CreateHorizontalApertureAttr(2.0955)
+    cam.CreateVerticalApertureAttr(2.0955)
+    cam.AddRotateXOp().Set(-90.0)  # camera −Z → world −Y
+    stage.Save()
+
+    def look(z_degrees):
+        st = Usd.Stage.Open(str(path))
+        op = UsdGeom.Xformable(st.GetPrimAtPath("/cam"))
+        op.ClearXformOpOrder()
+        op.AddRotateZOp().Set(z_degrees)
+        op.AddRotateXOp().Set(-90.0)
+        st.Save()
+        return pc.render(usd.read_stage(path), width=8, height=8, samples=4, max_bounces=1).rgba[..., :3].mean(axis=(0, 1))
+
+    towards_minus_y = look(0.0)
+    towards_plus_x = look(90.0)  # camera −Y rotated +90° about Z looks along +X
+    towards_plus_y = look(180.0)
+    assert towards_minus_y[0] > 20 * towards_minus_y[2] and towards_minus_y[0] > 1.0, towards_minus_y
+    assert towards_plus_x[2] > 20 * towards_plus_x[0] and towards_plus_x[2] > 1.0, towards_plus_x
+    assert towards_plus_y.max() < 0.05, towards_plus_y

@@ -70,6 +70,89 @@ class DescribedMaterial(Material):
         return f"DescribedMaterial({self.description!r})"
 
 
+def material_from_description(d: dict[str, Any]):
+    """The polychrome material class for a core description when one reproduces it
+    exactly (Diffuse, Emitter, Dielectric, Conductor, Glossy), else a DescribedMaterial."""
+    import polychrome as pc
+    from ..ior import Ior
+
+    name = d.get("name", "Material")
+    bsdf = dict(d.get("bsdf") or {})
+    emission = None if d.get("emission") is None else _spectrum_from_dict(d["emission"])
+    kind = bsdf.get("type")
+
+    def spec(key):
+        v = bsdf[key]
+        if isinstance(v, dict) and v.get("type") == "texture":
+            return v["texture"]
+        return _spectrum_from_dict(v)
+
+    try:
+        if kind == "diffuse":
+            m = pc.Diffuse(spec("reflectance"), emission=emission, name=name)
+        elif kind == "none" and emission is not None:
+            m = pc.Emitter(emission, name=name)
+        elif kind == "dielectric" and hasattr(pc, "Dielectric"):
+            ior = dict(bsdf["ior"])
+            m = pc.Dielectric(Ior(str(ior.pop("type")), ior), roughness=bsdf.get("roughness", 0.0), name=name)
+        elif kind == "conductor" and hasattr(pc, "Conductor"):
+            if "metal" in bsdf:
+                m = pc.Conductor(bsdf["metal"], roughness=bsdf.get("roughness", 0.0), name=name)
+            else:
+                m = pc.Conductor(eta=spec("eta"), k=spec("k"), roughness=bsdf.get("roughness", 0.0), name=name)
+        elif kind == "glossy" and hasattr(pc, "Glossy"):
+            m = pc.Glossy(spec("reflectance"), roughness=bsdf.get("roughness", 0.5), name=name)
+        else:
+            m = None
+        if m is not None and kind != "diffuse" and kind != "none" and emission is not None:
+            m.emission = emission
+        if m is not None and _same(m.to_dict(), d):
+            return m
+    except (KeyError, TypeError, ValueError):
+        pass
+    return DescribedMaterial(d)
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Equality of descriptions, where texture objects compare by identity."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+    if type(a).__name__ == "Texture" or type(b).__name__ == "Texture":
+        return a is b
+    return a == b
+
+
+def light_from_description(d: dict[str, Any], power=None, colour=None):
+    """The polychrome light class for a core description when one reproduces it exactly
+    (PointLight, SpotLight, SunLight), else a DescribedLight."""
+    import polychrome as pc
+
+    kind = d.get("type")
+    name = d.get("name", "Light")
+    try:
+        if kind in ("point", "spot"):
+            if power is not None and colour is not None:
+                p, c = float(power), colour
+            else:
+                p, c = 4.0 * math.pi, _spectrum_from_dict(d["intensity"])
+            if kind == "point":
+                light = pc.PointLight(list(d["position"]), power=p, color=c, name=name)
+            else:
+                light = pc.SpotLight(list(d["position"]), list(d["direction"]), power=p, color=c,
+                                     spot_size=d["spot_size"], spot_blend=d["spot_blend"], name=name)
+        elif kind == "distant" and hasattr(pc, "SunLight"):
+            light = pc.SunLight(list(d["direction"]), strength=1.0, color=_spectrum_from_dict(d["irradiance"]), name=name)
+        else:
+            light = None
+        if light is not None and light.to_dict() == d:
+            return light
+    except (KeyError, TypeError, ValueError, AttributeError):
+        pass
+    return DescribedLight(d)
+
+
 def _pxr():
     try:
         from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdRender, UsdShade
@@ -117,8 +200,10 @@ class _Reader:
         self.instances: list[tuple[str, np.ndarray, str]] = []
         self.lights: list[Any] = []
         self.world = None
+        self.world_texture: dict[str, Any] | None = None
         self.cameras: list[Any] = []
         self.black_backing: int | None = None
+        self.textures: dict[str, Any] = {}
 
     # -- helpers ------------------------------------------------------------------
     def error(self, prim_or_path, problem: str) -> ValueError:
@@ -223,6 +308,8 @@ class _Reader:
         if not inp:
             return default
         if inp.HasConnectedSource():
+            if name == "diffuseColor" and self.texture_source(inp) is not None:
+                return default  # read by texture_input
             source = inp.GetConnectedSources()[0]
             src = source[0].source if source else None
             fallback = None
@@ -238,6 +325,61 @@ class _Reader:
             return default
         return tuple(float(x) for x in v) if isinstance(default, tuple) else float(v)
 
+    def texture_source(self, inp):
+        """The UsdUVTexture shader driving ``inp``, or None."""
+        sources = inp.GetConnectedSources()[0] if inp and inp.HasConnectedSource() else []
+        if not sources:
+            return None
+        src = self.UsdShade.Shader(sources[0].source.GetPrim())
+        if src and src.GetShaderId() == "UsdUVTexture":
+            return src
+        return None
+
+    def asset_path(self, attr_value, prim, what: str) -> Path:
+        """An SdfAssetPath as a file path (resolved, or relative to the stage's layer)."""
+        resolved = getattr(attr_value, "resolvedPath", "") or ""
+        raw = getattr(attr_value, "path", "") or str(attr_value or "")
+        if resolved:
+            return Path(resolved)
+        p = Path(raw)
+        if not p.is_absolute():
+            p = Path(self.stage.GetRootLayer().realPath or self.path).parent / p
+        if not p.is_file():
+            raise self.error(prim, f"{what} {raw!r} does not exist")
+        return p
+
+    def texture_input(self, shader, name: str, material_prim):
+        """A polychrome.Texture for an input driven by a UsdUVTexture, or None."""
+        from ..texture import Texture
+
+        tex = self.texture_source(shader.GetInput(name))
+        if tex is None:
+            return None
+        key = str(tex.GetPath())
+        if key in self.textures:
+            return self.textures[key]
+        file_input = tex.GetInput("file")
+        value = file_input.Get(self.time) if file_input else None
+        if value is None or not (getattr(value, "path", "") or ""):
+            self.warn(f"texfile:{key}", f"prim {tex.GetPath()}: UsdUVTexture without a file; {name} uses its fallback")
+            return None
+        path = self.asset_path(value, tex.GetPrim(), "texture file")
+        wrap_in = tex.GetInput("wrapS")
+        wrap = str(wrap_in.Get(self.time)) if wrap_in and wrap_in.Get(self.time) is not None else "repeat"
+        mode = {"repeat": "REPEAT", "black": "CLIP", "clamp": "EXTEND"}.get(wrap, "REPEAT")
+        if wrap == "mirror":
+            self.warn(f"mirror:{key}", f"prim {tex.GetPath()}: mirror wrapping is not supported; repeat is used")
+        for unsupported in ("scale", "bias"):
+            i = tex.GetInput(unsupported)
+            if i and i.Get(self.time) is not None:
+                self.warn(f"{unsupported}:{key}", f"prim {tex.GetPath()}: texture {unsupported} is not supported and is ignored")
+        try:
+            texture = Texture.from_file(path, wrap=mode, name=str(self.custom(tex.GetPrim(), A.NAME, path.name)))
+        except (OSError, ValueError) as e:
+            raise self.error(tex.GetPrim(), f"cannot read texture {path}: {e}") from None
+        self.textures[key] = texture
+        return texture
+
     def read_material(self, prim):
         import polychrome as pc
         from ..spectra import rgb
@@ -250,21 +392,23 @@ class _Reader:
         extra = self.json_attr(prim, A.BSDF_EXTRA)
         if extra is not None and not isinstance(extra, dict):
             raise self.error(prim, f"{A.BSDF_EXTRA} must be a JSON object")
+        surface = self.UsdShade.Material(prim).ComputeSurfaceSource()
+        surface_shader = surface[0] if surface and surface[0] and surface[0].GetShaderId() == "UsdPreviewSurface" else None
         if kind is not None:
             kind = str(kind)
             bsdf: dict[str, Any] = {"type": kind, **(extra or {})}
             if reflectance is not None:
                 bsdf["reflectance"] = reflectance.to_dict()
+            elif surface_shader is not None:
+                texture = self.texture_input(surface_shader, "diffuseColor", prim)
+                if texture is not None:
+                    bsdf["reflectance"] = texture.to_dict()
             if ior is not None:
                 bsdf["ior"] = {**ior, **(bsdf.get("ior") or {})}
-            if kind == "diffuse" and set(bsdf) == {"type", "reflectance"}:
-                return pc.Diffuse(reflectance, emission=emission, name=name)
-            if kind == "none" and emission is not None and set(bsdf) == {"type"}:
-                return pc.Emitter(emission, name=name)
             d = {"name": name, "bsdf": bsdf}
             if emission is not None:
                 d["emission"] = emission.to_dict()
-            return DescribedMaterial(d)
+            return material_from_description(d)
 
         # Plain UsdPreviewSurface, with polychrome spectra where given.
         diffuse, emissive, opacity, ior_value, metallic, roughness = FALLBACK_GREY, (0.0, 0.0, 0.0), 1.0, 1.5, 0.0, 0.5
@@ -288,6 +432,8 @@ class _Reader:
             raise self.error(prim, "its UsdPreviewSurface inputs are not finite")
         if emission is None and max(emissive) > 0.0:
             emission = rgb(*emissive)
+        if reflectance is None and shader is not None:
+            reflectance = self.texture_input(shader, "diffuseColor", prim)
         if reflectance is None:
             reflectance = rgb(*(min(max(c, 0.0), 1.0) for c in diffuse))
         if ior is not None or opacity < 1.0:
@@ -582,30 +728,47 @@ class _Reader:
             return blackbody * scalar
         return rgb(*colour) * scalar
 
+    def described_light(self, prim, m: np.ndarray) -> bool:
+        """Adds the light of a ``polychrome:light`` description, if the prim has one. Its
+        position and direction follow the prim's transform when that moved it."""
+        d = self.json_attr(prim, A.LIGHT)
+        if d is None:
+            return False
+        if not isinstance(d, dict) or "type" not in d:
+            raise self.error(prim, f"{A.LIGHT} must be a JSON light description with a 'type'")
+        d = dict(d)
+        if "position" in d and not np.allclose(d["position"], m[:3, 3], rtol=1e-9, atol=1e-9):
+            d["position"] = [float(x) for x in m[:3, 3]]
+        if "direction" in d:
+            axis = -m[:3, 2] / np.linalg.norm(m[:3, 2])
+            given = np.asarray(d["direction"], dtype=np.float64)
+            if not (np.linalg.norm(given) > 0 and np.allclose(given / np.linalg.norm(given), axis, atol=1e-9)):
+                d["direction"] = [float(x) for x in axis]
+        power = self.custom(prim, A.POWER)
+        colour = self.spectrum_attr(prim, A.COLOR)
+        self.lights.append(light_from_description(d, power, colour))
+        return True
+
     def read_sphere_light(self, prim) -> None:
+        import polychrome as pc
         from ..scene import PointLight
 
         m = self.world_matrix(prim)
+        if self.described_light(prim, m):
+            return
         pos = [float(x) for x in m[:3, 3]]
         name = str(self.custom(prim, A.NAME, str(prim.GetPath())))
-        described = self.json_attr(prim, A.LIGHT)
-        power = self.custom(prim, A.POWER)
-        colour_spec = self.spectrum_attr(prim, A.COLOR)
-        if power is not None and colour_spec is not None:
-            self.lights.append(PointLight(pos, power=float(power), color=colour_spec, name=name))
-            return
         intensity_spec = self.spectrum_attr(prim, A.INTENSITY)
         if intensity_spec is not None:
             self.lights.append(PointLight(pos, power=4.0 * math.pi, color=intensity_spec, name=name))
             return
-        if described is not None and described.get("type") != "point":
-            self.lights.append(DescribedLight(described))
-            return
         light = self.UsdLux.SphereLight(prim)
         scalar, colour, blackbody = self.light_rgb(prim, light)
         radius = float(self.get(light.GetRadiusAttr(), 0.5))
-        scale = float(np.cbrt(abs(np.linalg.det(m[:3, :3])))) if np.linalg.det(m[:3, :3]) != 0 else 0.0
-        r = radius * scale  # metres
+        det = float(np.linalg.det(m[:3, :3]))
+        r = radius * (float(np.cbrt(abs(det))) if det != 0 else 0.0)  # metres
+        if not (math.isfinite(r) and r >= 0):
+            raise self.error(prim, f"radius {radius} must be finite and non-negative")
         normalize = bool(self.get(light.GetNormalizeAttr(), False))
         treat_as_point = bool(self.get(light.GetTreatAsPointAttr(), False))
         # Radiant intensity of a sphere of radiance L and radius r is L·πr²; normalised,
@@ -619,9 +782,23 @@ class _Reader:
             factor = 1.0
         if not treat_as_point and r > 0:
             self.warn(f"sphere:{prim.GetPath()}", f"prim {prim.GetPath()}: sphere light of radius {r:g} m is rendered as a point light of the same power")
+        spectrum = self.emitted(scalar * factor, colour, blackbody)
         if prim.HasAPI(self.UsdLux.ShapingAPI):
-            self.warn(f"shaping:{prim.GetPath()}", f"prim {prim.GetPath()}: light shaping (spot cone, IES) is not supported and is ignored")
-        self.lights.append(PointLight(pos, power=4.0 * math.pi, color=self.emitted(scalar * factor, colour, blackbody), name=name))
+            shaping = self.UsdLux.ShapingAPI(prim)
+            cone = float(self.get(shaping.GetShapingConeAngleAttr(), 90.0))
+            softness = float(self.get(shaping.GetShapingConeSoftnessAttr(), 0.0))
+            ies = self.get(shaping.GetShapingIesFileAttr())
+            if ies is not None and getattr(ies, "path", ""):
+                self.warn(f"ies:{prim.GetPath()}", f"prim {prim.GetPath()}: IES profiles are not supported and are ignored")
+            if not (math.isfinite(cone) and math.isfinite(softness)):
+                raise self.error(prim, "its shaping cone angle or softness is not finite")
+            if cone < 90.0 and hasattr(pc, "SpotLight"):
+                axis = -m[:3, 2] / np.linalg.norm(m[:3, 2])
+                self.lights.append(pc.SpotLight(pos, axis.tolist(), power=4.0 * math.pi, color=spectrum,
+                                                spot_size=2.0 * math.radians(max(cone, 0.0)),
+                                                spot_blend=min(max(softness, 0.0), 1.0), name=name))
+                return
+        self.lights.append(PointLight(pos, power=4.0 * math.pi, color=spectrum, name=name))
 
     def add_emitter_polygon(self, prim, pts2d: np.ndarray, size: float, normalize: bool, scalar, colour, blackbody) -> None:
         """An emissive polygon in the light's local XY plane shining along −Z, with a black
@@ -675,42 +852,72 @@ class _Reader:
     def read_distant_light(self, prim) -> None:
         import polychrome as pc
 
-        described = self.json_attr(prim, A.LIGHT)
-        if described is not None:
-            self.lights.append(DescribedLight(described))
+        m = self.world_matrix(prim)
+        if self.described_light(prim, m):
             return
         light = self.UsdLux.DistantLight(prim)
-        if hasattr(pc, "SunLight"):
-            scalar, colour, blackbody = self.light_rgb(prim, light)
-            m = self.world_matrix(prim)
-            d = -m[:3, 2]
-            d = d / np.linalg.norm(d)
-            angle = math.radians(float(self.get(light.GetAngleAttr(), 0.53)))
-            # Normalised: intensity is the irradiance; else it is the radiance of the sun disk.
-            if not self.get(light.GetNormalizeAttr(), False) and angle > 0:
-                scalar *= math.pi * math.sin(angle / 2) ** 2
-            try:
-                self.lights.append(pc.SunLight(d.tolist(), irradiance=1.0, color=self.emitted(scalar, colour, blackbody), angle=angle,
-                                               name=str(prim.GetPath())))
-                return
-            except TypeError:
-                pass
-        self.warn(f"distant:{prim.GetPath()}", f"prim {prim.GetPath()}: DistantLight is not supported by this polychrome and is skipped")
+        if not hasattr(pc, "SunLight"):
+            self.warn(f"distant:{prim.GetPath()}", f"prim {prim.GetPath()}: DistantLight is not supported by this polychrome and is skipped")
+            return
+        scalar, colour, blackbody = self.light_rgb(prim, light)
+        axis = -m[:3, 2] / np.linalg.norm(m[:3, 2])
+        angle = math.radians(float(self.get(light.GetAngleAttr(), 0.53)))
+        if not math.isfinite(angle):
+            raise self.error(prim, "its angle is not finite")
+        # Normalised, intensity is the irradiance; otherwise it is the radiance of the sun
+        # disk of angular diameter `angle`: E = L·π·sin²(angle/2) (zero angle: E = intensity).
+        if not self.get(light.GetNormalizeAttr(), False) and angle > 0:
+            scalar *= math.pi * math.sin(angle / 2) ** 2
+        if angle > math.radians(1.0):
+            self.warn(f"angle:{prim.GetPath()}", f"prim {prim.GetPath()}: the sun's angular size is not supported; it is rendered as a parallel light")
+        self.lights.append(pc.SunLight(axis.tolist(), strength=1.0, color=self.emitted(scalar, colour, blackbody),
+                                       name=str(self.custom(prim, A.NAME, str(prim.GetPath())))))
 
     def read_dome_light(self, prim) -> None:
-        radiance = self.spectrum_attr(prim, A.RADIANCE)
-        if self.world is not None:
+        from ..texture import Texture
+
+        if self.world is not None or self.world_texture is not None:
             self.warn(f"dome:{prim.GetPath()}", f"prim {prim.GetPath()}: only one DomeLight is used; this one is skipped")
             return
+        radiance = self.spectrum_attr(prim, A.RADIANCE)
         if radiance is not None:
             self.world = radiance
             return
         light = self.UsdLux.DomeLight(prim) if prim.GetTypeName() == "DomeLight" else self.UsdLux.DomeLight_1(prim)
         scalar, colour, blackbody = self.light_rgb(prim, light)
         tex = self.get(light.GetTextureFileAttr())
-        if tex is not None and str(tex.path if hasattr(tex, "path") else tex):
-            self.warn(f"dometex:{prim.GetPath()}", f"prim {prim.GetPath()}: dome light texture {tex} is not supported yet; its colour × intensity is used")
-        self.world = self.emitted(scalar, colour, blackbody)
+        if tex is None or not (getattr(tex, "path", "") or ""):
+            self.world = self.emitted(scalar, colour, blackbody)
+            return
+        fmt = str(self.get(light.GetTextureFormatAttr(), "automatic"))
+        if fmt not in ("automatic", "latlong"):
+            self.warn(f"domefmt:{prim.GetPath()}", f"prim {prim.GetPath()}: dome texture format '{fmt}' is not supported; read as latlong")
+        if colour != (1.0, 1.0, 1.0) or blackbody is not None:
+            self.warn(f"dometint:{prim.GetPath()}", f"prim {prim.GetPath()}: a colour tint on a dome texture is not supported and is ignored")
+        path = self.asset_path(tex, prim, "dome texture")
+        try:
+            texture = Texture.from_file(path, name=path.name)
+        except (OSError, ValueError) as e:
+            raise self.error(prim, f"cannot read dome texture {path}: {e}") from None
+        # The latlong image has +Y up in the dome's frame (OpenEXR latlong, centre towards
+        # +Z). In Polychrome's Z-up world that frame is W = Rz(φ)·Rx(90°) for a dome turned
+        # by φ about the up axis, which Polychrome's rotation π/2 − φ reproduces.
+        w = self.world_matrix(prim)[:3, :3]
+        w = w / np.cbrt(abs(np.linalg.det(w)))
+        rx = np.array([[1, 0, 0], [0, 0, -1], [0, 1, 0]], dtype=np.float64)
+        wz = w @ rx.T
+        if abs(wz[2, 2] - 1.0) > 1e-4:
+            self.warn(f"dometilt:{prim.GetPath()}", f"prim {prim.GetPath()}: a dome tilted away from the up axis is not supported; only its turn about the up axis is used")
+        phi = math.atan2(wz[1, 0], wz[0, 0])
+        extra = self.json_attr(prim, A.LIGHT) or {}
+        rotation = extra.get("rotation") if "rotation" in extra else math.remainder(math.pi / 2 - phi, 2 * math.pi)
+        self.world = None
+        self.world_texture = {
+            "texture": texture,
+            "strength": float(extra.get("strength", scalar)),
+            "rotation": float(rotation),
+            "importance_sampling": bool(extra.get("importance_sampling", True)),
+        }
 
     # -- camera --------------------------------------------------------------------------
     def read_camera(self, prim, resolution):
@@ -843,7 +1050,9 @@ class _Reader:
             scene.add_instance(index[key], matrix, name)
         for light in self.lights:
             scene.add_light(light)
-        if self.world is not None:
+        if self.world_texture is not None:
+            scene.set_world(**self.world_texture)
+        elif self.world is not None:
             scene.set_world(self.world)
         return scene
 

@@ -97,6 +97,32 @@ class _Rgb:
         return tuple(float(c) for c in np.clip(np.nan_to_num(rgb), 0.0, None))  # type: ignore[return-value]
 
 
+    def metal(self, bsdf: dict[str, Any]) -> tuple[float, float, float]:
+        """Normal-incidence reflectance ((n−1)² + k²)/((n+1)² + k²) of a conductor."""
+        metal = bsdf.get("metal")
+        if metal is not None:
+            return _METAL_RGB.get(str(metal).lower(), (0.9, 0.9, 0.9))
+        try:
+            n = np.asarray(self._core.spectrum_values(json.dumps(bsdf["eta"]), self._settings, "unbounded"), np.float64)
+            k = np.asarray(self._core.spectrum_values(json.dumps(bsdf["k"]), self._settings, "unbounded"), np.float64)
+            f0 = ((n - 1) ** 2 + k**2) / ((n + 1) ** 2 + k**2)
+            rgb = self._rgb_of(f0 * self._d65) / self._white
+        except Exception:  # noqa: BLE001
+            return (0.9, 0.9, 0.9)
+        return tuple(float(c) for c in np.clip(np.nan_to_num(rgb), 0.0, 1.0))  # type: ignore[return-value]
+
+
+#: Linear Rec.709 normal-incidence colours of the catalogue metals (UsdPreviewSurface only).
+_METAL_RGB = {
+    "gold": (1.0, 0.766, 0.336),
+    "silver": (0.972, 0.960, 0.915),
+    "copper": (0.955, 0.638, 0.538),
+    "aluminium": (0.913, 0.922, 0.924),
+    "aluminum": (0.913, 0.922, 0.924),
+}
+_WRAP_TO_USD = {"REPEAT": "repeat", "CLIP": "black", "EXTEND": "clamp"}
+
+
 def _intensity_colour(rgb) -> tuple[float, tuple[float, float, float]]:
     """UsdLux style: a scalar intensity times a colour whose largest channel is 1."""
     peak = max(float(c) for c in rgb)
@@ -166,6 +192,22 @@ def _matrix_to_usd(Gf, m) -> Any:
     return Gf.Matrix4d(np.asarray(m, dtype=np.float64).T.tolist())
 
 
+def _aim(direction, position) -> np.ndarray:
+    """Object → world matrix whose −Z axis points along ``direction`` (lights look down −Z)."""
+    d = np.asarray(direction, dtype=np.float64)
+    n = np.linalg.norm(d)
+    if not (np.isfinite(n) and n > 0):
+        raise ValueError(f"light direction {list(direction)} must be finite and non-zero")
+    z = -d / n
+    helper = np.array([0.0, 0.0, 1.0]) if abs(z[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = x, y, z, np.asarray(position, dtype=np.float64)
+    return m
+
+
 def _sensor_apertures(cam: dict[str, Any], width: int, height: int) -> tuple[float, float, float]:
     """(horizontal, vertical, largest) film extent in mm (perspective) or scene units
     (orthographic) that polychrome's camera shows for a ``width`` × ``height`` image."""
@@ -199,7 +241,7 @@ def write_stage(scene, path, settings=None) -> Path:
     settings_json = settings.to_json()
     desc, buffers = scene.description()
     for key, value in desc.items():
-        if key not in ("camera", "materials", "meshes", "instances", "lights", "world") and value:
+        if key not in ("camera", "materials", "meshes", "instances", "lights", "world", "textures") and value:
             warnings.warn(f"{path}: the scene's '{key}' cannot be written to USD yet and is left out", stacklevel=2)
     rgb = _Rgb(settings_json)
 
@@ -211,6 +253,48 @@ def write_stage(scene, path, settings=None) -> Path:
     world_names = _Names(Tf)
     for reserved in ("Looks", "Camera", "Lights"):
         world_names(reserved, reserved)
+
+    # -- textures (image files beside the stage) --------------------------------
+    texture_dir = path.parent / f"{path.stem}_textures"
+    texture_files: dict[int, str] = {}
+    texture_names = _Names(Tf)
+
+    def texture_file(index: int) -> str:
+        """Writes texture ``index`` once, returning its path relative to the stage."""
+        if index not in texture_files:
+            entry = desc["textures"][index]
+            pixels = np.asarray(buffers[entry["buffer"]]).reshape(entry["height"], entry["width"], entry["channels"])
+            texture_dir.mkdir(parents=True, exist_ok=True)
+            stem = texture_names(str(entry.get("name", "")).rsplit(".", 1)[0], f"texture{index}")
+            if entry.get("encoding") == "srgb":
+                from PIL import Image
+
+                file = texture_dir / f"{stem}.png"
+                Image.fromarray(np.ascontiguousarray(pixels[:, :, :3].astype(np.uint8)), "RGB").save(file, format="PNG")
+            else:
+                from ..imageio import write_exr
+
+                file = texture_dir / f"{stem}.exr"
+                write_exr(file, np.asarray(pixels[:, :, :3], dtype=np.float32))
+            texture_files[index] = f"./{texture_dir.name}/{file.name}"
+        return texture_files[index]
+
+    def texture_shader(mp, index: int):
+        """UsdUVTexture (reading primvars:st) for texture ``index``: returns its rgb output."""
+        entry = desc["textures"][index]
+        reader = UsdShade.Shader.Define(stage, mp.AppendChild("st"))
+        reader.CreateIdAttr("UsdPrimvarReader_float2")
+        reader.CreateInput("varname", Sdf.ValueTypeNames.Token).Set("st")
+        tex = UsdShade.Shader.Define(stage, mp.AppendChild("Texture"))
+        tex.CreateIdAttr("UsdUVTexture")
+        tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(Sdf.AssetPath(texture_file(index)))
+        tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(reader.ConnectableAPI(), "result")
+        wrap = _WRAP_TO_USD.get(str(entry.get("wrap", "REPEAT")).upper(), "repeat")
+        tex.CreateInput("wrapS", Sdf.ValueTypeNames.Token).Set(wrap)
+        tex.CreateInput("wrapT", Sdf.ValueTypeNames.Token).Set(wrap)
+        tex.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set("sRGB" if entry.get("encoding") == "srgb" else "raw")
+        tex.GetPrim().CreateAttribute(A.NAME, Sdf.ValueTypeNames.String).Set(str(entry.get("name", "")))
+        return tex.CreateOutput("rgb", Sdf.ValueTypeNames.Float3)
 
     # -- materials ------------------------------------------------------------
     materials = []
@@ -227,12 +311,16 @@ def write_stage(scene, path, settings=None) -> Path:
         shader = UsdShade.Shader.Define(stage, mp.AppendChild("PreviewSurface"))
         shader.CreateIdAttr("UsdPreviewSurface")
         inp = lambda n, t, v: shader.CreateInput(n, t).Set(v)  # noqa: E731
+        colour = Sdf.ValueTypeNames.Color3f
         reflectance = bsdf.pop("reflectance", None)
-        if reflectance is not None:
+        if isinstance(reflectance, dict) and reflectance.get("type") == "texture":
+            # An image: a UsdUVTexture network any tool reads (no polychrome:reflectance).
+            shader.CreateInput("diffuseColor", colour).ConnectToSource(texture_shader(mp, int(reflectance["texture"])))
+        elif reflectance is not None:
             prim.CreateAttribute(A.REFLECTANCE, Sdf.ValueTypeNames.String).Set(json.dumps(reflectance))
-            inp("diffuseColor", Sdf.ValueTypeNames.Color3f, Gf.Vec3f(*rgb.reflectance(reflectance)))
+            inp("diffuseColor", colour, Gf.Vec3f(*rgb.reflectance(reflectance)))
         elif kind == "none":
-            inp("diffuseColor", Sdf.ValueTypeNames.Color3f, Gf.Vec3f(0.0, 0.0, 0.0))
+            inp("diffuseColor", colour, Gf.Vec3f(0.0, 0.0, 0.0))
         ior = bsdf.pop("ior", None)
         if isinstance(ior, dict):
             prim.CreateAttribute(A.IOR_MODEL, Sdf.ValueTypeNames.Token).Set(str(ior.get("type", "")))
@@ -250,12 +338,18 @@ def write_stage(scene, path, settings=None) -> Path:
             bsdf["ior"] = ior
         if kind == "diffuse":
             inp("roughness", Sdf.ValueTypeNames.Float, 1.0)
+        elif "roughness" in bsdf:
+            inp("roughness", Sdf.ValueTypeNames.Float, float(bsdf["roughness"]))
+        if kind in ("conductor", "glossy"):
+            inp("metallic", Sdf.ValueTypeNames.Float, 1.0)
+            if kind == "conductor":
+                inp("diffuseColor", colour, Gf.Vec3f(*rgb.metal(bsdf)))
         if bsdf:
             prim.CreateAttribute(A.BSDF_EXTRA, Sdf.ValueTypeNames.String).Set(json.dumps(bsdf))
         emission = m.get("emission")
         if emission is not None:
             prim.CreateAttribute(A.EMISSION, Sdf.ValueTypeNames.String).Set(json.dumps(emission))
-            inp("emissiveColor", Sdf.ValueTypeNames.Color3f, Gf.Vec3f(*rgb.emission(emission)))
+            inp("emissiveColor", colour, Gf.Vec3f(*rgb.emission(emission)))
         mat.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
         materials.append(mat)
 
@@ -354,45 +448,73 @@ def write_stage(scene, path, settings=None) -> Path:
     light_names = _Names(Tf)
     for i, (light, ld) in enumerate(zip(scene.lights, desc["lights"])):
         lp = Sdf.Path("/World/Lights").AppendChild(light_names(ld.get("name", ""), f"Light{i}"))
-        if ld.get("type") == "point":
-            sl = UsdLux.SphereLight.Define(stage, lp)
-            sl.CreateTreatAsPointAttr(True)
-            sl.CreateRadiusAttr(POINT_LIGHT_RADIUS)
+        kind = ld.get("type")
+        if kind in ("point", "spot") or ("position" in ld and kind != "distant"):
+            lt = UsdLux.SphereLight.Define(stage, lp)
+            lt.CreateTreatAsPointAttr(True)
+            lt.CreateRadiusAttr(POINT_LIGHT_RADIUS)
             # Normalised sphere of radius r: radiance intensity/(4πr²), radiant intensity
             # L·πr² = intensity/4, whatever the radius (docs/usd.md, "Lights").
-            sl.CreateNormalizeAttr(True)
-            peak, colour = _intensity_colour(rgb.emission(ld["intensity"]))
-            sl.CreateIntensityAttr(4.0 * peak)
-            sl.CreateColorAttr(Gf.Vec3f(*colour))
-            sl.AddTranslateOp().Set(Gf.Vec3d(*[float(c) for c in ld["position"]]))
-            prim = sl.GetPrim()
-            if isinstance(light, PointLight):
-                prim.CreateAttribute(A.POWER, Sdf.ValueTypeNames.Double).Set(float(light.power))
-                from ..spectra import as_spectrum
-
-                prim.CreateAttribute(A.COLOR, Sdf.ValueTypeNames.String).Set(json.dumps(as_spectrum(light.color).to_dict()))
+            lt.CreateNormalizeAttr(True)
+            if isinstance(ld.get("intensity"), dict):
+                peak, colour = _intensity_colour(rgb.emission(ld["intensity"]))
+                lt.CreateIntensityAttr(4.0 * peak)
+                lt.CreateColorAttr(Gf.Vec3f(*colour))
+            position = [float(c) for c in ld.get("position", (0.0, 0.0, 0.0))]
+            if kind == "spot" and "direction" in ld:
+                lt.AddTransformOp().Set(_matrix_to_usd(Gf, _aim(ld["direction"], position)))
+                shaping = UsdLux.ShapingAPI.Apply(lt.GetPrim())
+                shaping.CreateShapingConeAngleAttr(math.degrees(float(ld.get("spot_size", math.pi / 4))) / 2.0)
+                shaping.CreateShapingConeSoftnessAttr(float(ld.get("spot_blend", 0.0)))
             else:
-                prim.CreateAttribute(A.INTENSITY, Sdf.ValueTypeNames.String).Set(json.dumps(ld["intensity"]))
+                lt.AddTranslateOp().Set(Gf.Vec3d(*position))
+        elif "direction" in ld:
+            lt = UsdLux.DistantLight.Define(stage, lp)
+            lt.AddTransformOp().Set(_matrix_to_usd(Gf, _aim(ld["direction"], (0.0, 0.0, 0.0))))
+            lt.CreateAngleAttr(0.0)
+            lt.CreateNormalizeAttr(True)  # normalised: intensity × colour is the irradiance
+            if isinstance(ld.get("irradiance"), dict):
+                peak, colour = _intensity_colour(rgb.emission(ld["irradiance"]))
+                lt.CreateIntensityAttr(peak)
+                lt.CreateColorAttr(Gf.Vec3f(*colour))
         else:
-            # A light type without a UsdLux mapping yet: kept whole in polychrome:light.
-            if "position" in ld:
-                lt = UsdLux.SphereLight.Define(stage, lp)
-                lt.CreateTreatAsPointAttr(True)
-                lt.AddTranslateOp().Set(Gf.Vec3d(*[float(c) for c in ld["position"]]))
-            else:
-                lt = UsdLux.DistantLight.Define(stage, lp)
-            prim = lt.GetPrim()
-            prim.CreateAttribute(A.LIGHT, Sdf.ValueTypeNames.String).Set(json.dumps(ld))
-        prim.CreateAttribute(A.NAME, Sdf.ValueTypeNames.String).Set(str(ld.get("name", "")))
+            lt = UsdLux.SphereLight.Define(stage, lp)
+            lt.CreateIntensityAttr(0.0)
+        prim = lt.GetPrim()
+        power, colour_spec = getattr(light, "power", None), getattr(light, "color", None)
+        if kind in ("point", "spot") and power is not None and colour_spec is not None:
+            from ..spectra import as_spectrum
 
-    if desc.get("world") is not None and desc["world"].get("radiance") is not None:
-        radiance = desc["world"]["radiance"]
+            try:
+                prim.CreateAttribute(A.POWER, Sdf.ValueTypeNames.Double).Set(float(power))
+                prim.CreateAttribute(A.COLOR, Sdf.ValueTypeNames.String).Set(json.dumps(as_spectrum(colour_spec).to_dict()))
+            except (TypeError, ValueError):
+                pass
+        prim.CreateAttribute(A.NAME, Sdf.ValueTypeNames.String).Set(str(ld.get("name", "")))
+        prim.CreateAttribute(A.LIGHT, Sdf.ValueTypeNames.String).Set(json.dumps(ld))
+
+    world_desc = desc.get("world")
+    if world_desc is not None and (world_desc.get("radiance") is not None or world_desc.get("texture") is not None):
         dome = UsdLux.DomeLight.Define(stage, "/World/Lights/World")
-        peak, colour = _intensity_colour(rgb.emission(radiance))
-        dome.CreateIntensityAttr(peak)
-        dome.CreateColorAttr(Gf.Vec3f(*colour))
-        dome.GetPrim().CreateAttribute(A.RADIANCE, Sdf.ValueTypeNames.String).Set(json.dumps(radiance))
-        extra = {k: v for k, v in desc["world"].items() if k != "radiance"}
+        extra = {k: v for k, v in world_desc.items() if k not in ("radiance", "texture")}
+        if world_desc.get("texture") is not None:
+            # Polychrome looks up u = 0.5 − atan2(y, x)/2π after Rz(rotation); a latlong
+            # dome oriented to the Z-up stage (rotateX 90) and turned by φ about Z looks
+            # up u = 0.5 − atan2(x', −y')/2π of Rz(−φ)·d: the same for φ = π/2 − rotation.
+            phi = math.pi / 2 - float(world_desc.get("rotation", 0.0))
+            c, sn = math.cos(phi), math.sin(phi)
+            rz = np.array([[c, -sn, 0, 0], [sn, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]])
+            rx = np.array([[1, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 1]], dtype=np.float64)
+            dome.AddTransformOp().Set(_matrix_to_usd(Gf, rz @ rx))
+            dome.CreateTextureFileAttr(Sdf.AssetPath(texture_file(int(world_desc["texture"]))))
+            dome.CreateTextureFormatAttr(UsdLux.Tokens.latlong)
+            dome.CreateIntensityAttr(float(world_desc.get("strength", 1.0)))
+        else:
+            radiance = world_desc["radiance"]
+            peak, colour = _intensity_colour(rgb.emission(radiance))
+            dome.CreateIntensityAttr(peak)
+            dome.CreateColorAttr(Gf.Vec3f(*colour))
+            dome.GetPrim().CreateAttribute(A.RADIANCE, Sdf.ValueTypeNames.String).Set(json.dumps(radiance))
         if extra:
             dome.GetPrim().CreateAttribute(A.LIGHT, Sdf.ValueTypeNames.String).Set(json.dumps(extra))
 
