@@ -2,7 +2,7 @@
 :class:`polychrome.RenderSettings` (and the CLI flags)."""
 
 import bpy
-from bpy.props import EnumProperty, FloatProperty, IntProperty, PointerProperty
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty
 
 METHOD_ITEMS = [
     ("POLYCHROMATIC", "Polychromatic Rays", "Every ray carries the whole sampled spectrum (the paper's method, default)"),
@@ -32,6 +32,11 @@ class PolychromeRenderSettings(bpy.types.PropertyGroup):
     time_limit: FloatProperty(name="Time Limit", description="Seconds after which no new pass starts (0: none)",
                               default=0.0, min=0.0, unit="TIME_ABSOLUTE")
     uplift: EnumProperty(name="RGB Uplift", items=UPLIFT_ITEMS, default="LINEAR")
+    dispersion_splitting: BoolProperty(
+        name="Dispersion Splitting",
+        description="Polychromatic rays: at the first dispersive surface split into one ray per wavelength "
+                    "instead of choosing one (deterministic mode)",
+        default=False)
     threads: IntProperty(name="Threads", description="Worker threads (0: every core)", default=0, min=0, max=1024)
 
 

@@ -44,6 +44,8 @@ class RENDER_PT_polychrome(bpy.types.Panel):
                 col.label(text=f"{props.method} is not available in this build", icon="ERROR")
         except ImportError:
             col.label(text="the polychrome package is not installed", icon="ERROR")
+        if props.method == "POLYCHROMATIC":
+            col.prop(props, "dispersion_splitting")
         col.prop(props, "wavelength_count")
         col.prop(props, "uplift")
         col = layout.column()

@@ -31,7 +31,8 @@ def test_register_adds_engine_and_unregister_removes_it(tmp_path):
     assert "POLYCHROME" not in r["after"]
     assert "'POLYCHROME'" in r["again"]
     assert r["has_props"]
-    for name in ("method", "direction", "wavelength_count", "samples", "max_bounces", "seed", "time_limit", "uplift", "threads"):
+    for name in ("method", "direction", "wavelength_count", "samples", "max_bounces", "seed", "time_limit", "uplift", "threads",
+                 "dispersion_splitting"):
         assert name in r["names"]
 
 
@@ -376,3 +377,27 @@ def test_emissive_mesh_with_blackbody_matches_cycles(tmp_path):
     assert r["err"] is None and r["warn"] == []
     assert r["mean"] < 2.0, r
     assert r["yb"] == pytest.approx(r["ya"], rel=0.05), r
+
+
+def test_settings_reach_the_core_and_seed_is_deterministic(tmp_path):
+    proc, res = run_bpy(tmp_path, """
+    bpy.ops.wm.read_factory_settings()
+    sc = bpy.context.scene; p = sc.polychrome
+    sc.render.engine = 'POLYCHROME'
+    sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 40, 30, 50
+    p.method = 'MONOCHROMATIC_RAYS'; p.wavelength_count = 16; p.samples = 3; p.max_bounces = 2; p.threads = 1
+    sc.render.image_settings.file_format = 'OPEN_EXR'
+    imgs, stats = [], []
+    for i, seed in enumerate((5, 5, 6)):
+        p.seed = seed
+        sc.render.filepath = os.path.abspath(f's{i}.exr'); bpy.ops.render.render(write_still=True)
+        imgs.append(exr_channels(f's{i}.exr')['R']); stats.append(Engine.last_stats)
+    emit(stats=stats[0], shape=list(imgs[0].shape), same=float(np.abs(imgs[0] - imgs[1]).max()),
+         diff=float(np.abs(imgs[0] - imgs[2]).max()))
+    """)
+    r = check(proc, res)[0]
+    s = r["stats"]
+    assert s["method"] == "MONOCHROMATIC_RAYS" and s["wavelengths"] == 16 and s["samples_per_pixel"] == 3
+    assert s["threads"] == 1
+    assert r["shape"] == [15, 20]                      # resolution × 50 %
+    assert r["same"] == 0.0 and r["diff"] > 0.0
