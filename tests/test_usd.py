@@ -433,7 +433,7 @@ def test_bad_subset_and_instancer_indices_raise_value_error(tmp_path):
 def test_unsupported_prim_warns_once_and_the_render_still_works(tmp_path):
     path = bad_mesh_stage(tmp_path / "extra.usda")
     stage = Usd.Stage.Open(str(path))
-    UsdGeom.Sphere.Define(stage, "/World/ball")
+    UsdGeom.Points.Define(stage, "/World/ball")
     UsdGeom.BasisCurves.Define(stage, "/World/hair")
     UsdLux.CylinderLight.Define(stage, "/World/tube")
     stage.Save()
@@ -640,3 +640,64 @@ def test_foreign_dome_texture_lands_where_usd_puts_it(tmp_path):
     assert towards_minus_y[0] > 20 * towards_minus_y[2] and towards_minus_y[0] > 1.0, towards_minus_y
     assert towards_plus_x[2] > 20 * towards_plus_x[0] and towards_plus_x[2] > 1.0, towards_plus_x
     assert towards_plus_y.max() < 0.05, towards_plus_y
+
+
+def test_intrinsic_shapes_are_tessellated_with_their_size_and_axis(tmp_path):
+    path = tmp_path / "shapes.usda"
+    stage = new_stage(path)
+    UsdGeom.Sphere.Define(stage, "/sphere").CreateRadiusAttr(2.0)
+    UsdGeom.Cube.Define(stage, "/cube").CreateSizeAttr(3.0)
+    cyl = UsdGeom.Cylinder.Define(stage, "/cylinder")
+    cyl.CreateRadiusAttr(0.5)
+    cyl.CreateHeightAttr(4.0)
+    cyl.CreateAxisAttr("X")
+    UsdGeom.Cone.Define(stage, "/cone")
+    top_camera(stage, "/cam", 10.0, 10.0)
+    stage.Save()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        scene = usd.read_stage(path)
+    desc, buffers = scene.description()
+    shapes = {m["name"]: np.asarray(buffers[m["vertices"]]).reshape(-1, 3) for m in desc["meshes"]}
+    tris = {m["name"]: np.asarray(buffers[m["triangles"]]).reshape(-1, 3) for m in desc["meshes"]}
+
+    def volume(name):  # divergence theorem: a closed, outward-wound mesh has positive volume
+        v, t = shapes[name].astype(np.float64), tris[name]
+        return float(np.einsum("ij,ij->i", v[t[:, 0]], np.cross(v[t[:, 1]], v[t[:, 2]])).sum() / 6)
+
+    assert np.allclose(np.linalg.norm(shapes["/sphere"], axis=1), 2.0, atol=1e-6)
+    assert volume("/sphere") == pytest.approx(4 / 3 * math.pi * 8, rel=0.02)
+    assert volume("/cube") == pytest.approx(27.0, rel=1e-6)
+    assert np.allclose(shapes["/cylinder"][:, 0].min(), -2.0) and np.allclose(np.abs(shapes["/cylinder"][:, 1:]).max(), 0.5)
+    assert volume("/cylinder") == pytest.approx(math.pi * 0.25 * 4, rel=0.01)
+    assert volume("/cone") == pytest.approx(math.pi * 1 * 2 / 3, rel=0.01)
+
+
+def test_preview_surface_glass_metal_and_emission_map_to_polychrome_materials(tmp_path):
+    path = tmp_path / "looks.usda"
+    stage = new_stage(path)
+    specs = {
+        "glass": {"opacity": 0.0, "ior": 1.33, "roughness": 0.0},
+        "metal": {"metallic": 1.0, "diffuseColor": Gf.Vec3f(0.9, 0.6, 0.2), "roughness": 0.25},
+        "lamp": {"diffuseColor": Gf.Vec3f(0.1, 0.1, 0.1), "emissiveColor": Gf.Vec3f(2.0, 1.0, 0.5)},
+    }
+    for name, inputs in specs.items():
+        mat = UsdShade.Material.Define(stage, f"/Looks/{name}")
+        sh = UsdShade.Shader.Define(stage, f"/Looks/{name}/s")
+        sh.CreateIdAttr("UsdPreviewSurface")
+        for key, value in inputs.items():
+            sh.CreateInput(key, Sdf.ValueTypeNames.Color3f if isinstance(value, Gf.Vec3f) else Sdf.ValueTypeNames.Float).Set(value)
+        mat.CreateSurfaceOutput().ConnectToSource(sh.ConnectableAPI(), "surface")
+        floor_mesh(stage, f"/{name}", 1.0, mat)
+    top_camera(stage, "/cam", 2.0, 2.0)
+    stage.Save()
+    scene = usd.read_stage(path)
+    by_name = {m.name: m for m in scene.materials}
+    glass = by_name["/Looks/glass"].to_dict()["bsdf"]
+    assert glass == {"type": "dielectric", "ior": {"type": "constant", "ior": pytest.approx(1.33)}, "roughness": 0.0}
+    metal = by_name["/Looks/metal"].to_dict()["bsdf"]
+    assert metal["type"] == "glossy" and metal["roughness"] == 0.25
+    assert metal["reflectance"]["rgb"] == pytest.approx([0.9, 0.6, 0.2])
+    lamp = by_name["/Looks/lamp"].to_dict()
+    assert lamp["bsdf"]["reflectance"]["rgb"] == pytest.approx([0.1, 0.1, 0.1])
+    assert lamp["emission"]["rgb"] == pytest.approx([2.0, 1.0, 0.5])

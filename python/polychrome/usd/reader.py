@@ -24,6 +24,8 @@ import numpy as np
 from ..scene import Material
 from . import attributes as A
 
+#: Tessellation of the intrinsic shapes (Sphere, Cylinder, Cone).
+GPRIM_RINGS, GPRIM_SEGMENTS = 24, 48
 #: Segments of the polygon standing in for a DiskLight.
 DISK_SEGMENTS = 32
 #: UsdPreviewSurface's fallback diffuseColor, used for unbound meshes without displayColor.
@@ -436,21 +438,23 @@ class _Reader:
             reflectance = self.texture_input(shader, "diffuseColor", prim)
         if reflectance is None:
             reflectance = rgb(*(min(max(c, 0.0), 1.0) for c in diffuse))
+        rough = min(max(float(roughness), 0.0), 1.0)
         if ior is not None or opacity < 1.0:
-            if hasattr(pc, "Dielectric"):
-                try:
-                    return pc.Dielectric(ior=ior if ior is not None else float(ior_value), name=name)
-                except (TypeError, ValueError):
-                    if ior is not None:
-                        return DescribedMaterial({"name": name, "bsdf": {"type": "dielectric", "ior": ior}})
-            self.warn(f"glass:{self.key_of(prim)}", f"prim {prim.GetPath()}: transparency/ior is not supported by this polychrome; rendered as diffuse")
-        elif metallic > 0.5:
-            if hasattr(pc, "Conductor"):
-                try:
-                    return pc.Conductor(tuple(diffuse), roughness=float(roughness), name=name)
-                except (TypeError, ValueError):
-                    pass
-            self.warn(f"metal:{self.key_of(prim)}", f"prim {prim.GetPath()}: metallic is not supported by this polychrome; rendered as diffuse")
+            # UsdPreviewSurface transparency: a clear (or rough) glass of index `ior`.
+            if opacity > 0.0 and ior is None:
+                self.warn(f"opacity:{self.key_of(prim)}", f"prim {prim.GetPath()}: partial opacity {opacity:g} is rendered as clear glass")
+            desc = {"name": name, "bsdf": {"type": "dielectric", "ior": ior if ior is not None else {"type": "constant", "ior": float(ior_value)}, "roughness": rough}}
+            if emission is not None:
+                desc["emission"] = emission.to_dict()
+            return material_from_description(desc)
+        if metallic > 0.5:
+            # UsdPreviewSurface metal: Fresnel tinted by the base colour (Blender's Glossy).
+            desc = {"name": name, "bsdf": {"type": "glossy", "reflectance": reflectance.to_dict() if hasattr(reflectance, "kind") else rgb(*diffuse).to_dict(), "roughness": rough}}
+            if emission is not None:
+                desc["emission"] = emission.to_dict()
+            return material_from_description(desc)
+        if metallic > 0.0:
+            self.warn(f"metal:{self.key_of(prim)}", f"prim {prim.GetPath()}: metallic {metallic:g} is rendered as diffuse (below 0.5)")
         return pc.Diffuse(reflectance, emission=emission, name=name)
 
     def read_ior(self, prim) -> dict[str, Any] | None:
@@ -513,8 +517,73 @@ class _Reader:
             return None  # flat data: the geometric normal / no texture variation does the same
         return arr, ("corner" if interp == "faceVarying" else "vertex")
 
+    def gprim_arrays(self, prim) -> dict[str, Any] | None:
+        """Triangles for the intrinsic UsdGeom shapes (Sphere, Cube, Cylinder, Cone, Plane)."""
+        UsdGeom, t = self.UsdGeom, str(prim.GetTypeName())
+        attr = lambda name, default: float(self.get(prim.GetAttribute(name), default))  # noqa: E731
+        normals = None
+        if t == "Sphere":
+            r = attr("radius", 1.0)
+            rings, segments = GPRIM_RINGS, GPRIM_SEGMENTS
+            theta = np.linspace(0.0, math.pi, rings + 1)
+            phi = np.linspace(0.0, 2 * math.pi, segments + 1)
+            th, ph = np.meshgrid(theta, phi, indexing="ij")
+            unit = np.stack([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)], -1).reshape(-1, 3)
+            a = (np.arange(rings)[:, None] * (segments + 1) + np.arange(segments)[None, :]).ravel()
+            b = a + segments + 1
+            tris = np.concatenate([np.stack([a, b, a + 1], 1), np.stack([a + 1, b, b + 1], 1)])
+            verts, normals, dims = unit * r, unit, [r]
+        elif t == "Cube":
+            h = attr("size", 2.0) / 2
+            verts = np.array([[x, y, z] for z in (-h, h) for y in (-h, h) for x in (-h, h)], np.float64)
+            quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+            tris = np.array([[q[0], q[1], q[2]] for q in quads] + [[q[0], q[2], q[3]] for q in quads])
+            dims = [h]
+        elif t in ("Cylinder", "Cone"):
+            r, height = attr("radius", 1.0), attr("height", 2.0)
+            n = GPRIM_SEGMENTS
+            ang = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
+            ring = np.stack([np.cos(ang) * r, np.sin(ang) * r], 1)
+            bottom = np.concatenate([ring, np.full((n, 1), -height / 2)], 1)
+            top = np.concatenate([ring if t == "Cylinder" else ring * 0.0, np.full((n, 1), height / 2)], 1)
+            centres = np.array([[0.0, 0.0, -height / 2], [0.0, 0.0, height / 2]])
+            verts = np.concatenate([bottom, top, centres])
+            k = np.arange(n)
+            k1 = (k + 1) % n
+            side = np.concatenate([np.stack([k, k1, n + k1], 1), np.stack([k, n + k1, n + k], 1)])
+            cap_b = np.stack([np.full(n, 2 * n), k1, k], 1)
+            cap_t = np.stack([np.full(n, 2 * n + 1), n + k, n + k1], 1)
+            tris = np.concatenate([side, cap_b] + ([cap_t] if t == "Cylinder" else []))
+            dims = [r, height]
+        elif t == "Plane":
+            w, length = attr("width", 2.0) / 2, attr("length", 2.0) / 2
+            verts = np.array([[-w, -length, 0], [w, -length, 0], [w, length, 0], [-w, length, 0]], np.float64)
+            tris = np.array([[0, 1, 2], [0, 2, 3]])
+            dims = [w, length]
+        else:
+            return None
+        if not all(math.isfinite(d) for d in dims):
+            raise self.error(prim, "its size is not finite")
+        axis = str(self.get(prim.GetAttribute("axis"), "Z")) if t != "Sphere" and t != "Cube" else "Z"
+        perm = {"X": [2, 0, 1], "Y": [1, 2, 0]}.get(axis)
+        if perm is not None:  # a cyclic permutation keeps the winding: local Z becomes the axis
+            verts = verts[:, perm]
+            normals = None if normals is None else normals[:, perm]
+        return {
+            "name": str(prim.GetPath()),
+            "order": None,
+            "vertices": verts.astype(np.float32),
+            "triangles": tris.astype(np.int64),
+            "normals": None if normals is None else normals.astype(np.float32),
+            "uvs": None,
+            "material_ids": None,
+            "material": self.bound_material(prim),
+        }
+
     def mesh_arrays(self, prim) -> dict[str, Any] | None:
         UsdGeom = self.UsdGeom
+        if prim.GetTypeName() != "Mesh":
+            return self.gprim_arrays(prim)
         mesh = UsdGeom.Mesh(prim)
         where = prim.GetPath()
         points = mesh.GetPointsAttr().Get(self.time)
@@ -686,7 +755,7 @@ class _Reader:
             if len(which) == 0:
                 continue
             for sub in Usd.PrimRange(root, Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)):
-                if sub.GetTypeName() != "Mesh":
+                if sub.GetTypeName() not in ("Mesh", "Sphere", "Cube", "Cylinder", "Cone", "Plane"):
                     if sub.GetTypeName() not in _SILENT_TYPES:
                         self.warn(f"proto:{sub.GetPath()}", f"prim {sub.GetPath()}: {sub.GetTypeName()} inside a PointInstancer prototype is not supported and is skipped")
                     continue
@@ -993,7 +1062,7 @@ class _Reader:
                         or img.ComputePurpose() in (UsdGeom.Tokens.guide, UsdGeom.Tokens.proxy)):
                 it.PruneChildren()
                 continue
-            if t == "Mesh":
+            if t in ("Mesh", "Sphere", "Cube", "Cylinder", "Cone", "Plane"):
                 self.read_mesh(prim)
             elif t == "PointInstancer":
                 self.read_point_instancer(prim)

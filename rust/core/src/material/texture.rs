@@ -53,7 +53,11 @@ fn srgb_table() -> &'static [f32; 256] {
     T.get_or_init(|| {
         std::array::from_fn(|i| {
             let c = i as f64 / 255.0;
-            let l = if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) };
+            let l = if c <= 0.04045 {
+                c / 12.92
+            } else {
+                ((c + 0.055) / 1.055).powf(2.4)
+            };
             l as f32
         })
     })
@@ -66,13 +70,23 @@ pub fn srgb_decode(byte: u8) -> f32 {
 
 fn check_shape(name: &str, width: u32, height: u32, channels: u32, len: usize) -> Result<usize> {
     if width == 0 || height == 0 {
-        return Err(Error::object("texture", name, format!("size {width}×{height} must be at least 1×1")));
+        return Err(Error::object(
+            "texture",
+            name,
+            format!("size {width}×{height} must be at least 1×1"),
+        ));
     }
     if !(channels == 3 || channels == 4) {
-        return Err(Error::object("texture", name, format!("{channels} channels: expected 3 (RGB) or 4 (RGBA)")));
+        return Err(Error::object(
+            "texture",
+            name,
+            format!("{channels} channels: expected 3 (RGB) or 4 (RGBA)"),
+        ));
     }
     let texels = width as usize * height as usize;
-    let expected = texels.checked_mul(channels as usize).ok_or_else(|| Error::object("texture", name, "size overflows"))?;
+    let expected = texels
+        .checked_mul(channels as usize)
+        .ok_or_else(|| Error::object("texture", name, "size overflows"))?;
     if len != expected {
         return Err(Error::object(
             "texture",
@@ -94,36 +108,78 @@ impl Texture {
     pub fn from_desc(d: &TextureDesc, buffers: &[Buffer]) -> Result<Self> {
         let name = d.name.as_str();
         match (d.encoding, buffers.get(d.buffer)) {
-            (TextureEncoding::Linear, Some(Buffer::F32(v))) => Self::from_linear(name, d.width, d.height, d.channels, v, d.wrap),
-            (TextureEncoding::Srgb, Some(Buffer::U8(v))) => Self::from_srgb8(name, d.width, d.height, d.channels, v, d.wrap),
-            (TextureEncoding::Linear, Some(_)) => {
-                Err(Error::object("texture", name, format!("encoding 'linear' needs float32 pixels but buffer {} holds another type", d.buffer)))
+            (TextureEncoding::Linear, Some(Buffer::F32(v))) => {
+                Self::from_linear(name, d.width, d.height, d.channels, v, d.wrap)
             }
-            (TextureEncoding::Srgb, Some(_)) => {
-                Err(Error::object("texture", name, format!("encoding 'srgb' needs uint8 pixels but buffer {} holds another type", d.buffer)))
+            (TextureEncoding::Srgb, Some(Buffer::U8(v))) => {
+                Self::from_srgb8(name, d.width, d.height, d.channels, v, d.wrap)
             }
-            (_, None) => Err(Error::object("texture", name, format!("buffer {} does not exist", d.buffer))),
+            (TextureEncoding::Linear, Some(_)) => Err(Error::object(
+                "texture",
+                name,
+                format!(
+                    "encoding 'linear' needs float32 pixels but buffer {} holds another type",
+                    d.buffer
+                ),
+            )),
+            (TextureEncoding::Srgb, Some(_)) => Err(Error::object(
+                "texture",
+                name,
+                format!(
+                    "encoding 'srgb' needs uint8 pixels but buffer {} holds another type",
+                    d.buffer
+                ),
+            )),
+            (_, None) => Err(Error::object(
+                "texture",
+                name,
+                format!("buffer {} does not exist", d.buffer),
+            )),
         }
     }
 
     /// A texture from linear float pixels (`channels` = 3 or 4, top row first).
     /// Non-finite texels are an error naming the texture and the texel.
-    pub fn from_linear(name: &str, width: u32, height: u32, channels: u32, pixels: &[f32], wrap: Wrap) -> Result<Self> {
+    pub fn from_linear(
+        name: &str,
+        width: u32,
+        height: u32,
+        channels: u32,
+        pixels: &[f32],
+        wrap: Wrap,
+    ) -> Result<Self> {
         let texels = check_shape(name, width, height, channels, pixels.len())?;
         let mut data = Vec::with_capacity(texels * 3);
         for (k, px) in pixels.chunks_exact(channels as usize).enumerate() {
             let rgb = &px[..3];
             if let Some(v) = rgb.iter().find(|v| !v.is_finite()) {
                 let (x, y) = (k % width as usize, k / width as usize);
-                return Err(Error::object("texture", name, format!("texel ({x}, {y}) has the non-finite value {v}")));
+                return Err(Error::object(
+                    "texture",
+                    name,
+                    format!("texel ({x}, {y}) has the non-finite value {v}"),
+                ));
             }
             data.extend_from_slice(rgb);
         }
-        Ok(Self { name: name.into(), width, height, wrap, data: TexelData::Linear(data) })
+        Ok(Self {
+            name: name.into(),
+            width,
+            height,
+            wrap,
+            data: TexelData::Linear(data),
+        })
     }
 
     /// A texture from 8-bit sRGB-encoded pixels (`channels` = 3 or 4, top row first).
-    pub fn from_srgb8(name: &str, width: u32, height: u32, channels: u32, pixels: &[u8], wrap: Wrap) -> Result<Self> {
+    pub fn from_srgb8(
+        name: &str,
+        width: u32,
+        height: u32,
+        channels: u32,
+        pixels: &[u8],
+        wrap: Wrap,
+    ) -> Result<Self> {
         let texels = check_shape(name, width, height, channels, pixels.len())?;
         let data = if channels == 3 {
             pixels.to_vec()
@@ -134,7 +190,13 @@ impl Texture {
             }
             d
         };
-        Ok(Self { name: name.into(), width, height, wrap, data: TexelData::Srgb8(data) })
+        Ok(Self {
+            name: name.into(),
+            width,
+            height,
+            wrap,
+            data: TexelData::Srgb8(data),
+        })
     }
 
     /// Bytes of texel storage held (the raw RGB size).
@@ -158,14 +220,32 @@ impl Texture {
         }
     }
 
-    /// Maps an integer texel coordinate through a wrap mode; None = outside (black).
+    /// Along one axis of `n` texels: the two texel indices a bilinear lookup at `t`
+    /// blends (None = outside the image under CLIP: black) and the weight of the second.
     #[inline]
-    fn wrap_index(i: i64, n: u32, wrap: Wrap) -> Option<usize> {
-        let n = n as i64;
+    fn axis(t: f32, n: u32, wrap: Wrap) -> (Option<usize>, Option<usize>, f32) {
+        let nf = n as f32;
+        let x = t * nf - 0.5;
+        let x0 = x.floor();
+        let f = x - x0;
+        let last = n as i64 - 1;
         match wrap {
-            Wrap::Repeat => Some(i.rem_euclid(n) as usize),
-            Wrap::Extend => Some(i.clamp(0, n - 1) as usize),
-            Wrap::Clip => (0..n).contains(&i).then_some(i as usize),
+            Wrap::Repeat => {
+                // Float modulo (no integer division); the clamp absorbs rounding.
+                let i = ((x0 - (x0 / nf).floor() * nf) as i64).clamp(0, last);
+                let j = if i == last { 0 } else { i + 1 };
+                (Some(i as usize), Some(j as usize), f)
+            }
+            Wrap::Extend => {
+                let i = (x0.clamp(-1.0, nf) as i64).clamp(0, last);
+                let j = ((x0.clamp(-1.0, nf) as i64) + 1).clamp(0, last);
+                (Some(i as usize), Some(j as usize), f)
+            }
+            Wrap::Clip => {
+                let i = x0.clamp(-2.0, nf + 1.0) as i64;
+                let inside = |k: i64| (0..=last).contains(&k).then_some(k as usize);
+                (inside(i), inside(i + 1), f)
+            }
         }
     }
 
@@ -181,20 +261,20 @@ impl Texture {
         if !(uv.x.is_finite() && uv.y.is_finite()) {
             return [0.0; 3];
         }
-        // Continuous texel coordinates with texel centres at integers (row 0 = top).
-        let x = uv.x as f64 * self.width as f64 - 0.5;
-        let y = (1.0 - uv.y as f64) * self.height as f64 - 0.5;
-        let (x0, y0) = (x.floor(), y.floor());
-        let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
-        // Clamp far-away coordinates so the integer conversion cannot overflow.
-        let (x0, y0) = (x0.clamp(-4e15, 4e15) as i64, y0.clamp(-4e15, 4e15) as i64);
-        let xs = [Self::wrap_index(x0, self.width, wrap_u), Self::wrap_index(x0 + 1, self.width, wrap_u)];
-        let ys = [Self::wrap_index(y0, self.height, wrap_v), Self::wrap_index(y0 + 1, self.height, wrap_v)];
+        // Texel centres at integers; rows count from the top (v = 1).
+        let (x0, x1, fx) = Self::axis(uv.x, self.width, wrap_u);
+        let (y0, y1, fy) = Self::axis(1.0 - uv.y, self.height, wrap_v);
+        let (xs, ys) = ([x0, x1], [y0, y1]);
         let at = |xi: Option<usize>, yi: Option<usize>| match (xi, yi) {
             (Some(a), Some(b)) => self.texel(a, b),
             _ => [0.0; 3],
         };
-        let (c00, c10, c01, c11) = (at(xs[0], ys[0]), at(xs[1], ys[0]), at(xs[0], ys[1]), at(xs[1], ys[1]));
+        let (c00, c10, c01, c11) = (
+            at(xs[0], ys[0]),
+            at(xs[1], ys[0]),
+            at(xs[0], ys[1]),
+            at(xs[1], ys[1]),
+        );
         std::array::from_fn(|c| lerp(lerp(c00[c], c10[c], fx), lerp(c01[c], c11[c], fx), fy))
     }
 }
@@ -206,18 +286,25 @@ mod tests {
     #[test]
     fn bilinear_hits_texel_centres_and_midpoints() {
         // 2×1 image: left texel red 1, right texel red 3.
-        let t = Texture::from_linear("t", 2, 1, 3, &[1.0, 0.0, 0.0, 3.0, 0.0, 0.0], Wrap::Extend).unwrap();
+        let t = Texture::from_linear("t", 2, 1, 3, &[1.0, 0.0, 0.0, 3.0, 0.0, 0.0], Wrap::Extend)
+            .unwrap();
         assert_eq!(t.lookup(Vec2::new(0.25, 0.5))[0], 1.0);
         assert_eq!(t.lookup(Vec2::new(0.75, 0.5))[0], 3.0);
         assert!((t.lookup(Vec2::new(0.5, 0.5))[0] - 2.0).abs() < 1e-6);
         // Extend: beyond the edge stays at the edge texel.
         assert_eq!(t.lookup(Vec2::new(-3.0, 0.5))[0], 1.0);
         // Repeat: u = 0 is halfway between the last and the first texel.
-        let r = Texture { wrap: Wrap::Repeat, ..t.clone() };
+        let r = Texture {
+            wrap: Wrap::Repeat,
+            ..t.clone()
+        };
         assert!((r.lookup(Vec2::new(0.0, 0.5))[0] - 2.0).abs() < 1e-6);
         assert!((r.lookup(Vec2::new(1.25, 0.5))[0] - 1.0).abs() < 1e-6);
         // Clip: black outside, half-faded at the edge.
-        let c = Texture { wrap: Wrap::Clip, ..t };
+        let c = Texture {
+            wrap: Wrap::Clip,
+            ..t
+        };
         assert_eq!(c.lookup(Vec2::new(-1.0, 0.5)), [0.0; 3]);
         assert!((c.lookup(Vec2::new(0.0, 0.5))[0] - 0.5).abs() < 1e-6);
     }
@@ -225,7 +312,8 @@ mod tests {
     #[test]
     fn top_row_is_v_one() {
         // 1×2: top texel 1, bottom texel 0.
-        let t = Texture::from_linear("t", 1, 2, 3, &[1.0, 1.0, 1.0, 0.0, 0.0, 0.0], Wrap::Extend).unwrap();
+        let t = Texture::from_linear("t", 1, 2, 3, &[1.0, 1.0, 1.0, 0.0, 0.0, 0.0], Wrap::Extend)
+            .unwrap();
         assert_eq!(t.lookup(Vec2::new(0.5, 0.75))[1], 1.0);
         assert_eq!(t.lookup(Vec2::new(0.5, 0.25))[1], 0.0);
     }
@@ -242,9 +330,13 @@ mod tests {
 
     #[test]
     fn bad_textures_are_reported_by_name() {
-        let e = Texture::from_linear("wood", 2, 2, 3, &[0.0; 11], Wrap::Repeat).unwrap_err().to_string();
+        let e = Texture::from_linear("wood", 2, 2, 3, &[0.0; 11], Wrap::Repeat)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("wood") && e.contains("12"), "{e}");
-        let e = Texture::from_linear("sky", 1, 1, 3, &[0.0, f32::NAN, 0.0], Wrap::Repeat).unwrap_err().to_string();
+        let e = Texture::from_linear("sky", 1, 1, 3, &[0.0, f32::NAN, 0.0], Wrap::Repeat)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("sky") && e.contains("non-finite"), "{e}");
         assert!(Texture::from_srgb8("x", 1, 1, 2, &[0, 0], Wrap::Repeat).is_err());
     }

@@ -13,7 +13,7 @@ use crate::geometry::{Instance, Mesh, Ray};
 use crate::light::{AreaTriangle, ImageEnvironment, Light, PointLight, UniformEnvironment};
 use crate::material::{Black, Bsdf, Diffuse, Material, SpectralParam, Texture};
 use crate::sampling::Distribution1D;
-use crate::spectrum::named::{evaluate_for, SpectrumKind, SpectrumRole};
+use crate::spectrum::named::{evaluate_for, RgbToSpectrum, SpectrumKind, SpectrumRole};
 use std::sync::Arc;
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 use crate::{Error, Result};
@@ -85,7 +85,9 @@ pub struct Scene {
     pub grid: WavelengthGrid,
     pub observer: Observer,
     pub space: RgbSpace,
-    pub uplift: Uplift,
+    /// The RGB → spectrum map (eq. 10) for this grid; None when the grid is too coarse
+    /// for one, in which case any RGB data in the scene is reported as an error.
+    pub uplift: Option<Arc<Uplift>>,
     pub camera: Camera,
     pub meshes: Vec<Mesh>,
     pub instances: Vec<Instance>,
@@ -102,6 +104,41 @@ pub struct Scene {
     /// Centre and radius of a sphere bounding all geometry.
     pub bounds_center: Vec3A,
     pub bounds_radius: f32,
+}
+
+/// The RGB → spectrum map while building: where the grid has none, the first RGB
+/// colour evaluated becomes an error naming its object.
+struct BuildUplift<'a> {
+    uplift: std::result::Result<&'a Arc<Uplift>, String>,
+    n: usize,
+    used_missing: std::cell::Cell<bool>,
+}
+
+impl<'a> BuildUplift<'a> {
+    fn new(uplift: std::result::Result<&'a Arc<Uplift>, &Error>, n: usize) -> Self {
+        Self { uplift: uplift.map_err(|e| e.to_string()), n, used_missing: std::cell::Cell::new(false) }
+    }
+
+    fn evaluate(&self, d: &crate::spectrum::SpectrumDesc, grid: &WavelengthGrid, role: SpectrumRole, kind: &'static str, name: &str, what: &str) -> Result<Vec<f32>> {
+        let v = evaluate_for(d, grid, role, self, kind, name, what)?;
+        if self.used_missing.replace(false) {
+            let why = self.uplift.as_ref().err().cloned().unwrap_or_default();
+            return Err(Error::object(kind, name, format!("{what}: RGB colours cannot be used on this wavelength grid ({why})")));
+        }
+        Ok(v)
+    }
+}
+
+impl RgbToSpectrum for BuildUplift<'_> {
+    fn convert(&self, rgb: [f32; 3], role: SpectrumRole) -> Vec<f32> {
+        match self.uplift {
+            Ok(u) => u.convert(rgb, role),
+            Err(_) => {
+                self.used_missing.set(true);
+                vec![0.0; self.n]
+            }
+        }
+    }
 }
 
 fn buffer_f32<'a>(buffers: &'a [Buffer], i: usize, mesh: &str, what: &str) -> Result<&'a [f32]> {
@@ -126,8 +163,9 @@ impl Scene {
     pub fn build(desc: &SceneDesc, buffers: &[Buffer], opts: &BuildOptions) -> Result<Self> {
         let grid = opts.grid.clone();
         let n = grid.len();
-        let uplift = Uplift::new(&grid, &opts.space, opts.uplift)?;
-        let shared_uplift = Some(Arc::new(uplift.clone()));
+        let uplift_result = Uplift::new(&grid, &opts.space, opts.uplift).map(Arc::new);
+        let rgb = BuildUplift::new(uplift_result.as_ref(), n);
+        let uplift = uplift_result.as_ref().ok().cloned();
         let camera = Camera::new(&desc.camera, opts.width, opts.height)?;
 
         // Textures: kept RGB, converted at each hit (SPEC §4).
@@ -137,13 +175,13 @@ impl Scene {
         let mut materials = Vec::with_capacity(desc.materials.len().max(1));
         for m in &desc.materials {
             let spectrum = |d, role, what| -> Result<SampledSpectrum> {
-                Ok(SampledSpectrum::from_slice(&evaluate_for(d, &grid, role, &uplift, "material", &m.name, what)?))
+                Ok(SampledSpectrum::from_slice(&rgb.evaluate(d, &grid, role, "material", &m.name, what)?))
             };
             let bsdf: Box<dyn Bsdf> = match &m.bsdf {
                 BsdfDesc::Diffuse { reflectance } if matches!(reflectance.kind, SpectrumKind::Texture { .. }) => {
                     let SpectrumKind::Texture { texture: t } = reflectance.kind else { unreachable!() };
                     let texture = textures.get(t).ok_or_else(|| Error::object("material", &m.name, format!("reflectance: texture {t} does not exist ({} textures)", textures.len())))?;
-                    let Some(up) = &shared_uplift else {
+                    let Some(up) = &uplift else {
                         return Err(Error::object("material", &m.name, format!("reflectance: texture '{}' cannot be used on this wavelength grid (no RGB → spectrum map)", texture.name)));
                     };
                     let scale = reflectance.scale;
@@ -250,15 +288,15 @@ impl Scene {
                     if !position.is_finite() {
                         return Err(Error::object("light", name, "position is not finite"));
                     }
-                    let intensity = evaluate_for(intensity, &grid, SpectrumRole::Illuminant, &uplift, "light", name, "intensity")?;
+                    let intensity = rgb.evaluate(intensity, &grid, SpectrumRole::Illuminant, "light", name, "intensity")?;
                     lights.push(Box::new(PointLight { position, intensity: SampledSpectrum::from_slice(&intensity) }));
                 }
                 LightDesc::Spot { name, position, direction, intensity, spot_size, spot_blend } => {
-                    let intensity = evaluate_for(intensity, &grid, SpectrumRole::Illuminant, &uplift, "light", name, "intensity")?;
+                    let intensity = rgb.evaluate(intensity, &grid, SpectrumRole::Illuminant, "light", name, "intensity")?;
                     lights.push(optics::build_spot(name, *position, *direction, SampledSpectrum::from_slice(&intensity), *spot_size, *spot_blend)?);
                 }
                 LightDesc::Distant { name, direction, irradiance } => {
-                    let irradiance = evaluate_for(irradiance, &grid, SpectrumRole::Illuminant, &uplift, "light", name, "irradiance")?;
+                    let irradiance = rgb.evaluate(irradiance, &grid, SpectrumRole::Illuminant, "light", name, "irradiance")?;
                     lights.push(optics::build_distant(name, *direction, SampledSpectrum::from_slice(&irradiance), bounds_center, bounds_radius)?);
                 }
             }
@@ -268,7 +306,7 @@ impl Scene {
             Some(w) => match w.texture {
                 Some(t) => {
                     let texture = textures.get(t).ok_or_else(|| Error::object("world", "World", format!("texture {t} does not exist ({} textures)", textures.len())))?;
-                    let Some(up) = &shared_uplift else {
+                    let Some(up) = &uplift else {
                         return Err(Error::object("world", "World", format!("texture '{}': RGB images cannot be used on this wavelength grid (no RGB → spectrum map)", texture.name)));
                     };
                     if !(w.strength.is_finite() && w.strength >= 0.0) || !w.rotation.is_finite() {
@@ -284,7 +322,7 @@ impl Scene {
                 }
                 None => {
                     let d = w.radiance.clone().unwrap_or_else(|| crate::spectrum::SpectrumDesc::constant(0.0));
-                    let radiance = SampledSpectrum::from_slice(&evaluate_for(&d, &grid, SpectrumRole::Illuminant, &uplift, "world", "World", "radiance")?);
+                    let radiance = SampledSpectrum::from_slice(&rgb.evaluate(&d, &grid, SpectrumRole::Illuminant, "world", "World", "radiance")?);
                     if radiance.is_black() {
                         None
                     } else {
