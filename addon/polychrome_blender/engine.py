@@ -20,6 +20,8 @@ def settings_from_scene(pc, props, width, height):
     values = dict(width=width, height=height, samples=props.samples, method=props.method,
                   wavelength_count=props.wavelength_count, max_bounces=props.max_bounces, seed=props.seed,
                   threads=props.threads, time_limit=props.time_limit, uplift=props.uplift)
+    if "spectral_output" in fields:
+        values["spectral_output"] = bool(getattr(props, "spectral_output", False))
     if "dispersion_splitting" in fields:
         values["dispersion_splitting"] = bool(props.dispersion_splitting)
     if "direction" in fields:

@@ -1,4 +1,5 @@
-"""Render passes: Combined (RGBA), Depth (Z), Normal (XYZ, world space) and Albedo (RGB).
+"""Render passes: Combined (RGBA), Depth (Z), Normal (XYZ, world space), Albedo (RGB) and,
+with ``scene.polychrome.spectral_output``, one 1-channel pass per wavelength.
 
 Depth and Normal follow the view layer's ``use_pass_z`` / ``use_pass_normal``; Albedo is
 always written. Polychrome's arrays have row 0 at the top; Blender's at the bottom.
@@ -9,6 +10,13 @@ import numpy as np
 NO_HIT_DEPTH = 1.0e10  # what Cycles writes where nothing was hit
 
 
+def spectral_pass_names(count, lo=380.0, hi=780.0):
+    """Names of the per-wavelength passes of a uniform grid (as the core builds it)."""
+    if count < 2:
+        return []
+    return [f"Spectral {lo + (hi - lo) * i / (count - 1):.1f} nm" for i in range(count)]
+
+
 def register_passes(engine, scene, renderlayer):
     engine.register_pass(scene, renderlayer, "Combined", 4, "RGBA", "COLOR")
     if renderlayer.use_pass_z:
@@ -16,6 +24,10 @@ def register_passes(engine, scene, renderlayer):
     if renderlayer.use_pass_normal:
         engine.register_pass(scene, renderlayer, "Normal", 3, "XYZ", "VECTOR")
     engine.register_pass(scene, renderlayer, "Albedo", 3, "RGB", "COLOR")
+    props = getattr(scene, "polychrome", None)
+    if props is not None and props.spectral_output:
+        for name in spectral_pass_names(props.wavelength_count):
+            engine.register_pass(scene, renderlayer, name, 1, "V", "VALUE")
 
 
 def pass_arrays(result, width, height):
@@ -34,6 +46,11 @@ def pass_arrays(result, width, height):
         "Normal": np.asarray(result.normal, np.float32).reshape(height, width, 3),
         "Albedo": np.asarray(result.albedo, np.float32).reshape(height, width, 3),
     }
+    spectral = getattr(result, "spectral", None)
+    if spectral is not None:
+        spectral = np.asarray(spectral, np.float32).reshape(height, width, -1)
+        for i, name in enumerate(spectral_pass_names(spectral.shape[2])):
+            out[name] = spectral[:, :, i:i + 1]
     for k, v in out.items():
         out[k] = np.nan_to_num(v[::-1], nan=0.0, posinf=0.0, neginf=0.0) if k != "Depth" else v[::-1]
     return out

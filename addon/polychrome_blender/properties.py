@@ -37,6 +37,11 @@ class PolychromeRenderSettings(bpy.types.PropertyGroup):
         description="Polychromatic rays: at the first dispersive surface split into one ray per wavelength "
                     "instead of choosing one (deterministic mode)",
         default=False)
+    spectral_output: BoolProperty(
+        name="Spectral Passes",
+        description="Also write one pass per wavelength ('Spectral 550.0 nm', spectral radiance) "
+                    "into the render result and multilayer EXR",
+        default=False)
     threads: IntProperty(name="Threads", description="Worker threads (0: every core)", default=0, min=0, max=1024)
 
 

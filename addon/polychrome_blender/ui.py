@@ -48,6 +48,7 @@ class RENDER_PT_polychrome(bpy.types.Panel):
             col.prop(props, "dispersion_splitting")
         col.prop(props, "wavelength_count")
         col.prop(props, "uplift")
+        col.prop(props, "spectral_output")
         col = layout.column()
         col.prop(props, "samples")
         col.prop(props, "time_limit")

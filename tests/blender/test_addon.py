@@ -401,3 +401,38 @@ def test_settings_reach_the_core_and_seed_is_deterministic(tmp_path):
     assert s["threads"] == 1
     assert r["shape"] == [15, 20]                      # resolution × 50 %
     assert r["same"] == 0.0 and r["diff"] > 0.0
+
+
+def test_spectral_passes_integrate_to_the_combined_pass(tmp_path):
+    """With spectral_output, the multilayer EXR holds one pass per wavelength; integrating
+    them with colour-science's CIE 1931 CMFs (trapezoid weights, normalised by ∫ȳ as the
+    core does) gives the Combined pass's luminance."""
+    proc, res = run_bpy(tmp_path, """
+    bpy.ops.wm.read_factory_settings()
+    sc = bpy.context.scene; p = sc.polychrome
+    sc.render.engine = 'POLYCHROME'
+    sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 24, 18, 100
+    p.samples = 4; p.wavelength_count = 21; p.spectral_output = True
+    sc.render.image_settings.file_format = 'OPEN_EXR_MULTILAYER'; sc.render.filepath = os.path.abspath('spec.exr')
+    bpy.ops.render.render(write_still=True)
+    ch = exr_channels('spec.exr')
+    names = sorted((k for k in ch if k.startswith('ViewLayer.Spectral ')), key=lambda k: float(k.split()[1]))
+    emit(err=Engine.last_error, names=names, bands=[ch[k].tolist() for k in names],
+         rgb=[ch['ViewLayer.Combined.' + c].tolist() for c in 'RGB'])
+    """)
+    r = check(proc, res)[0]
+    assert r["err"] is None
+    assert len(r["names"]) == 21 and r["names"][0] == "ViewLayer.Spectral 380.0 nm.V" and r["names"][-1] == "ViewLayer.Spectral 780.0 nm.V"
+    colour = pytest.importorskip("colour")
+    import numpy as np
+
+    lam = np.linspace(380.0, 780.0, 21)
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
+    ybar = np.array([cmfs[l][1] for l in lam])
+    w = np.full(21, lam[1] - lam[0]); w[0] = w[-1] = (lam[1] - lam[0]) / 2   # eq. 6 weights
+    bands = np.array(r["bands"])                                               # (21, H, W)
+    y_spec = np.tensordot(ybar * w, bands, axes=1) / np.sum(ybar * w)
+    rgb = np.array(r["rgb"])
+    y_rgb = 0.2126729 * rgb[0] + 0.7151522 * rgb[1] + 0.0721750 * rgb[2]
+    assert y_rgb.mean() > 0
+    assert np.allclose(y_spec, y_rgb, rtol=0.02, atol=1e-4), float(np.abs(y_spec - y_rgb).max())
