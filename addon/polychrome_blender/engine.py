@@ -124,15 +124,16 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
         export_time = time.perf_counter() - t0
         if self.test_break():
             return None
-        pixels = width * height
         method = props.method.replace("_", " ").title()
+        if props.direction != "BACKWARD":
+            method += f" {props.direction.title()}"
         start = time.perf_counter()
 
         def progress(done, total):
             try:
                 if total:
                     self.update_progress(min(1.0, done / total))
-                spp = done / pixels if pixels else 0
+                spp = settings.samples * done / total if total else 0.0  # totals differ per method
                 self.update_stats("", f"Polychrome | {method} | {settings.wavelength_count} wavelengths | "
                                       f"sample {spp:.1f}/{settings.samples} | {time.perf_counter() - start:.1f} s")
                 hook = cls.test_break_hook
