@@ -216,3 +216,24 @@ def test_world_settings_are_checked():
         scene.set_world(texture=np.zeros((2, 2, 3)))
     with pytest.raises(ValueError, match="strength"):
         scene.set_world(texture=pc.Texture.from_array(np.zeros((1, 1, 3))), strength=float("nan"))
+
+
+def test_description_lists_each_texture_once_with_its_buffer():
+    tex = pc.Texture.from_array(np.zeros((2, 3, 4), np.float32), wrap="extend", name="shared")
+    byte = pc.Texture.from_array(np.zeros((1, 1, 3), np.uint8), encoding="srgb")
+    scene = pc.Scene()
+    v, t, uv = sphere(4, 8)
+    scene.add_mesh("a", v, t, uvs=uv, material=pc.Diffuse(tex))
+    scene.add_mesh("b", v, t, uvs=uv, material=pc.Diffuse(byte))
+    scene.add_mesh("c", v, t, uvs=uv, material=pc.Diffuse(tex))
+    scene.set_world(texture=tex, strength=2.0, rotation=0.5, importance_sampling=False)
+    desc, buffers = scene.description()
+    json.dumps(desc)  # every Texture object was replaced by an index
+    assert [d["name"] for d in desc["textures"]] == ["shared", "Texture"]
+    first = desc["textures"][0]
+    assert (first["width"], first["height"], first["channels"], first["wrap"], first["encoding"]) == (3, 2, 3, "EXTEND", "linear")
+    assert buffers[first["buffer"]].dtype == np.float32 and buffers[first["buffer"]].size == 18
+    assert buffers[desc["textures"][1]["buffer"]].dtype == np.uint8
+    refs = [m["bsdf"]["reflectance"]["texture"] for m in desc["materials"]]
+    assert refs == [0, 1, 0]
+    assert desc["world"] == {"texture": 0, "strength": 2.0, "rotation": 0.5, "importance_sampling": False}

@@ -161,6 +161,9 @@ impl<T: Light + ?Sized> Light for Arc<T> {
     fn pdf_li(&self, p: Vec3A, wi: Vec3A, distance: f32) -> f32 {
         (**self).pdf_li(p, wi, distance)
     }
+    fn sample_le(&self, u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<super::EmissionSample> {
+        (**self).sample_le(u_pos, u_dir, le)
+    }
 }
 
 const LUMA: [f32; 3] = [0.2126, 0.7152, 0.0722];
