@@ -701,3 +701,32 @@ def test_preview_surface_glass_metal_and_emission_map_to_polychrome_materials(tm
     lamp = by_name["/Looks/lamp"].to_dict()
     assert lamp["bsdf"]["reflectance"]["rgb"] == pytest.approx([0.1, 0.1, 0.1])
     assert lamp["emission"]["rgb"] == pytest.approx([2.0, 1.0, 0.5])
+
+
+@pytest.mark.parametrize(
+    "edit, prim, problem",
+    [
+        (lambda st: UsdGeom.Xformable(st.GetPrimAtPath("/World/broken")).AddTranslateOp().Set(Gf.Vec3d(0, float("nan"), 0)), "/World/broken", "transform is not finite"),
+        (lambda st: UsdLux.SphereLight.Define(st, "/World/bulb").CreateIntensityAttr(float("inf")), "/World/bulb", "not finite"),
+        (lambda st: UsdGeom.Camera(st.GetPrimAtPath("/World/cam")).CreateHorizontalApertureAttr(float("nan")), "/World/cam", "not finite"),
+        (lambda st: st.GetPrimAtPath("/World/cam").CreateAttribute("polychrome:camera", Sdf.ValueTypeNames.String).Set("{oops"), "/World/cam", "not valid JSON"),
+        (lambda st: UsdGeom.Mesh(st.GetPrimAtPath("/World/broken")).CreateNormalsAttr([(0, 0, 1), (0, 0, float("nan")), (0, 0, 1)]), "/World/broken", r"normals\[1\] is not finite"),
+    ],
+)
+def test_non_finite_values_and_bad_json_raise_value_error_naming_the_prim(tmp_path, edit, prim, problem):
+    path = bad_mesh_stage(tmp_path / "odd.usda")
+    stage = Usd.Stage.Open(str(path))
+    edit(stage)
+    stage.Save()
+    with pytest.raises(ValueError, match=rf"odd\.usda: prim {prim}: .*{problem}"):
+        usd.read_stage(path)
+
+
+def test_stage_without_camera_warns_and_uses_the_default_camera(tmp_path):
+    path = tmp_path / "nocam.usda"
+    stage = new_stage(path)
+    floor_mesh(stage, "/floor", 1.0)
+    stage.Save()
+    with pytest.warns(UserWarning, match="no UsdGeom.Camera"):
+        scene = usd.read_stage(path)
+    assert scene.camera.to_dict() == pc.Camera().to_dict()
