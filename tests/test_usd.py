@@ -730,3 +730,15 @@ def test_stage_without_camera_warns_and_uses_the_default_camera(tmp_path):
     with pytest.warns(UserWarning, match="no UsdGeom.Camera"):
         scene = usd.read_stage(path)
     assert scene.camera.to_dict() == pc.Camera().to_dict()
+
+
+def test_every_render_setting_but_threads_round_trips(tmp_path):
+    import dataclasses
+
+    scene = pc.Scene()
+    scene.add_mesh("t", [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
+    settings = pc.RenderSettings(width=10, height=7, samples=3, wavelengths=[400, 450, 500, 550, 600, 650, 700], uplift="SMOOTH",
+                                 spectral_output=True, time_limit=2.5, seed=11, max_bounces=2, threads=3)
+    path = usd.write_stage(scene, tmp_path / "settings.usdc", settings)
+    back = pc.RenderSettings(**usd.read_settings(path))
+    assert back == dataclasses.replace(settings, threads=0)

@@ -37,6 +37,8 @@ _XYZ_TO_REC709 = np.array(
         [0.0556434, -0.2040259, 1.0572252],
     ]
 )
+#: Wavelength grid of the RGB previews written for other tools (380..780 nm every 5 nm).
+PREVIEW_GRID = json.dumps({"wavelength_count": 81})
 #: Radius given to point lights so that renderers without point lights still see them.
 POINT_LIGHT_RADIUS = 0.05
 
@@ -238,12 +240,12 @@ def write_stage(scene, path, settings=None) -> Path:
     if path.suffix.lower() not in (".usd", ".usda", ".usdc"):
         raise ValueError(f"{path}: a USD stage must end in .usd, .usda or .usdc")
     settings = settings or RenderSettings()
-    settings_json = settings.to_json()
+    settings.to_json()  # validates the settings (ValueError naming a bad one)
     desc, buffers = scene.description()
     for key, value in desc.items():
         if key not in ("camera", "materials", "meshes", "instances", "lights", "world", "textures") and value:
             warnings.warn(f"{path}: the scene's '{key}' cannot be written to USD yet and is left out", stacklevel=2)
-    rgb = _Rgb(settings_json)
+    rgb = _Rgb(PREVIEW_GRID)  # preview colours do not depend on the render's grid
 
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
