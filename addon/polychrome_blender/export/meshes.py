@@ -5,15 +5,41 @@ their corners disagree (sharp edges, UV seams)."""
 import numpy as np
 
 
-def _corner_keys(cv, cn, uv):
-    """Unique (vertex, normal, uv) corners → (first corner of each new vertex, inverse)."""
-    cols = [cv.view(np.int32)[:, None], np.ascontiguousarray(cn, np.float32).view(np.int32)]
-    if uv is not None:
-        cols.append(np.ascontiguousarray(uv, np.float32).view(np.int32))
-    keys = np.ascontiguousarray(np.concatenate(cols, axis=1))
+def _unique_rows(keys):
+    """np.unique over the rows of a 2-D int32 array: (first index of each row, inverse)."""
+    keys = np.ascontiguousarray(keys)
     row = keys.view(np.dtype((np.void, keys.dtype.itemsize * keys.shape[1]))).ravel()
     _, first, inverse = np.unique(row, return_index=True, return_inverse=True)
     return first, inverse.ravel()
+
+
+def _corner_keys(cv, cn, uv, nv):
+    """Merges corners with equal (vertex, normal, uv) into output vertices.
+
+    Returns (first corner of each output vertex, output vertex of each corner). Fast path:
+    a corner equal to its vertex's representative corner maps to that vertex; only the
+    others (sharp edges, UV seams, flat faces) go through a sort."""
+    cols = [np.ascontiguousarray(cn, np.float32).view(np.int32)]
+    if uv is not None:
+        cols.append(np.ascontiguousarray(uv, np.float32).view(np.int32))
+    attrs = np.concatenate(cols, axis=1)
+    nl = len(cv)
+    rep = np.full(nv, -1, np.int64)
+    rep[cv] = np.arange(nl)  # one corner per used vertex (the last one written)
+    same = np.all(attrs == attrs[rep[cv]], axis=1)
+    used = rep >= 0
+    base_id = np.cumsum(used) - 1
+    n_base = int(used.sum())
+    out = np.empty(nl, np.int64)
+    out[same] = base_id[cv[same]]
+    first = rep[used]
+    diff = np.nonzero(~same)[0]
+    if diff.size:
+        keys = np.concatenate([cv[diff].astype(np.int32)[:, None], attrs[diff]], axis=1)
+        f, inv = _unique_rows(keys)
+        out[diff] = n_base + inv
+        first = np.concatenate([first, diff[f]])
+    return first, out
 
 
 def mesh_arrays(ob, name):
@@ -50,7 +76,7 @@ def mesh_arrays(ob, name):
             me.uv_layers.active.uv.foreach_get("vector", uv)
             uv = uv.reshape(-1, 2)
             uv[~np.isfinite(uv)] = 0.0
-        first, inverse = _corner_keys(cv, cn, uv)
+        first, inverse = _corner_keys(cv, cn, uv, nv)
         vertices = co[cv[first]]
         normals = cn[first]
         uvs = None if uv is None else uv[first]
