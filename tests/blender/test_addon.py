@@ -436,3 +436,35 @@ def test_spectral_passes_integrate_to_the_combined_pass(tmp_path):
     y_rgb = 0.2126729 * rgb[0] + 0.7151522 * rgb[1] + 0.0721750 * rgb[2]
     assert y_rgb.mean() > 0
     assert np.allclose(y_spec, y_rgb, rtol=0.02, atol=1e-4), float(np.abs(y_spec - y_rgb).max())
+
+
+def test_material_slots_loose_vertices_and_empty_meshes(tmp_path):
+    proc, res = run_bpy(tmp_path, """
+    import polychrome as pc
+    from polychrome_blender.export import export_scene
+    sc = empty_scene(8, 8)
+    add_camera(sc, (0, -10, 0))
+    me = bpy.data.meshes.new('Two')
+    me.from_pydata([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (2, 0, 0), (2, 1, 0), (9, 9, 9)], [],
+                   [(0, 1, 2, 3), (1, 4, 5, 2)])          # vertex 6 is loose
+    me.polygons[1].material_index = 1
+    ob = bpy.data.objects.new('Two', me); sc.collection.objects.link(ob)
+    me.materials.append(diffuse_material('Red', (0.8, 0.1, 0.1)))
+    me.materials.append(diffuse_material('Blue', (0.1, 0.1, 0.8)))
+    e = bpy.data.objects.new('Empty', bpy.data.meshes.new('Empty')); sc.collection.objects.link(e)
+    n = bpy.data.objects.new('NoMat', bpy.data.meshes.new('NoMat')); sc.collection.objects.link(n)
+    n.data.from_pydata([(0, 0, 1), (1, 0, 1), (0, 1, 1)], [], [(0, 1, 2)])
+    scene, warns = export_scene(pc, bpy.context.evaluated_depsgraph_get())
+    desc, bufs = scene.description()
+    mats = [m['name'] for m in desc['materials']]
+    meshes = {m['name']: m for m in desc['meshes']}
+    two = meshes['Two']
+    emit(mats=mats, ids=[mats[i] for i in bufs[two['material_ids']].tolist()],
+         nverts=len(bufs[two['vertices']]) // 3, verts=bufs[two['vertices']].reshape(-1, 3).tolist(),
+         names=sorted(meshes), nomat=mats[int(bufs[meshes['NoMat']['material_ids']][0])], warns=warns)
+    """)
+    r = check(proc, res)[0]
+    assert r["ids"] == ["Red", "Red", "Blue", "Blue"]
+    assert r["nverts"] == 6 and [9.0, 9.0, 9.0] not in r["verts"]     # the loose vertex is dropped
+    assert r["names"] == ["NoMat", "Two"]                             # the empty mesh is skipped
+    assert r["nomat"] == "default" and r["warns"] == []
