@@ -742,3 +742,44 @@ def test_every_render_setting_but_threads_round_trips(tmp_path):
     path = usd.write_stage(scene, tmp_path / "settings.usdc", settings)
     back = pc.RenderSettings(**usd.read_settings(path))
     assert back == dataclasses.replace(settings, threads=0)
+
+
+@pytest.mark.blender
+def test_blenders_own_usd_export_renders_like_the_addon_export(tmp_path):
+    """Blender's USD exporter (bpy.ops.wm.usd_export: SphereLight intensity P/π normalised,
+    colour temperature, the world as a tiny HDR dome) read by polychrome.usd gives the
+    same picture as the add-on's direct export of the same scene (ΔE00)."""
+    pytest.importorskip("bpy")
+    stage = tmp_path / "blender.usda"
+    script = textwrap.dedent(f"""
+        import json, sys, warnings
+        sys.path.insert(0, {str(ROOT / 'python')!r})
+        import bpy
+        import polychrome as pc, polychrome_blender
+        polychrome_blender.register()
+        try:
+            bpy.ops.wm.read_factory_settings()
+            polychrome_blender.unregister(); polychrome_blender.register()
+            bpy.ops.wm.usd_export(filepath={str(stage)!r}, export_materials=True)
+            from polychrome_blender.export import export_scene
+            from polychrome import usd
+            from polychrome.colordiff import delta_e_stats, image_delta_e
+            direct, _ = export_scene(pc, bpy.context.evaluated_depsgraph_get())
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                via_usd = usd.read_stage({str(stage)!r})
+            a = pc.render(direct, width=48, height=27, samples=32, seed=1).rgba[..., :3]
+            b = pc.render(via_usd, width=48, height=27, samples=32, seed=1).rgba[..., :3]
+            print("RESULT " + json.dumps({{"de": delta_e_stats(image_delta_e(a, b)), "a": a.mean(axis=(0, 1)).tolist(),
+                                          "b": b.mean(axis=(0, 1)).tolist(), "warnings": [str(w.message) for w in caught],
+                                          "world": via_usd.description()[0]["world"]}}))
+        finally:
+            polychrome_blender.unregister()
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    res = json.loads(next(line[7:] for line in proc.stdout.splitlines() if line.startswith("RESULT ")))
+    assert res["de"]["mean"] < 1.0, res
+    assert np.allclose(res["a"], res["b"], rtol=0.05), res
+    assert res["world"]["texture"] == 0 and abs(res["world"]["rotation"]) < 1e-9  # Blender's dome: rotateXYZ (90, 0, 90)
+    assert len(res["warnings"]) == 1 and "/root/Light/Light" in res["warnings"][0]  # its 0.1 m radius
