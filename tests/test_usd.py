@@ -783,3 +783,32 @@ def test_blenders_own_usd_export_renders_like_the_addon_export(tmp_path):
     assert np.allclose(res["a"], res["b"], rtol=0.05), res
     assert res["world"]["texture"] == 0 and abs(res["world"]["rotation"]) < 1e-9  # Blender's dome: rotateXYZ (90, 0, 90)
     assert len(res["warnings"]) == 1 and "/root/Light/Light" in res["warnings"][0]  # its 0.1 m radius
+
+
+@pytest.mark.blender
+def test_blender_imports_a_polychrome_stage_with_the_same_camera_and_lights(tmp_path):
+    """Blender's USD importer (an independent reader of the tenths-of-a-unit camera and of
+    UsdLux intensities) sees the lens, sensor, shift and point-light power we wrote."""
+    pytest.importorskip("bpy")
+    stage = usd.write_stage(spectral_scene(), tmp_path / "ours.usda", SETTINGS)
+    script = textwrap.dedent(f"""
+        import json, sys
+        import bpy
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        assert 'FINISHED' in bpy.ops.wm.usd_import(filepath={str(stage)!r})
+        cam = next(o for o in bpy.data.objects if o.type == 'CAMERA')
+        lights = {{o.name: [o.data.energy, list(o.matrix_world.translation)] for o in bpy.data.objects if o.type == 'LIGHT'}}
+        print("RESULT " + json.dumps({{"lens": cam.data.lens, "sensor": [cam.data.sensor_width, cam.data.sensor_height],
+                                      "shift": [cam.data.shift_x, cam.data.shift_y], "position": list(cam.matrix_world.translation),
+                                      "lights": lights}}))
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    res = json.loads(next(line[7:] for line in proc.stdout.splitlines() if line.startswith("RESULT ")))
+    assert res["lens"] == pytest.approx(35.0, rel=1e-5)
+    assert res["sensor"] == pytest.approx([36.0, 24.0], rel=1e-5)  # 24 mm: the 3:2 image's fitted height
+    assert res["shift"] == pytest.approx([0.05, -0.02], abs=1e-6)
+    assert res["position"] == pytest.approx([0.5, -6.0, 2.0], abs=1e-6)
+    # The RGB-coloured fill light: power = 4π × radiant intensity of the brightest channel.
+    energy, position = res["lights"]["fill"]
+    assert energy == pytest.approx(15.0, rel=1e-4) and position == pytest.approx([-3.0, -1.0, 2.0])
