@@ -104,3 +104,39 @@ def test_standard_nodes_map_to_polychrome_bsdfs(tmp_path):
     luminance = warm["scale"] * np.trapz(ybar * planck) / np.trapz(ybar)
     assert luminance == pytest.approx(2.0, rel=0.01)
     assert m["Prism"]["bsdf"]["type"] == "dielectric" and m["Prism"]["bsdf"]["ior"]["name"] == "N-SF11"
+
+
+def test_area_light_radiance_follows_cycles_convention(tmp_path):
+    """Exported emitter radiance = P / (π A) (Normalize on) or P / π (off), A the true area of
+    the square / rectangle / disk / ellipse (the 32-gon's area, so the power is exact)."""
+    proc, res = run_bpy(tmp_path, """
+    import polychrome as pc
+    from polychrome_blender.export import export_scene
+    sc = empty_scene(8, 8); add_camera(sc, (0, -10, 0))
+    cases = [('SQUARE', 2.0, 1.0, True), ('RECTANGLE', 2.0, 0.5, True), ('DISK', 1.0, 1.0, True),
+             ('ELLIPSE', 2.0, 1.0, True), ('SQUARE', 2.0, 1.0, False)]
+    for i, (shape, sx, sy, norm) in enumerate(cases):
+        ld = bpy.data.lights.new(f'L{i}', 'AREA'); ld.shape = shape; ld.size = sx; ld.size_y = sy
+        ld.energy = 100.0; ld.normalize = norm
+        o = bpy.data.objects.new(f'L{i}', ld); sc.collection.objects.link(o); o.location = (3 * i, 0, 3)
+    scene, warns = export_scene(pc, bpy.context.evaluated_depsgraph_get())
+    desc, bufs = scene.description()
+    out = {}
+    for m in desc['materials']:
+        if m['name'].endswith('(area light)'):
+            out[m['name'].split()[0]] = m['emission']['scale']
+    areas = {}
+    for mesh in desc['meshes']:
+        if mesh['name'].startswith('L') and '(back)' not in mesh['name']:
+            v = bufs[mesh['vertices']].reshape(-1, 3).astype(float); t = bufs[mesh['triangles']].reshape(-1, 3)
+            areas[mesh['name']] = float(0.5 * np.linalg.norm(np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]]), axis=1).sum())
+    emit(scale=out, areas=areas, warns=warns, cases=cases)
+    """)
+    r = check(proc, res)[0]
+    assert r["warns"] == []
+    exact = [4.0, 1.0, math.pi / 4, math.pi / 2, 4.0]
+    for i, (shape, sx, sy, norm) in enumerate(r["cases"]):
+        area = r["areas"][f"L{i}"]
+        assert area == pytest.approx(exact[i], rel=0.01 if shape in ("DISK", "ELLIPSE") else 1e-6)
+        want = 100.0 / (math.pi * (area if norm else 1.0))
+        assert r["scale"][f"L{i}"] == pytest.approx(want, rel=1e-6), (shape, norm)

@@ -6,7 +6,8 @@
   (checked against Cycles 4.5: irradiance under a small area light matches this to < 1 %,
   and nothing is emitted behind it). It is exported as an emissive quad/disk (ellipse:
   a 32-gon) of that radiance, plus a black backing one thousandth of its size behind it,
-  because polychrome's emitters shine from both faces.
+  because polychrome's emitters shine from both faces. With *Normalize* off, Cycles
+  gives radiance ``colour × P / π`` whatever the size (measured likewise); so does this.
 * Spot: ``polychrome.SpotLight`` — intensity ``colour × P / 4π`` on the axis, cone
   ``spot_size`` and ``spot_blend`` as Blender's (the radius is ignored).
 * Sun: ``polychrome.SunLight`` — irradiance ``colour × strength`` W/m² (its angle is ignored).
@@ -79,10 +80,10 @@ def export_area(pc, scene, ob, ld, name, matrix, warnings):
         return
     if getattr(ld, "spread", math.pi) < math.pi - 1e-4:
         warnings.add(("spread", name), f"light '{name}': area light spread is not supported; rendered as 180°")
-    if not getattr(ld, "normalize", True):
-        warnings.add(("normalize", name), f"light '{name}': 'Normalize' off is not supported; power is per area as with Normalize on")
     spec, tint = light_colour(pc, ld)
-    radiance = spec * (power / (math.pi * area))
+    # Normalize on (default): P is the power of the whole light; off: P is per unit area
+    per_area = area if getattr(ld, "normalize", True) else 1.0
+    radiance = spec * (power / (math.pi * per_area))
     if tint is not None and tint != (1.0, 1.0, 1.0):
         warnings.add(("tint", name), f"light '{name}': colour tint on a blackbody temperature is ignored")
     emitter = pc.Emitter(radiance, name=f"{name} (area light)")
