@@ -140,3 +140,28 @@ def test_area_light_radiance_follows_cycles_convention(tmp_path):
         assert area == pytest.approx(exact[i], rel=0.01 if shape in ("DISK", "ELLIPSE") else 1e-6)
         want = 100.0 / (math.pi * (area if norm else 1.0))
         assert r["scale"][f"L{i}"] == pytest.approx(want, rel=1e-6), (shape, norm)
+
+
+def test_light_exposure_and_temperature(tmp_path):
+    proc, res = run_bpy(tmp_path, """
+    import polychrome as pc
+    from polychrome_blender.export import export_scene
+    sc = empty_scene(8, 8); add_camera(sc, (0, -10, 0))
+    ld = bpy.data.lights.new('P', 'POINT'); ld.energy = 100.0; ld.exposure = 1.5
+    ld.use_temperature = True; ld.temperature = 2700.0
+    o = bpy.data.objects.new('P', ld); sc.collection.objects.link(o)
+    scene, warns = export_scene(pc, bpy.context.evaluated_depsgraph_get())
+    desc, _ = scene.description()
+    emit(light=desc['lights'][0], warns=warns)
+    """)
+    r = check(proc, res)[0]
+    i = r["light"]["intensity"]
+    assert r["warns"] == [] and i["type"] == "blackbody" and i["temperature"] == 2700.0
+    # intensity = luminance-1 blackbody × P 2^exposure / 4π: the scale over the luminance-1 factor
+    colour = pytest.importorskip("colour")
+    shape = colour.SpectralShape(380, 780, 1)
+    peak = colour.sd_blackbody(2700.0, colour.SpectralShape(380, 3000, 1)).values.max()
+    planck = colour.sd_blackbody(2700.0, shape).values / peak
+    ybar = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape).values[:, 1]
+    lum = np.trapz(ybar * planck) / np.trapz(ybar)
+    assert i["scale"] * lum == pytest.approx(100.0 * 2**1.5 / (4 * math.pi), rel=0.01)

@@ -11,8 +11,9 @@
 * Spot: ``polychrome.SpotLight`` — intensity ``colour × P / 4π`` on the axis, cone
   ``spot_size`` and ``spot_blend`` as Blender's (the radius is ignored).
 * Sun: ``polychrome.SunLight`` — irradiance ``colour × strength`` W/m² (its angle is ignored).
-* Colour from temperature (``use_temperature``, Blender 5): a blackbody normalised to
-  the luminance of white.
+* Exposure (Blender 4.4+) multiplies the power by 2^exposure, as in Cycles.
+* Colour from temperature (``use_temperature``, Blender 4.5+): a blackbody spectrum
+  normalised to the luminance of white; an extra colour tint is then ignored (warning).
 """
 
 import math
@@ -42,12 +43,14 @@ def blackbody_white(pc, temperature):
     return pc.spectra.blackbody(float(temperature), 1.0 / lum)
 
 
-def light_colour(pc, ld):
+def light_colour(pc, ld, name, warnings):
+    """The light's colour as a spectrum: RGB, or a blackbody when ``use_temperature``."""
     col = tuple(float(c) for c in ld.color[:3])
     if getattr(ld, "use_temperature", False):
-        spec = blackbody_white(pc, float(ld.temperature))
-        return spec, col
-    return pc.spectra.rgb(*col), None
+        if col != (1.0, 1.0, 1.0):
+            warnings.add(("tint", name), f"light '{name}': its colour tint on top of the temperature is ignored")
+        return blackbody_white(pc, float(ld.temperature))
+    return pc.spectra.rgb(*col)
 
 
 def _area_polygon(ld):
@@ -67,7 +70,8 @@ def _area_polygon(ld):
 
 
 def _power(ld, name):
-    p = float(ld.energy)
+    """Blender's power (or sun strength) times 2^exposure (Blender 4.4+), as Cycles uses it."""
+    p = float(ld.energy) * 2.0 ** float(getattr(ld, "exposure", 0.0))
     if not math.isfinite(p) or p < 0.0:
         raise ValueError(f"light '{name}': power {p} W must be finite and non-negative")
     return p
@@ -80,12 +84,10 @@ def export_area(pc, scene, ob, ld, name, matrix, warnings):
         return
     if getattr(ld, "spread", math.pi) < math.pi - 1e-4:
         warnings.add(("spread", name), f"light '{name}': area light spread is not supported; rendered as 180°")
-    spec, tint = light_colour(pc, ld)
+    spec = light_colour(pc, ld, name, warnings)
     # Normalize on (default): P is the power of the whole light; off: P is per unit area
     per_area = area if getattr(ld, "normalize", True) else 1.0
     radiance = spec * (power / (math.pi * per_area))
-    if tint is not None and tint != (1.0, 1.0, 1.0):
-        warnings.add(("tint", name), f"light '{name}': colour tint on a blackbody temperature is ignored")
     emitter = pc.Emitter(radiance, name=f"{name} (area light)")
     verts = np.concatenate([pts, np.zeros((len(pts), 1))], axis=1).astype(np.float32)
     back = verts.copy()
@@ -118,16 +120,16 @@ def export_lights(pc, depsgraph, scene, warnings):
             raise ValueError(f"light '{name}': its transform is not finite")
         pos = m[:3, 3]
         if ld.type == "POINT":
-            spec, _ = light_colour(pc, ld)
+            spec = light_colour(pc, ld, name, warnings)
             scene.add_light(pc.PointLight(pos.tolist(), _power(ld, name), spec, name=name))
         elif ld.type == "AREA":
             export_area(pc, scene, ob, ld, name, m, warnings)
         elif ld.type == "SPOT" and hasattr(pc, "SpotLight"):
-            spec, _ = light_colour(pc, ld)
+            spec = light_colour(pc, ld, name, warnings)
             scene.add_light(pc.SpotLight(pos.tolist(), _axis(m, name), power=_power(ld, name), color=spec,
                                          spot_size=float(ld.spot_size), spot_blend=float(ld.spot_blend), name=name))
         elif ld.type == "SUN" and hasattr(pc, "SunLight"):
-            spec, _ = light_colour(pc, ld)
+            spec = light_colour(pc, ld, name, warnings)
             if float(getattr(ld, "angle", 0.0)) > 1e-3:
                 warnings.add(("sun", name), f"light '{name}': the sun's angular diameter is ignored (sharp shadows)")
             scene.add_light(pc.SunLight(_axis(m, name), strength=_power(ld, name), color=spec, name=name))
