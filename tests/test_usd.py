@@ -812,3 +812,16 @@ def test_blender_imports_a_polychrome_stage_with_the_same_camera_and_lights(tmp_
     # The RGB-coloured fill light: power = 4π × radiant intensity of the brightest channel.
     energy, position = res["lights"]["fill"]
     assert energy == pytest.approx(15.0, rel=1e-4) and position == pytest.approx([-3.0, -1.0, 2.0])
+
+
+def test_cli_takes_the_image_aspect_from_a_foreign_camera_without_render_settings(tmp_path):
+    from PIL import Image
+
+    path = bad_mesh_stage(tmp_path / "plain.usda")  # its camera: a square 2 × 2 aperture
+    stage = Usd.Stage.Open(str(path))
+    UsdGeom.Camera(stage.GetPrimAtPath("/World/cam")).CreateVerticalApertureAttr(10.0)  # 20:10
+    stage.Save()
+    out = tmp_path / "plain.png"
+    assert cli.main(["render", str(path), "-o", str(out), "--width", "30", "--samples", "1", "--quiet"]) == 0
+    with Image.open(out) as im:
+        assert im.size == (30, 15)

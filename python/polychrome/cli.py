@@ -160,6 +160,19 @@ def _load_usd(path: str, overrides: dict):
     from . import usd
 
     stored = usd.read_settings(path)
+    if ("width" not in stored or "height" not in stored) and not ("width" in overrides and "height" in overrides):
+        # No image size anywhere: take the camera aperture's aspect (one side from the
+        # flags, else the default width).
+        from .render import RenderSettings
+
+        scene = usd.read_stage(path)
+        cam = scene.camera
+        aspect = cam.sensor_width / cam.sensor_height if cam.sensor_height > 0 else 4 / 3
+        if "height" in overrides:
+            stored = {**stored, "height": overrides["height"], "width": max(1, round(overrides["height"] * aspect))}
+        else:
+            width = overrides.get("width", RenderSettings.width)
+            stored = {**stored, "width": width, "height": max(1, round(width / aspect))}
     settings = _settings_from(_merge_size(stored, overrides))
     scene = usd.read_stage(path, resolution=(settings.width, settings.height))
     return scene, settings

@@ -300,7 +300,8 @@ class _Reader:
         return self.default_materials[colour]
 
     def bound_material(self, prim) -> int:
-        mat, _ = self.UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
+        # The 'full' (final render) binding, falling back to the all-purpose one.
+        mat, _ = self.UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial(self.UsdShade.Tokens.full)
         if mat and mat.GetPrim().IsValid():
             return self.material_for(mat.GetPrim())
         return self.default_material(prim)
