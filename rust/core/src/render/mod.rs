@@ -317,6 +317,9 @@ fn render_built(
             // Passes grow so progress stays smooth early and overhead stays low later.
             let pass = (round_spp / 4).clamp(1, 16).min(samples - round_spp);
             let range = round_spp..round_spp + pass;
+            // Tiles of camera paths; merged after the light paths of the same pass so a
+            // cancel during either discards the whole pass.
+            let mut camera_tiles: Vec<Option<FilmBuffer>> = Vec::new();
             if backward {
                 let sampler = |x: u32, y: u32, pixel: u64, s: u32, ps: &mut PixelSample, scratch: &mut Scratch| {
                     // Each (round, sample) pair has its own stream.
@@ -338,18 +341,16 @@ fn render_built(
                         }
                     }
                 };
-                let results: Vec<Option<FilmBuffer>> = tiles
+                camera_tiles = tiles
                     .par_iter()
                     .map(|&t| render_tile(scene, &sampler, t, range.clone(), &albedo_white, settings.spectral_output, control))
                     .collect();
-                if results.iter().any(|r| r.is_none()) {
+                if camera_tiles.iter().any(|r| r.is_none()) {
                     incomplete_spectrum = mono_scenes && (round > 0 || round_spp > 0);
                     break 'rounds; // cancelled mid-pass: the pass is discarded so every pixel has the same count
                 }
-                for (&(x0, y0, tw, th), r) in tiles.iter().zip(results) {
-                    film.merge_tile(x0, y0, tw, th, &r.expect("checked above"));
-                }
             }
+            let mut light_splats: Vec<Vec<Splat>> = Vec::new();
             if forward {
                 let paths = w as u64 * h as u64 * pass as u64;
                 let base = (round as u64 * samples as u64 + round_spp as u64) * w as u64 * h as u64;
@@ -382,14 +383,18 @@ fn render_built(
                     incomplete_spectrum = mono_scenes && (round > 0 || round_spp > 0);
                     break 'rounds;
                 }
-                // Merged in chunk order: the same sums on any thread count.
-                for splats in results.into_iter().flatten() {
-                    add_splats(&mut film, &splats, &scene.observer);
-                }
-                if !backward {
-                    for c in film.buffer.count.iter_mut() {
-                        *c += pass;
-                    }
+                light_splats = results.into_iter().flatten().collect();
+            }
+            for (&(x0, y0, tw, th), r) in tiles.iter().zip(camera_tiles) {
+                film.merge_tile(x0, y0, tw, th, &r.expect("checked above"));
+            }
+            // Merged in chunk order: the same sums on any thread count.
+            for splats in &light_splats {
+                add_splats(&mut film, splats, &scene.observer);
+            }
+            if forward && !backward {
+                for c in film.buffer.count.iter_mut() {
+                    *c += pass;
                 }
             }
             round_spp += pass;
