@@ -825,3 +825,58 @@ def test_cli_takes_the_image_aspect_from_a_foreign_camera_without_render_setting
     assert cli.main(["render", str(path), "-o", str(out), "--width", "30", "--samples", "1", "--quiet"]) == 0
     with Image.open(out) as im:
         assert im.size == (30, 15)
+
+
+def addon_style_area_light(scene, name, shape, size, matrix, radiance):
+    """What polychrome_blender exports for an area light: an emission-only polygon in
+    the local XY plane shining along −Z and a black copy 1/1000 of its size behind it."""
+    if shape == "rect":
+        pts = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], np.float64) * [size[0] / 2, size[1] / 2]
+    else:
+        a = np.linspace(0, 2 * math.pi, 32, endpoint=False)
+        pts = np.stack([np.cos(a), np.sin(a)], 1) * size[0] / 2
+    n = len(pts)
+    tris = np.stack([np.zeros(n - 2, int), np.arange(1, n - 1), np.arange(2, n)], 1)
+    verts = np.concatenate([pts, np.zeros((n, 1))], 1)
+    back = verts.copy()
+    back[:, 2] = 1e-3 * max(size)
+    m = scene.add_mesh(name, verts, tris, material=pc.Emitter(radiance, name=f"{name} (area light)"), place=False)
+    scene.add_instance(m, matrix, name)
+    b = scene.add_mesh(f"{name} (back)", back, tris, material=pc.Diffuse(0.0, name=f"{name} (back)"), place=False)
+    scene.add_instance(b, matrix, f"{name} (back)")
+
+
+def test_area_lights_become_rect_and_disk_lights_that_render_the_same(tmp_path):
+    rho, h = 0.8, 1.0
+    scene = pc.Scene()
+    scene.add_mesh("floor", [[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], [[0, 1, 2], [0, 2, 3]], material=pc.Diffuse(rho, name="floor"))
+    down = np.eye(4)
+    down[:3, 3] = [0.0, 0.0, h]  # local −Z is world −Z: shining down
+    addon_style_area_light(scene, "panel", "rect", (0.6, 0.4), down, pc.spectra.blackbody(5000) * 6.0)
+    tilted = np.eye(4)
+    c, s_ = math.cos(0.3), math.sin(0.3)
+    tilted[:3, :3] = [[1, 0, 0], [0, c, -s_], [0, s_, c]]
+    tilted[:3, 3] = [3.0, 0.0, 1.5]
+    addon_style_area_light(scene, "spot disk", "disk", (0.5, 0.5), tilted, pc.spectra.rgb(1.0, 0.5, 0.2) * 4.0)
+    scene.camera = pc.Camera(to_world=np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0.5], [0, 0, 0, 1.0]]), projection="ORTHOGRAPHIC", ortho_scale=0.2)
+    path = usd.write_stage(scene, tmp_path / "area.usda", SETTINGS)
+
+    stage = Usd.Stage.Open(str(path))
+    rect = UsdLux.RectLight(stage.GetPrimAtPath("/World/Lights/panel"))
+    assert (rect.GetWidthAttr().Get(), rect.GetHeightAttr().Get()) == pytest.approx((0.6, 0.4))
+    frame = np.array(UsdGeom.Xformable(rect).ComputeLocalToWorldTransform(Usd.TimeCode.Default())).T
+    assert frame[:3, 2] == pytest.approx([0, 0, 1]) and frame[:3, 3] == pytest.approx([0, 0, h])  # shines along −Z: down
+    disk = UsdLux.DiskLight(stage.GetPrimAtPath("/World/Lights/spot_disk"))
+    polygon_area = 0.5 * 32 * 0.25**2 * math.sin(2 * math.pi / 32)
+    assert math.pi * disk.GetRadiusAttr().Get() ** 2 == pytest.approx(polygon_area, rel=1e-6)
+    meshes = {p.GetAttribute("polychrome:instanceName").Get() for p in stage.Traverse() if p.GetTypeName() == "Mesh"}
+    assert meshes == {"floor", "panel (back)", "spot disk (back)"}  # the emitters became lights
+
+    back = usd.read_stage(path)
+    emitters = [m for m in back.materials if m.to_dict()["bsdf"]["type"] == "none"]
+    assert sorted(m.to_dict()["emission"]["type"] for m in emitters) == ["blackbody", "rgb"]
+    assert len(back.description()[0]["meshes"]) == 5  # floor, 2 backings, 2 emitters: no extra backing
+    settings = pc.RenderSettings(width=3, height=3, samples=256, max_bounces=1, seed=2)
+    a = luminance(pc.render(scene, settings).rgba[1, 1])
+    b = luminance(pc.render(back, settings).rgba[1, 1])
+    assert b == pytest.approx(a, rel=0.03), (a, b)

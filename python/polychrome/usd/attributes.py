@@ -53,8 +53,14 @@ COLOR = "polychrome:color"
 INTENSITY = "polychrome:intensity"
 #: string (JSON spectrum): radiance of the world (on the DomeLight)
 RADIANCE = "polychrome:radiance"
-#: string (JSON object): the full description of a light type the schema has no mapping for
+#: string (JSON object): the light's full description (point, spot, distant, ...); on the
+#: DomeLight the HDRI's strength, rotation and importance_sampling
 LIGHT = "polychrome:light"
+#: string (JSON spectrum) on a RectLight / DiskLight: its exact emitted radiance (EMISSION)
+#: string on a RectLight / DiskLight: the name of the emission material it came from
+MATERIAL_NAME = "polychrome:materialName"
+#: bool on a RectLight / DiskLight: its black backing is already a mesh of the stage
+HAS_BACKING = "polychrome:hasBacking"
 
 # -- render settings (on /Render/PolychromeSettings, a UsdRender.Settings prim) --
 RENDER_SETTINGS_PATH = "/Render/PolychromeSettings"
@@ -89,6 +95,6 @@ def settings_items(settings):
 
 ALL = [
     BSDF, BSDF_EXTRA, REFLECTANCE, EMISSION, IOR_MODEL, IOR_COEFFICIENTS, IOR_NAME, NAME,
-    MESH_INDEX, INSTANCE_NAME, CAMERA, POWER, COLOR, INTENSITY, RADIANCE, LIGHT,
+    MESH_INDEX, INSTANCE_NAME, CAMERA, POWER, COLOR, INTENSITY, RADIANCE, LIGHT, MATERIAL_NAME, HAS_BACKING,
     *(name for name, _ in SETTINGS.values()),
 ]

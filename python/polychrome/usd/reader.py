@@ -886,10 +886,14 @@ class _Reader:
         if normalize:
             scalar = scalar / area
         name = str(self.custom(prim, A.NAME, str(prim.GetPath())))
-        emitter = self.add_material(Emitter(self.emitted(scalar, colour, blackbody), name=name))
+        exact = self.spectrum_attr(prim, A.EMISSION)  # the radiance Polychrome wrote, if it did
+        radiance = exact if exact is not None else self.emitted(scalar, colour, blackbody)
+        emitter = self.add_material(Emitter(radiance, name=str(self.custom(prim, A.MATERIAL_NAME, name))))
         key = f"light:{prim.GetPath()}"
         self.meshes[key] = {"name": name, "order": None, "vertices": verts, "triangles": tris, "normals": None, "uvs": None, "material_ids": None, "material": emitter}
         self.instances.append((key, m, name))
+        if self.custom(prim, A.HAS_BACKING, False):
+            return  # the stage holds the backing as a mesh already
         if self.black_backing is None:
             self.black_backing = self.add_material(Diffuse(0.0, name="light backing"))
         back = verts.copy()
@@ -916,7 +920,9 @@ class _Reader:
         if not math.isfinite(r):
             raise self.error(prim, "its radius is not finite")
         a = np.linspace(0.0, 2.0 * math.pi, DISK_SEGMENTS, endpoint=False)
-        pts = np.stack([np.cos(a), np.sin(a)], axis=1) * r
+        # The polygon's circumradius is chosen so that its area is the disk's, πr².
+        k = math.sqrt(2.0 * math.pi / (DISK_SEGMENTS * math.sin(2.0 * math.pi / DISK_SEGMENTS)))
+        pts = np.stack([np.cos(a), np.sin(a)], axis=1) * r * k
         self.add_emitter_polygon(prim, pts, 2 * r, bool(self.get(light.GetNormalizeAttr(), False)), scalar, colour, blackbody)
 
     def read_distant_light(self, prim) -> None:

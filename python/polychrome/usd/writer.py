@@ -194,6 +194,108 @@ def _matrix_to_usd(Gf, m) -> Any:
     return Gf.Matrix4d(np.asarray(m, dtype=np.float64).T.tolist())
 
 
+def _world_points(desc, buffers, inst) -> np.ndarray:
+    md = desc["meshes"][int(inst["mesh"])]
+    v = np.asarray(buffers[md["vertices"]], dtype=np.float64).reshape(-1, 3)
+    m = np.asarray(inst["transform"], dtype=np.float64)
+    return v @ m[:3, :3].T + m[:3, 3]
+
+
+def _is_black(material) -> bool:
+    bsdf = material.get("bsdf") or {}
+    r = bsdf.get("reflectance") or {}
+    if bsdf.get("type") != "diffuse" or material.get("emission") is not None:
+        return False
+    scale = float(r.get("scale", 1.0))
+    if r.get("type") == "constant":
+        return float(r.get("value", 1.0)) * scale == 0.0
+    if r.get("type") == "rgb":
+        return all(float(c) * scale == 0.0 for c in r.get("rgb", [1.0]))
+    return False
+
+
+def _area_lights(desc, buffers, uses) -> dict[int, dict[str, Any]]:
+    """Instances that are emissive rectangles / regular polygons with a black backing
+    (Blender's area lights as polychrome_blender exports them): instance → shape."""
+    found: dict[int, dict[str, Any]] = {}
+    materials, meshes, instances = desc["materials"], desc["meshes"], desc["instances"]
+    backings = []
+    for k, inst in enumerate(instances):
+        md = meshes[int(inst["mesh"])]
+        if md.get("material_ids") is None and materials and _is_black(materials[int(md.get("material") or 0)]):
+            backings.append((k, _world_points(desc, buffers, inst)))
+    if not backings:
+        return found
+    for k, inst in enumerate(instances):
+        index = int(inst["mesh"])
+        md = meshes[index]
+        if uses[index] != 1 or md.get("material_ids") is not None or md.get("normals") is not None or md.get("uvs") is not None or not materials:
+            continue
+        mat = materials[int(md.get("material") or 0)]
+        if (mat.get("bsdf") or {}).get("type") != "none" or mat.get("emission") is None:
+            continue
+        tris = np.asarray(buffers[md["triangles"]], dtype=np.int64).reshape(-1, 3)
+        p = _world_points(desc, buffers, inst)
+        n = len(p)
+        if n < 4 or len(tris) != n - 2 or len(np.unique(tris)) != n:
+            continue
+        c = p.mean(axis=0)
+        size = float(np.linalg.norm(p - c, axis=1).max())
+        cross = np.cross(p[tris[:, 1]] - p[tris[:, 0]], p[tris[:, 2]] - p[tris[:, 0]])
+        tri_area = 0.5 * np.linalg.norm(cross, axis=1)
+        if not size > 0 or np.any(tri_area <= 0):
+            continue
+        normal = cross[0] / np.linalg.norm(cross[0])
+        if np.any(np.abs((p - c) @ normal) > 1e-6 * size) or np.any(cross @ normal <= 0):
+            continue  # not planar, or folded
+        # Polygon outline in angular order around the centre.
+        x_axis = (p[0] - c) / np.linalg.norm(p[0] - c)
+        y_axis = np.cross(normal, x_axis)
+        order = np.argsort(np.arctan2((p - c) @ y_axis, (p - c) @ x_axis))
+        q = p[order]
+        edges = np.roll(q, -1, axis=0) - q
+        polygon_area = 0.5 * abs(float(np.dot(np.cross(q, np.roll(q, -1, axis=0)).sum(axis=0), normal)))
+        if abs(tri_area.sum() - polygon_area) > 1e-6 * polygon_area:
+            continue  # triangles overlap or leave holes
+        shape: dict[str, Any]
+        if n == 4:
+            e0, e1 = edges[0], edges[1]
+            if abs(np.dot(e0, e1)) > 1e-6 * np.linalg.norm(e0) * np.linalg.norm(e1) or not np.allclose(edges[0], -edges[2], atol=1e-6 * size):
+                continue
+            # Width along the edge closest to the instance's own x axis (as Blender sizes it).
+            local_x = np.asarray(inst["transform"], dtype=np.float64)[:3, 0]
+            if abs(np.dot(e1, local_x)) / np.linalg.norm(e1) > abs(np.dot(e0, local_x)) / np.linalg.norm(e0):
+                e0, e1 = e1, e0
+            if np.dot(e0, local_x) < 0:
+                e0 = -e0
+            shape = {"kind": "rect", "width": float(np.linalg.norm(e0)), "height": float(np.linalg.norm(e1)), "x": e0 / np.linalg.norm(e0)}
+        elif n >= 8:
+            radii = np.linalg.norm(p - c, axis=1)
+            lengths = np.linalg.norm(edges, axis=1)
+            if np.ptp(radii) > 1e-5 * size or np.ptp(lengths) > 1e-5 * size:
+                continue
+            shape = {"kind": "disk", "radius": float(math.sqrt(polygon_area / math.pi)), "x": x_axis}  # same area
+        else:
+            continue
+        # A black copy just behind it: the light shines away from that side.
+        for _, back in backings:
+            if len(back) != n:
+                continue
+            offset = back.mean(axis=0) - c
+            dist = float(np.dot(offset, normal))
+            if 0 < abs(dist) < 0.01 * size and np.allclose(back - offset, p, atol=1e-5 * size) and np.allclose(offset, dist * normal, atol=1e-6 * size):
+                z = normal if dist > 0 else -normal  # the light's +Z points at the backing
+                x = shape.pop("x")
+                x = x - np.dot(x, z) * z
+                x /= np.linalg.norm(x)
+                frame = np.eye(4)
+                frame[:3, 0], frame[:3, 1], frame[:3, 2], frame[:3, 3] = x, np.cross(z, x), z, c
+                shape["frame"] = frame
+                found[k] = shape
+                break
+    return found
+
+
 def _aim(direction, position) -> np.ndarray:
     """Object → world matrix whose −Z axis points along ``direction`` (lights look down −Z)."""
     d = np.asarray(direction, dtype=np.float64)
@@ -226,12 +328,16 @@ def _sensor_apertures(cam: dict[str, Any], width: int, height: int) -> tuple[flo
     return w, h, max(w, h)
 
 
-def write_stage(scene, path, settings=None) -> Path:
+def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path:
     """Writes ``scene`` (a :class:`polychrome.Scene`) as a USD stage at ``path``
     (``.usda`` text, ``.usdc`` or ``.usd`` binary). ``settings`` (a
     :class:`polychrome.RenderSettings`, default: the defaults) go to
     ``/Render/PolychromeSettings``; its image size also sets the camera's apertures.
-    Returns the path."""
+
+    With ``area_lights`` (default), an emission-only rectangle or regular polygon backed
+    by a black copy just behind it (how Blender's area lights are exported) is written
+    as a UsdLux RectLight / DiskLight shining away from the backing, keeping its exact
+    spectrum in ``polychrome:emission``; the backing stays a mesh. Returns the path."""
     Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdRender, UsdShade, Vt = _pxr()
     from ..render import RenderSettings
     from ..scene import PointLight
@@ -298,11 +404,31 @@ def write_stage(scene, path, settings=None) -> Path:
         tex.GetPrim().CreateAttribute(A.NAME, Sdf.ValueTypeNames.String).Set(str(entry.get("name", "")))
         return tex.CreateOutput("rgb", Sdf.ValueTypeNames.Float3)
 
+    # -- area lights (found first: their emission materials need no Material prim) --
+    instances = desc["instances"]
+    uses = np.zeros(len(desc["meshes"]), dtype=np.int64)
+    for inst in instances:
+        uses[inst["mesh"]] += 1
+    area = _area_lights(desc, buffers, uses) if area_lights else {}
+    converted = {int(instances[k]["mesh"]) for k in area}
+    needed = set()
+    for index, md in enumerate(desc["meshes"]):
+        if index in converted:
+            continue
+        if md.get("material_ids") is not None:
+            needed.update(int(x) for x in np.unique(np.asarray(buffers[md["material_ids"]])))
+        else:
+            needed.add(int(md.get("material") or 0))
+    only_lights = {int(desc["meshes"][i].get("material") or 0) for i in converted} - needed
+
     # -- materials ------------------------------------------------------------
     materials = []
     UsdGeom.Scope.Define(stage, "/World/Looks")
     look_names = _Names(Tf)
     for i, m in enumerate(desc["materials"]):
+        if i in only_lights:
+            materials.append(None)  # kept on the RectLight/DiskLight instead
+            continue
         mp = Sdf.Path("/World/Looks").AppendChild(look_names(m.get("name", ""), f"Material{i}"))
         mat = UsdShade.Material.Define(stage, mp)
         prim = mat.GetPrim()
@@ -356,10 +482,6 @@ def write_stage(scene, path, settings=None) -> Path:
         materials.append(mat)
 
     # -- meshes and instances ---------------------------------------------------
-    instances = desc["instances"]
-    uses = np.zeros(len(desc["meshes"]), dtype=np.int64)
-    for inst in instances:
-        uses[inst["mesh"]] += 1
     proto_names = _Names(Tf)
     proto_paths: dict[int, Any] = {}
 
@@ -414,6 +536,8 @@ def write_stage(scene, path, settings=None) -> Path:
 
     for k, inst in enumerate(instances):
         index = int(inst["mesh"])
+        if k in area:
+            continue  # written as a UsdLux light below
         ip = Sdf.Path("/World").AppendChild(world_names(inst.get("name", ""), f"Instance{k}"))
         if index in proto_paths:
             xf = UsdGeom.Xform.Define(stage, ip)
@@ -494,6 +618,29 @@ def write_stage(scene, path, settings=None) -> Path:
                 pass
         prim.CreateAttribute(A.NAME, Sdf.ValueTypeNames.String).Set(str(ld.get("name", "")))
         prim.CreateAttribute(A.LIGHT, Sdf.ValueTypeNames.String).Set(json.dumps(ld))
+
+    for k, shape in area.items():
+        inst = instances[k]
+        md = desc["meshes"][int(inst["mesh"])]
+        mat = desc["materials"][int(md.get("material") or 0)]
+        lp = Sdf.Path("/World/Lights").AppendChild(light_names(inst.get("name", ""), f"AreaLight{k}"))
+        if shape["kind"] == "rect":
+            al = UsdLux.RectLight.Define(stage, lp)
+            al.CreateWidthAttr(float(shape["width"]))
+            al.CreateHeightAttr(float(shape["height"]))
+        else:
+            al = UsdLux.DiskLight.Define(stage, lp)
+            al.CreateRadiusAttr(float(shape["radius"]))
+        al.AddTransformOp().Set(_matrix_to_usd(Gf, shape["frame"]))
+        al.CreateNormalizeAttr(False)  # intensity × colour is the radiance
+        peak, colour = _intensity_colour(rgb.emission(mat["emission"]))
+        al.CreateIntensityAttr(peak)
+        al.CreateColorAttr(Gf.Vec3f(*colour))
+        prim = al.GetPrim()
+        prim.CreateAttribute(A.EMISSION, Sdf.ValueTypeNames.String).Set(json.dumps(mat["emission"]))
+        prim.CreateAttribute(A.NAME, Sdf.ValueTypeNames.String).Set(str(inst.get("name", "")))
+        prim.CreateAttribute(A.MATERIAL_NAME, Sdf.ValueTypeNames.String).Set(str(mat.get("name", "")))
+        prim.CreateAttribute(A.HAS_BACKING, Sdf.ValueTypeNames.Bool).Set(True)
 
     world_desc = desc.get("world")
     if world_desc is not None and (world_desc.get("radiance") is not None or world_desc.get("texture") is not None):
