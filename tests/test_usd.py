@@ -880,3 +880,18 @@ def test_area_lights_become_rect_and_disk_lights_that_render_the_same(tmp_path):
     a = luminance(pc.render(scene, settings).rgba[1, 1])
     b = luminance(pc.render(back, settings).rgba[1, 1])
     assert b == pytest.approx(a, rel=0.03), (a, b)
+
+
+def test_unresolved_reference_is_one_warning_and_the_rest_renders(tmp_path, capfd):
+    path = bad_mesh_stage(tmp_path / "refs.usda")
+    stage = Usd.Stage.Open(str(path))
+    UsdGeom.Xform.Define(stage, "/World/asset").GetPrim().GetReferences().AddReference("./missing_asset.usd")
+    stage.Save()
+    capfd.readouterr()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scene = usd.read_stage(path)
+    messages = [str(w.message) for w in caught]
+    assert len(messages) == 1 and "missing_asset.usd" in messages[0] and "/World/asset" in messages[0], messages
+    assert "missing_asset" not in capfd.readouterr().err  # not printed by USD itself
+    assert len(scene.description()[0]["meshes"]) == 1

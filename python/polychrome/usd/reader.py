@@ -1144,18 +1144,35 @@ def _blackbody_white(temperature: float):
     return spec * (1.0 / y if y > 0 else 1.0)
 
 
-def open_stage(path):
-    """Opens ``path`` as a USD stage; ValueError naming the file when it cannot."""
+def open_stage(path, *, report: bool = True):
+    """Opens ``path`` as a USD stage; ValueError naming the file when it cannot. USD's
+    own diagnostics (unresolved references, ...) become one Python warning each instead
+    of lines printed on stderr (with ``report`` False they are dropped)."""
     _, _, Usd, _, _, _, _ = _pxr()
+    from pxr import UsdUtils
+
     p = Path(path)
     if not p.is_file():
         raise ValueError(f"{p}: no such file")
+    delegate = UsdUtils.CoalescingDiagnosticDelegate()
     try:
         stage = Usd.Stage.Open(str(p))
+        if report:
+            seen = set()
+            for diagnostic in delegate.TakeUncoalescedDiagnostics():
+                text = " ".join(str(diagnostic.commentary).split())
+                if text and text not in seen:
+                    seen.add(text)
+                    warnings.warn(f"{p}: {text}", stacklevel=3)
     except Exception as e:  # noqa: BLE001 - pxr raises Tf.ErrorException
-        first = str(e).strip().splitlines()
-        detail = next((line.strip() for line in first if line.strip() and "Error in" not in line), "unreadable")
+        import re
+
+        messages = [" ".join(m.split()) for m in re.findall(r" : '(.*?)'\s*(?=\n\s*Error in|$)", str(e), re.S)]
+        detail = messages[0] if messages else (str(e).strip().splitlines() or ["unreadable"])[0]
+        detail = re.sub(r"pxrInternal_\w+?__pxrReserved__::", "", detail).replace(str(p) + ":", "line ")
         raise ValueError(f"{p}: not a readable USD stage ({detail[:200]})") from None
+    finally:
+        del delegate
     if stage is None:
         raise ValueError(f"{p}: not a readable USD stage")
     return stage
@@ -1231,5 +1248,5 @@ def read_stage(path, *, resolution=None):
 def read_settings(path) -> dict[str, Any]:
     """The :class:`polychrome.RenderSettings` fields a stage stores (its UsdRender.Settings
     resolution and ``polychrome:`` attributes), as a dict ready for ``RenderSettings(**d)``."""
-    stage = open_stage(path)
+    stage = open_stage(path, report=False)  # read_stage reports the stage's problems
     return {k: v for k, v in read_settings_from_stage(stage, Path(path)).items() if not k.startswith("_")}
