@@ -895,3 +895,13 @@ def test_unresolved_reference_is_one_warning_and_the_rest_renders(tmp_path, capf
     assert len(messages) == 1 and "missing_asset.usd" in messages[0] and "/World/asset" in messages[0], messages
     assert "missing_asset" not in capfd.readouterr().err  # not printed by USD itself
     assert len(scene.description()[0]["meshes"]) == 1
+
+
+def test_cli_prints_each_stage_warning_on_one_line(tmp_path, capsys):
+    path = bad_mesh_stage(tmp_path / "warn.usda")
+    stage = Usd.Stage.Open(str(path))
+    UsdGeom.Points.Define(stage, "/World/dust")
+    stage.Save()
+    assert cli.main(["render", str(path), "-o", str(tmp_path / "w.png"), "--samples", "1", "--quiet"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert [line for line in err if "warning" in line] == [f"polychrome render: warning: {path}: prim /World/dust: prim type 'Points' is not supported and is skipped"]

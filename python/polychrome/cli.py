@@ -165,7 +165,7 @@ def _load_usd(path: str, overrides: dict):
         # flags, else the default width).
         from .render import RenderSettings
 
-        scene = usd.read_stage(path)
+        scene = usd.read_stage(path)  # camera fitted to its own aperture: kept as is
         cam = scene.camera
         aspect = cam.sensor_width / cam.sensor_height if cam.sensor_height > 0 else 4 / 3
         if "height" in overrides:
@@ -173,6 +173,7 @@ def _load_usd(path: str, overrides: dict):
         else:
             width = overrides.get("width", RenderSettings.width)
             stored = {**stored, "width": width, "height": max(1, round(width / aspect))}
+        return scene, _settings_from(_merge_size(stored, overrides))
     settings = _settings_from(_merge_size(stored, overrides))
     scene = usd.read_stage(path, resolution=(settings.width, settings.height))
     return scene, settings
@@ -230,7 +231,13 @@ def cmd_render(args: argparse.Namespace) -> int:
     overrides = _render_overrides(args)
     suffix = Path(args.scene).suffix.lower()
     if suffix in USD_SUFFIXES:
-        scene, settings = _load_usd(args.scene, overrides)
+        import warnings
+
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            scene, settings = _load_usd(args.scene, overrides)
+        for w in caught:  # unsupported prims etc.: one line each
+            print(f"polychrome render: warning: {w.message}", file=sys.stderr)
     elif suffix == ".blend":
         scene, settings = _load_blend(args.scene, overrides)
     else:
