@@ -905,3 +905,29 @@ def test_cli_prints_each_stage_warning_on_one_line(tmp_path, capsys):
     assert cli.main(["render", str(path), "-o", str(tmp_path / "w.png"), "--samples", "1", "--quiet"]) == 0
     err = capsys.readouterr().err.splitlines()
     assert [line for line in err if "warning" in line] == [f"polychrome render: warning: {path}: prim /World/dust: prim type 'Points' is not supported and is skipped"]
+
+
+def test_pre_2102_usdlux_attribute_names_are_read(tmp_path):
+    """Old stages name light attributes without "inputs:" (intensity, radius, ...)."""
+    path = tmp_path / "old.usda"
+    path.write_text(textwrap.dedent("""\
+        #usda 1.0
+        (
+            metersPerUnit = 1
+            upAxis = "Z"
+        )
+        def SphereLight "bulb"
+        {
+            float intensity = 40
+            float radius = 0
+            bool treatAsPoint = 1
+            double3 xformOp:translate = (0, 0, 2)
+            uniform token[] xformOpOrder = ["xformOp:translate"]
+        }
+    """))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = usd.read_stage(path)
+    light = scene.lights[0].to_dict()
+    assert light["position"] == [0.0, 0.0, 2.0]
+    assert light["intensity"]["scale"] == pytest.approx(40.0)  # radius 0, not normalised: the radiant intensity

@@ -228,6 +228,11 @@ class _Reader:
         return m
 
     def get(self, attr, default=None):
+        if attr and not attr.HasAuthoredValue() and attr.GetName().startswith("inputs:"):
+            # UsdLux before 21.02 named its attributes without "inputs:".
+            legacy = attr.GetPrim().GetAttribute(attr.GetName()[len("inputs:"):])
+            if legacy and legacy.HasAuthoredValue():
+                attr = legacy
         if not attr or not attr.HasAuthoredValue() and not attr.HasFallbackValue():
             return default
         v = attr.Get(self.time)
