@@ -129,6 +129,20 @@ impl Film {
         self.buffer.nonfinite += tile.nonfinite;
     }
 
+    /// Only the RGBA image of [`Film::images`] (the same conversion), for previews.
+    pub fn rgba(&self, space: &RgbSpace) -> Vec<f32> {
+        let b = &self.buffer;
+        let mut rgba = vec![1.0f32; b.count.len() * 4];
+        for (i, px) in rgba.chunks_exact_mut(4).enumerate() {
+            let inv = if b.count[i] > 0 { 1.0 / b.count[i] as f64 } else { 0.0 };
+            let rgb = space.xyz_to_rgb(b.xyz[i].map(|v| v * inv));
+            for k in 0..3 {
+                px[k] = rgb[k] as f32;
+            }
+        }
+        rgba
+    }
+
     /// Averages and converts to the working space: RGBA (alpha 1), depth, normal, albedo.
     pub fn images(&self, space: &RgbSpace) -> FilmImages {
         let px = (self.width * self.height) as usize;

@@ -18,7 +18,8 @@ use crate::{Error, Result};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::time::Instant;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "SCREAMING_SNAKE_CASE")]
@@ -136,7 +137,29 @@ pub struct RenderControl {
     cancel: AtomicBool,
     done: AtomicU64,
     total: AtomicU64,
+    /// Progressive display: publish [`Preview`]s (off by default, so renders that do
+    /// not ask pay nothing).
+    previews: AtomicBool,
+    preview: Mutex<Option<Preview>>,
 }
+
+/// A snapshot of the image being rendered, converted exactly as the final image's RGBA.
+#[derive(Clone, Debug)]
+pub struct Preview {
+    /// Row 0 at the top, RGBA (alpha 1), `width * height * 4` values.
+    pub rgba: Arc<Vec<f32>>,
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel in the snapshot.
+    pub samples_per_pixel: u32,
+    /// Counts up with every published snapshot of this control (1, 2, ...).
+    pub serial: u64,
+    /// The render has ended: this is the final image.
+    pub last: bool,
+}
+
+/// Previews are published after a pass at most this often (plus the final image).
+pub const PREVIEW_INTERVAL: Duration = Duration::from_millis(100);
 
 impl RenderControl {
     pub fn new() -> Self {
@@ -152,6 +175,26 @@ impl RenderControl {
     /// (pixel samples done, pixel samples planned).
     pub fn progress(&self) -> (u64, u64) {
         (self.done.load(Ordering::Relaxed), self.total.load(Ordering::Relaxed))
+    }
+    /// A control whose render publishes previews (see [`RenderControl::latest_preview`]).
+    pub fn with_previews() -> Self {
+        let c = Self::default();
+        c.previews.store(true, Ordering::Relaxed);
+        c
+    }
+    pub fn previews_requested(&self) -> bool {
+        self.previews.load(Ordering::Relaxed)
+    }
+    /// The newest snapshot: after the first pass, then after a pass at most every
+    /// [`PREVIEW_INTERVAL`], and the final image (`last`) when the render ends. None
+    /// unless previews were requested.
+    pub fn latest_preview(&self) -> Option<Preview> {
+        self.preview.lock().unwrap_or_else(|e| e.into_inner()).clone()
+    }
+    fn publish_preview(&self, rgba: Vec<f32>, width: u32, height: u32, samples_per_pixel: u32, last: bool) {
+        let mut slot = self.preview.lock().unwrap_or_else(|e| e.into_inner());
+        let serial = slot.as_ref().map_or(0, |p| p.serial) + 1;
+        *slot = Some(Preview { rgba: Arc::new(rgba), width, height, samples_per_pixel, serial, last });
     }
 }
 
@@ -175,6 +218,10 @@ pub struct RenderStats {
     pub triangles: usize,
     /// Bytes held by textures and HDRIs (RGB texels + environment sampling tables).
     pub texture_bytes: usize,
+    /// Largest reflectance round-trip error of the RGB → spectrum map on this grid: 0
+    /// normally; a few percent (more on 4–5 samples) on grids that needed the
+    /// cell-averaged fallback basis (see color/uplift.rs).
+    pub uplift_round_trip_error: f32,
 }
 
 pub struct RenderOutput {
@@ -299,6 +346,7 @@ fn render_built(
         .collect();
     let mut film = Film::new(w, h, settings.spectral_output.then_some(n));
     let mut done_spp = 0u32;
+    let mut last_preview: Option<Instant> = None;
     let mut time_limited = false;
     // MONOCHROMATIC_SCENES stopped (cancel, time limit) after some wavelength images.
     let mut incomplete_spectrum = false;
@@ -401,6 +449,10 @@ fn render_built(
             if round == 0 || !mono_scenes {
                 done_spp += pass;
             }
+            if control.previews_requested() && last_preview.is_none_or(|t| t.elapsed() >= PREVIEW_INTERVAL) {
+                control.publish_preview(film.rgba(&scene.space), w, h, done_spp, false);
+                last_preview = Some(Instant::now());
+            }
         }
     }
     let stats = RenderStats {
@@ -418,8 +470,13 @@ fn render_built(
         lights: scene.lights.len(),
         triangles: scene.meshes.iter().map(|m| m.indices.len()).sum(),
         texture_bytes: scene.texture_bytes,
+        uplift_round_trip_error: scene.uplift.as_ref().map_or(0.0, |u| u.round_trip_error()),
     };
-    Ok(RenderOutput { width: w, height: h, images: film.images(&scene.space), wavelengths: scene.grid.lambdas().to_vec(), stats })
+    let images = film.images(&scene.space);
+    if control.previews_requested() {
+        control.publish_preview(images.rgba.clone(), w, h, done_spp, true);
+    }
+    Ok(RenderOutput { width: w, height: h, images, wavelengths: scene.grid.lambdas().to_vec(), stats })
 }
 
 /// Adds light-path splats (radiance at a pixel, per light path per pixel) to the film.
