@@ -340,7 +340,6 @@ def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path
     spectrum in ``polychrome:emission``; the backing stays a mesh. Returns the path."""
     Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdRender, UsdShade, Vt = _pxr()
     from ..render import RenderSettings
-    from ..scene import PointLight
 
     path = Path(path)
     if path.suffix.lower() not in (".usd", ".usda", ".usdc"):
