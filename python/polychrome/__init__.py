@@ -17,6 +17,7 @@ from .scene import Camera, Diffuse, Emitter, Material, PointLight, Scene, look_a
 from . import ior
 from .scene import Conductor, Dielectric, Glossy, SpotLight, SunLight
 from .texture import Texture
+from .job import Preview, RenderJob
 
 __all__ = [
     "Camera",
@@ -30,6 +31,8 @@ __all__ = [
     "Emitter",
     "Material",
     "PointLight",
+    "Preview",
+    "RenderJob",
     "RenderResult",
     "RenderSettings",
     "Scene",

@@ -15,6 +15,8 @@ use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::atomic::AtomicBool;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 fn to_py_err(e: Error) -> PyErr {
@@ -77,7 +79,8 @@ fn render<'py>(
     progress: Option<PyObject>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let desc: SceneDesc = parse(scene_json, "scene description")?;
-    let settings: RenderSettings = parse(settings_json, "render settings")?;
+    // Keys present in the JSON are the explicit settings; `quality` fills the rest.
+    let settings = RenderSettings::from_json(settings_json).map_err(|e| PyValueError::new_err(format!("render settings: {e}")))?;
     let buffers = convert_buffers(buffers)?;
     let control = RenderControl::new();
     let mut callback_error: Option<PyErr> = None;
@@ -112,6 +115,160 @@ fn render<'py>(
         return Err(e);
     }
     output_dict(py, result?)
+}
+
+type JobOutcome = PyResult<RenderOutput>;
+
+/// RenderJob(scene_json, buffers, settings_json, previews=True)
+///
+/// A render on a background thread (no GIL held while it runs), for progressive
+/// display: `start()`, then poll `progress()` / `preview()` from any thread, `cancel()`,
+/// `wait(timeout)`, and `result()` (the dict of `render`; taken once). With `previews`
+/// the core publishes a snapshot of the image after the first pass, then at most every
+/// 100 ms, and the final image last. Dropping a running job cancels it.
+#[pyclass(module = "polychrome._core", frozen)]
+struct RenderJob {
+    control: Arc<RenderControl>,
+    input: Mutex<Option<(SceneDesc, Vec<Buffer>, RenderSettings)>>,
+    handle: Mutex<Option<std::thread::JoinHandle<JobOutcome>>>,
+    outcome: Mutex<Option<JobOutcome>>,
+    started: AtomicBool,
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+impl RenderJob {
+    /// Joins a finished worker into `outcome`; false while it runs.
+    fn collect(&self) -> bool {
+        let mut handle = lock(&self.handle);
+        if let Some(h) = handle.as_ref() {
+            if !h.is_finished() {
+                return false;
+            }
+            let h = handle.take().expect("checked above");
+            let outcome = h.join().unwrap_or_else(|p| Err(PyRuntimeError::new_err(format!("render thread died: {}", panic_message(p)))));
+            *lock(&self.outcome) = Some(outcome);
+        }
+        // Not started (callers check) or joined: the outcome is known (or already taken).
+        true
+    }
+}
+
+#[pymethods]
+impl RenderJob {
+    #[new]
+    #[pyo3(signature = (scene_json, buffers, settings_json, previews=true))]
+    fn new(scene_json: &str, buffers: Vec<Bound<'_, PyAny>>, settings_json: &str, previews: bool) -> PyResult<Self> {
+        let desc: SceneDesc = parse(scene_json, "scene description")?;
+        let settings: RenderSettings = parse(settings_json, "render settings")?;
+        let buffers = convert_buffers(buffers)?;
+        let control = if previews { RenderControl::with_previews() } else { RenderControl::new() };
+        Ok(Self {
+            control: Arc::new(control),
+            input: Mutex::new(Some((desc, buffers, settings))),
+            handle: Mutex::new(None),
+            outcome: Mutex::new(None),
+            started: AtomicBool::new(false),
+        })
+    }
+
+    /// Starts rendering on a new thread (once).
+    fn start(&self) -> PyResult<()> {
+        let Some((desc, buffers, settings)) = lock(&self.input).take() else {
+            return Err(PyRuntimeError::new_err("RenderJob.start(): the job was already started"));
+        };
+        let control = self.control.clone();
+        let handle = std::thread::Builder::new()
+            .name("polychrome-render".into())
+            .spawn(move || guarded("render", || core_render(&desc, &buffers, &settings, &control)))
+            .map_err(|e| PyRuntimeError::new_err(format!("cannot start the render thread: {e}")))?;
+        *lock(&self.handle) = Some(handle);
+        self.started.store(true, std::sync::atomic::Ordering::Release);
+        Ok(())
+    }
+
+    /// (pixel samples done, pixel samples planned).
+    fn progress(&self) -> (u64, u64) {
+        self.control.progress()
+    }
+
+    /// Asks the render to stop; it ends after the pass in flight is dropped.
+    fn cancel(&self) {
+        self.control.cancel();
+    }
+
+    /// True when the job was started and its thread has ended.
+    fn done(&self) -> bool {
+        self.started.load(std::sync::atomic::Ordering::Acquire) && self.collect()
+    }
+
+    /// Serial number of the newest preview (0: none yet), without copying it.
+    fn preview_serial(&self) -> u64 {
+        self.control.latest_preview().map_or(0, |p| p.serial)
+    }
+
+    /// The newest preview as (rgba (H, W, 4) float32 with row 0 at the top, samples per
+    /// pixel, serial, last), or None before the first pass ends.
+    fn preview<'py>(&self, py: Python<'py>) -> PyResult<Option<(Bound<'py, PyAny>, u32, u64, bool)>> {
+        let Some(p) = self.control.latest_preview() else { return Ok(None) };
+        let rgba = PyArray1::from_slice(py, &p.rgba).reshape([p.height as usize, p.width as usize, 4])?;
+        Ok(Some((rgba.into_any(), p.samples_per_pixel, p.serial, p.last)))
+    }
+
+    /// Waits (GIL released) until the job ends or `timeout` seconds pass; returns whether
+    /// it ended. Ctrl-C cancels the job and raises KeyboardInterrupt.
+    #[pyo3(signature = (timeout=None))]
+    fn wait(&self, py: Python<'_>, timeout: Option<f64>) -> PyResult<bool> {
+        if !self.started.load(std::sync::atomic::Ordering::Acquire) {
+            return Err(PyRuntimeError::new_err("RenderJob.wait(): the job was not started"));
+        }
+        let deadline = timeout.map(|t| std::time::Instant::now() + Duration::from_secs_f64(t.clamp(0.0, 1e9)));
+        loop {
+            let finished = py.allow_threads(|| {
+                let step = std::time::Instant::now() + Duration::from_millis(50);
+                loop {
+                    if self.collect() {
+                        return true;
+                    }
+                    let now = std::time::Instant::now();
+                    if now >= step || deadline.is_some_and(|d| now >= d) {
+                        return false;
+                    }
+                    std::thread::sleep(Duration::from_millis(1));
+                }
+            });
+            if finished {
+                return Ok(true);
+            }
+            if let Err(e) = py.check_signals() {
+                self.control.cancel();
+                return Err(e);
+            }
+            if deadline.is_some_and(|d| std::time::Instant::now() >= d) {
+                return Ok(false);
+            }
+        }
+    }
+
+    /// Waits for the end and returns the render's dict (as `render`); raises the render's
+    /// error. The result can be taken once.
+    fn result<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        self.wait(py, None)?;
+        match lock(&self.outcome).take() {
+            Some(Ok(out)) => output_dict(py, out),
+            Some(Err(e)) => Err(e),
+            None => Err(PyRuntimeError::new_err("RenderJob.result(): the result was already taken")),
+        }
+    }
+}
+
+impl Drop for RenderJob {
+    fn drop(&mut self) {
+        // A running render must not outlive its owner doing useless work.
+        self.control.cancel();
+    }
 }
 
 fn output_dict<'py>(py: Python<'py>, out: RenderOutput) -> PyResult<Bound<'py, PyDict>> {
@@ -211,6 +368,13 @@ fn uplift<'py>(py: Python<'py>, rgb: PyReadonlyArrayDyn<'py, f32>, role: &str, s
     PyArray1::from_vec(py, out).reshape(out_shape)
 }
 
+/// _panic_for_tests(message) — panics inside `guarded` on purpose, so tests can check
+/// that an internal panic reaches Python as a RuntimeError and never aborts the process.
+#[pyfunction]
+fn _panic_for_tests(message: &str) -> PyResult<()> {
+    guarded("_panic_for_tests", || -> Result<(), Error> { panic!("{message}") })
+}
+
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render, m)?)?;
@@ -218,6 +382,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(spectrum_values, m)?)?;
     m.add_function(wrap_pyfunction!(spectrum_xyz, m)?)?;
     m.add_function(wrap_pyfunction!(uplift, m)?)?;
+    m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
+    m.add_class::<RenderJob>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }
