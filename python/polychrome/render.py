@@ -96,6 +96,41 @@ class RenderResult:
 ProgressCallback = Callable[[int, int], Any]
 
 
+def _nonfinite_path(value: Any, path: str = "") -> str | None:
+    """Where in a description a NaN or infinity sits, e.g. "materials[1] 'lamp'.emission.scale"."""
+    if isinstance(value, float):
+        return None if np.isfinite(value) else path
+    if isinstance(value, dict):
+        for k, v in value.items():
+            label = f"{path}.{k}" if path else str(k)
+            if isinstance(v, list) and v and isinstance(v[0], dict):
+                for i, item in enumerate(v):
+                    name = item.get("name") if isinstance(item, dict) else None
+                    found = _nonfinite_path(item, f"{label}[{i}]" + (f" '{name}'" if name else ""))
+                    if found:
+                        return found
+                continue
+            found = _nonfinite_path(v, label)
+            if found:
+                return found
+    if isinstance(value, (list, tuple)):
+        for i, v in enumerate(value):
+            found = _nonfinite_path(v, f"{path}[{i}]")
+            if found:
+                return found
+    return None
+
+
+def _description_json(desc: dict[str, Any]) -> str:
+    """JSON of a scene description; JSON has no NaN or infinity, so a non-finite number is
+    reported here with where it is instead of as a parse error in the core."""
+    try:
+        return json.dumps(desc, allow_nan=False)
+    except ValueError:
+        where = _nonfinite_path(desc) or "a value"
+        raise ValueError(f"scene description: {where} is not finite") from None
+
+
 def _progress_bar(description: str) -> tuple[ProgressCallback, Callable[[], None]]:
     """A tqdm bar over pixel samples (falls back to nothing if tqdm is missing)."""
     try:
@@ -147,7 +182,7 @@ def render(
         callback = None
     try:
         start = time.perf_counter()
-        out = _core.render(json.dumps(desc), buffers, settings.to_json(), callback)
+        out = _core.render(_description_json(desc), buffers, settings.to_json(), callback)
     finally:
         if close:
             close()

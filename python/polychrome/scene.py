@@ -26,6 +26,15 @@ def _matrix(value: Any, what: str) -> list[list[float]]:
     return m.tolist()
 
 
+def _finite_floats(values: Any, what: str) -> list[float]:
+    """Floats that must be finite (JSON cannot carry NaN/inf, and the core would only
+    report a parse error without the object's name)."""
+    out = [float(c) for c in values]
+    if not all(math.isfinite(c) for c in out):
+        raise ValueError(f"{what} is not finite ({out})")
+    return out
+
+
 def look_at(position: Sequence[float], target: Sequence[float], up: Sequence[float] = (0.0, 0.0, 1.0)) -> np.ndarray:
     """Camera → world matrix of a camera at ``position`` looking at ``target`` (Blender's
     convention: the camera looks down its local −Z with +Y up; the world is Z-up)."""
@@ -137,9 +146,10 @@ class PointLight:
     name: str = "PointLight"
 
     def to_dict(self) -> dict[str, Any]:
-        pos = [float(c) for c in self.position]
+        pos = _finite_floats(self.position, f"light '{self.name}': position")
         if len(pos) != 3:
             raise ValueError(f"light '{self.name}': position must have 3 coordinates")
+        _finite_floats([self.power], f"light '{self.name}': power")
         intensity = as_spectrum(self.color) * (float(self.power) / (4.0 * math.pi))
         return {"type": "point", "name": self.name, "position": pos, "intensity": intensity.to_dict()}
 
@@ -222,8 +232,9 @@ class SpotLight:
     name: str = "SpotLight"
 
     def to_dict(self) -> dict[str, Any]:
-        pos = [float(c) for c in self.position]
-        d = [float(c) for c in self.direction]
+        pos = _finite_floats(self.position, f"light '{self.name}': position")
+        d = _finite_floats(self.direction, f"light '{self.name}': direction")
+        _finite_floats([self.power, self.spot_size, self.spot_blend], f"light '{self.name}': power/spot_size/spot_blend")
         if len(pos) != 3 or len(d) != 3:
             raise ValueError(f"light '{self.name}': position and direction must have 3 coordinates")
         intensity = as_spectrum(self.color) * (float(self.power) / (4.0 * math.pi))
@@ -249,9 +260,10 @@ class SunLight:
     name: str = "Sun"
 
     def to_dict(self) -> dict[str, Any]:
-        d = [float(c) for c in self.direction]
+        d = _finite_floats(self.direction, f"light '{self.name}': direction")
         if len(d) != 3:
             raise ValueError(f"light '{self.name}': direction must have 3 coordinates")
+        _finite_floats([self.strength], f"light '{self.name}': strength")
         irradiance = as_spectrum(self.color) * float(self.strength)
         return {"type": "distant", "name": self.name, "direction": d, "irradiance": irradiance.to_dict()}
 

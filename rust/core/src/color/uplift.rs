@@ -64,6 +64,15 @@ pub struct Uplift {
     to_rgb: [Vec<f32>; 3],
     /// Coefficient lattice of the smooth uplift (only for [`UpliftMethod::Smooth`]).
     smooth: Option<SmoothTable>,
+    /// Largest |RGB(basis_c) − e_c| of the reflectance round trip (0 up to rounding when
+    /// the basis was solved on the grid itself).
+    round_trip_error: f32,
+    /// When the bounded reversible problem is infeasible on the grid: the size of the
+    /// fine auxiliary grid the basis was solved on and cell-averaged from.
+    fallback_samples: Option<usize>,
+    /// Whether the emission basis round-trips exactly (false only when the fallback's
+    /// curves could merely be rescaled per channel).
+    emission_exact: bool,
 }
 
 /// An `RgbToSpectrum` that is never asked for RGB: used to evaluate D65 on the grid.
@@ -112,7 +121,12 @@ impl Uplift {
         let (lo, hi) = (grid.lambdas()[0], grid.lambdas()[n - 1]);
         let (e, k, y_e) = reflectance_rows(grid, space)?;
         let sums: Vec<f64> = k.iter().map(|row| row.iter().sum()).collect();
-        if !(y_e.is_finite() && y_e > 0.0) || sums.iter().any(|&s| !(s > 1e-3 * y_e)) {
+        let white_ok = !sums.iter().any(|&s| !(s > 1e-3 * y_e));
+        // A grid too coarse to reproduce D65 white at all (4 samples over 380..780 nm: red
+        // of white < 0) still gets the LINEAR fallback basis below, with the map
+        // normalised by luminance instead of per channel (SPEC §2: 4..401 samples work).
+        let coverage_fallback = !white_ok && method == UpliftMethod::Linear && y_e.is_finite() && y_e > 0.0 && n >= 4;
+        if !(y_e.is_finite() && y_e > 0.0) || (!white_ok && !coverage_fallback) {
             return Err(Error::setting(
                 "wavelength_count",
                 format!(
@@ -126,22 +140,44 @@ impl Uplift {
             ));
         }
         // The normalised reflectance → RGB map: each row sums to 1, so ρ = 1 gives (1,1,1).
+        let sums: Vec<f64> = if coverage_fallback { vec![y_e; 3] } else { sums };
         let a: [Vec<f64>; 3] = std::array::from_fn(|c| k[c].iter().map(|v| v / sums[c]).collect());
         let lambdas: Vec<f64> = grid.lambdas().iter().map(|&l| l as f64).collect();
         let h: Vec<f64> = lambdas.windows(2).map(|p| 1.0 / (p[1] - p[0])).collect();
-        let w = solve_basis(&a, &h).map_err(|why| {
-            Error::setting(
-                "wavelength_count",
-                format!(
-                    "no bounded, reversible RGB → spectrum basis exists on the {n} wavelengths over \
-                     {lo}..{hi} nm: {why}; use more wavelengths (any count from 12 up over 380..780 nm \
-                     works; 41 is the default)"
-                ),
-            )
-        })?;
+        let solved = if coverage_fallback { Err("the grid cannot reproduce D65 white".to_string()) } else { solve_basis(&a, &h) };
+        let (w, fallback_samples) = match solved {
+            Ok(w) => (w, None),
+            // Some small grids (4, 5, 7, 8, 9, 11 samples over 380..780 nm) admit no basis
+            // that is both bounded and exactly reversible, yet SPEC §2 wants 4..401 samples
+            // to work: fall back to a basis solved on a fine grid over the same range and
+            // averaged over each coarse sample's cell (see `fallback_basis`).
+            Err(why) => match fallback_basis(grid, space) {
+                Some((w, m)) => (w, Some(m)),
+                None => {
+                    return Err(Error::setting(
+                        "wavelength_count",
+                        format!(
+                            "no bounded, reversible RGB → spectrum basis exists on the {n} wavelengths over \
+                             {lo}..{hi} nm: {why}; use more wavelengths (any count from 12 up over 380..780 nm \
+                             works; 41 is the default)"
+                        ),
+                    ))
+                }
+            },
+        };
+        // Reflectance round trip of the unit colours (exact unless the fallback was used).
+        let aw: [[f64; 3]; 3] = std::array::from_fn(|c| std::array::from_fn(|d| a[d].iter().zip(&w[c]).map(|(x, y)| x * y).sum()));
+        let round_trip_error = (0..3)
+            .flat_map(|c| (0..3).map(move |d| (c, d)))
+            .map(|(c, d)| (aw[c][d] - if c == d { 1.0 } else { 0.0 }).abs())
+            .fold(0.0f64, f64::max) as f32;
         let basis: [Vec<f32>; 3] = std::array::from_fn(|c| w[c].iter().map(|&v| v as f32).collect());
-        let emission: [Vec<f32>; 3] =
+        let mut emission: [Vec<f32>; 3] =
             std::array::from_fn(|c| w[c].iter().zip(&e).map(|(&wi, &ei)| (wi * ei / sums[c]) as f32).collect());
+        let mut emission_exact = true;
+        if fallback_samples.is_some() {
+            (emission, emission_exact) = exact_emission(&emission, &aw, &sums);
+        }
         let d65 = e.iter().map(|&v| (v / y_e) as f32).collect();
         let white = std::array::from_fn(|c| (sums[c] / y_e) as f32);
         let to_rgb = std::array::from_fn(|c| a[c].iter().map(|&v| v as f32).collect());
@@ -149,7 +185,24 @@ impl Uplift {
             UpliftMethod::Linear => None,
             UpliftMethod::Smooth => Some(SmoothTable::build(&lambdas, &a, space, SMOOTH_RES)),
         };
-        Ok(Self { method, basis, emission, d65, white, to_rgb, smooth })
+        Ok(Self { method, basis, emission, d65, white, to_rgb, smooth, round_trip_error, fallback_samples, emission_exact })
+    }
+
+    /// Largest error of the reflectance round trip RGB(basis_c) − unit RGB_c: 0 (up to
+    /// rounding) normally, a few percent on grids that needed the fallback.
+    pub fn round_trip_error(&self) -> f32 {
+        self.round_trip_error
+    }
+
+    /// Whether illuminant RGB round-trips exactly (false only for fallback curves that
+    /// could merely be rescaled per channel without going negative).
+    pub fn emission_round_trips_exactly(&self) -> bool {
+        self.emission_exact
+    }
+
+    /// Some(fine grid size) when the grid needed the cell-averaged fallback basis.
+    pub fn fallback_samples(&self) -> Option<usize> {
+        self.fallback_samples
     }
 
     pub fn method(&self) -> UpliftMethod {
@@ -424,6 +477,93 @@ fn laplacian_mul(h: &[f64], v: &[f64], out: &mut [f64]) {
         out[k] += d;
         out[k + 1] -= d;
     }
+}
+
+/// Fallback basis for grids on which the bounded reversible problem is infeasible: solve
+/// it on a fine uniform grid (41, else 81, else 161 samples) over the grid's own range,
+/// then average each fine basis curve (piecewise linear) over each coarse sample's cell
+/// (midpoints between samples; half cells at the ends). Averaging is linear, so `w ≥ 0`
+/// and `Σ_c w_c = 1` survive exactly (white stays flat 1, every RGB in [0,1]³ stays a
+/// reflectance in [0,1]); reversibility becomes approximate
+/// ([`Uplift::round_trip_error`]). Returns the basis and the fine grid's size.
+fn fallback_basis(grid: &WavelengthGrid, space: &RgbSpace) -> Option<([Vec<f64>; 3], usize)> {
+    let coarse = grid.lambdas();
+    let n = coarse.len();
+    let (lo, hi) = (coarse[0], coarse[n - 1]);
+    for m in [41usize, 81, 161] {
+        let Ok(fine) = WavelengthGrid::uniform(m, lo, hi) else { continue };
+        let Ok((_, k, _)) = reflectance_rows(&fine, space) else { continue };
+        let sums: Vec<f64> = k.iter().map(|row| row.iter().sum()).collect();
+        if sums.iter().any(|&s| !(s > 0.0)) {
+            continue;
+        }
+        let a: [Vec<f64>; 3] = std::array::from_fn(|c| k[c].iter().map(|v| v / sums[c]).collect());
+        let x: Vec<f64> = fine.lambdas().iter().map(|&l| l as f64).collect();
+        let h: Vec<f64> = x.windows(2).map(|p| 1.0 / (p[1] - p[0])).collect();
+        let Ok(wf) = solve_basis(&a, &h) else { continue };
+        let c: Vec<f64> = coarse.iter().map(|&l| l as f64).collect();
+        let mut w: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; n]);
+        for i in 0..n {
+            let a0 = if i == 0 { c[0] } else { 0.5 * (c[i - 1] + c[i]) };
+            let b0 = if i + 1 == n { c[n - 1] } else { 0.5 * (c[i] + c[i + 1]) };
+            for ch in 0..3 {
+                w[ch][i] = cell_average(&x, &wf[ch], a0, b0);
+            }
+        }
+        // Re-impose Σ = 1 against rounding (the averages of a partition of unity are one).
+        for i in 0..n {
+            let s: f64 = (0..3).map(|ch| w[ch][i].max(0.0)).sum();
+            for ch in 0..3 {
+                w[ch][i] = w[ch][i].max(0.0) / s;
+            }
+        }
+        return Some((w, m));
+    }
+    None
+}
+
+/// Mean of the piecewise-linear function (x, y) over [a, b] (b > a, inside x's range).
+fn cell_average(x: &[f64], y: &[f64], a: f64, b: f64) -> f64 {
+    let lerp = |k: usize, t: f64| y[k] + (y[k + 1] - y[k]) * (t - x[k]) / (x[k + 1] - x[k]);
+    let mut integral = 0.0;
+    for k in 0..x.len() - 1 {
+        let (s0, s1) = (a.max(x[k]), b.min(x[k + 1]));
+        if s1 > s0 {
+            integral += (s1 - s0) * 0.5 * (lerp(k, s0) + lerp(k, s1));
+        }
+    }
+    if b > a {
+        integral / (b - a)
+    } else {
+        y[0]
+    }
+}
+
+/// Emission basis that round-trips exactly although the reflectance basis does not:
+/// `G[d][c] = RGB_d(emission_c) = sums_d/sums_c · (A w_c)_d`; the curves are remixed by
+/// G⁻¹ so that RGB(emission_c) = e_c, or, where that would make a curve negative (no
+/// negative radiance), only rescaled so that each unit colour keeps its own channel.
+fn exact_emission(em: &[Vec<f32>; 3], aw: &[[f64; 3]; 3], sums: &[f64]) -> ([Vec<f32>; 3], bool) {
+    let g: [[f64; 3]; 3] = std::array::from_fn(|d| std::array::from_fn(|c| sums[d] / sums[c] * aw[c][d]));
+    let det = g[0][0] * (g[1][1] * g[2][2] - g[1][2] * g[2][1]) - g[0][1] * (g[1][0] * g[2][2] - g[1][2] * g[2][0])
+        + g[0][2] * (g[1][0] * g[2][1] - g[1][1] * g[2][0]);
+    if det.is_finite() && det.abs() > 1e-12 {
+        // Inverse by cofactors.
+        let inv: [[f64; 3]; 3] = std::array::from_fn(|r| {
+            std::array::from_fn(|c| {
+                let (r1, r2) = ((c + 1) % 3, (c + 2) % 3);
+                let (c1, c2) = ((r + 1) % 3, (r + 2) % 3);
+                (g[r1][c1] * g[r2][c2] - g[r1][c2] * g[r2][c1]) / det
+            })
+        });
+        let mixed: [Vec<f32>; 3] = std::array::from_fn(|c| {
+            (0..em[0].len()).map(|i| (0..3).map(|d| em[d][i] as f64 * inv[d][c]).sum::<f64>() as f32).collect()
+        });
+        if mixed.iter().all(|curve| curve.iter().all(|&v| v >= 0.0 && v.is_finite())) {
+            return (mixed, true);
+        }
+    }
+    (std::array::from_fn(|c| em[c].iter().map(|&v| if g[c][c] > 0.0 { (v as f64 / g[c][c]) as f32 } else { v }).collect()), false)
 }
 
 /// Minimum-variation bounded reversible basis for the 3 × n map `a` and edge weights `h`.
@@ -1595,15 +1735,55 @@ mod tests {
         let e = Uplift::new(&g, &RgbSpace::rec709(), UpliftMethod::Linear).unwrap_err();
         assert!(e.to_string().contains("wavelength_count"), "{e}");
         // 8 samples over 380..780 nm: the bounded reversible problem is infeasible (also
-        // confirmed by an independent LP solver, HiGHS); the error says what to do.
+        // confirmed by an independent LP solver, HiGHS): the cell-averaged fallback is used.
         let g = WavelengthGrid::uniform(8, 380.0, 780.0).unwrap();
-        let e = Uplift::new(&g, &RgbSpace::rec709(), UpliftMethod::Smooth).unwrap_err();
-        assert!(e.to_string().contains("wavelength_count") && e.to_string().contains("cannot"), "{e}");
+        let up = Uplift::new(&g, &RgbSpace::rec709(), UpliftMethod::Smooth).unwrap();
+        assert_eq!(up.fallback_samples(), Some(41));
         // From 12 samples up every uniform count over 380..780 nm works (checked up to 401).
         for n in (12..=41).chain([6, 10, 57, 81]) {
             let g = WavelengthGrid::uniform(n, 380.0, 780.0).unwrap();
             if let Err(e) = Uplift::new(&g, &RgbSpace::rec709(), UpliftMethod::Linear) {
                 panic!("{n} samples: {e}");
+            }
+        }
+    }
+
+    #[test]
+    fn small_infeasible_grids_use_the_cell_averaged_fallback() {
+        let space = RgbSpace::rec709();
+        for n in 4..=11 {
+            let g = WavelengthGrid::uniform(n, 380.0, 780.0).unwrap();
+            let up = Uplift::new(&g, &space, UpliftMethod::Linear).unwrap_or_else(|e| panic!("{n}: {e}"));
+            let [r, gr, b] = up.reflectance_basis();
+            for i in 0..n {
+                // Bounded and a partition of unity: white is flat 1.
+                assert!(r[i] >= 0.0 && gr[i] >= 0.0 && b[i] >= 0.0, "{n}: {i}");
+                assert!((r[i] + gr[i] + b[i] - 1.0).abs() < 1e-6, "{n}: {i}");
+            }
+            let mut out = vec![0.0; n];
+            up.reflectance_into([1.0, 1.0, 1.0], &mut out);
+            assert!(out.iter().all(|v| (v - 1.0).abs() < 1e-6), "{n}: {out:?}");
+            // Reversibility is approximate on the fallback grids, and reported.
+            let err = up.round_trip_error();
+            eprintln!("{n} samples: fallback {:?}, round-trip error {err:.4}", up.fallback_samples());
+            // (4 and 5 samples are too coarse for any colour round trip: only finiteness there.)
+            assert!(err.is_finite() && (n <= 5 || err < 0.3), "{n}: round trip {err}");
+            if up.fallback_samples().is_none() {
+                assert!(err < 1e-4, "{n}: exact basis with round-trip error {err}");
+            }
+            // Emission still round-trips exactly through the grid's observer.
+            let obs = Observer::new(&g);
+            for c in 0..3 {
+                let mut rgb = [0.0f32; 3];
+                rgb[c] = 2.0;
+                up.illuminant_into(rgb, &mut out);
+                assert!(out.iter().all(|v| *v >= 0.0 && v.is_finite()), "{n}: {out:?}");
+                let got = space.xyz_to_rgb(obs.xyz(&out));
+                for d in 0..3 {
+                    let want = if c == d { 2.0 } else { 0.0 };
+                    let tol = if n <= 5 { f64::INFINITY } else if up.fallback_samples().is_some() && !up.emission_exact { 0.4 } else { 1e-3 };
+                    assert!((got[d] - want).abs() < tol, "{n}: unit {c} channel {d}: {got:?} (round trip {err})");
+                }
             }
         }
     }

@@ -65,6 +65,12 @@ impl FilmBuffer {
         let mut a = s.albedo.clone();
         a.mul_assign(albedo_white);
         let axyz = observer.xyz(a.values());
+        // The auxiliary passes are guarded too: a NaN depth, normal or albedo would
+        // otherwise reach its pass unseen (SPEC §8: no NaN in any pass).
+        if !(s.depth.is_finite() && s.normal.is_finite() && axyz.iter().all(|v| v.is_finite())) {
+            self.nonfinite += 1;
+            return;
+        }
         for k in 0..3 {
             self.xyz[i][k] += xyz[k];
             self.albedo_xyz[i][k] += axyz[k];

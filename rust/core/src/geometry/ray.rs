@@ -42,6 +42,23 @@ pub fn offset_ray_origin(p: Vec3A, n: Vec3A) -> Vec3A {
     Vec3A::new(pick(p.x, pi[0], n.x), pick(p.y, pi[1], n.y), pick(p.z, pi[2], n.z))
 }
 
+/// Length of a shadow ray that leaves from `origin` (the shading point `p` moved off its
+/// surface by [`offset_ray_origin`]) along `wi` towards a light point `distance` from `p`,
+/// stopping just short of the light's surface. Two things matter far from the origin
+/// (found by the scene-translated-by-1e6 test, where area lights shadowed themselves):
+/// the distance is measured from the offset origin (the offset is 256 ulps of the
+/// coordinates: 0.25 units at 1e4, 16 at 1e6, far more than a relative 1e-4 of the
+/// distance), and the margin grows with the coordinates (16 ulps of the larger end).
+pub fn shadow_ray_tmax(p: Vec3A, origin: Vec3A, wi: Vec3A, distance: f32) -> f32 {
+    if !distance.is_finite() {
+        return f32::INFINITY;
+    }
+    let end = p + wi * distance;
+    let along = (end - origin).dot(wi);
+    let magnitude = origin.abs().max_element().max(end.abs().max_element());
+    (along * (1.0 - 1e-4) - magnitude * (16.0 * f32::EPSILON)).max(0.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -54,6 +71,26 @@ mod tests {
             let q = offset_ray_origin(p, n);
             assert!(q.z > p.z, "scale {s}");
             assert!((q - p).length() <= 1e-4f32.max(s * 1e-4));
+        }
+    }
+
+    #[test]
+    fn shadow_rays_stop_short_of_the_light_at_any_scale() {
+        for &s in &[0.0f32, 1.0, 1e3, 1e6, 1e7] {
+            let o = Vec3A::splat(s);
+            let t = shadow_ray_tmax(o, o, Vec3A::Z, 100.0);
+            // Short of the end by more than the end point's own rounding (a few ulps)...
+            assert!(t < 100.0 && (o.z + 100.0) - (o.z + t) >= 4.0 * (s + 100.0) * f32::EPSILON, "{s}: {t}");
+            // ...but not by more than a few percent at 1e6 units and nothing at the origin.
+            assert!(t > 100.0 * (1.0 - 1e-4) - 1e-3 * s.max(1.0), "{s}: {t}");
+        }
+        assert_eq!(shadow_ray_tmax(Vec3A::ZERO, Vec3A::ZERO, Vec3A::Z, f32::INFINITY), f32::INFINITY);
+        // From an offset origin the ray still ends before the light, at any scale.
+        for &s in &[1.0f32, 1e4, 1e6] {
+            let p = Vec3A::new(s, -s, s);
+            let origin = offset_ray_origin(p, Vec3A::Z);
+            let t = shadow_ray_tmax(p, origin, Vec3A::Z, 200.0);
+            assert!(origin.z + t < p.z + 200.0, "{s}: {t}");
         }
     }
 }

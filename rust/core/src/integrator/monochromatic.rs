@@ -178,11 +178,9 @@ impl MonochromaticTracer {
                             let f = s.f.get(lambda);
                             if f > 0.0 {
                                 let origin = offset_ray_origin(si.p, ng);
-                                let tmax = if ls.distance.is_finite() {
-                                    ls.distance * (1.0 - 1e-4)
-                                } else {
-                                    f32::INFINITY
-                                };
+                                // Stop short of the light by a margin that grows with the
+                                // coordinates (a light 1e6 units away could shadow itself).
+                                let tmax = crate::geometry::shadow_ray_tmax(si.p, origin, ls.wi, ls.distance);
                                 if !scene.occluded(&Ray::segment(origin, ls.wi, tmax)) {
                                     let light_pdf = pmf * ls.pdf;
                                     let w = if ls.delta {
