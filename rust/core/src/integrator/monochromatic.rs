@@ -178,10 +178,9 @@ impl MonochromaticTracer {
                             let f = s.f.get(lambda);
                             if f > 0.0 {
                                 let origin = offset_ray_origin(si.p, ng);
-                                // Stop short of the light by a margin that grows with the
-                                // coordinates (a light 1e6 units away could shadow itself).
-                                let tmax = crate::geometry::shadow_ray_tmax(si.p, origin, ls.wi, ls.distance);
-                                if !scene.occluded(&Ray::segment(origin, ls.wi, tmax)) {
+                                // Aimed from the offset origin at the light point, stopping
+                                // short of it (robust far from the origin: 1e6 units).
+                                if !scene.occluded(&crate::geometry::shadow_ray(si.p, origin, ls.wi, ls.distance)) {
                                     let light_pdf = pmf * ls.pdf;
                                     let w = if ls.delta {
                                         1.0

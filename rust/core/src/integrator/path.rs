@@ -113,9 +113,8 @@ impl Integrator for PathTracer {
                         let same_side = ls.wi.dot(ng) > 0.0;
                         if !f.is_black() && same_side {
                             let origin = offset_ray_origin(si.p, ng);
-                            // Stop short of the light by a margin that grows with the coordinates (1e6 units).
-                            let tmax = crate::geometry::shadow_ray_tmax(si.p, origin, ls.wi, ls.distance);
-                            if !scene.occluded(&Ray::segment(origin, ls.wi, tmax)) {
+                            // Aimed from the offset origin at the light point, stopping short (robust at 1e6 units).
+                            if !scene.occluded(&crate::geometry::shadow_ray(si.p, origin, ls.wi, ls.distance)) {
                                 let light_pdf = pmf * ls.pdf;
                                 let w = if ls.delta { 1.0 } else { power_heuristic(light_pdf, bsdf_pdf) };
                                 f.mul_assign(&beta);
