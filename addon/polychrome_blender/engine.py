@@ -10,8 +10,9 @@ import time
 import traceback
 
 import bpy
+import numpy as np
 
-from . import passes
+from . import passes, viewport
 
 
 def settings_from_scene(pc, props, width, height):
@@ -29,6 +30,53 @@ def settings_from_scene(pc, props, width, height):
     elif props.direction != "BACKWARD":
         raise ValueError(f"setting 'direction': '{props.direction}' is not supported by this polychrome version (only BACKWARD)")
     return pc.RenderSettings(**values)
+
+
+def viewport_settings(pc, props, width=1, height=1):
+    """Settings of the interactive viewport render: the scene's, with the viewport's
+    sample count, no time limit and no spectral passes."""
+    settings = settings_from_scene(pc, props, width, height)
+    values = dict(samples=int(props.viewport_samples), time_limit=0.0)
+    if "spectral_output" in {f.name for f in dataclasses.fields(pc.RenderSettings)}:
+        values["spectral_output"] = False
+    return dataclasses.replace(settings, **values)
+
+
+def material_preview_settings(pc, props, width, height):
+    """Settings of material / world / light preview renders (small, few samples)."""
+    settings = settings_from_scene(pc, props, width, height)
+    values = dict(samples=viewport.MATERIAL_PREVIEW_SAMPLES, time_limit=viewport.MATERIAL_PREVIEW_TIME_LIMIT)
+    if "spectral_output" in {f.name for f in dataclasses.fields(pc.RenderSettings)}:
+        values["spectral_output"] = False
+    return dataclasses.replace(settings, **values)
+
+
+def sync_viewport_scene(session, pc, depsgraph):
+    """``view_update``'s work: re-exports the evaluated depsgraph and the viewport
+    settings into ``session``; the render restarts (in ``sync``) only if the exported scene
+    or the settings differ from what is rendering. Returns the export warnings."""
+    scene, warnings = export_scene_for_view(pc, depsgraph)
+    desc, buffers = scene.description()
+    session.set_scene(desc, buffers)
+    session.set_settings(viewport_settings(pc, depsgraph.scene.polychrome))
+    session.sync()
+    return warnings
+
+
+def export_scene_for_view(pc, depsgraph):
+    from .export import export_scene
+
+    return export_scene(pc, depsgraph, camera=pc.Camera(name="Viewport"))
+
+
+def sync_viewport_view(session, pc, region_data, region_width, region_height, pixel_size):
+    """``view_draw``'s work before drawing: the view's camera and size into ``session``
+    (restarting the render if they changed); returns the render size."""
+    width, height = viewport.viewport_size(region_width, region_height, pixel_size)
+    camera = viewport.view_camera(pc, region_data.view_matrix, region_data.window_matrix, width, height)
+    session.set_view(camera, width, height)
+    session.sync()
+    return width, height
 
 
 def border_rect(scene, width, height):
@@ -49,7 +97,7 @@ def border_rect(scene, width, height):
 class PolychromeRenderEngine(bpy.types.RenderEngine):
     bl_idname = "POLYCHROME"
     bl_label = "Polychrome"
-    bl_use_preview = False
+    bl_use_preview = True  # material, world and light previews render through render()
     bl_use_shading_nodes_custom = False  # keep the standard Shader Editor
     bl_use_postprocess = True
 
@@ -60,6 +108,92 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
     last_stats = None
     # Optional callable(done, total) -> bool that cancels like Esc when it returns True.
     test_break_hook = None
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.session = None  # ViewportSession of an interactive viewport render
+        self._texture = None
+        self._texture_serial = None
+        self._reported = set()
+
+    def __del__(self):
+        # Blender frees the engine when the viewport stops rendering or closes: never
+        # leave a render thread behind (Blender would otherwise wait on exit).
+        try:
+            session = getattr(self, "session", None)
+            if session is not None:
+                self.session = None
+                session.free(timeout=2.0)
+        except Exception:  # noqa: BLE001 - the RNA struct may already be gone
+            pass
+
+    def _report_once(self, level, msg):
+        reported = getattr(self, "_reported", None)
+        if reported is None:
+            reported = self._reported = set()
+        if msg not in reported:
+            reported.add(msg)
+            self._report(level, msg)
+
+    def view_update(self, context, depsgraph):
+        """Called on every depsgraph change while the viewport shows Rendered shading:
+        re-export and restart the render when the scene or settings changed."""
+        import polychrome as pc
+
+        try:
+            if getattr(self, "session", None) is None:
+                self.session = viewport.ViewportSession(pc)
+            for w in sync_viewport_scene(self.session, pc, depsgraph):
+                self._report_once("WARNING", w)
+        except BaseException as e:  # noqa: BLE001 - nothing may escape into Blender
+            self._report_once("ERROR", str(e) or type(e).__name__)
+            if not isinstance(e, (ValueError, TypeError)):
+                traceback.print_exc()
+        self.tag_redraw()
+
+    def view_draw(self, context, depsgraph):
+        """Draws the newest preview; restarts the render when the view changed, and asks
+        for another redraw while it refines."""
+        import polychrome as pc
+
+        session = getattr(self, "session", None)
+        if session is None:
+            return
+        try:
+            props = depsgraph.scene.polychrome
+            region = context.region
+            sync_viewport_view(session, pc, context.region_data, region.width, region.height,
+                               props.viewport_pixel_size)
+            session.poll()
+            if session.error:
+                self._report_once("ERROR", session.error)
+            if session.latest is not None:
+                self._draw_preview(depsgraph.scene, session.latest, region.width, region.height)
+            if session.refining:
+                self.update_stats("", f"Polychrome | viewport | sample {session.samples}/{props.viewport_samples}")
+                self.tag_redraw()
+            elif session.latest is not None:
+                self.update_stats("", f"Polychrome | viewport | {session.samples} samples")
+        except BaseException as e:  # noqa: BLE001
+            self._report_once("ERROR", str(e) or type(e).__name__)
+            if not isinstance(e, (ValueError, TypeError)):
+                traceback.print_exc()
+
+    def _draw_preview(self, scene, preview, region_width, region_height):
+        import gpu
+        from gpu_extras.presets import draw_texture_2d
+
+        if getattr(self, "_texture_serial", None) != preview.serial or getattr(self, "_texture", None) is None:
+            h, w = preview.rgba.shape[:2]
+            rgba = np.nan_to_num(np.ascontiguousarray(preview.rgba[::-1], np.float32), nan=0.0, posinf=0.0, neginf=0.0)
+            buf = gpu.types.Buffer("FLOAT", rgba.size, rgba.ravel())
+            self._texture = gpu.types.GPUTexture((w, h), format="RGBA16F", data=buf)
+            self._texture_serial = preview.serial
+        gpu.state.blend_set("ALPHA_PREMULT")
+        self.bind_display_space_shader(scene)
+        draw_texture_2d(self._texture, (0, 0), region_width, region_height)
+        self.unbind_display_space_shader()
+        gpu.state.blend_set("NONE")
 
     def update_render_passes(self, scene=None, renderlayer=None):
         passes.register_passes(self, scene, renderlayer)
@@ -114,13 +248,17 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
 
         cls = type(self)
         props = depsgraph.scene.polychrome
-        settings = settings_from_scene(pc, props, width, height)
+        if self.is_preview:
+            settings = material_preview_settings(pc, props, width, height)
+        else:
+            settings = settings_from_scene(pc, props, width, height)
         self.update_stats("", "Polychrome | exporting scene")
         t0 = time.perf_counter()
         scene, warnings = export_scene(pc, depsgraph)
         cls.last_warnings = list(warnings)
-        for w in warnings:
-            self._report("WARNING", w)
+        if not self.is_preview:  # the preview scene's checker floor etc. would warn every time
+            for w in warnings:
+                self._report("WARNING", w)
         export_time = time.perf_counter() - t0
         if self.test_break():
             return None
@@ -159,4 +297,5 @@ def register():
 
 
 def unregister():
+    viewport.free_all()
     bpy.utils.unregister_class(PolychromeRenderEngine)

@@ -43,6 +43,15 @@ class PolychromeRenderSettings(bpy.types.PropertyGroup):
                     "into the render result and multilayer EXR",
         default=False)
     threads: IntProperty(name="Threads", description="Worker threads (0: every core)", default=0, min=0, max=1024)
+    viewport_samples: IntProperty(
+        name="Viewport Samples",
+        description="Samples per pixel of the interactive viewport render (it refines up to this many, "
+                    "restarting on every edit or view change)",
+        default=256, min=1, soft_max=4096)
+    viewport_pixel_size: IntProperty(
+        name="Viewport Pixel Size",
+        description="Screen pixels per rendered pixel in the viewport (larger: faster, blockier)",
+        default=2, min=1, max=16)
 
 
 classes = (PolychromeRenderSettings,)

@@ -55,6 +55,9 @@ class RENDER_PT_polychrome(bpy.types.Panel):
         col.prop(props, "max_bounces")
         col.prop(props, "seed")
         col.prop(props, "threads")
+        col = layout.column(heading="Viewport")
+        col.prop(props, "viewport_samples", text="Samples")
+        col.prop(props, "viewport_pixel_size", text="Pixel Size")
 
 
 classes = (RENDER_PT_polychrome,)

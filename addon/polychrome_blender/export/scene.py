@@ -8,11 +8,12 @@ from .warnings import Warnings
 from .world import export_world
 
 
-def export_scene(pc, depsgraph):
-    """Returns ``(polychrome.Scene, [warning messages])``."""
+def export_scene(pc, depsgraph, camera=None):
+    """Returns ``(polychrome.Scene, [warning messages])``. ``camera`` (a
+    ``polychrome.Camera``, e.g. the viewport's) replaces the scene camera."""
     warnings = Warnings()
     scene = pc.Scene()
-    scene.camera = export_camera(pc, depsgraph, warnings)
+    scene.camera = export_camera(pc, depsgraph, warnings) if camera is None else camera
     materials = MaterialTable(pc, scene, warnings)
     export_meshes(pc, depsgraph, scene, materials, warnings)
     export_lights(pc, depsgraph, scene, warnings)
