@@ -18,6 +18,10 @@ from .scene import Scene
 METHODS = ("POLYCHROMATIC", "MONOCHROMATIC_RAYS", "MONOCHROMATIC_SCENES", "RGB")
 DIRECTIONS = ("BACKWARD", "FORWARD", "BIDIRECTIONAL")
 UPLIFTS = ("LINEAR", "SMOOTH")
+#: ``quality`` presets; AUTO fits the grid to the scene and samples adaptively.
+QUALITIES = ("AUTO", "PREVIEW", "FINAL", "REFERENCE")
+#: Settings a quality preset fills when they are left at None (not set explicitly).
+QUALITY_FIELDS = ("samples", "max_bounces", "wavelength_count", "wavelengths", "noise_threshold")
 
 
 @dataclass
@@ -26,34 +30,48 @@ class RenderSettings:
 
     width: int = 320
     height: int = 240
-    samples: int = 64
+    #: None: chosen by ``quality`` (the maximum per pixel when sampling adaptively).
+    samples: int | None = None
     method: str = "POLYCHROMATIC"
     #: BACKWARD (from the camera), FORWARD (light tracing) or BIDIRECTIONAL.
     direction: str = "BACKWARD"
     #: POLYCHROMATIC only: split into one monochromatic path per wavelength at the
     #: first dispersive surface instead of choosing one (deterministic mode).
     dispersion_splitting: bool = False
-    wavelength_count: int = 41
+    #: None (and no ``wavelengths``): the grid is chosen by ``quality``.
+    wavelength_count: int | None = None
     wavelength_min: float = 380.0
     wavelength_max: float = 780.0
     wavelengths: list[float] | None = None
-    max_bounces: int = 8
+    max_bounces: int | None = None
     seed: int = 0
     threads: int = 0
     time_limit: float = 0.0
     uplift: str = "LINEAR"
     spectral_output: bool = False
+    #: AUTO, PREVIEW, FINAL or REFERENCE: fills every setting of QUALITY_FIELDS left at
+    #: None; a value given explicitly always wins.
+    quality: str = "AUTO"
+    #: Adaptive sampling: stop a pixel at this estimated ΔE (0: off; None: from quality).
+    noise_threshold: float | None = None
 
     def to_json(self) -> str:
-        d = asdict(self)
+        d = {k: v for k, v in asdict(self).items() if v is not None or k not in QUALITY_FIELDS}
+        if str(d["quality"]).upper() not in QUALITIES:
+            raise ValueError(f"setting 'quality': '{d['quality']}' is not one of {', '.join(QUALITIES)}")
+        d["quality"] = d["quality"].upper()
+        if "noise_threshold" in d:
+            d["noise_threshold"] = float(d["noise_threshold"])
+            if not d["noise_threshold"] >= 0:
+                raise ValueError(f"setting 'noise_threshold': {d['noise_threshold']} must be 0 (off) or positive")
         d["method"] = d["method"].upper()
         d["direction"] = d["direction"].upper()
         d["dispersion_splitting"] = bool(d["dispersion_splitting"])
         d["uplift"] = d["uplift"].upper()
-        if d["wavelengths"] is not None:
+        if d.get("wavelengths") is not None:
             d["wavelengths"] = [float(x) for x in d["wavelengths"]]
         for k in ("width", "height", "samples", "max_bounces", "seed", "threads", "wavelength_count"):
-            if int(d[k]) < 0:
+            if k in d and int(d[k]) < 0:
                 raise ValueError(f"setting '{k}': {d[k]} must not be negative")
         return json.dumps(d)
 

@@ -21,6 +21,9 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+pub mod quality;
+pub use quality::Quality;
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "SCREAMING_SNAKE_CASE")]
 pub enum Method {
@@ -81,6 +84,16 @@ pub struct RenderSettings {
     pub uplift: UpliftMethod,
     /// Keep the per-pixel spectrum (for spectral EXR output).
     pub spectral_output: bool,
+    /// AUTO (default), PREVIEW, FINAL or REFERENCE: fills every setting not given
+    /// explicitly (samples, max_bounces, noise_threshold, the grid); see [`quality`].
+    pub quality: Quality,
+    /// Adaptive sampling target: a pixel stops once its estimated error (ΔE, see
+    /// [`quality::pixel_error`]) is at most this; 0 renders every pixel `samples` times.
+    pub noise_threshold: f32,
+    /// The fields the user set (keys of the settings JSON, see [`Self::from_json`]);
+    /// None means every field is explicit (a struct built in Rust).
+    #[serde(skip)]
+    pub explicit: Option<std::collections::BTreeSet<String>>,
 }
 
 impl Default for RenderSettings {
@@ -102,11 +115,32 @@ impl Default for RenderSettings {
             time_limit: 0.0,
             uplift: UpliftMethod::Linear,
             spectral_output: false,
+            quality: Quality::Auto,
+            noise_threshold: 0.0,
+            explicit: None,
         }
     }
 }
 
 impl RenderSettings {
+    /// Parses settings JSON, recording its keys as the explicitly set fields (the
+    /// quality preset fills the others).
+    pub fn from_json(json: &str) -> Result<Self> {
+        let value: serde_json::Value = serde_json::from_str(json).map_err(|e| Error::setting("settings", e.to_string()))?;
+        let keys = value.as_object().map(|m| m.keys().cloned().collect()).unwrap_or_default();
+        let mut s: Self = serde_json::from_value(value).map_err(|e| Error::setting("settings", e.to_string()))?;
+        s.explicit = Some(keys);
+        Ok(s)
+    }
+    /// Settings with nothing explicit: everything comes from `quality` (and the scene).
+    pub fn with_quality(quality: Quality) -> Self {
+        Self { quality, explicit: Some(Default::default()), ..Self::default() }
+    }
+    /// Whether `field` was set by the user (always true when `explicit` is None).
+    pub fn is_explicit(&self, field: &str) -> bool {
+        self.explicit.as_ref().is_none_or(|e| e.contains(field))
+    }
+
     pub fn grid(&self) -> Result<WavelengthGrid> {
         match &self.wavelengths {
             Some(l) => WavelengthGrid::from_wavelengths(l.clone()),
@@ -123,6 +157,9 @@ impl RenderSettings {
         }
         if !(self.time_limit.is_finite() && self.time_limit >= 0.0) {
             return Err(Error::setting("time_limit", format!("{} s must be 0 (none) or positive", self.time_limit)));
+        }
+        if !(self.noise_threshold.is_finite() && self.noise_threshold >= 0.0) {
+            return Err(Error::setting("noise_threshold", format!("{} must be 0 (off) or a positive ΔE", self.noise_threshold)));
         }
         if self.max_bounces > 1024 {
             return Err(Error::setting("max_bounces", format!("{} exceeds 1024", self.max_bounces)));
@@ -218,6 +255,17 @@ pub struct RenderStats {
     pub triangles: usize,
     /// Bytes held by textures and HDRIs (RGB texels + environment sampling tables).
     pub texture_bytes: usize,
+    /// The quality preset and what it (AUTO: the scene) chose, in short sentences.
+    pub quality: Quality,
+    pub auto_reason: Vec<String>,
+    /// Camera samples taken over all pixels (adaptive sampling stops pixels early).
+    pub total_samples: u64,
+    /// The adaptive target used (0: off) and the pixels that reached it.
+    pub noise_threshold: f32,
+    pub converged_pixels: u64,
+    /// The resolved samples per pixel (the maximum when adaptive) and max_bounces.
+    pub max_samples: u32,
+    pub max_bounces: u32,
     /// Largest reflectance round-trip error of the RGB → spectrum map on this grid: 0
     /// normally; a few percent (more on 4–5 samples) on grids that needed the
     /// cell-averaged fallback basis (see color/uplift.rs).
@@ -245,13 +293,18 @@ impl RgbToSpectrum for NoRgb {
 /// Renders a scene description. Cancelling returns the samples finished so far.
 pub fn render(desc: &SceneDesc, buffers: &[Buffer], settings: &RenderSettings, control: &RenderControl) -> Result<RenderOutput> {
     settings.validate()?;
+    let (resolved, reasons) = quality::resolve(settings, Some(desc))?;
+    let settings = &resolved;
+    settings.validate()?;
     let grid = settings.grid()?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(settings.threads)
         .build()
         .map_err(|e| Error::setting("threads", e.to_string()))?;
     let threads = pool.current_num_threads();
-    pool.install(|| render_in_pool(desc, buffers, settings, grid, control, threads))
+    let mut out = pool.install(|| render_in_pool(desc, buffers, settings, grid, control, threads))?;
+    out.stats.auto_reason.splice(0..0, reasons);
+    Ok(out)
 }
 
 fn render_in_pool(
@@ -278,6 +331,8 @@ fn render_in_pool(
 /// swap in their own materials or lights.
 pub fn render_scene(scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> Result<RenderOutput> {
     settings.validate()?;
+    let (resolved, reasons) = quality::resolve(settings, None)?;
+    let settings = &resolved;
     if scene.camera.width() != settings.width || scene.camera.height() != settings.height {
         return Err(Error::setting("width", format!("the scene was built for {}×{} pixels, settings ask for {}×{}", scene.camera.width(), scene.camera.height(), settings.width, settings.height)));
     }
@@ -289,7 +344,9 @@ pub fn render_scene(scene: &Scene, settings: &RenderSettings, control: &RenderCo
         .build()
         .map_err(|e| Error::setting("threads", e.to_string()))?;
     let threads = pool.current_num_threads();
-    pool.install(|| render_built(scene, settings, control, threads, Instant::now(), 0.0))
+    let mut out = pool.install(|| render_built(scene, settings, control, threads, Instant::now(), 0.0))?;
+    out.stats.auto_reason.splice(0..0, reasons);
+    Ok(out)
 }
 
 /// Light paths per parallel work item of a forward pass (fixed, so the image does not
@@ -346,6 +403,14 @@ fn render_built(
         .collect();
     let mut film = Film::new(w, h, settings.spectral_output.then_some(n));
     let mut done_spp = 0u32;
+    // Adaptive sampling (quality.rs): each pass's samples are split into two halves;
+    // the first half's sums per pixel and the film's sums give the error estimate.
+    let adaptive = settings.noise_threshold > 0.0 && quality::adaptive_supported(settings);
+    let pixels = (w * h) as usize;
+    let mut active: Vec<bool> = if adaptive { vec![true; pixels] } else { Vec::new() };
+    let mut half_xyz: Vec<[f64; 3]> = if adaptive { vec![[0.0; 3]; pixels] } else { Vec::new() };
+    let mut half_count: Vec<u32> = if adaptive { vec![0; pixels] } else { Vec::new() };
+    let mut pixel_err: Vec<f64> = if adaptive { vec![f64::INFINITY; pixels] } else { Vec::new() };
     let mut last_preview: Option<Instant> = None;
     let mut time_limited = false;
     // MONOCHROMATIC_SCENES stopped (cancel, time limit) after some wavelength images.
@@ -363,8 +428,11 @@ fn render_built(
                 break 'rounds;
             }
             // Passes grow so progress stays smooth early and overhead stays low later.
-            let pass = (round_spp / 4).clamp(1, 16).min(samples - round_spp);
+            let pass = (round_spp / 4).clamp(if adaptive { 2 } else { 1 }, 16).min(samples - round_spp);
             let range = round_spp..round_spp + pass;
+            if adaptive && !active.iter().any(|&a| a) {
+                break 'rounds;
+            }
             // Tiles of camera paths; merged after the light paths of the same pass so a
             // cancel during either discards the whole pass.
             let mut camera_tiles: Vec<Option<FilmBuffer>> = Vec::new();
@@ -389,10 +457,40 @@ fn render_built(
                         }
                     }
                 };
+                if adaptive {
+                    // First half of the pass: also summed into the half buffer.
+                    let mid = range.start + pass / 2;
+                    let first: Vec<Option<FilmBuffer>> = tiles
+                        .par_iter()
+                        .map(|&t| render_tile_masked(scene, &sampler, t, range.start..mid, &albedo_white, settings.spectral_output, control, Some(&active)))
+                        .collect();
+                    if first.iter().all(|r| r.is_some()) {
+                        for (&(x0, y0, tw, _), r) in tiles.iter().zip(&first) {
+                            let b = r.as_ref().expect("checked above");
+                            for (t, (xyz, c)) in b.xyz.iter().zip(&b.count).enumerate() {
+                                let i = ((y0 + t as u32 / tw) * w + x0 + t as u32 % tw) as usize;
+                                for k in 0..3 {
+                                    half_xyz[i][k] += xyz[k];
+                                }
+                                half_count[i] += c;
+                            }
+                        }
+                        for (&(x0, y0, tw, th), r) in tiles.iter().zip(first) {
+                            film.merge_tile(x0, y0, tw, th, &r.expect("checked above"));
+                        }
+                        camera_tiles = tiles
+                            .par_iter()
+                            .map(|&t| render_tile_masked(scene, &sampler, t, mid..range.end, &albedo_white, settings.spectral_output, control, Some(&active)))
+                            .collect();
+                    } else {
+                        camera_tiles = first;
+                    }
+                } else {
                 camera_tiles = tiles
                     .par_iter()
                     .map(|&t| render_tile(scene, &sampler, t, range.clone(), &albedo_white, settings.spectral_output, control))
                     .collect();
+                }
                 if camera_tiles.iter().any(|r| r.is_none()) {
                     incomplete_spectrum = mono_scenes && (round > 0 || round_spp > 0);
                     break 'rounds; // cancelled mid-pass: the pass is discarded so every pixel has the same count
@@ -449,6 +547,9 @@ fn render_built(
             if round == 0 || !mono_scenes {
                 done_spp += pass;
             }
+            if adaptive {
+                quality::update_active(&mut active, &mut pixel_err, &half_xyz, &half_count, &film.buffer.xyz, &film.buffer.count, w, h, settings.noise_threshold as f64, done_spp >= quality::ADAPTIVE_MIN_SAMPLES.min(samples));
+            }
             if control.previews_requested() && last_preview.is_none_or(|t| t.elapsed() >= PREVIEW_INTERVAL) {
                 control.publish_preview(film.rgba(&scene.space), w, h, done_spp, false);
                 last_preview = Some(Instant::now());
@@ -470,6 +571,13 @@ fn render_built(
         lights: scene.lights.len(),
         triangles: scene.meshes.iter().map(|m| m.indices.len()).sum(),
         texture_bytes: scene.texture_bytes,
+        quality: settings.quality,
+        auto_reason: Vec::new(),
+        total_samples: film.buffer.count.iter().map(|&c| c as u64).sum(),
+        noise_threshold: if adaptive { settings.noise_threshold } else { 0.0 },
+        converged_pixels: if adaptive { active.iter().filter(|&&a| !a).count() as u64 } else { 0 },
+        max_samples: settings.samples,
+        max_bounces: settings.max_bounces,
         uplift_round_trip_error: scene.uplift.as_ref().map_or(0.0, |u| u.round_trip_error()),
     };
     let images = film.images(&scene.space);
@@ -505,11 +613,26 @@ type Sampler<'a> = dyn Fn(u32, u32, u64, u32, &mut PixelSample, &mut Scratch) + 
 fn render_tile(
     scene: &Scene,
     sampler: &Sampler,
+    tile: (u32, u32, u32, u32),
+    samples: std::ops::Range<u32>,
+    albedo_white: &SampledSpectrum,
+    spectral: bool,
+    control: &RenderControl,
+) -> Option<FilmBuffer> {
+    render_tile_masked(scene, sampler, tile, samples, albedo_white, spectral, control, None)
+}
+
+/// [`render_tile`] that skips the pixels whose `active` entry is false (adaptive sampling).
+#[allow(clippy::too_many_arguments)]
+fn render_tile_masked(
+    scene: &Scene,
+    sampler: &Sampler,
     (x0, y0, tw, th): (u32, u32, u32, u32),
     samples: std::ops::Range<u32>,
     albedo_white: &SampledSpectrum,
     spectral: bool,
     control: &RenderControl,
+    active: Option<&[bool]>,
 ) -> Option<FilmBuffer> {
     let n = scene.grid.len();
     let mut buf = FilmBuffer::new((tw * th) as usize, spectral.then_some(n));
@@ -523,6 +646,9 @@ fn render_tile(
         for tx in 0..tw {
             let (x, y) = (x0 + tx, y0 + ty);
             let pixel = y as u64 * width + x as u64;
+            if active.is_some_and(|a| !a[pixel as usize]) {
+                continue;
+            }
             for s in samples.clone() {
                 ps.reset();
                 sampler(x, y, pixel, s, &mut ps, &mut scratch);
