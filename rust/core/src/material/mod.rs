@@ -12,8 +12,11 @@ pub mod diffuse;
 pub mod dispersion;
 pub mod fresnel;
 pub mod microfacet;
+pub mod mix;
 pub mod param;
+pub mod principled;
 pub mod texture;
+pub mod thinfilm;
 
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 use glam::{Vec2, Vec3A};
@@ -24,6 +27,9 @@ pub use diffuse::Diffuse;
 pub use dispersion::{IndexOfRefraction, IorDesc};
 pub use param::SpectralParam;
 pub use texture::{Texture, Wrap};
+pub use mix::MixBsdf;
+pub use principled::{Principled, PrincipledParams};
+pub use thinfilm::ThinFilm;
 
 /// What an integrator needs to know about a BSDF without evaluating it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -106,6 +106,51 @@ pub enum BsdfDesc {
         #[serde(default)]
         roughness: f32,
     },
+    /// Blender's Principled BSDF: a diffuse base (`base_color`) under a dielectric GGX
+    /// specular layer (Fresnel at `ior`, optional thin film), blended towards a metal
+    /// (`metallic`, base colour as F0, F82 `specular_tint`) and a rough glass
+    /// (`transmission`, tinted by the base colour). See `material::principled`.
+    Principled {
+        #[serde(default = "default_base_color")]
+        base_color: SpectrumDesc,
+        #[serde(default)]
+        metallic: f32,
+        #[serde(default = "half")]
+        roughness: f32,
+        #[serde(default)]
+        ior: crate::material::IorDesc,
+        #[serde(default)]
+        transmission: f32,
+        /// The metal's tint at ~82° (Blender's Specular Tint); white when absent.
+        #[serde(default)]
+        specular_tint: Option<SpectrumDesc>,
+        /// Thin film on the specular interface (nm; 0: none).
+        #[serde(default)]
+        thin_film_thickness: f32,
+        #[serde(default = "default_thin_film_ior")]
+        thin_film_ior: f32,
+    },
+    /// Blender's Mix Shader: (1 − factor)·a + factor·b.
+    Mix {
+        a: Box<BsdfDesc>,
+        b: Box<BsdfDesc>,
+        #[serde(default = "half")]
+        factor: f32,
+    },
+    /// Blender's Add Shader: a + b.
+    Add { a: Box<BsdfDesc>, b: Box<BsdfDesc> },
+}
+
+fn default_base_color() -> SpectrumDesc {
+    SpectrumDesc::constant(0.8)
+}
+
+fn half() -> f32 {
+    0.5
+}
+
+fn default_thin_film_ior() -> f32 {
+    1.33
 }
 
 impl Default for BsdfDesc {

@@ -3,6 +3,7 @@
 //! distribution ready.
 
 pub mod desc;
+pub mod layered;
 pub mod optics;
 
 use crate::accel::{Accel, Hit};
@@ -205,6 +206,10 @@ impl Scene {
                     optics::build_conductor(&m.name, metal.as_deref(), eta, k, *roughness, &grid)?
                 }
                 BsdfDesc::Glossy { reflectance, roughness } => optics::build_glossy(&m.name, spectrum(reflectance, SpectrumRole::Reflectance, "reflectance")?, *roughness)?,
+                BsdfDesc::Principled { .. } | BsdfDesc::Mix { .. } | BsdfDesc::Add { .. } => {
+                    let b = layered::BsdfBuild { grid: &grid, rgb: &rgb, textures: &textures, uplift: uplift.as_ref() };
+                    layered::build_bsdf(&b, &m.name, &m.bsdf)?
+                }
             };
             let emission = match &m.emission {
                 Some(e) => Some(spectrum(e, SpectrumRole::Illuminant, "emission")?).filter(|s| !s.is_black()),

@@ -1,0 +1,248 @@
+//! Building the layered and combined BSDFs (Principled, Mix, Add) from their
+//! descriptions, recursively: a Mix or Add may hold any BSDF description, including
+//! another Mix or a Principled.
+
+use super::{BsdfDesc, BuildUplift};
+use crate::color::uplift::Uplift;
+use crate::material::principled::{Principled, PrincipledParams};
+use crate::material::{
+    Black, Bsdf, Diffuse, IndexOfRefraction, MixBsdf, SpectralParam, Texture, ThinFilm,
+};
+use crate::spectrum::named::{SpectrumKind, SpectrumRole};
+use crate::spectrum::{SampledSpectrum, SpectrumDesc, WavelengthGrid};
+use crate::{Error, Result};
+use std::sync::Arc;
+
+/// Deepest nesting of Mix/Add accepted (guards against runaway descriptions).
+const MAX_DEPTH: usize = 32;
+
+/// What building a BSDF needs from the scene being built.
+pub(super) struct BsdfBuild<'a> {
+    pub grid: &'a WavelengthGrid,
+    pub rgb: &'a BuildUplift<'a>,
+    pub textures: &'a [Arc<Texture>],
+    pub uplift: Option<&'a Arc<Uplift>>,
+}
+
+impl BsdfBuild<'_> {
+    fn spectrum(
+        &self,
+        d: &SpectrumDesc,
+        role: SpectrumRole,
+        material: &str,
+        what: &str,
+    ) -> Result<SampledSpectrum> {
+        Ok(SampledSpectrum::from_slice(&self.rgb.evaluate(
+            d, self.grid, role, "material", material, what,
+        )?))
+    }
+
+    /// A reflectance in 0..1: a constant spectrum or an RGB texture converted per hit.
+    fn reflectance(&self, d: &SpectrumDesc, material: &str, what: &str) -> Result<SpectralParam> {
+        if let SpectrumKind::Texture { texture: t } = d.kind {
+            let texture = self.textures.get(t).ok_or_else(|| {
+                Error::object(
+                    "material",
+                    material,
+                    format!(
+                        "{what}: texture {t} does not exist ({} textures)",
+                        self.textures.len()
+                    ),
+                )
+            })?;
+            let Some(up) = self.uplift else {
+                return Err(Error::object("material", material, format!("{what}: texture '{}' cannot be used on this wavelength grid (no RGB → spectrum map)", texture.name)));
+            };
+            let scale = d.scale;
+            if !(scale.is_finite() && (0.0..=1.0).contains(&scale)) {
+                return Err(Error::object(
+                    "material",
+                    material,
+                    format!("{what}: texture scale {scale} must be in 0..1 (energy conserving)"),
+                ));
+            }
+            return Ok(SpectralParam::Texture {
+                texture: texture.clone(),
+                uplift: up.clone(),
+                scale,
+            });
+        }
+        let r = self.spectrum(d, SpectrumRole::Reflectance, material, what)?;
+        if r.max_value() > 1.0 {
+            return Err(Error::object(
+                "material",
+                material,
+                format!("{what} {} exceeds 1 (not energy conserving)", r.max_value()),
+            ));
+        }
+        if !r.is_finite() || r.values().iter().any(|&v| v < 0.0) {
+            return Err(Error::object(
+                "material",
+                material,
+                format!("{what} must be finite and non-negative"),
+            ));
+        }
+        Ok(SpectralParam::Constant(r))
+    }
+}
+
+fn unit_weight(material: &str, what: &str, v: f32) -> Result<f32> {
+    if !(v.is_finite() && (0.0..=1.0).contains(&v)) {
+        return Err(Error::object(
+            "material",
+            material,
+            format!("{what} {v} must be in 0..1"),
+        ));
+    }
+    Ok(v)
+}
+
+/// Builds any BSDF description (the Principled, Mix and Add arms of `Scene::build`,
+/// and every BSDF nested inside a Mix or Add).
+pub(super) fn build_bsdf(b: &BsdfBuild, material: &str, d: &BsdfDesc) -> Result<Box<dyn Bsdf>> {
+    build_at(b, material, d, 0)
+}
+
+fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result<Box<dyn Bsdf>> {
+    if depth > MAX_DEPTH {
+        return Err(Error::object(
+            "material",
+            material,
+            format!("mix/add shaders nested deeper than {MAX_DEPTH}"),
+        ));
+    }
+    Ok(match d {
+        BsdfDesc::Diffuse { reflectance } => Box::new(Diffuse {
+            reflectance: b.reflectance(reflectance, material, "reflectance")?,
+        }),
+        BsdfDesc::None => Box::new(Black),
+        BsdfDesc::Dielectric { ior, roughness } => {
+            super::optics::build_dielectric(material, ior, *roughness, b.grid)?
+        }
+        BsdfDesc::Conductor {
+            metal,
+            eta,
+            k,
+            roughness,
+        } => {
+            let eta = eta
+                .as_ref()
+                .map(|d| b.spectrum(d, SpectrumRole::Unbounded, material, "eta"))
+                .transpose()?;
+            let k = k
+                .as_ref()
+                .map(|d| b.spectrum(d, SpectrumRole::Unbounded, material, "k"))
+                .transpose()?;
+            super::optics::build_conductor(material, metal.as_deref(), eta, k, *roughness, b.grid)?
+        }
+        BsdfDesc::Glossy {
+            reflectance,
+            roughness,
+        } => super::optics::build_glossy(
+            material,
+            b.spectrum(
+                reflectance,
+                SpectrumRole::Reflectance,
+                material,
+                "reflectance",
+            )?,
+            *roughness,
+        )?,
+        BsdfDesc::Principled {
+            base_color,
+            metallic,
+            roughness,
+            ior,
+            transmission,
+            specular_tint,
+            thin_film_thickness,
+            thin_film_ior,
+        } => {
+            let base_color = b.reflectance(base_color, material, "base_color")?;
+            let metallic = unit_weight(material, "metallic", *metallic)?;
+            let transmission = unit_weight(material, "transmission", *transmission)?;
+            let roughness = unit_weight(material, "roughness", *roughness)?;
+            let index = IndexOfRefraction::build(ior, b.grid, material)?;
+            let n = b.grid.len();
+            let specular_tint = match specular_tint {
+                Some(t) => {
+                    let s = b.spectrum(t, SpectrumRole::Reflectance, material, "specular_tint")?;
+                    if !s.is_finite() || s.max_value() > 1.0 || s.values().iter().any(|&v| v < 0.0)
+                    {
+                        return Err(Error::object(
+                            "material",
+                            material,
+                            "specular_tint must lie in 0..1",
+                        ));
+                    }
+                    s
+                }
+                None => SampledSpectrum::splat(n, 1.0),
+            };
+            let (d_nm, n_film) = (*thin_film_thickness, *thin_film_ior);
+            if !(d_nm.is_finite() && (0.0..=100_000.0).contains(&d_nm)) {
+                return Err(Error::object(
+                    "material",
+                    material,
+                    format!("thin_film_thickness {d_nm} nm must be in 0..100000"),
+                ));
+            }
+            if !(n_film.is_finite() && (1.0..=10.0).contains(&n_film)) {
+                return Err(Error::object(
+                    "material",
+                    material,
+                    format!("thin_film_ior {n_film} must be in 1..10"),
+                ));
+            }
+            let thin_film = Some(ThinFilm {
+                thickness_nm: d_nm,
+                ior: n_film,
+            })
+            .filter(|f| f.active());
+            let glass = if transmission > 0.0 {
+                Some(super::optics::build_dielectric(
+                    material, ior, roughness, b.grid,
+                )?)
+            } else {
+                None
+            };
+            Box::new(Principled::new(
+                PrincipledParams {
+                    base_color,
+                    metallic,
+                    transmission,
+                    roughness,
+                    ior: index,
+                    specular_tint,
+                    thin_film,
+                    glass,
+                },
+                b.grid,
+            ))
+        }
+        BsdfDesc::Mix {
+            a,
+            b: second,
+            factor,
+        } => {
+            let f = unit_weight(material, "mix factor", *factor)?;
+            Box::new(MixBsdf::mix(
+                build_at(b, material, a, depth + 1)?,
+                build_at(b, material, second, depth + 1)?,
+                f,
+            ))
+        }
+        BsdfDesc::Add { a, b: second } => Box::new(MixBsdf::add(
+            build_at(b, material, a, depth + 1)?,
+            build_at(b, material, second, depth + 1)?,
+        )),
+        #[allow(unreachable_patterns)]
+        _ => {
+            return Err(Error::object(
+                "material",
+                material,
+                "this BSDF cannot be used inside a mix or add shader",
+            ))
+        }
+    })
+}
