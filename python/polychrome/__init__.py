@@ -16,6 +16,7 @@ from .render import RenderResult, RenderSettings, render
 from .scene import Camera, Diffuse, Emitter, Material, PointLight, Scene, look_at
 from . import ior
 from .scene import Conductor, Dielectric, Glossy, SpotLight, SunLight
+from .scene import Add, Mix, Principled
 from .texture import Texture
 from .job import Preview, RenderJob
 
@@ -24,6 +25,9 @@ __all__ = [
     "Conductor",
     "Dielectric",
     "Glossy",
+    "Principled",
+    "Mix",
+    "Add",
     "SpotLight",
     "SunLight",
     "ior",

@@ -268,6 +268,118 @@ class SunLight:
         return {"type": "distant", "name": self.name, "direction": d, "irradiance": irradiance.to_dict()}
 
 
+def _unit(value: Any, what: str, name: str) -> float:
+    v = float(value)
+    if not (math.isfinite(v) and 0.0 <= v <= 1.0):
+        raise ValueError(f"material '{name}': {what} {value} must be in 0..1")
+    return v
+
+
+def _sum_emission(parts: list[tuple[float, Spectrum | None]], name: str) -> Spectrum | None:
+    """Weighted sum of emissions: kept exact when one part emits or all are RGB."""
+    parts = [(w, e) for w, e in parts if e is not None and w > 0.0]
+    if not parts:
+        return None
+    if len(parts) == 1:
+        return parts[0][1] * parts[0][0]
+    if all(e.kind == "rgb" for _, e in parts):
+        rgb = [sum(w * e.scale * e.params["rgb"][c] for w, e in parts) for c in range(3)]
+        return spectra.rgb(*rgb)
+    if all(e.kind == "constant" for _, e in parts):
+        return spectra.constant(sum(w * e.scale * e.params["value"] for w, e in parts))
+    raise ValueError(f"material '{name}': cannot combine emissions of kinds {[e.kind for _, e in parts]}; give emission= explicitly")
+
+
+class Principled(Material):
+    """Blender's Principled BSDF: a diffuse ``base_color`` (a spectrum, number, RGB
+    triple or :class:`~polychrome.Texture`) under a dielectric GGX specular layer with
+    Fresnel at ``ior`` (a number or a :mod:`polychrome.ior` model: a dispersive index
+    also disperses the transmitted light), blended towards a metal (``metallic``, base
+    colour as F0, ``specular_tint`` at grazing angles) and a rough glass
+    (``transmission``, tinted by the base colour). ``thin_film_thickness`` (nm) and
+    ``thin_film_ior`` put an interference film on the specular interface (and on the
+    metal). ``roughness`` as Blender's (alpha = roughness²). Defaults are Blender's."""
+
+    def __init__(
+        self,
+        base_color: Any = 0.8,
+        *,
+        metallic: float = 0.0,
+        roughness: float = 0.5,
+        ior: Any = 1.5,
+        transmission: float = 0.0,
+        specular_tint: Any = None,
+        thin_film_thickness: float = 0.0,
+        thin_film_ior: float = 1.33,
+        emission: Any = None,
+        name: str = "Principled",
+    ):
+        from .ior import as_ior
+
+        self.base_color = base_color if isinstance(base_color, Texture) else as_spectrum(base_color)
+        self.metallic = _unit(metallic, "metallic", name)
+        self.roughness = _roughness(roughness, name)
+        self.ior = as_ior(ior)
+        self.transmission = _unit(transmission, "transmission", name)
+        self.specular_tint = None if specular_tint is None else as_spectrum(specular_tint)
+        t = float(thin_film_thickness)
+        if not (math.isfinite(t) and 0.0 <= t <= 100_000.0):
+            raise ValueError(f"material '{name}': thin_film_thickness {thin_film_thickness} nm must be in 0..100000")
+        n = float(thin_film_ior)
+        if not (math.isfinite(n) and 1.0 <= n <= 10.0):
+            raise ValueError(f"material '{name}': thin_film_ior {thin_film_ior} must be in 1..10")
+        self.thin_film_thickness, self.thin_film_ior = t, n
+        self.emission = None if emission is None else as_spectrum(emission)
+        self.name = name
+
+    def bsdf_dict(self) -> dict[str, Any]:
+        d: dict[str, Any] = {
+            "type": "principled",
+            "base_color": self.base_color.to_dict(),
+            "metallic": self.metallic,
+            "roughness": self.roughness,
+            "ior": self.ior.to_dict(),
+            "transmission": self.transmission,
+            "thin_film_thickness": self.thin_film_thickness,
+            "thin_film_ior": self.thin_film_ior,
+        }
+        if self.specular_tint is not None:
+            d["specular_tint"] = self.specular_tint.to_dict()
+        return d
+
+
+class Mix(Material):
+    """Blender's Mix Shader of two materials: ``(1 − factor)·a + factor·b`` (factor 0
+    gives ``a``, 1 gives ``b``). Emissions mix the same way unless ``emission`` is
+    given. Mixes nest: ``a`` and ``b`` may be any material, including a Mix."""
+
+    def __init__(self, a: Material, b: Material, factor: float = 0.5, *, emission: Any = None, name: str = "Mix"):
+        if not isinstance(a, Material) or not isinstance(b, Material):
+            raise TypeError(f"material '{name}': a and b must be polychrome materials")
+        self.a, self.b = a, b
+        self.factor = _unit(factor, "factor", name)
+        self.name = name
+        self.emission = as_spectrum(emission) if emission is not None else _sum_emission([(1.0 - self.factor, a.emission), (self.factor, b.emission)], name)
+
+    def bsdf_dict(self) -> dict[str, Any]:
+        return {"type": "mix", "a": self.a.bsdf_dict(), "b": self.b.bsdf_dict(), "factor": self.factor}
+
+
+class Add(Material):
+    """Blender's Add Shader: ``a + b`` (emissions add too). Like Cycles, it may reflect
+    more light than it receives when ``a`` and ``b`` together do."""
+
+    def __init__(self, a: Material, b: Material, *, emission: Any = None, name: str = "Add"):
+        if not isinstance(a, Material) or not isinstance(b, Material):
+            raise TypeError(f"material '{name}': a and b must be polychrome materials")
+        self.a, self.b = a, b
+        self.name = name
+        self.emission = as_spectrum(emission) if emission is not None else _sum_emission([(1.0, a.emission), (1.0, b.emission)], name)
+
+    def bsdf_dict(self) -> dict[str, Any]:
+        return {"type": "add", "a": self.a.bsdf_dict(), "b": self.b.bsdf_dict()}
+
+
 class Scene:
     """A scene description: camera, materials, meshes, instances, lights, world."""
 
@@ -449,3 +561,4 @@ class Scene:
 
 __all__ = ["Camera", "Material", "Diffuse", "Emitter", "PointLight", "Scene", "Texture", "look_at", "spectra"]
 __all__ += ["Dielectric", "Conductor", "Glossy", "SpotLight", "SunLight"]
+__all__ += ["Principled", "Mix", "Add"]

@@ -1,0 +1,166 @@
+"""Principled, Mix and Add through the Python API, against closed forms computed here:
+Fresnel at normal incidence, thin-film interference per wavelength (transfer-matrix
+formula written independently of the core's Airy sum), a white Principled base in a
+white world, and the mix of two diffuse colours."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import polychrome as pc
+
+
+def luminance(rgba: np.ndarray) -> np.ndarray:
+    return 0.2126 * rgba[..., 0] + 0.7152 * rgba[..., 1] + 0.0722 * rgba[..., 2]
+
+
+def plane_scene(material: pc.Material) -> pc.Scene:
+    """A large plane at z = 0 seen straight down by an orthographic camera (normal
+    incidence everywhere), under a world of radiance 1 at every wavelength."""
+    scene = pc.Scene()
+    m = np.eye(4)
+    m[2, 3] = 5.0
+    scene.camera = pc.Camera(to_world=m, projection="ORTHOGRAPHIC", ortho_scale=1.0)
+    v = np.array([[-4, -4, 0], [4, -4, 0], [4, 4, 0], [-4, 4, 0]], dtype=np.float32)
+    scene.add_mesh("plane", v, np.array([[0, 1, 2], [0, 2, 3]]), material=material)
+    scene.set_world(pc.spectra.constant(1.0))
+    return scene
+
+
+@pytest.mark.parametrize("n", [1.33, 1.5, 2.4])
+def test_black_base_reflects_normal_incidence_fresnel(n):
+    scene = plane_scene(pc.Principled((0.0, 0.0, 0.0), roughness=0.0, ior=n))
+    out = pc.render(scene, width=4, height=4, samples=2, max_bounces=4)
+    expected = ((n - 1) / (n + 1)) ** 2
+    assert np.allclose(luminance(out.rgba), expected, rtol=2e-3), (luminance(out.rgba).mean(), expected)
+
+
+def film_reflectance(lam: np.ndarray, d: float, n1: float, n2: float) -> np.ndarray:
+    """Normal-incidence reflectance of one film (n1, d) on a substrate n2 from air, by
+    the characteristic matrix [[cos δ, i sin δ/n1], [i n1 sin δ, cos δ]] (Macleod)."""
+    delta = 2 * np.pi * n1 * d / lam
+    b = np.cos(delta) + 1j * np.sin(delta) * n2 / n1
+    c = 1j * n1 * np.sin(delta) + n2 * np.cos(delta)
+    r = (b - c) / (b + c)
+    return np.abs(r) ** 2
+
+
+def test_thin_film_interference_is_spectral():
+    """A quarter-wave film (n = √1.5, d = 550/(4n) nm) on a smooth black-base Principled:
+    the spectral pass holds the textbook film reflectance at every grid wavelength
+    (zero at 550 nm), which no RGB product can reproduce."""
+    n_sub = 1.5
+    n_film = math.sqrt(n_sub)
+    d = 550.0 / (4 * n_film)
+    mat = pc.Principled(0.0, roughness=0.0, ior=n_sub, thin_film_thickness=d, thin_film_ior=n_film)
+    out = pc.render(plane_scene(mat), width=2, height=2, samples=1, max_bounces=4, wavelength_count=41, spectral_output=True)
+    spectrum = out.spectral.reshape(-1, out.spectral.shape[-1]).mean(axis=0)
+    expected = film_reflectance(np.asarray(out.wavelengths, dtype=np.float64), d, n_film, n_sub)
+    assert np.allclose(spectrum, expected, atol=2e-5), np.c_[out.wavelengths, spectrum, expected]
+    i550 = int(np.argmin(np.abs(out.wavelengths - 550.0)))
+    assert spectrum[i550] < 1e-5
+    # Without the film: the flat 4 % of bare glass.
+    bare = pc.render(plane_scene(pc.Principled(0.0, roughness=0.0, ior=n_sub)), width=2, height=2, samples=1,
+                     max_bounces=4, wavelength_count=41, spectral_output=True)
+    assert np.allclose(bare.spectral, 0.04, atol=1e-5)
+
+
+def sphere(radius: float = 1.0, rings: int = 24, segments: int = 48) -> tuple[np.ndarray, np.ndarray]:
+    v = [[0.0, 0.0, radius]]
+    for i in range(1, rings):
+        th = math.pi * i / rings
+        for j in range(segments):
+            ph = 2 * math.pi * j / segments
+            v.append([radius * math.sin(th) * math.cos(ph), radius * math.sin(th) * math.sin(ph), radius * math.cos(th)])
+    v.append([0.0, 0.0, -radius])
+    t = []
+    for j in range(segments):
+        t.append([0, 1 + j, 1 + (j + 1) % segments])
+    for i in range(rings - 2):
+        for j in range(segments):
+            a, b = 1 + i * segments + j, 1 + i * segments + (j + 1) % segments
+            t += [[a, a + segments, b + segments], [a, b + segments, b]]
+    last = len(v) - 1
+    for j in range(segments):
+        a, b = 1 + (rings - 2) * segments + j, 1 + (rings - 2) * segments + (j + 1) % segments
+        t.append([a, last, b])
+    return np.array(v, dtype=np.float32), np.array(t)
+
+
+def convex_scene(material: pc.Material) -> pc.Scene:
+    """A sphere filling the view under a uniform white (D65-shaped, luminance 1) world:
+    a convex object sees only the world, so its radiance is (directional albedo) × world."""
+    scene = pc.Scene()
+    scene.camera = pc.Camera.looking_at((0, -6, 0), (0, 0, 0), focal_length=200.0)  # the sphere fills the frame
+    v, t = sphere()
+    scene.add_mesh("ball", v, t, material=material)
+    scene.set_world((1.0, 1.0, 1.0))
+    return scene
+
+
+def on_sphere(out) -> np.ndarray:
+    """RGB of the pixels that see the sphere (non-zero normal pass), every pixel."""
+    hit = np.linalg.norm(out.normal, axis=-1) > 0.5
+    assert hit.all(), hit.mean()
+    return out.rgba[..., :3][hit]
+
+
+def test_white_principled_base_is_invisible_in_a_white_world():
+    """Energy conservation: a white base under the specular layer returns all the light
+    at every angle, so in a uniform world the sphere has the world's colour (1, 1, 1)."""
+    for roughness in (0.0, 0.5, 1.0):
+        out = pc.render(convex_scene(pc.Principled((1.0, 1.0, 1.0), roughness=roughness)), width=16, height=16, samples=32, max_bounces=4)
+        rgb = on_sphere(out)
+        assert np.allclose(rgb.mean(axis=0), 1.0, atol=0.01), (roughness, rgb.mean(axis=0))
+        assert out.stats["nonfinite_samples"] == 0
+
+
+def test_mix_of_red_and_blue_diffuse_is_the_mixed_colour():
+    """Mix(a, b, t) of two diffuse colours = diffuse (1 − t)·a + t·b: in a white world a
+    convex diffuse object shows its reflectance's colour (the uplift round-trips RGB
+    under the D65 white)."""
+    red, blue = (0.8, 0.1, 0.1), (0.1, 0.1, 0.8)
+    for t in (0.0, 0.5, 0.8):
+        mat = pc.Mix(pc.Diffuse(red), pc.Diffuse(blue), t)
+        out = pc.render(convex_scene(mat), width=12, height=12, samples=16, max_bounces=2)
+        got = on_sphere(out).mean(axis=0)
+        expected = (1 - t) * np.array(red) + t * np.array(blue)
+        assert np.allclose(got, expected, atol=0.01), (t, got, expected)
+
+
+def test_add_and_mix_emission_and_description():
+    a = pc.Diffuse(0.5, emission=(1.0, 0.0, 0.0))
+    b = pc.Principled((0.2, 0.3, 0.4), metallic=0.3, transmission=0.2, ior=pc.ior.named("N-BK7"),
+                      specular_tint=(1.0, 0.9, 0.8), thin_film_thickness=300.0)
+    m = pc.Mix(a, b, 0.25)
+    def rgb(e):
+        return [c * e.scale for c in e.params["rgb"]]
+
+    assert m.emission.kind == "rgb" and rgb(m.emission) == pytest.approx([0.75, 0.0, 0.0])
+    d = m.bsdf_dict()
+    assert d["type"] == "mix" and d["factor"] == 0.25 and d["a"]["type"] == "diffuse"
+    assert d["b"]["type"] == "principled" and d["b"]["thin_film_thickness"] == 300.0 and d["b"]["ior"]["type"] == "named"
+    add = pc.Add(pc.Mix(a, b), pc.Emitter((0.0, 1.0, 0.0)))
+    assert rgb(add.emission) == pytest.approx([0.5, 1.0, 0.0])
+    assert add.bsdf_dict()["b"] == {"type": "none"}
+    # Renders (nested mix, dispersive glass lobe) with finite values.
+    out = pc.render(convex_scene(add), width=6, height=6, samples=4, max_bounces=6)
+    assert np.all(np.isfinite(out.rgba)) and out.stats["nonfinite_samples"] == 0
+
+
+def test_bad_parameters_are_value_errors_naming_the_material():
+    with pytest.raises(ValueError, match="material 'P'"):
+        pc.Principled(metallic=1.2, name="P")
+    with pytest.raises(ValueError, match="thin_film_ior"):
+        pc.Principled(thin_film_thickness=100.0, thin_film_ior=0.5, name="P")
+    with pytest.raises(ValueError, match="material 'M'"):
+        pc.Mix(pc.Diffuse(), pc.Diffuse(), 1.5, name="M")
+    with pytest.raises(TypeError):
+        pc.Mix(pc.Diffuse(), 0.5)
+    # The core rejects a base colour above 1 (energy) naming the material.
+    scene = plane_scene(pc.Principled(2.0, name="Bright"))
+    with pytest.raises(ValueError, match="material 'Bright'"):
+        pc.render(scene, width=2, height=2, samples=1)
