@@ -87,10 +87,13 @@ def test_standard_nodes_map_to_polychrome_bsdfs(tmp_path):
     assert m["Glass"]["bsdf"]["type"] == "dielectric"
     assert m["Glass"]["bsdf"]["ior"] == {"type": "constant", "ior": pytest.approx(1.33)}
     assert m["Gloss"]["bsdf"] == {"type": "glossy", "reflectance": m["Gloss"]["bsdf"]["reflectance"], "roughness": pytest.approx(0.3)}
-    assert m["Metal"]["bsdf"]["type"] == "glossy"
-    assert m["Clear"]["bsdf"]["type"] == "dielectric"
-    assert m["Paint"]["bsdf"]["type"] == "diffuse"
-    assert m["Paint"]["bsdf"]["reflectance"]["rgb"] == pytest.approx([0.2, 0.3, 0.4])
+    # Principled BSDFs map to polychrome.Principled with their lobe weights
+    # (tests/blender/test_principled_mix.py checks the mapping in detail).
+    assert m["Metal"]["bsdf"]["type"] == "principled" and m["Metal"]["bsdf"]["metallic"] == 1.0
+    assert m["Clear"]["bsdf"]["type"] == "principled" and m["Clear"]["bsdf"]["transmission"] == 1.0
+    assert m["Clear"]["bsdf"]["ior"] == {"type": "constant", "ior": pytest.approx(1.45)}
+    assert m["Paint"]["bsdf"]["type"] == "principled"
+    assert m["Paint"]["bsdf"]["base_color"]["rgb"] == pytest.approx([0.2, 0.3, 0.4])
     warm = m["Warm"]["emission"]
     assert warm["type"] == "blackbody" and warm["temperature"] == 3000.0
     # luminance of the exported blackbody = Emission strength (Cycles normalises Blackbody

@@ -1,9 +1,13 @@
 """Blender materials → polychrome materials.
 
-Supported: Principled BSDF (base colour, emission colour × strength; metallic ≥ 0.5 →
-``polychrome.Glossy`` tinted by base colour, transmission ≥ 0.5 → ``polychrome.Dielectric``
-with IOR and roughness), Diffuse, Glossy, Glass BSDF, Emission (colour or Blackbody),
-Image Texture on a colour, Polychrome's own nodes (see ``nodes.py``). Anything else becomes a grey diffuse with one warning naming material and node.
+Supported: Principled BSDF → ``polychrome.Principled`` (base colour or image texture,
+metallic, roughness, IOR — or a Polychrome Dispersion node linked to IOR —, transmission,
+specular tint, thin film, emission colour × strength), Mix Shader and Add Shader of
+supported shaders → ``polychrome.Mix`` / ``polychrome.Add`` (nested), Diffuse, Glossy,
+Glass BSDF, Emission (colour or Blackbody), Image Texture on a colour, Polychrome's own
+nodes (see ``nodes.py``). Anything else becomes a grey diffuse with one warning naming
+material and node. With a polychrome that lacks ``Principled`` the older mapping is used
+(metallic ≥ 0.5 → Glossy, transmission ≥ 0.5 → Dielectric, else Diffuse).
 """
 
 GREY = (0.8, 0.8, 0.8)
@@ -93,6 +97,65 @@ def _ior(node, mat):
     return n
 
 
+def _linked_node(sock):
+    """The node feeding ``sock`` through reroutes, or None."""
+    while sock is not None and sock.is_linked:
+        node = sock.links[0].from_node
+        if node.type != "REROUTE":
+            return node
+        sock = node.inputs[0]
+    return None
+
+
+def _clamp01(v):
+    return min(max(float(v), 0.0), 1.0)
+
+
+def _principled_full(pc, mat, node, warnings, base, emission):
+    """Principled BSDF → ``polychrome.Principled`` with every lobe it has."""
+    ior = _ior(node, mat)
+    src = _linked_node(node.inputs["IOR"])
+    if src is not None and hasattr(src, "polychrome_ior"):
+        src.polychrome_export(pc, mat, warnings)  # validates the index over 380–780 nm
+        ior = src.polychrome_ior(pc)
+    elif src is not None:
+        warnings.add(("link", mat.name, src.name),
+                     f"material '{mat.name}': node '{src.name}' ({src.bl_idname}) driving 'IOR' is not supported; its default value is used")
+    for name, value in (("Coat Weight", 0.0), ("Sheen Weight", 0.0), ("Subsurface Weight", 0.0)):
+        sock = node.inputs.get(name)
+        if sock is not None and (sock.is_linked or float(sock.default_value) != value):
+            warnings.add(("principled-lobe", mat.name, name),
+                         f"material '{mat.name}': '{node.name}' {name} is not supported yet and is ignored")
+    level = node.inputs.get("Specular IOR Level")
+    if level is not None and abs(float(level.default_value) - 0.5) > 1e-6:
+        warnings.add(("principled-level", mat.name),
+                     f"material '{mat.name}': '{node.name}' Specular IOR Level is ignored (0.5 assumed)")
+    tint = None
+    if node.inputs.get("Specular Tint") is not None:
+        t = _input_colour(mat, node, "Specular Tint", warnings, pc)
+        if t != (1.0, 1.0, 1.0):
+            tint = tuple(_clamp01(c) for c in t)
+    film_d = float(node.inputs["Thin Film Thickness"].default_value) if node.inputs.get("Thin Film Thickness") else 0.0
+    film_n = float(node.inputs["Thin Film IOR"].default_value) if node.inputs.get("Thin Film IOR") else 1.33
+    if film_d > 0.0 and film_n < 1.0:
+        warnings.add(("film-ior", mat.name), f"material '{mat.name}': Thin Film IOR {film_n:.3g} below 1 is raised to 1")
+        film_n = 1.0
+    if isinstance(base, tuple):
+        base = tuple(_clamp01(c) for c in base)
+    return pc.Principled(
+        base,
+        metallic=_clamp01(_input_value(node, "Metallic")),
+        roughness=_clamp01(_input_value(node, "Roughness")),
+        ior=ior,
+        transmission=_clamp01(_input_value(node, "Transmission Weight")),
+        specular_tint=tint,
+        thin_film_thickness=max(film_d, 0.0),
+        thin_film_ior=film_n,
+        emission=emission,
+        name=mat.name,
+    )
+
+
 def _principled(pc, mat, node, warnings):
     base = _input_colour(mat, node, "Base Color", warnings, pc, allow_texture=True)
     emission = None
@@ -101,6 +164,8 @@ def _principled(pc, mat, node, warnings):
         espec = _emission_spectrum(pc, mat, node, "Emission Color", warnings)
         if espec.kind != "rgb" or max(espec.params["rgb"]) > 0.0:
             emission = espec * strength
+    if hasattr(pc, "Principled"):
+        return _principled_full(pc, mat, node, warnings, base, emission)
     metallic = _input_value(node, "Metallic")
     transmission = _input_value(node, "Transmission Weight")
     roughness = min(max(_input_value(node, "Roughness"), 0.0), 1.0)
@@ -129,7 +194,43 @@ def export_material(pc, mat, warnings):
         if mat.use_nodes:
             return pc.Diffuse((0.0, 0.0, 0.0), name=mat.name)  # nothing connected: black, as Cycles
         return pc.Diffuse(_rgb(mat.diffuse_color), name=mat.name)
+    return _export_node(pc, mat, node, warnings)
+
+
+def _no_closure(pc, mat):
+    """An unconnected shader input: no scattering, no emission (as Cycles)."""
+    m = pc.Emitter((0.0, 0.0, 0.0), name=mat.name)
+    m.emission = None
+    return m
+
+
+def _mix_shader(pc, mat, node, warnings, depth):
+    """Mix Shader / Add Shader of supported shaders → ``polychrome.Mix`` / ``polychrome.Add``."""
+    shaders = [sock for sock in node.inputs if sock.type == "SHADER"]
+    if len(shaders) != 2 or depth > 16:
+        warnings.add(("node", mat.name, node.name),
+                     f"material '{mat.name}': node '{node.name}' ({node.bl_idname}) is not supported; rendered as grey diffuse")
+        return pc.Diffuse(GREY, name=mat.name)
+    parts = []
+    for sock in shaders:
+        child = _linked_node(sock)
+        parts.append(_no_closure(pc, mat) if child is None else _export_node(pc, mat, child, warnings, depth + 1))
+    if node.type == "ADD_SHADER":
+        return pc.Add(parts[0], parts[1], name=mat.name)
+    fac = node.inputs[0]
+    if fac.is_linked:
+        src = _linked_node(fac)
+        warnings.add(("link", mat.name, node.name),
+                     f"material '{mat.name}': node '{src.name if src else '?'}' driving the factor of '{node.name}' is not supported; "
+                     f"its value {float(fac.default_value):.3g} is used")
+    return pc.Mix(parts[0], parts[1], _clamp01(fac.default_value), name=mat.name)
+
+
+def _export_node(pc, mat, node, warnings, depth=0):
+    """One shader node (on the Surface output or inside a Mix/Add) → a polychrome material."""
     t = node.type
+    if t in ("MIX_SHADER", "ADD_SHADER") and hasattr(pc, "Mix"):
+        return _mix_shader(pc, mat, node, warnings, depth)
     if t == "BSDF_PRINCIPLED":
         return _principled(pc, mat, node, warnings)
     if t == "BSDF_DIFFUSE":

@@ -1,0 +1,167 @@
+"""Blender's Principled BSDF, Mix Shader and Add Shader through the add-on (bpy in
+subprocesses): export mapping, a default Principled cube against Cycles CPU, and a Mix
+of red and blue diffuse rendering as the mixed colour."""
+
+import numpy as np
+import pytest
+
+from .bhelper import check, run_bpy
+
+pytestmark = pytest.mark.blender
+
+
+def test_principled_mix_add_map_to_polychrome(tmp_path):
+    proc, res = run_bpy(tmp_path, """
+    import polychrome as pc
+    from polychrome_blender.export import export_scene
+    sc = empty_scene(8, 8)
+    add_camera(sc, (0, -5, 0))
+    def fresh(name):
+        m = bpy.data.materials.new(name); m.use_nodes = True; nt = m.node_tree
+        for n in list(nt.nodes):
+            if n.type != 'OUTPUT_MATERIAL': nt.nodes.remove(n)
+        return m, nt
+    def out(nt, node):
+        nt.links.new(node.outputs[0], nt.nodes['Material Output'].inputs['Surface'])
+    mats = []
+    m = bpy.data.materials.new('Default'); m.use_nodes = True; mats.append(m)      # Blender's default Principled
+    m, nt = fresh('Film'); p = nt.nodes.new('ShaderNodeBsdfPrincipled')
+    p.inputs['Metallic'].default_value = 0.25; p.inputs['Transmission Weight'].default_value = 0.5
+    p.inputs['Roughness'].default_value = 0.2; p.inputs['IOR'].default_value = 1.45
+    p.inputs['Thin Film Thickness'].default_value = 420.0; p.inputs['Thin Film IOR'].default_value = 1.38
+    p.inputs['Specular Tint'].default_value = (1.0, 0.8, 0.6, 1.0)
+    p.inputs['Emission Color'].default_value = (1.0, 0.5, 0.0, 1.0); p.inputs['Emission Strength'].default_value = 2.0
+    out(nt, p); mats.append(m)
+    m, nt = fresh('Mixed'); mix = nt.nodes.new('ShaderNodeMixShader'); mix.inputs[0].default_value = 0.3
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse'); d.inputs['Color'].default_value = (0.9, 0.1, 0.1, 1.0)
+    add = nt.nodes.new('ShaderNodeAddShader')
+    g = nt.nodes.new('ShaderNodeBsdfGlossy'); g.inputs['Roughness'].default_value = 0.1
+    e = nt.nodes.new('ShaderNodeEmission'); e.inputs['Strength'].default_value = 3.0
+    nt.links.new(d.outputs[0], mix.inputs[1]); nt.links.new(add.outputs[0], mix.inputs[2])
+    nt.links.new(g.outputs[0], add.inputs[0]); nt.links.new(e.outputs[0], add.inputs[1])
+    out(nt, mix); mats.append(m)
+    m, nt = fresh('Half'); mix = nt.nodes.new('ShaderNodeMixShader')
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse'); nt.links.new(d.outputs[0], mix.inputs[2])   # first input empty
+    out(nt, mix); mats.append(m)
+    m, nt = fresh('Flint'); p = nt.nodes.new('ShaderNodeBsdfPrincipled')
+    p.inputs['Transmission Weight'].default_value = 1.0
+    dn = nt.nodes.new('PolychromeDispersionNode'); dn.model = 'NAMED'; dn.named = 'N_SF11'
+    nt.links.new(dn.outputs[0], p.inputs['IOR'])
+    out(nt, p); mats.append(m)
+    for i, mat in enumerate(mats):
+        bpy.ops.mesh.primitive_cube_add(size=0.5, location=(i - 2, 0, 0))
+        bpy.context.object.data.materials.append(mat)
+    dg = bpy.context.evaluated_depsgraph_get()
+    scene, warns = export_scene(pc, dg)
+    desc, _ = scene.description()
+    emit(m={x['name']: x for x in desc['materials']}, warns=warns)
+    """)
+    r = check(proc, res)[0]
+    m = r["m"]
+    assert r["warns"] == []
+    d = m["Default"]["bsdf"]
+    assert d["type"] == "principled"
+    assert d["base_color"]["rgb"] == pytest.approx([0.8, 0.8, 0.8])
+    assert d["roughness"] == pytest.approx(0.5) and d["metallic"] == 0.0 and d["transmission"] == 0.0
+    assert d["ior"] == {"type": "constant", "ior": pytest.approx(1.5)}
+    assert "emission" not in m["Default"]
+    f = m["Film"]
+    fb = f["bsdf"]
+    assert fb["metallic"] == pytest.approx(0.25) and fb["transmission"] == pytest.approx(0.5)
+    assert fb["roughness"] == pytest.approx(0.2) and fb["ior"]["ior"] == pytest.approx(1.45)
+    assert fb["thin_film_thickness"] == pytest.approx(420.0) and fb["thin_film_ior"] == pytest.approx(1.38)
+    assert fb["specular_tint"]["rgb"] == pytest.approx([1.0, 0.8, 0.6])
+    assert f["emission"]["rgb"] == pytest.approx([1.0, 0.5, 0.0]) and f["emission"]["scale"] == pytest.approx(2.0)
+    mx = m["Mixed"]
+    assert mx["bsdf"]["type"] == "mix" and mx["bsdf"]["factor"] == pytest.approx(0.3)
+    assert mx["bsdf"]["a"]["type"] == "diffuse" and mx["bsdf"]["a"]["reflectance"]["rgb"] == pytest.approx([0.9, 0.1, 0.1])
+    assert mx["bsdf"]["b"]["type"] == "add"
+    assert mx["bsdf"]["b"]["a"]["type"] == "glossy" and mx["bsdf"]["b"]["b"] == {"type": "none"}
+    # Emission of the nested Emission node (white × 3) weighted by the mix factor 0.3.
+    em = mx["emission"]
+    assert np.allclose(np.array(em["rgb"]) * em["scale"], 0.3 * 3.0)
+    h = m["Half"]["bsdf"]
+    assert h["type"] == "mix" and h["a"] == {"type": "none"} and h["b"]["type"] == "diffuse"
+    fl = m["Flint"]["bsdf"]
+    assert fl["type"] == "principled" and fl["transmission"] == 1.0 and fl["ior"] == {"type": "named", "name": "N-SF11"}
+
+
+def test_default_principled_cube_matches_cycles(tmp_path):
+    """A cube with Blender's default material (Principled BSDF: base 0.8, roughness 0.5,
+    IOR 1.5) on a Principled floor, lit by an area and a point light, in Cycles CPU and in
+    Polychrome: mean CIEDE2000 below 2."""
+    proc, res = run_bpy(tmp_path, """
+    sc = empty_scene(48, 36)
+    sc.world = None
+    def principled(name, rgb, roughness=0.5):
+        m = bpy.data.materials.new(name); m.use_nodes = True
+        p = m.node_tree.nodes['Principled BSDF']
+        p.inputs['Base Color'].default_value = (*rgb, 1.0); p.inputs['Roughness'].default_value = roughness
+        return m
+    bpy.ops.mesh.primitive_plane_add(size=8)
+    bpy.context.object.data.materials.append(principled('Floor', (0.6, 0.45, 0.3), 0.35))
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0, 0, 0.5))
+    cube = bpy.data.materials.new('Cube'); cube.use_nodes = True     # untouched default Principled
+    bpy.context.object.data.materials.append(cube)
+    ld = bpy.data.lights.new('Area', 'AREA'); ld.energy = 300.0; ld.size = 1.5
+    lo = bpy.data.objects.new('Area', ld); sc.collection.objects.link(lo); lo.location = (0.5, -0.5, 3.0)
+    pd = bpy.data.lights.new('Point', 'POINT'); pd.energy = 150.0; pd.shadow_soft_size = 0.0; pd.color = (1.0, 0.9, 0.8)
+    po = bpy.data.objects.new('Point', pd); sc.collection.objects.link(po); po.location = (-2.0, -1.0, 2.0)
+    add_camera(sc, (4.0, -4.0, 3.0), (0, 0, 0.4), lens=35)
+    sc.render.image_settings.file_format = 'OPEN_EXR'
+    sc.render.engine = 'CYCLES'
+    c = sc.cycles; c.device = 'CPU'; c.samples = 128; c.use_denoising = False; c.use_adaptive_sampling = False
+    c.filter_width = 0.01; c.max_bounces = 8; c.diffuse_bounces = 8; c.glossy_bounces = 8
+    c.sample_clamp_indirect = 0.0; c.sample_clamp_direct = 0.0
+    sc.render.filepath = os.path.abspath('cycles.exr'); bpy.ops.render.render(write_still=True)
+    sc.render.engine = 'POLYCHROME'
+    sc.polychrome.samples = 128; sc.polychrome.max_bounces = 8
+    sc.render.filepath = os.path.abspath('poly.exr'); bpy.ops.render.render(write_still=True)
+    a, b = exr_channels('cycles.exr'), exr_channels('poly.exr')
+    import polychrome.colordiff as cd
+    A = np.stack([a['R'], a['G'], a['B']], -1); B = np.stack([b['R'], b['G'], b['B']], -1)
+    white = float(np.percentile(A[..., 1], 99))
+    de = cd.image_delta_e(A, B, white_luminance=white)
+    emit(mean=float(de.mean()), err=Engine.last_error, warn=Engine.last_warnings,
+         ma=A.mean(axis=(0, 1)).tolist(), mb=B.mean(axis=(0, 1)).tolist())
+    """)
+    r = check(proc, res)[0]
+    assert r["err"] is None and r["warn"] == []
+    print("default Principled vs Cycles:", r)
+    assert r["mean"] < 2.0, r
+    for x, y in zip(r["ma"], r["mb"]):
+        assert y == pytest.approx(x, rel=0.05), r
+
+
+def test_mix_of_red_and_blue_diffuse_renders_the_mixed_colour(tmp_path):
+    """A Mix Shader (factor 0.5) of red and blue Diffuse BSDFs on a plane under a uniform
+    white world, seen straight down: each pixel is the mixed reflectance × the world
+    (the plane's upper hemisphere is all world), i.e. 0.5·(red + blue)."""
+    proc, res = run_bpy(tmp_path, """
+    sc = empty_scene(8, 8)
+    w = bpy.data.worlds.new('W'); w.use_nodes = True; sc.world = w
+    bg = w.node_tree.nodes['Background']; bg.inputs['Color'].default_value = (1, 1, 1, 1); bg.inputs['Strength'].default_value = 1.0
+    m = bpy.data.materials.new('Mix'); m.use_nodes = True; nt = m.node_tree
+    for n in list(nt.nodes):
+        if n.type != 'OUTPUT_MATERIAL': nt.nodes.remove(n)
+    mix = nt.nodes.new('ShaderNodeMixShader'); mix.inputs[0].default_value = 0.5
+    red = nt.nodes.new('ShaderNodeBsdfDiffuse'); red.inputs['Color'].default_value = (0.8, 0.05, 0.05, 1)
+    blue = nt.nodes.new('ShaderNodeBsdfDiffuse'); blue.inputs['Color'].default_value = (0.05, 0.05, 0.8, 1)
+    nt.links.new(red.outputs[0], mix.inputs[1]); nt.links.new(blue.outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], nt.nodes['Material Output'].inputs['Surface'])
+    bpy.ops.mesh.primitive_plane_add(size=20)
+    bpy.context.object.data.materials.append(m)
+    cd = bpy.data.cameras.new('Camera'); cd.type = 'ORTHO'; cd.ortho_scale = 2.0
+    co = bpy.data.objects.new('Camera', cd); sc.collection.objects.link(co); sc.camera = co
+    co.location = (0, 0, 5)
+    sc.render.engine = 'POLYCHROME'
+    sc.polychrome.samples = 64; sc.polychrome.max_bounces = 4
+    sc.render.image_settings.file_format = 'OPEN_EXR'
+    sc.render.filepath = os.path.abspath('mix.exr'); bpy.ops.render.render(write_still=True)
+    ch = exr_channels('mix.exr')
+    emit(rgb=[float(ch[k].mean()) for k in ('R', 'G', 'B')], err=Engine.last_error, warn=Engine.last_warnings)
+    """)
+    r = check(proc, res)[0]
+    assert r["err"] is None and r["warn"] == []
+    expected = 0.5 * (np.array([0.8, 0.05, 0.05]) + np.array([0.05, 0.05, 0.8]))
+    assert np.allclose(r["rgb"], expected, atol=0.01), (r["rgb"], expected)
