@@ -108,6 +108,11 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
     last_stats = None
     # Optional callable(done, total) -> bool that cancels like Esc when it returns True.
     test_break_hook = None
+    # Final renders show intermediate images: None = only when Blender has a UI (not in
+    # background mode), True/False to force; PROGRESSIVE_INTERVAL seconds between them.
+    progressive_final = None
+    PROGRESSIVE_INTERVAL = 1.0
+    intermediate_updates = 0  # count of intermediate images shown (for tests)
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
@@ -194,6 +199,50 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
         draw_texture_2d(self._texture, (0, 0), region_width, region_height)
         self.unbind_display_space_shader()
         gpu.state.blend_set("NONE")
+
+    def _progressive_final(self):
+        mode = type(self).progressive_final
+        return (not bpy.app.background) if mode is None else bool(mode)
+
+    def _run_render(self, pc, scene, settings, progress, depsgraph, width, height):
+        """The render itself; with a UI (``progressive_final``), on a background job whose
+        previews are shown in the Image Editor about every ``PROGRESSIVE_INTERVAL`` s."""
+        if self.is_preview or not self._progressive_final():
+            return pc.render(scene, settings, progress=progress)
+        job = pc.RenderJob(scene, settings).start()
+        shown, last_shown = 0, time.perf_counter()
+        try:
+            while not job.wait(0.05):
+                if progress(*job.progress()) is False:
+                    job.cancel()
+                now = time.perf_counter()
+                serial = job.preview_serial()
+                if serial not in (0, shown) and (shown == 0 or now - last_shown >= self.PROGRESSIVE_INTERVAL):
+                    p = job.preview()
+                    if p is not None and not p.last:
+                        self._show_intermediate(depsgraph, p.rgba, width, height)
+                        shown, last_shown = p.serial, now
+        except BaseException:
+            job.cancel()
+            job.wait()
+            raise
+        return job.result()
+
+    def _show_intermediate(self, depsgraph, rgba, width, height):
+        """Shows a preview (Combined only) in the render result; the final image replaces it."""
+        x0, y0, x1, y1 = border_rect(depsgraph.scene, width, height)
+        rgba = np.nan_to_num(np.asarray(rgba, np.float32)[::-1], nan=0.0, posinf=0.0, neginf=0.0)[y0:y1, x0:x1]
+        layer = depsgraph.view_layer.name if depsgraph.view_layer else ""
+        result = self.begin_result(0, 0, x1 - x0, y1 - y0, layer=layer)
+        try:
+            combined = result.layers[0].passes.get("Combined") if result is not None else None
+            if combined is not None and combined.channels == 4:
+                combined.rect.foreach_set(np.ascontiguousarray(rgba).ravel())
+                self.update_result(result)
+                type(self).intermediate_updates += 1
+        finally:
+            if result is not None:
+                self.end_result(result)
 
     def update_render_passes(self, scene=None, renderlayer=None):
         passes.register_passes(self, scene, renderlayer)
@@ -282,7 +331,7 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
                 traceback.print_exc()
                 return False
 
-        out = pc.render(scene, settings, progress=progress)
+        out = self._run_render(pc, scene, settings, progress, depsgraph, width, height)
         stats = dict(out.stats)
         stats["export_seconds"] = export_time
         cls.last_stats = stats

@@ -225,3 +225,37 @@ def test_material_preview_renders_through_the_engine(tmp_path):
     # display-encoded (sRGB) preview pixels: the sphere is clearly red, then green
     assert red["centre"][0] > 1.25 * max(red["centre"][1], red["centre"][2]), red
     assert green["centre"][1] > 1.25 * max(green["centre"][0], green["centre"][2]), green
+
+
+def test_final_render_shows_intermediate_images_and_ends_with_the_same_pixels(tmp_path):
+    proc, res = run_bpy(tmp_path, """
+    bpy.ops.wm.read_factory_settings()
+    sc = bpy.context.scene
+    sc.render.engine = 'POLYCHROME'
+    sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 64, 48, 100
+    sc.polychrome.samples = 64
+    sc.render.image_settings.file_format = 'OPEN_EXR'; sc.render.image_settings.color_depth = '32'
+    out = {}
+    for mode in (False, True):
+        Engine.progressive_final = mode
+        Engine.PROGRESSIVE_INTERVAL = 0.05
+        Engine.intermediate_updates = 0
+        sc.render.filepath = os.path.abspath(f'p{int(mode)}.exr')
+        r = bpy.ops.render.render(write_still=True)
+        out[mode] = dict(r=list(r), err=Engine.last_error, n=Engine.intermediate_updates,
+                         spp=Engine.last_stats['samples_per_pixel'])
+    a, b = exr_channels('p0.exr'), exr_channels('p1.exr')
+    # Esc during a progressive render
+    Engine.test_break_hook = lambda done, total: done > 0
+    sc.polychrome.samples = 100000
+    sc.render.filepath = os.path.abspath('p2.exr')
+    bpy.ops.render.render(write_still=True)
+    emit(off=out[False], on=out[True], same=all(np.array_equal(a[k], b[k]) for k in a), keys=sorted(a),
+         cancelled=Engine.last_stats['cancelled'], err2=Engine.last_error)
+    """)
+    r = check(proc, res)[0]
+    assert r["off"]["err"] is None and r["on"]["err"] is None
+    assert r["off"]["n"] == 0 and r["on"]["n"] >= 1
+    assert r["off"]["spp"] == r["on"]["spp"] == 64
+    assert r["same"], r["keys"]
+    assert r["cancelled"] and r["err2"] is None

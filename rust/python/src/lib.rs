@@ -162,7 +162,8 @@ impl RenderJob {
     #[pyo3(signature = (scene_json, buffers, settings_json, previews=true))]
     fn new(scene_json: &str, buffers: Vec<Bound<'_, PyAny>>, settings_json: &str, previews: bool) -> PyResult<Self> {
         let desc: SceneDesc = parse(scene_json, "scene description")?;
-        let settings: RenderSettings = parse(settings_json, "render settings")?;
+        // As `render`: keys present in the JSON are explicit, `quality` fills the rest.
+        let settings = RenderSettings::from_json(settings_json).map_err(|e| PyValueError::new_err(format!("render settings: {e}")))?;
         let buffers = convert_buffers(buffers)?;
         let control = if previews { RenderControl::with_previews() } else { RenderControl::new() };
         Ok(Self {
