@@ -1,6 +1,6 @@
 """The paper's figure 12: a closed room of spectral diffuse surfaces (no dispersion).
 
-    python examples/fig12_room.py [--samples 64] [--width 320] [--height 240] [--wavelengths 41]
+    python examples/fig12_room.py [--samples 48] [--width 320] [--height 240] [--wavelengths 41]
         [--compare] [--out examples/out/fig12_room] [--docs]
 
 A closed room (the camera inside) with measured-looking spectral paints on the walls —
@@ -71,13 +71,13 @@ def build_scene(glass: bool = False) -> pc.Scene:
     else:
         v, t, n = figlib.uv_sphere((0.1, -0.2, 0.3), 0.3)
         scene.add_mesh("white ball", v, t, normals=n, material=p["warm white"])
-    scene.camera = pc.Camera.looking_at((0.0, -0.97, 1.05), (0.0, 1.0, 0.7), focal_length=15.0)
+    scene.camera = pc.Camera.looking_at((0.0, -0.97, 1.15), (0.0, 1.0, 0.45), focal_length=14.0)
     return scene
 
 
 def run(glass: bool, default_out: str, argv=None) -> int:
     parser = argparse.ArgumentParser(description=(__doc__ if not glass else sys.modules["__main__"].__doc__).splitlines()[0])
-    parser.add_argument("--samples", type=int, default=64)
+    parser.add_argument("--samples", type=int, default=48)
     parser.add_argument("--width", type=int, default=320)
     parser.add_argument("--height", type=int, default=240)
     parser.add_argument("--wavelengths", type=int, default=41)

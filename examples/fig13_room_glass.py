@@ -1,6 +1,6 @@
 """The paper's figure 13: the room of figure 12 with dispersive glass objects.
 
-    python examples/fig13_room_glass.py [--samples 64] [--width 320] [--height 240] [--wavelengths 41]
+    python examples/fig13_room_glass.py [--samples 48] [--width 320] [--height 240] [--wavelengths 41]
         [--splitting] [--compare] [--out examples/out/fig13_room_glass] [--docs]
 
 The closed room of ``fig12_room.py`` with a dense-flint (N-SF11) glass ball and an

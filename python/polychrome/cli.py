@@ -101,7 +101,18 @@ def _add_render_parser(subparsers) -> None:
     p.add_argument("-o", "--output", metavar="OUT", required=True, help="image to write: .exr or .png")
     p.add_argument("--samples", type=int, metavar="N", help="samples per pixel")
     p.add_argument("--method", metavar="M", help="POLYCHROMATIC, MONOCHROMATIC_RAYS, MONOCHROMATIC_SCENES or RGB")
-    p.add_argument("--wavelengths", type=int, metavar="N", help="number of wavelength samples (380-780 nm)")
+    p.add_argument("--direction", metavar="D", help="BACKWARD (from the camera), FORWARD (light tracing) or BIDIRECTIONAL")
+    p.add_argument("--dispersion-splitting", action=argparse.BooleanOptionalAction, default=None,
+                   help="POLYCHROMATIC: one monochromatic path per wavelength at the first dispersive surface (deterministic mode)")
+    p.add_argument("--wavelengths", metavar="N|L1,L2,...",
+                   help="wavelength grid: a sample count (uniform over --wavelength-min..--wavelength-max, default 380-780 nm) "
+                   "or an explicit ascending list of wavelengths in nm")
+    p.add_argument("--wavelength-min", type=float, metavar="NM", help="start of the uniform grid (default 380)")
+    p.add_argument("--wavelength-max", type=float, metavar="NM", help="end of the uniform grid (default 780)")
+    p.add_argument("--max-bounces", type=int, metavar="B", help="scattering events per path (0: only what the camera sees)")
+    p.add_argument("--uplift", metavar="U", help="RGB to spectrum map: LINEAR (the paper's eq. 10) or SMOOTH")
+    p.add_argument("--spectral-output", action=argparse.BooleanOptionalAction, default=None,
+                   help="keep each pixel's spectrum (.exr output then uses the spectral EXR layout)")
     p.add_argument("--seed", type=int, metavar="S", help="random seed (same seed, same pixels)")
     p.add_argument("--threads", type=int, metavar="T", help="worker threads (0: every core)")
     p.add_argument("--time-limit", type=float, metavar="SEC", help="seconds after which no new pass starts (0: none)")
@@ -116,8 +127,7 @@ def _render_overrides(args: argparse.Namespace) -> dict:
     """RenderSettings fields given on the command line."""
     pairs = {
         "samples": args.samples,
-        "method": None if args.method is None else args.method.upper(),
-        "wavelength_count": args.wavelengths,
+        **_spectral_overrides(args),
         "seed": args.seed,
         "threads": args.threads,
         "time_limit": args.time_limit,
@@ -133,6 +143,54 @@ def _render_overrides(args: argparse.Namespace) -> dict:
     if pairs["time_limit"] is not None and not pairs["time_limit"] >= 0:
         raise ValueError(f"--time-limit must not be negative, got {pairs['time_limit']}")
     return {k: v for k, v in pairs.items() if v is not None}
+
+
+def _choice(flag: str, value, choices) -> str | None:
+    if value is None:
+        return None
+    if value.upper() not in choices:
+        raise ValueError(f"--{flag} must be one of {', '.join(choices)}, got {value}")
+    return value.upper()
+
+
+def _spectral_overrides(args: argparse.Namespace) -> dict:
+    """The method, direction, grid and uplift flags as RenderSettings fields (None: not given).
+    ``--wavelengths`` is a count (``wavelength_count``) or a comma-separated list (``wavelengths``)."""
+    from .render import DIRECTIONS, METHODS, UPLIFTS
+
+    out = {
+        "method": _choice("method", args.method, METHODS),
+        "direction": _choice("direction", args.direction, DIRECTIONS),
+        "dispersion_splitting": args.dispersion_splitting,
+        "uplift": _choice("uplift", args.uplift, UPLIFTS),
+        "spectral_output": args.spectral_output,
+        "max_bounces": args.max_bounces,
+        "wavelength_min": args.wavelength_min,
+        "wavelength_max": args.wavelength_max,
+        "wavelength_count": None,
+        "wavelengths": None,
+    }
+    if out["max_bounces"] is not None and out["max_bounces"] < 0:
+        raise ValueError(f"--max-bounces must not be negative, got {out['max_bounces']}")
+    for key in ("wavelength_min", "wavelength_max"):
+        if out[key] is not None and not 360.0 <= out[key] <= 830.0:
+            raise ValueError(f"--{key.replace('_', '-')} must lie in 360..830 nm, got {out[key]}")
+    text = args.wavelengths
+    if text is not None:
+        parts = [p for p in str(text).replace(" ", "").split(",") if p]
+        try:
+            values = [float(p) for p in parts]
+        except ValueError:
+            raise ValueError(f"--wavelengths must be a count or a comma-separated list of nm, got '{text}'") from None
+        if len(parts) == 1 and parts[0].isdigit():
+            out["wavelength_count"] = int(parts[0])
+            if out["wavelength_count"] <= 0:
+                raise ValueError(f"--wavelengths must be positive, got {text}")
+        elif len(values) < 2 or any(b <= a for a, b in zip(values, values[1:])):
+            raise ValueError(f"--wavelengths: a list must hold at least two strictly ascending wavelengths, got '{text}'")
+        else:
+            out["wavelengths"] = values
+    return out
 
 
 def _merge_size(stored: dict, overrides: dict) -> dict:
