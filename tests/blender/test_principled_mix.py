@@ -48,6 +48,9 @@ def test_principled_mix_add_map_to_polychrome(tmp_path):
     dn = nt.nodes.new('PolychromeDispersionNode'); dn.model = 'NAMED'; dn.named = 'N_SF11'
     nt.links.new(dn.outputs[0], p.inputs['IOR'])
     out(nt, p); mats.append(m)
+    m, nt = fresh('Coated'); p = nt.nodes.new('ShaderNodeBsdfPrincipled')
+    p.inputs['Coat Weight'].default_value = 0.5; p.inputs['Alpha'].default_value = 0.5
+    out(nt, p); mats.append(m)
     for i, mat in enumerate(mats):
         bpy.ops.mesh.primitive_cube_add(size=0.5, location=(i - 2, 0, 0))
         bpy.context.object.data.materials.append(mat)
@@ -58,7 +61,10 @@ def test_principled_mix_add_map_to_polychrome(tmp_path):
     """)
     r = check(proc, res)[0]
     m = r["m"]
-    assert r["warns"] == []
+    # Only the unsupported Principled inputs of 'Coated' are reported, once each.
+    assert len(r["warns"]) == 2 and all("'Coated'" in w for w in r["warns"]), r["warns"]
+    assert any("Coat Weight" in w for w in r["warns"]) and any("Alpha" in w for w in r["warns"])
+    assert m["Coated"]["bsdf"]["type"] == "principled"
     d = m["Default"]["bsdf"]
     assert d["type"] == "principled"
     assert d["base_color"]["rgb"] == pytest.approx([0.8, 0.8, 0.8])

@@ -121,7 +121,8 @@ def _principled_full(pc, mat, node, warnings, base, emission):
     elif src is not None:
         warnings.add(("link", mat.name, src.name),
                      f"material '{mat.name}': node '{src.name}' ({src.bl_idname}) driving 'IOR' is not supported; its default value is used")
-    for name, value in (("Coat Weight", 0.0), ("Sheen Weight", 0.0), ("Subsurface Weight", 0.0)):
+    for name, value in (("Coat Weight", 0.0), ("Sheen Weight", 0.0), ("Subsurface Weight", 0.0),
+                        ("Diffuse Roughness", 0.0), ("Alpha", 1.0), ("Anisotropic", 0.0)):
         sock = node.inputs.get(name)
         if sock is not None and (sock.is_linked or float(sock.default_value) != value):
             warnings.add(("principled-lobe", mat.name, name),
