@@ -98,6 +98,7 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
     bl_idname = "POLYCHROME"
     bl_label = "Polychrome"
     bl_use_preview = True  # material, world and light previews render through render()
+    bl_use_eevee_viewport = True  # Material Preview shading uses EEVEE (as Cycles); Rendered uses view_draw
     bl_use_shading_nodes_custom = False  # keep the standard Shader Editor
     bl_use_postprocess = True
 
