@@ -241,14 +241,16 @@ def pixel_u(g):
     return ((np.arange(PRISM_W) + 0.5) / PRISM_W - 0.5) * 2 * half
 
 
-@pytest.fixture(scope="module")
-def prism_render():
-    """N-BK7 prism, D65 cone light, FORWARD, the camera facing the screen; light paths
-    stop at the screen (max_bounces 3: entry, exit, screen) so no inter-reflection
-    lands elsewhere."""
+@pytest.fixture(scope="module", params=["FORWARD", "BIDIRECTIONAL"])
+def prism_render(request):
+    """N-BK7 prism, D65 cone light, the camera facing the screen, traced FORWARD or
+    BIDIRECTIONAL (whose light-tracing part takes this caustic of a delta light); light
+    paths stop at the screen (max_bounces 3: entry, exit, screen) so no
+    inter-reflection lands elsewhere."""
     scene, g = fig06.build_scene(spectra.d65(), glass="N-BK7", camera="screen", table=False, spot_deg=SPOT_DEG)
-    result = pc.render(scene, width=PRISM_W, height=PRISM_H, samples=48, wavelength_count=41, direction="FORWARD",
+    result = pc.render(scene, width=PRISM_W, height=PRISM_H, samples=48, wavelength_count=41, direction=request.param,
                        max_bounces=3, spectral_output=True, seed=11, **FIXED)
+    assert result.stats["direction"] == request.param
     return result, g
 
 
@@ -297,9 +299,8 @@ def test_prism_rainbow_spread_matches_snell(prism_render):
     assert mix_std > 2.0 * std[20]
 
 
-def test_prism_in_rgb_mode_gives_three_spots_at_620_540_460(prism_render):
-    _, g = prism_render
-    scene, _ = fig06.build_scene(spectra.d65(), glass="N-BK7", camera="screen", table=False, spot_deg=SPOT_DEG)
+def test_prism_in_rgb_mode_gives_three_spots_at_620_540_460():
+    scene, g = fig06.build_scene(spectra.d65(), glass="N-BK7", camera="screen", table=False, spot_deg=SPOT_DEG)
     result = pc.render(scene, width=PRISM_W, height=PRISM_H, samples=32, method="RGB", direction="FORWARD",
                        max_bounces=3, seed=11, **FIXED)
     u = pixel_u(g)
@@ -307,5 +308,24 @@ def test_prism_in_rgb_mode_gives_three_spots_at_620_540_460(prism_render):
     for channel in range(3):
         m, _ = column_moments(result.rgba[..., channel], u)
         assert abs(m - mean[channel]) < 0.25 * (u[1] - u[0]), (channel, m, mean[channel])
-    # Three separate spots: the green channel is dark between the red and blue spots' centres.
+    # Three spots in the order of their indices, each more than two pixels apart.
     assert mean[0] < mean[1] < mean[2] or mean[0] > mean[1] > mean[2]
+    assert min(abs(mean[1] - mean[0]), abs(mean[2] - mean[1])) > 2 * (u[1] - u[0])
+
+
+# --------------------------------------------------------------------------- the scripts themselves
+
+
+@pytest.mark.parametrize("name", ["fig02_red_light_green_sphere", "fig04_non_d65_white", "fig06_prism", "fig12_room", "fig13_room_glass"])
+def test_example_scripts_run_and_write_png_and_exr(name, tmp_path, capsys):
+    import importlib
+
+    module = importlib.import_module(name)
+    out = tmp_path / name
+    args = ["--samples", "1", "--width", "16", "--height", "12", "--wavelengths", "16", "--out", str(out)]
+    assert module.main(args) == 0
+    assert out.with_suffix(".png").is_file() and out.with_suffix(".exr").is_file()
+    image = pc.imageio.read_image(out.with_suffix(".exr"))
+    assert np.all(np.isfinite(image)) and image[..., :3].max() > 0
+    printed = capsys.readouterr().out
+    assert "wrote" in printed
