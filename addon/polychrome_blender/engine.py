@@ -168,6 +168,9 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
         try:
             props = depsgraph.scene.polychrome
             region = context.region
+            # settings edits do not always reach view_update (Python property sets); the
+            # redraw that follows them does
+            session.set_settings(viewport_settings(pc, props))
             sync_viewport_view(session, pc, context.region_data, region.width, region.height,
                                props.viewport_pixel_size)
             session.poll()

@@ -120,10 +120,15 @@ def test_view_update_and_view_draw_restart_on_edits_and_refine(tmp_path):
     step('settings', edit=lambda: setattr(sc.polychrome, 'viewport_samples', 8))
     cam.location = (1, -6, 5); bpy.context.view_layer.update()
     step('view', view=region_ctx(cam, bpy.context.evaluated_depsgraph_get(), 64, 48))
-    job = s.job
+    # a settings edit seen only by the next redraw (no view_update) restarts too
+    sc.polychrome.max_bounces = 3
+    before = fake.session.restarts
+    refine(fake, ctx)
+    draw_only = fake.session.restarts - before
+    job = fake.session.job
     fake.__del__()                                           # the engine is freed
     emit(steps=steps, freed=fake.session is None and job.done(), reports=fake.reports,
-         redraws=fake.redraws)
+         redraws=fake.redraws, draw_only=draw_only)
     """))
     r = check(proc, res)[0]
     st = r["steps"]
@@ -140,6 +145,7 @@ def test_view_update_and_view_draw_restart_on_edits_and_refine(tmp_path):
     # same seed and paths, only the point light's power doubled: exactly twice as bright
     assert st["light"]["lum"] == pytest.approx(2 * st["material"]["lum"], rel=1e-3)
     assert st["settings"]["samples"] == 8
+    assert r["draw_only"] == 1
     assert r["freed"]
 
 
