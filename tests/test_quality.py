@@ -85,6 +85,9 @@ def test_presets_fill_only_what_is_not_explicit():
     r = pc.render(scene, width=4, height=4, quality="PREVIEW", max_bounces=2, noise_threshold=0.0)
     assert (r.stats["samples_per_pixel"], r.stats["wavelengths"], r.stats["max_bounces"]) == (32, 16, 2)
     assert r.stats["quality"] == "PREVIEW" and any("PREVIEW" in x for x in r.stats["auto_reason"])
+    # An explicit sample count means that many samples: AUTO does not stop pixels early.
+    r = pc.render(scene, width=4, height=4, samples=5)
+    assert r.stats["total_samples"] == 16 * 5 and r.stats["noise_threshold"] == 0
     # An explicit grid wins over AUTO's.
     r = pc.render(scene, width=4, height=4, samples=2, wavelengths=[400, 450, 500, 550, 600, 650, 700])
     assert r.stats["wavelengths"] == 7 and np.allclose(r.wavelengths, [400, 450, 500, 550, 600, 650, 700])

@@ -25,6 +25,14 @@ def settings_from_scene(pc, props, width, height):
         values["spectral_output"] = bool(getattr(props, "spectral_output", False))
     if "dispersion_splitting" in fields:
         values["dispersion_splitting"] = bool(props.dispersion_splitting)
+    if "quality" in fields and hasattr(props, "quality"):
+        values["quality"] = props.quality
+        values["noise_threshold"] = float(props.noise_threshold)
+        # Settings never set in the panel are left to the quality preset (samples stays:
+        # it is the maximum per pixel the progress display counts against).
+        for key in ("wavelength_count", "max_bounces", "noise_threshold"):
+            if not props.is_property_set(key):
+                values.pop(key)
     if "direction" in fields:
         values["direction"] = props.direction
     elif props.direction != "BACKWARD":
@@ -325,7 +333,7 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
                 if total:
                     self.update_progress(min(1.0, done / total))
                 spp = settings.samples * done / total if total else 0.0  # totals differ per method
-                self.update_stats("", f"Polychrome | {method} | {settings.wavelength_count} wavelengths | "
+                self.update_stats("", f"Polychrome | {method} | {settings.wavelength_count or props.quality.lower()} wavelengths | "
                                       f"sample {spp:.1f}/{settings.samples} | {time.perf_counter() - start:.1f} s")
                 hook = cls.test_break_hook
                 if hook is not None and hook(done, total):
@@ -340,7 +348,7 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
         stats["export_seconds"] = export_time
         cls.last_stats = stats
         self.update_progress(1.0)
-        self.update_stats("", f"Polychrome | {method} | {settings.wavelength_count} wavelengths | "
+        self.update_stats("", f"Polychrome | {method} | {stats.get('wavelengths', settings.wavelength_count)} wavelengths | "
                               f"done in {time.perf_counter() - start:.1f} s")
         return passes.pass_arrays(out, width, height)
 

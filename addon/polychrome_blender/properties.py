@@ -21,7 +21,20 @@ UPLIFT_ITEMS = [
 ]
 
 
+QUALITY_ITEMS = [
+    ("AUTO", "Auto", "Wavelength grid fitted to the scene's spectra, adaptive sampling to the noise threshold"),
+    ("PREVIEW", "Preview", "16 wavelengths, at most 32 samples stopping at dE00 3, 4 bounces"),
+    ("FINAL", "Final", "41 wavelengths, 256 samples, 8 bounces, no adaptive stop"),
+    ("REFERENCE", "Reference", "81 wavelengths, 2048 samples, 16 bounces, no adaptive stop"),
+]
+
+
 class PolychromeRenderSettings(bpy.types.PropertyGroup):
+    quality: EnumProperty(name="Quality", items=QUALITY_ITEMS, default="AUTO",
+                          description="Fills the settings never set here (wavelengths, max bounces, noise threshold); "
+                                      "a value set explicitly wins")
+    noise_threshold: FloatProperty(name="Noise Threshold", default=1.0, min=0.0, soft_max=10.0,
+                                   description="Adaptive sampling: a pixel stops at this estimated dE00 (0: off)")
     method: EnumProperty(name="Method", items=METHOD_ITEMS, default="POLYCHROMATIC")
     direction: EnumProperty(name="Direction", items=DIRECTION_ITEMS, default="BACKWARD")
     wavelength_count: IntProperty(name="Wavelengths", description="Samples of the 380-780 nm grid",

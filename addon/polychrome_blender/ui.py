@@ -35,6 +35,7 @@ class RENDER_PT_polychrome(bpy.types.Panel):
         layout.use_property_decorate = False
         props = context.scene.polychrome
         col = layout.column()
+        col.prop(props, "quality")
         col.prop(props, "method")
         col.prop(props, "direction")
         try:
@@ -51,6 +52,7 @@ class RENDER_PT_polychrome(bpy.types.Panel):
         col.prop(props, "spectral_output")
         col = layout.column()
         col.prop(props, "samples")
+        col.prop(props, "noise_threshold")
         col.prop(props, "time_limit")
         col.prop(props, "max_bounces")
         col.prop(props, "seed")

@@ -118,6 +118,9 @@ def _add_render_parser(subparsers) -> None:
     p.add_argument("--time-limit", type=float, metavar="SEC", help="seconds after which no new pass starts (0: none)")
     p.add_argument("--width", type=int, metavar="W", help="image width in pixels")
     p.add_argument("--height", type=int, metavar="H", help="image height in pixels")
+    p.add_argument("--quality", metavar="Q", help="AUTO (default: grid fitted to the scene, adaptive sampling), PREVIEW, FINAL or REFERENCE; "
+                   "explicit flags override what the preset chooses")
+    p.add_argument("--noise-threshold", type=float, metavar="DE", help="adaptive sampling: stop a pixel at this estimated dE00 (0: off)")
     p.add_argument("--passes", action="store_true", help="EXR only: also write Depth, Normal and Albedo layers")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(handler=cmd_render)
@@ -133,6 +136,8 @@ def _render_overrides(args: argparse.Namespace) -> dict:
         "time_limit": args.time_limit,
         "width": args.width,
         "height": args.height,
+        "quality": None if getattr(args, "quality", None) is None else args.quality.upper(),
+        "noise_threshold": getattr(args, "noise_threshold", None),
     }
     for key in ("samples", "wavelength_count", "width", "height"):
         if pairs[key] is not None and pairs[key] <= 0:
@@ -140,6 +145,10 @@ def _render_overrides(args: argparse.Namespace) -> dict:
     for key in ("seed", "threads"):
         if pairs[key] is not None and pairs[key] < 0:
             raise ValueError(f"--{key} must not be negative, got {pairs[key]}")
+    if pairs["quality"] is not None and pairs["quality"] not in ("AUTO", "PREVIEW", "FINAL", "REFERENCE"):
+        raise ValueError(f"--quality must be AUTO, PREVIEW, FINAL or REFERENCE, got {args.quality}")
+    if pairs["noise_threshold"] is not None and not pairs["noise_threshold"] >= 0:
+        raise ValueError(f"--noise-threshold must not be negative, got {pairs['noise_threshold']}")
     if pairs["time_limit"] is not None and not pairs["time_limit"] >= 0:
         raise ValueError(f"--time-limit must not be negative, got {pairs['time_limit']}")
     return {k: v for k, v in pairs.items() if v is not None}
@@ -310,8 +319,8 @@ def cmd_render(args: argparse.Namespace) -> int:
         return EXIT_INTERRUPTED
     result.save(out, passes=args.passes)
     print(
-        f"wrote {out} ({settings.width}x{settings.height}, {settings.samples} samples, "
-        f"{settings.method}, {settings.wavelength_count} wavelengths, {time.perf_counter() - start:.1f} s)"
+        f"wrote {out} ({settings.width}x{settings.height}, {result.stats.get('samples_per_pixel')} samples, "
+        f"{settings.method}, {result.stats.get('wavelengths')} wavelengths, quality {result.stats.get('quality')}, {time.perf_counter() - start:.1f} s)"
     )
     return EXIT_OK
 

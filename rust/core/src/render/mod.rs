@@ -293,6 +293,9 @@ impl RgbToSpectrum for NoRgb {
 /// Renders a scene description. Cancelling returns the samples finished so far.
 pub fn render(desc: &SceneDesc, buffers: &[Buffer], settings: &RenderSettings, control: &RenderControl) -> Result<RenderOutput> {
     settings.validate()?;
+    // The plan as soon as it is known (the render refines it for other methods).
+    let planned = if settings.is_explicit("samples") { settings.samples } else { settings.quality.preset().samples };
+    control.total.store(settings.width as u64 * settings.height as u64 * planned as u64, Ordering::Relaxed);
     let (resolved, reasons) = quality::resolve(settings, Some(desc))?;
     let settings = &resolved;
     settings.validate()?;

@@ -126,12 +126,16 @@ pub fn resolve(settings: &RenderSettings, desc: Option<&SceneDesc>) -> Result<(R
         s.max_bounces = p.max_bounces;
     }
     if free("noise_threshold") {
-        s.noise_threshold = p.noise_threshold;
-        if p.noise_threshold > 0.0 {
+        // An explicit sample count is a request for that many samples: no early stop
+        // unless noise_threshold is given too.
+        s.noise_threshold = if free("samples") { p.noise_threshold } else { 0.0 };
+        if s.noise_threshold > 0.0 {
             why.push(format!(
-                "adaptive: a pixel stops at estimated ΔE ≤ {} after ≥ {ADAPTIVE_MIN_SAMPLES} samples",
+                "adaptive: a pixel stops at estimated ΔE00 ≤ {} after ≥ {ADAPTIVE_MIN_SAMPLES} samples",
                 p.noise_threshold
             ));
+        } else if p.noise_threshold > 0.0 {
+            why.push("adaptive off: samples set explicitly (set noise_threshold too for adaptive sampling)".into());
         }
     }
     if s.noise_threshold > 0.0 && !adaptive_supported(&s) {
@@ -171,26 +175,45 @@ struct Found {
     emitter: bool,
 }
 
-fn collect(v: &serde_json::Value, key: &str, out: &mut Vec<Found>, textures: &mut bool) {
+/// What the scene description holds that decides the grid.
+#[derive(Default)]
+struct Holds {
+    /// RGB data (RGB spectra or textures): judged through a fixed set of RGB colours, so
+    /// the same colour given as RGB or as a one-texel texture gets the same grid.
+    rgb: bool,
+    /// A dielectric whose index varies with wavelength.
+    dispersive: bool,
+}
+
+fn collect(v: &serde_json::Value, key: &str, out: &mut Vec<Found>, holds: &mut Holds) {
     match v {
         serde_json::Value::Object(m) => {
             if m.contains_key("type") {
                 if let Ok(sd) = serde_json::from_value::<SpectrumDesc>(v.clone()) {
                     let emitter = matches!(key, "emission" | "intensity" | "irradiance" | "radiance");
                     let ignored = matches!(key, "eta" | "k" | "ior" | "index");
-                    if matches!(sd.kind, SpectrumKind::Texture { .. }) {
-                        *textures = true;
+                    if matches!(sd.kind, SpectrumKind::Texture { .. } | SpectrumKind::Rgb { .. }) {
+                        holds.rgb |= !ignored;
                     } else if !ignored {
                         out.push(Found { spectrum: sd, emitter });
                     }
                     return;
                 }
             }
+            if m.get("type").and_then(|t| t.as_str()) == Some("dielectric") {
+                let constant = match m.get("ior") {
+                    None => true,
+                    Some(serde_json::Value::Number(_)) => true,
+                    Some(serde_json::Value::Object(o)) => o.get("type").and_then(|t| t.as_str()) == Some("constant"),
+                    Some(_) => false,
+                };
+                holds.dispersive |= !constant;
+            }
             for (k, x) in m {
-                collect(x, k, out, textures);
+                collect(x, k, out, holds);
             }
         }
-        serde_json::Value::Array(a) => a.iter().for_each(|x| collect(x, key, out, textures)),
+        serde_json::Value::Array(a) => a.iter().for_each(|x| collect(x, key, out, holds)),
         _ => {}
     }
 }
@@ -269,10 +292,6 @@ pub fn de2000(l1: [f64; 3], l2: [f64; 3]) -> f64 {
     (x * x + y * y + z * z + rt * y * z).max(0.0).sqrt()
 }
 
-fn de76(a: [f64; 3], b: [f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-}
-
 /// Spectra evaluated on one grid: emitters and reflectances.
 struct OnGrid {
     observer: Observer,
@@ -282,7 +301,7 @@ struct OnGrid {
 
 fn on_grid(grid: &WavelengthGrid, found: &[Found], rgb_samples: &[[f32; 3]], uplift: UpliftMethod) -> Option<OnGrid> {
     let up = Uplift::new(grid, &RgbSpace::rec709(), uplift).ok();
-    let needs_uplift = !rgb_samples.is_empty() || found.iter().any(|f| matches!(f.spectrum.kind, SpectrumKind::Rgb { .. }));
+    let needs_uplift = !rgb_samples.is_empty();
     if needs_uplift && up.is_none() {
         return None;
     }
@@ -389,10 +408,10 @@ fn refined(n: usize, min: f32, max: f32, bands: &[(f32, f32)]) -> Vec<f32> {
 pub fn auto_grid(desc: &SceneDesc, min: f32, max: f32, uplift: UpliftMethod) -> Result<(Vec<f32>, Vec<String>)> {
     let v = serde_json::to_value(desc).map_err(|e| crate::Error::setting("quality", format!("scene description: {e}")))?;
     let mut found = Vec::new();
-    let mut textures = false;
-    collect(&v, "", &mut found, &mut textures);
-    // Textures stand for arbitrary RGB: judge a few saturated colours.
-    let rgb_samples: Vec<[f32; 3]> = if textures {
+    let mut holds = Holds::default();
+    collect(&v, "", &mut found, &mut holds);
+    // RGB data stands for arbitrary RGB: judge a few saturated colours.
+    let rgb_samples: Vec<[f32; 3]> = if holds.rgb {
         vec![[0.8, 0.1, 0.1], [0.1, 0.8, 0.1], [0.1, 0.1, 0.8], [0.8, 0.8, 0.1]]
     } else {
         Vec::new()
@@ -407,7 +426,10 @@ pub fn auto_grid(desc: &SceneDesc, min: f32, max: f32, uplift: UpliftMethod) -> 
         return Ok((fallback()?, why));
     };
     let mut best: Option<(Vec<f32>, f64, usize)> = None;
-    for n in CANDIDATES {
+    // Dispersion spreads the wavelengths apart in space: a coarse grid would show as
+    // separate coloured copies (banding) instead of a continuous spread.
+    let floor = if holds.dispersive { 41 } else { 0 };
+    for n in CANDIDATES.into_iter().filter(|&n| n >= floor) {
         let lambdas = refined(n, min, max, &bands);
         let Ok(g) = WavelengthGrid::from_wavelengths(lambdas.clone()) else {
             continue;
@@ -445,7 +467,12 @@ pub fn auto_grid(desc: &SceneDesc, min: f32, max: f32, uplift: UpliftMethod) -> 
             String::new()
         },
     ));
-    if found.iter().any(|f| matches!(f.spectrum.kind, SpectrumKind::Rgb { .. })) || textures {
+    if holds.dispersive {
+        why.push("dispersive glass: at least 41 wavelengths, and wavelength collapse (eq. 9) at it".into());
+    } else {
+        why.push("nothing disperses: no path ever collapses to one wavelength".into());
+    }
+    if holds.rgb {
         why.push(format!("RGB data: the grid keeps the {uplift:?} uplift valid"));
     }
     Ok((lambdas, why))
