@@ -177,16 +177,16 @@ def test_metal_and_thin_film_principled_match_cycles(tmp_path):
     """Principled spheres in Cycles CPU and Polychrome: a gold-coloured metal (F82-tint
     Fresnel), a half-metallic paint, a dark dielectric with a 500 nm thin film (spectral
     interference in Polychrome, Cycles' own thin-film model) and a white metal under a
-    300 nm film, on a Principled floor, area light and a blue world. The Principled nodes
-    use single-scattering GGX (Polychrome's model) and Cycles' glossy filter is off, so
-    the two renderers compute the same thing: mean CIEDE2000 below 2."""
+    300 nm film, on a Principled floor, area light and a blue world, with Blender's default
+    Multiscatter GGX (Polychrome compensates the metal's multiple scattering, Kulla & Conty)
+    and Cycles' glossy filter off: mean CIEDE2000 below 2 on 2×2 blocks."""
     proc, res = run_bpy(tmp_path, """
     sc = empty_scene(64, 36)
     w = bpy.data.worlds.new('W'); w.use_nodes = True; sc.world = w
     bg = w.node_tree.nodes['Background']; bg.inputs['Color'].default_value = (0.6, 0.7, 0.9, 1); bg.inputs['Strength'].default_value = 0.5
     def principled(name, rgb, **kw):
         m = bpy.data.materials.new(name); m.use_nodes = True
-        p = m.node_tree.nodes['Principled BSDF']; p.distribution = 'GGX'
+        p = m.node_tree.nodes['Principled BSDF']   # Blender's default distribution: Multiscatter GGX
         p.inputs['Base Color'].default_value = (*rgb, 1.0)
         for k, v in kw.items(): p.inputs[k].default_value = v
         return m

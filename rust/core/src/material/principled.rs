@@ -7,7 +7,9 @@
 //! * **metal** (weight metallic): GGX reflection with Blender's F82-tint Fresnel (base
 //!   colour = F0, specular tint = the tint at ~82°; white tint = Schlick), or, with a
 //!   thin film, the Airy reflectance of the film on a conductor whose complex index is
-//!   derived from F0 and the tint (Gulbrandsen 2014);
+//!   derived from F0 and the tint (Gulbrandsen 2014); when rough, plus the multiply
+//!   scattered light of Kulla & Conty 2017 (as Blender's default Multiscatter GGX), so a
+//!   white metal reflects everything;
 //! * **glass** (weight (1 − metallic)·transmission): the existing smooth or rough
 //!   dielectric ([`super::Dielectric`] / [`super::RoughDielectric`], dispersive when the
 //!   IOR varies over the grid), its transmission tinted by the base colour as in Blender.
@@ -122,6 +124,21 @@ pub struct MetalF82 {
     pub film: Option<ThinFilm>,
 }
 
+impl MetalF82 {
+    /// Hemispherical average 2∫F(μ)μ dμ of the F82-tint Fresnel per lane, in closed form:
+    /// F0 + (1 − F0)/21 − b/126 (a film is ignored here: its metal's F82 average is used).
+    fn average_into(&self, ctx: &ShadingContext, out: &mut SampledSpectrum) {
+        self.f0.evaluate_into(ctx, out);
+        let f = 6.0f32 / 7.0;
+        let f5 = f * f * f * f * f;
+        for i in 0..out.len() {
+            let f0 = out.get(i).clamp(0.0, 1.0);
+            let b = (f0 + (1.0 - f0) * f5) * (7.0 / (f5 * f)) * (1.0 - self.tint.get(i));
+            out.set(i, (f0 + (1.0 - f0) / 21.0 - b / 126.0).clamp(0.0, 1.0));
+        }
+    }
+}
+
 impl MetalFresnel for MetalF82 {
     fn eval(&self, ctx: &ShadingContext, cos: f32, out: &mut SampledSpectrum) {
         self.f0.evaluate_into(ctx, out);
@@ -177,6 +194,19 @@ pub struct Principled {
     e_table: Vec<Vec<f32>>,
     /// 1/(1 − E_avg) per row (0 when the layer reflects everything).
     inv_one_minus_eavg: Vec<f32>,
+    /// Multiple scattering of the rough metal (Kulla & Conty 2017): E(μ) of the GGX lobe
+    /// with F = 1, its average and 1/(1 − E_avg) (0 when smooth or nothing is lost).
+    ms_table: Vec<f32>,
+    ms_e_avg: f32,
+    ms_inv: f32,
+}
+
+/// Per-hit spectra: base colour, the metal's Fresnel at wo and its multiple-scattering
+/// colour F_ms.
+struct HitSpectra {
+    rho: SampledSpectrum,
+    metal_f: SampledSpectrum,
+    fms: SampledSpectrum,
 }
 
 /// Selection probabilities of the lobes at one wo.
@@ -185,6 +215,7 @@ struct Lobes {
     spec: f32,
     diffuse: f32,
     metal: f32,
+    metal_ms: f32,
     glass: f32,
 }
 
@@ -235,7 +266,22 @@ impl Principled {
                 }
             })
             .collect();
+        let (ms_table, ms_e_avg, ms_inv) = if metallic > 0.0 && !smooth {
+            let t = albedo_table(&distribution, false, &|_| 1.0);
+            let avg = albedo_average(&t);
+            let inv = if 1.0 - avg > 1e-4 {
+                1.0 / (1.0 - avg)
+            } else {
+                0.0
+            };
+            (t, avg, inv)
+        } else {
+            (vec![1.0; ALBEDO_MU], 1.0, 0.0)
+        };
         Self {
+            ms_table,
+            ms_e_avg,
+            ms_inv,
             metal: MetalF82 {
                 f0: clone_param(&p.base_color),
                 tint: p.specular_tint,
@@ -293,42 +339,44 @@ impl Principled {
 
     /// Lobe selection probabilities at `wo` (upper hemisphere), from their albedos
     /// averaged over the lanes (or the path's single lane).
-    fn lobes(
-        &self,
-        ctx: &ShadingContext,
-        mu_o: f32,
-        rho: &SampledSpectrum,
-        metal_f: &SampledSpectrum,
-    ) -> Lobes {
+    fn lobes(&self, ctx: &ShadingContext, mu_o: f32, h: &HitSpectra) -> Lobes {
+        let (rho, metal_f) = (&h.rho, &h.metal_f);
         let lanes: Box<dyn Iterator<Item = usize>> = match ctx.single_wavelength {
             Some(i) => Box::new(std::iter::once(i)),
             None => Box::new(0..rho.len()),
         };
-        let (mut e, mut d, mut m, mut count) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
+        let (mut e, mut d, mut m, mut ms, mut count) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
         for i in lanes {
             let ei = lookup(&self.e_table[self.row(i)], mu_o);
             e += ei;
             d += rho.get(i).max(0.0) * (1.0 - ei);
             m += metal_f.get(i);
+            ms += h.fms.get(i);
             count += 1.0;
         }
         let mut l = Lobes {
             spec: self.w_base * e / count,
             diffuse: self.w_base * d / count,
             metal: self.w_metal * m / count,
+            metal_ms: if self.ms_inv > 0.0 {
+                self.w_metal * ms / count * (1.0 - lookup(&self.ms_table, mu_o))
+            } else {
+                0.0
+            },
             glass: if self.glass.is_some() {
                 self.w_glass
             } else {
                 0.0
             },
         };
-        let total = l.spec + l.diffuse + l.metal + l.glass;
+        let total = l.spec + l.diffuse + l.metal + l.metal_ms + l.glass;
         if !(total > 0.0 && total.is_finite()) {
             return Lobes::default();
         }
         l.spec /= total;
         l.diffuse /= total;
         l.metal /= total;
+        l.metal_ms /= total;
         l.glass /= total;
         l
     }
@@ -338,12 +386,13 @@ impl Principled {
         &self,
         ctx: &ShadingContext,
         lobes: &Lobes,
-        rho: &SampledSpectrum,
+        h: &HitSpectra,
         wo: Vec3A,
         wi: Vec3A,
         out: &mut SampledSpectrum,
     ) -> f32 {
         out.fill(0.0);
+        let rho = &h.rho;
         let mut pdf = 0.0f32;
         let n = out.len();
         let reflect_side = wo.z * wi.z > 0.0;
@@ -369,6 +418,17 @@ impl Principled {
                     out.set(k, self.w_base * v);
                 }
                 pdf += lobes.diffuse * mu_i * FRAC_1_PI;
+            }
+            // The rough metal's multiply scattered light (Kulla & Conty 2017):
+            // F_ms (1 − E(μo))(1 − E(μi)) / (π (1 − E_avg)), E for F = 1.
+            if self.w_metal > 0.0 && self.ms_inv > 0.0 {
+                let shape = (1.0 - lookup(&self.ms_table, mu_o))
+                    * (1.0 - lookup(&self.ms_table, mu_i))
+                    * self.ms_inv
+                    * FRAC_1_PI
+                    * mu_i;
+                out.add_scaled(&h.fms, self.w_metal * shape);
+                pdf += lobes.metal_ms * mu_i * FRAC_1_PI;
             }
             if !self.smooth && (self.w_base > 0.0 || self.w_metal > 0.0) {
                 let wm = (o + i).normalize_or_zero();
@@ -406,20 +466,26 @@ impl Principled {
         pdf
     }
 
-    /// ρ and the metal's normal-incidence-free Fresnel at `mu_o` (for lobe selection).
-    fn hit_spectra(
-        &self,
-        ctx: &ShadingContext,
-        mu_o: f32,
-        n: usize,
-    ) -> (SampledSpectrum, SampledSpectrum) {
+    /// ρ, the metal's Fresnel at `mu_o` (for lobe selection) and its F_ms.
+    fn hit_spectra(&self, ctx: &ShadingContext, mu_o: f32, n: usize) -> HitSpectra {
         let mut rho = SampledSpectrum::zeros(n);
         self.base_color.evaluate_into(ctx, &mut rho);
-        let mut mf = SampledSpectrum::zeros(n);
+        let mut metal_f = SampledSpectrum::zeros(n);
+        let mut fms = SampledSpectrum::zeros(n);
         if self.w_metal > 0.0 {
-            self.metal.eval(ctx, mu_o, &mut mf);
+            self.metal.eval(ctx, mu_o, &mut metal_f);
+            if self.ms_inv > 0.0 {
+                // F_ms = F_avg² E_avg / (1 − F_avg (1 − E_avg)): the colour of light
+                // that scattered more than once between the microfacets.
+                self.metal.average_into(ctx, &mut fms);
+                let e = self.ms_e_avg;
+                for v in fms.values_mut() {
+                    let fa = *v;
+                    *v = fa * fa * e / (1.0 - fa * (1.0 - e)).max(1e-6);
+                }
+            }
         }
-        (rho, mf)
+        HitSpectra { rho, metal_f, fms }
     }
 }
 
@@ -452,9 +518,9 @@ impl Bsdf for Principled {
     fn eval(&self, ctx: &ShadingContext, wo: Vec3A, wi: Vec3A, out: &mut SampledSpectrum) -> f32 {
         let n = out.len();
         let mu_o = wo.z.abs();
-        let (rho, mf) = self.hit_spectra(ctx, mu_o, n);
-        let lobes = self.lobes(ctx, mu_o, &rho, &mf);
-        let pdf = self.eval_lobes(ctx, &lobes, &rho, wo, wi, out);
+        let h = self.hit_spectra(ctx, mu_o, n);
+        let lobes = self.lobes(ctx, mu_o, &h);
+        let pdf = self.eval_lobes(ctx, &lobes, &h, wo, wi, out);
         if !(out.is_finite() && pdf.is_finite()) {
             out.fill(0.0);
             return 0.0;
@@ -480,8 +546,8 @@ impl Bsdf for Principled {
         }
         let n = throughput.len();
         let mu_o = wo.z.abs();
-        let (rho, mf) = self.hit_spectra(ctx, mu_o, n);
-        let lobes = self.lobes(ctx, mu_o, &rho, &mf);
+        let h = self.hit_spectra(ctx, mu_o, n);
+        let lobes = self.lobes(ctx, mu_o, &h);
         let flip = |v: Vec3A| {
             if wo.z < 0.0 {
                 Vec3A::new(v.x, v.y, -v.z)
@@ -534,9 +600,10 @@ impl Bsdf for Principled {
             }
             flip(wi)
         } else if uc < {
-            c0 += lobes.diffuse;
+            c0 += lobes.diffuse + lobes.metal_ms;
             c0
         } {
+            // The diffuse base and the metal's multiple scattering are both cosine-sampled.
             flip(cosine_hemisphere(u))
         } else {
             let glass = self.glass.as_ref()?;
@@ -549,7 +616,7 @@ impl Bsdf for Principled {
             if bs.specular || bs.collapsed_to.is_some() {
                 // A delta (or wavelength-dependent) direction: weight by this lobe alone.
                 if bs.wi.z * wo.z < 0.0 {
-                    tp.mul_assign(&rho);
+                    tp.mul_assign(&h.rho);
                 }
                 tp.scale(self.w_glass / lobes.glass);
                 if !tp.is_finite() {
@@ -567,7 +634,7 @@ impl Bsdf for Principled {
             return None;
         }
         let mut f = SampledSpectrum::zeros(n);
-        let pdf = self.eval_lobes(ctx, &lobes, &rho, wo, wi, &mut f);
+        let pdf = self.eval_lobes(ctx, &lobes, &h, wo, wi, &mut f);
         if !(pdf > 0.0 && pdf.is_finite()) || f.is_black() {
             return None;
         }
@@ -585,14 +652,20 @@ impl Bsdf for Principled {
     }
 
     fn albedo(&self, ctx: &ShadingContext, out: &mut SampledSpectrum) {
-        // Seen from the normal: E(1) + ρ(1 − E(1)) for the base, F0 for the metal, the
-        // base colour (its transmission tint) for the glass.
+        // Seen from the normal: E(1) + ρ(1 − E(1)) for the base, F0 (plus its multiple
+        // scattering) for the metal, the base colour (its transmission tint) for the glass.
         let n = out.len();
-        let (rho, mf) = self.hit_spectra(ctx, 1.0, n);
+        let h = self.hit_spectra(ctx, 1.0, n);
+        let (rho, mf) = (&h.rho, &h.metal_f);
+        let ms = if self.ms_inv > 0.0 {
+            1.0 - lookup(&self.ms_table, 1.0)
+        } else {
+            0.0
+        };
         for k in 0..n {
             let e = lookup(&self.e_table[self.row(k)], 1.0);
             let v = self.w_base * (e + rho.get(k) * (1.0 - e))
-                + self.w_metal * mf.get(k)
+                + self.w_metal * (mf.get(k) + h.fms.get(k) * ms)
                 + self.w_glass * rho.get(k);
             out.set(k, v.clamp(0.0, 1.0));
         }
@@ -715,8 +788,13 @@ mod tests {
         for &mode in &[TransportMode::Radiance, TransportMode::Importance] {
             let mut ctx = ShadingContext::new(&grid);
             ctx.mode = mode;
-            for &(metallic, transmission) in &[(0.0f32, 0.0f32), (0.5, 0.0), (0.0, 0.5), (0.3, 0.3)]
-            {
+            for &(metallic, transmission) in &[
+                (0.0f32, 0.0f32),
+                (1.0, 0.0),
+                (0.5, 0.0),
+                (0.0, 0.5),
+                (0.3, 0.3),
+            ] {
                 for &roughness in &[0.0f32, 0.2, 0.5, 1.0] {
                     let m = principled(&grid, 1.0, metallic, transmission, roughness, 1.5, None);
                     for &theta in &[0.0f32, 0.6, 1.1, 1.45] {
@@ -730,8 +808,9 @@ mod tests {
                         );
                         let tol = 4.0 * se + 4e-3;
                         assert!(mean <= 1.0 + tol, "m {metallic} t {transmission} r {roughness} θ {theta}: albedo {mean} ± {se}");
-                        if metallic == 0.0 && transmission == 0.0 {
-                            // The layer conserves energy exactly with a white base.
+                        if transmission == 0.0 {
+                            // The layer conserves energy exactly with a white base, and a
+                            // white metal with its multiple scattering.
                             assert!(
                                 (mean - 1.0).abs() < tol,
                                 "r {roughness} θ {theta}: white-base albedo {mean} ± {se}"
