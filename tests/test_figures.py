@@ -299,6 +299,24 @@ def test_prism_rainbow_spread_matches_snell(prism_render):
     assert mix_std > 2.0 * std[20]
 
 
+@pytest.mark.parametrize("center", [400.0, 700.0])
+def test_prism_narrow_band_light_lands_where_snell_puts_it(center):
+    """A red and a blue narrow-band cone light (2 nm wide: all its energy in one 10 nm
+    grid cell) each light one spot; its centroid in the RGB image (luminance-free: the
+    sum of |R|, |G|, |B|) is where Snell's law puts that wavelength."""
+    scene, g = fig06.build_scene(spectra.narrow_band(center, 2.0), glass="N-BK7", camera="screen", table=False,
+                                 spot_deg=SPOT_DEG)
+    result = pc.render(scene, width=PRISM_W, height=PRISM_H, samples=16, wavelength_count=41, direction="FORWARD",
+                       max_bounces=3, seed=3, **FIXED)
+    u = pixel_u(g)
+    m, _ = column_moments(np.abs(result.rgba[..., :3]).sum(axis=-1), u)
+    mean, _ = snell_spots(g, [center], SPOT_DEG)
+    assert abs(m - mean[0]) < 0.25 * (u[1] - u[0]), (center, m, mean[0])
+    # The other end of the spectrum is far away: this is not a loose tolerance.
+    other, _ = snell_spots(g, [1100.0 - center], SPOT_DEG)
+    assert abs(m - other[0]) > 10 * (u[1] - u[0])
+
+
 def test_prism_in_rgb_mode_gives_three_spots_at_620_540_460():
     scene, g = fig06.build_scene(spectra.d65(), glass="N-BK7", camera="screen", table=False, spot_deg=SPOT_DEG)
     result = pc.render(scene, width=PRISM_W, height=PRISM_H, samples=32, method="RGB", direction="FORWARD",
