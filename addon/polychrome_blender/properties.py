@@ -33,8 +33,9 @@ class PolychromeRenderSettings(bpy.types.PropertyGroup):
     quality: EnumProperty(name="Quality", items=QUALITY_ITEMS, default="AUTO",
                           description="Fills the settings never set here (wavelengths, max bounces, noise threshold); "
                                       "a value set explicitly wins")
-    noise_threshold: FloatProperty(name="Noise Threshold", default=1.0, min=0.0, soft_max=10.0,
-                                   description="Adaptive sampling: a pixel stops at this estimated dE00 (0: off)")
+    noise_threshold: FloatProperty(name="Noise Threshold", default=0.0, min=0.0, soft_max=10.0,
+                                   description="Adaptive sampling: a pixel stops at this estimated dE00, Samples being "
+                                               "the maximum (0: off, every pixel gets Samples)")
     method: EnumProperty(name="Method", items=METHOD_ITEMS, default="POLYCHROMATIC")
     direction: EnumProperty(name="Direction", items=DIRECTION_ITEMS, default="BACKWARD")
     wavelength_count: IntProperty(name="Wavelengths", description="Samples of the 380-780 nm grid",
