@@ -164,3 +164,21 @@ def test_bad_parameters_are_value_errors_naming_the_material():
     scene = plane_scene(pc.Principled(2.0, name="Bright"))
     with pytest.raises(ValueError, match="material 'Bright'"):
         pc.render(scene, width=2, height=2, samples=1)
+
+
+def test_fresnel_mix_factor_is_view_dependent():
+    """Mix(red, blue, Fresnel(1.5)) seen at normal incidence: (1 − F0)·red + F0·blue with
+    F0 = 4 %; with LayerWeight(0.5, "FACING") the factor is 1 − cos θ = 0: pure red."""
+    red, blue = np.array([0.8, 0.1, 0.1]), np.array([0.1, 0.1, 0.8])
+    world = (1.0, 1.0, 1.0)
+    for factor, t in ((pc.Fresnel(1.5), 0.04), (pc.LayerWeight(0.5, "FACING"), 0.0), (pc.LayerWeight(0.5), 1.0 / 9.0)):
+        scene = plane_scene(pc.Mix(pc.Diffuse(tuple(red)), pc.Diffuse(tuple(blue)), factor))
+        scene.set_world(world)
+        out = pc.render(scene, width=4, height=4, samples=16, max_bounces=2)
+        got = out.rgba[..., :3].reshape(-1, 3).mean(axis=0)
+        expected = (1 - t) * red + t * blue
+        assert np.allclose(got, expected, atol=0.01), (factor, got, expected)
+    d = pc.Mix(pc.Diffuse(), pc.Diffuse(), pc.LayerWeight(0.3, "facing")).bsdf_dict()
+    assert d["factor_from"] == {"type": "layer_weight_facing", "blend": 0.3}
+    with pytest.raises(ValueError, match="blend"):
+        pc.Mix(pc.Diffuse(), pc.Diffuse(), pc.LayerWeight(1.5))

@@ -16,7 +16,7 @@ from .render import RenderResult, RenderSettings, render
 from .scene import Camera, Diffuse, Emitter, Material, PointLight, Scene, look_at
 from . import ior
 from .scene import Conductor, Dielectric, Glossy, SpotLight, SunLight
-from .scene import Add, Mix, Principled
+from .scene import Add, Fresnel, LayerWeight, Mix, Principled
 from .texture import Texture
 from .job import Preview, RenderJob
 
@@ -28,6 +28,8 @@ __all__ = [
     "Principled",
     "Mix",
     "Add",
+    "Fresnel",
+    "LayerWeight",
     "SpotLight",
     "SunLight",
     "ior",

@@ -348,21 +348,74 @@ class Principled(Material):
         return d
 
 
+@dataclass(frozen=True)
+class Fresnel:
+    """A view-dependent Mix factor: Blender's Fresnel node (dielectric reflectance at
+    ``ior`` for the viewing angle)."""
+
+    ior: float = 1.45
+
+    def at_normal(self) -> float:
+        n = max(float(self.ior), 1e-5)
+        return ((n - 1) / (n + 1)) ** 2
+
+    def to_dict(self) -> dict[str, Any]:
+        n = float(self.ior)
+        if not (math.isfinite(n) and n >= 0.0):
+            raise ValueError(f"Fresnel factor: ior {self.ior} must be finite and non-negative")
+        return {"type": "fresnel", "ior": n}
+
+
+@dataclass(frozen=True)
+class LayerWeight:
+    """A view-dependent Mix factor: Blender's Layer Weight node, its ``"FRESNEL"`` or
+    ``"FACING"`` output, with ``blend`` in 0..1."""
+
+    blend: float = 0.5
+    output: str = "FRESNEL"
+
+    def at_normal(self) -> float:
+        if self.output.upper() == "FACING":
+            return 0.0
+        eta = 1.0 / max(1.0 - float(self.blend), 1e-5)
+        return ((eta - 1) / (eta + 1)) ** 2
+
+    def to_dict(self) -> dict[str, Any]:
+        b = float(self.blend)
+        if not (math.isfinite(b) and 0.0 <= b <= 1.0):
+            raise ValueError(f"LayerWeight factor: blend {self.blend} must be in 0..1")
+        kind = {"FRESNEL": "layer_weight_fresnel", "FACING": "layer_weight_facing"}.get(self.output.upper())
+        if kind is None:
+            raise ValueError(f"LayerWeight factor: output {self.output!r} must be 'FRESNEL' or 'FACING'")
+        return {"type": kind, "blend": b}
+
+
 class Mix(Material):
     """Blender's Mix Shader of two materials: ``(1 − factor)·a + factor·b`` (factor 0
-    gives ``a``, 1 gives ``b``). Emissions mix the same way unless ``emission`` is
-    given. Mixes nest: ``a`` and ``b`` may be any material, including a Mix."""
+    gives ``a``, 1 gives ``b``). ``factor`` is a number or a view-dependent
+    :class:`Fresnel` / :class:`LayerWeight` (Blender's nodes on Fac). Emissions mix the
+    same way (a view-dependent factor by its value at normal incidence) unless
+    ``emission`` is given. Mixes nest: ``a`` and ``b`` may be any material, including a Mix."""
 
-    def __init__(self, a: Material, b: Material, factor: float = 0.5, *, emission: Any = None, name: str = "Mix"):
+    def __init__(self, a: Material, b: Material, factor: Any = 0.5, *, emission: Any = None, name: str = "Mix"):
         if not isinstance(a, Material) or not isinstance(b, Material):
             raise TypeError(f"material '{name}': a and b must be polychrome materials")
         self.a, self.b = a, b
-        self.factor = _unit(factor, "factor", name)
+        if isinstance(factor, (Fresnel, LayerWeight)):
+            factor.to_dict()  # validates
+            self.factor_from = factor
+            self.factor = min(max(factor.at_normal(), 0.0), 1.0)
+        else:
+            self.factor_from = None
+            self.factor = _unit(factor, "factor", name)
         self.name = name
         self.emission = as_spectrum(emission) if emission is not None else _sum_emission([(1.0 - self.factor, a.emission), (self.factor, b.emission)], name)
 
     def bsdf_dict(self) -> dict[str, Any]:
-        return {"type": "mix", "a": self.a.bsdf_dict(), "b": self.b.bsdf_dict(), "factor": self.factor}
+        d = {"type": "mix", "a": self.a.bsdf_dict(), "b": self.b.bsdf_dict(), "factor": self.factor}
+        if self.factor_from is not None:
+            d["factor_from"] = self.factor_from.to_dict()
+        return d
 
 
 class Add(Material):
@@ -561,4 +614,4 @@ class Scene:
 
 __all__ = ["Camera", "Material", "Diffuse", "Emitter", "PointLight", "Scene", "Texture", "look_at", "spectra"]
 __all__ += ["Dielectric", "Conductor", "Glossy", "SpotLight", "SunLight"]
-__all__ += ["Principled", "Mix", "Add"]
+__all__ += ["Principled", "Mix", "Add", "Fresnel", "LayerWeight"]

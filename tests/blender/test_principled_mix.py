@@ -48,6 +48,16 @@ def test_principled_mix_add_map_to_polychrome(tmp_path):
     dn = nt.nodes.new('PolychromeDispersionNode'); dn.model = 'NAMED'; dn.named = 'N_SF11'
     nt.links.new(dn.outputs[0], p.inputs['IOR'])
     out(nt, p); mats.append(m)
+    for name, kind in (('Facing', 'ShaderNodeLayerWeight'), ('Fres', 'ShaderNodeFresnel')):
+        m, nt = fresh(name); mix = nt.nodes.new('ShaderNodeMixShader')
+        src = nt.nodes.new(kind)
+        if kind == 'ShaderNodeLayerWeight':
+            src.inputs['Blend'].default_value = 0.3; nt.links.new(src.outputs['Facing'], mix.inputs[0])
+        else:
+            src.inputs['IOR'].default_value = 1.6; nt.links.new(src.outputs[0], mix.inputs[0])
+        nt.links.new(nt.nodes.new('ShaderNodeBsdfDiffuse').outputs[0], mix.inputs[1])
+        nt.links.new(nt.nodes.new('ShaderNodeBsdfGlossy').outputs[0], mix.inputs[2])
+        out(nt, mix); mats.append(m)
     m, nt = fresh('Coated'); p = nt.nodes.new('ShaderNodeBsdfPrincipled')
     p.inputs['Coat Weight'].default_value = 0.5; p.inputs['Alpha'].default_value = 0.5
     out(nt, p); mats.append(m)
@@ -88,6 +98,9 @@ def test_principled_mix_add_map_to_polychrome(tmp_path):
     assert np.allclose(np.array(em["rgb"]) * em["scale"], 0.3 * 3.0)
     h = m["Half"]["bsdf"]
     assert h["type"] == "mix" and h["a"] == {"type": "none"} and h["b"]["type"] == "diffuse"
+    assert m["Facing"]["bsdf"]["factor_from"] == {"type": "layer_weight_facing", "blend": pytest.approx(0.3)}
+    assert m["Fres"]["bsdf"]["factor_from"] == {"type": "fresnel", "ior": pytest.approx(1.6)}
+    assert m["Fres"]["bsdf"]["b"]["type"] == "glossy"
     fl = m["Flint"]["bsdf"]
     assert fl["type"] == "principled" and fl["transmission"] == 1.0 and fl["ior"] == {"type": "named", "name": "N-SF11"}
 

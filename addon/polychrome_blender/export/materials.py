@@ -218,13 +218,33 @@ def _mix_shader(pc, mat, node, warnings, depth):
         parts.append(_no_closure(pc, mat) if child is None else _export_node(pc, mat, child, warnings, depth + 1))
     if node.type == "ADD_SHADER":
         return pc.Add(parts[0], parts[1], name=mat.name)
+    return pc.Mix(parts[0], parts[1], _mix_factor(pc, mat, node, warnings), name=mat.name)
+
+
+def _mix_factor(pc, mat, node, warnings):
+    """The Mix Shader's Fac: its value, or a Fresnel / Layer Weight node (view-dependent)."""
     fac = node.inputs[0]
-    if fac.is_linked:
-        src = _linked_node(fac)
-        warnings.add(("link", mat.name, node.name),
-                     f"material '{mat.name}': node '{src.name if src else '?'}' driving the factor of '{node.name}' is not supported; "
-                     f"its value {float(fac.default_value):.3g} is used")
-    return pc.Mix(parts[0], parts[1], _clamp01(fac.default_value), name=mat.name)
+    value = _clamp01(fac.default_value)
+    if not fac.is_linked:
+        return value
+    sock = fac
+    while sock.is_linked and sock.links[0].from_node.type == "REROUTE":
+        sock = sock.links[0].from_node.inputs[0]
+    src = sock.links[0].from_node if sock.is_linked else None
+    out = sock.links[0].from_socket if sock.is_linked else None
+    if src is not None and hasattr(pc, "Fresnel"):
+        if src.inputs.get("Normal") is not None and src.inputs["Normal"].is_linked:
+            warnings.add(("fac-normal", mat.name, src.name),
+                         f"material '{mat.name}': the Normal input of '{src.name}' is ignored (the shading normal is used)")
+        if src.type == "FRESNEL" and not src.inputs["IOR"].is_linked:
+            return pc.Fresnel(float(src.inputs["IOR"].default_value))
+        if src.type == "LAYER_WEIGHT" and not src.inputs["Blend"].is_linked:
+            return pc.LayerWeight(_clamp01(src.inputs["Blend"].default_value),
+                                  "FACING" if out is not None and out.name == "Facing" else "FRESNEL")
+    warnings.add(("link", mat.name, node.name),
+                 f"material '{mat.name}': node '{src.name if src else '?'}' driving the factor of '{node.name}' is not supported; "
+                 f"its value {value:.3g} is used")
+    return value
 
 
 def _export_node(pc, mat, node, warnings, depth=0):

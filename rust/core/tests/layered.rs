@@ -99,6 +99,7 @@ fn bad_layered_parameters_name_the_material() {
         r#"{"name": "M4", "bsdf": {"type": "mix", "factor": 2.0, "a": {"type": "none"}, "b": {"type": "none"}}}"#,
         r#"{"name": "M5", "bsdf": {"type": "add", "a": {"type": "none"}, "b": {"type": "dielectric", "roughness": 3.0}}}"#,
         r#"{"name": "M6", "bsdf": {"type": "principled", "roughness": "NaN"}}"#,
+        r#"{"name": "M7", "bsdf": {"type": "mix", "a": {"type": "none"}, "b": {"type": "none"}, "factor_from": {"type": "layer_weight_facing", "blend": 2.0}}}"#,
     ];
     for (k, json) in cases.iter().enumerate() {
         let name = format!("M{}", k + 1);

@@ -130,15 +130,30 @@ pub enum BsdfDesc {
         #[serde(default = "default_thin_film_ior")]
         thin_film_ior: f32,
     },
-    /// Blender's Mix Shader: (1 − factor)·a + factor·b.
+    /// Blender's Mix Shader: (1 − factor)·a + factor·b; `factor_from` (a Fresnel or
+    /// Layer Weight node on Fac) replaces the constant by a function of the view angle.
     Mix {
         a: Box<BsdfDesc>,
         b: Box<BsdfDesc>,
         #[serde(default = "half")]
         factor: f32,
+        #[serde(default)]
+        factor_from: Option<MixFactorDesc>,
     },
     /// Blender's Add Shader: a + b.
     Add { a: Box<BsdfDesc>, b: Box<BsdfDesc> },
+}
+
+/// A view-dependent Mix Shader factor, as Blender's nodes compute it.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum MixFactorDesc {
+    /// Fresnel node: dielectric reflectance at `ior`.
+    Fresnel { ior: f32 },
+    /// Layer Weight node, Fresnel output.
+    LayerWeightFresnel { blend: f32 },
+    /// Layer Weight node, Facing output.
+    LayerWeightFacing { blend: f32 },
 }
 
 fn default_base_color() -> SpectrumDesc {

@@ -2,8 +2,9 @@
 //! descriptions, recursively: a Mix or Add may hold any BSDF description, including
 //! another Mix or a Principled.
 
-use super::{BsdfDesc, BuildUplift};
+use super::{BsdfDesc, BuildUplift, MixFactorDesc};
 use crate::color::uplift::Uplift;
+use crate::material::mix::MixFactor;
 use crate::material::principled::{Principled, PrincipledParams};
 use crate::material::{
     Black, Bsdf, Diffuse, IndexOfRefraction, MixBsdf, SpectralParam, Texture, ThinFilm,
@@ -224,12 +225,36 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
             a,
             b: second,
             factor,
+            factor_from,
         } => {
             let f = unit_weight(material, "mix factor", *factor)?;
-            Box::new(MixBsdf::mix(
+            let factor = match factor_from {
+                None => MixFactor::Constant(f),
+                Some(MixFactorDesc::Fresnel { ior }) => {
+                    if !(ior.is_finite() && *ior >= 0.0) {
+                        return Err(Error::object(
+                            "material",
+                            material,
+                            format!(
+                                "mix factor: Fresnel ior {ior} must be finite and non-negative"
+                            ),
+                        ));
+                    }
+                    MixFactor::Fresnel { ior: *ior }
+                }
+                Some(MixFactorDesc::LayerWeightFresnel { blend }) => {
+                    MixFactor::LayerWeightFresnel {
+                        blend: unit_weight(material, "mix factor: layer weight blend", *blend)?,
+                    }
+                }
+                Some(MixFactorDesc::LayerWeightFacing { blend }) => MixFactor::LayerWeightFacing {
+                    blend: unit_weight(material, "mix factor: layer weight blend", *blend)?,
+                },
+            };
+            Box::new(MixBsdf::mix_with(
                 build_at(b, material, a, depth + 1)?,
                 build_at(b, material, second, depth + 1)?,
-                f,
+                factor,
             ))
         }
         BsdfDesc::Add { a, b: second } => Box::new(MixBsdf::add(
