@@ -60,6 +60,7 @@ def test_principled_mix_add_map_to_polychrome(tmp_path):
         out(nt, mix); mats.append(m)
     m, nt = fresh('Coated'); p = nt.nodes.new('ShaderNodeBsdfPrincipled')
     p.inputs['Coat Weight'].default_value = 0.5; p.inputs['Alpha'].default_value = 0.5
+    tex = nt.nodes.new('ShaderNodeTexNoise'); nt.links.new(tex.outputs[0], p.inputs['Roughness'])
     out(nt, p); mats.append(m)
     for i, mat in enumerate(mats):
         bpy.ops.mesh.primitive_cube_add(size=0.5, location=(i - 2, 0, 0))
@@ -72,8 +73,9 @@ def test_principled_mix_add_map_to_polychrome(tmp_path):
     r = check(proc, res)[0]
     m = r["m"]
     # Only the unsupported Principled inputs of 'Coated' are reported, once each.
-    assert len(r["warns"]) == 2 and all("'Coated'" in w for w in r["warns"]), r["warns"]
+    assert len(r["warns"]) == 3 and all("'Coated'" in w for w in r["warns"]), r["warns"]
     assert any("Coat Weight" in w for w in r["warns"]) and any("Alpha" in w for w in r["warns"])
+    assert any("driving 'Roughness'" in w for w in r["warns"])
     assert m["Coated"]["bsdf"]["type"] == "principled"
     d = m["Default"]["bsdf"]
     assert d["type"] == "principled"

@@ -127,6 +127,12 @@ def _principled_full(pc, mat, node, warnings, base, emission):
         if sock is not None and (sock.is_linked or float(sock.default_value) != value):
             warnings.add(("principled-lobe", mat.name, name),
                          f"material '{mat.name}': '{node.name}' {name} is not supported yet and is ignored")
+    for name in ("Metallic", "Roughness", "Transmission Weight", "Thin Film Thickness", "Thin Film IOR", "Emission Strength"):
+        sock = node.inputs.get(name)
+        src = _linked_node(sock) if sock is not None else None
+        if src is not None:
+            warnings.add(("link", mat.name, src.name, name),
+                         f"material '{mat.name}': node '{src.name}' ({src.bl_idname}) driving '{name}' is not supported; its default value is used")
     level = node.inputs.get("Specular IOR Level")
     if level is not None and abs(float(level.default_value) - 0.5) > 1e-6:
         warnings.add(("principled-level", mat.name),
