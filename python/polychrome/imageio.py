@@ -250,7 +250,7 @@ def _read_png_rgba(path) -> np.ndarray:
     try:
         with Image.open(p) as im:
             pixels = np.asarray(im.convert("RGBA"), dtype=np.float64) / 255.0
-    except OSError as exc:
+    except (OSError, Image.DecompressionBombError, SyntaxError) as exc:  # bombs and bad chunks are not OSErrors
         raise ValueError(f"{p}: cannot read as PNG ({exc})") from exc
     pixels[:, :, :3] = srgb_to_linear(pixels[:, :, :3])
     return pixels.astype(np.float32)

@@ -99,7 +99,7 @@ class Texture:
                     if im.mode in ("I", "I;16", "I;16B", "F"):
                         raise ValueError(f"texture '{label}': {p}: {im.mode} images (16-bit/float) are not supported; use EXR")
                     rgb = np.asarray(im.convert("RGB"), dtype=np.uint8)
-            except OSError as exc:
+            except (OSError, Image.DecompressionBombError, SyntaxError) as exc:  # bombs and bad chunks are not OSErrors
                 raise ValueError(f"texture '{label}': cannot read {p} ({exc})") from exc
             return cls.from_array(rgb, "srgb", wrap, label)
         raise ValueError(f"texture '{label}': unsupported image type {suffix or '(none)'!r} (use .exr, .hdr, .png, .jpg)")
@@ -146,7 +146,15 @@ def read_radiance_hdr(path: Any) -> np.ndarray:
     res = line().split()
     if len(res) != 4 or res[0] != b"-Y" or res[2] != b"+X":
         raise ValueError(f"{p}: unsupported orientation {b' '.join(res).decode(errors='replace')} (only -Y H +X W)")
-    h, w = int(res[1]), int(res[3])
+    try:
+        h, w = int(res[1]), int(res[3])
+    except ValueError:
+        raise ValueError(f"{p}: bad resolution line {b' '.join(res).decode(errors='replace')}") from None
+    # Check the size against the data before allocating (found by fuzzing: a corrupt
+    # header asked for 37 GiB). A run-length scanline encodes at most 127 pixels of a
+    # channel in 2 bytes, so h·w ≤ 64 × the remaining bytes for any readable file.
+    if h <= 0 or w <= 0 or h * w > 64 * max(len(data) - pos, 0):
+        raise ValueError(f"{p}: resolution {w}×{h} does not match the file's {len(data) - pos} bytes of pixel data")
     rgbe = np.zeros((h, w, 4), dtype=np.uint8)
     buf = np.frombuffer(data, dtype=np.uint8)
     for y in range(h):

@@ -1068,6 +1068,7 @@ class _Reader:
         for prim in it:
             if prim.IsPseudoRoot():
                 continue
+            self.current_prim = str(prim.GetPath())  # named by read_stage if pxr raises
             t = str(prim.GetTypeName())
             img = UsdGeom.Imageable(prim)
             if img and (img.ComputeVisibility(self.time) == UsdGeom.Tokens.invisible
@@ -1247,7 +1248,20 @@ def read_stage(path, *, resolution=None):
     ``resolution`` (width, height) decides how the camera's aperture is conformed to the
     image (UsdRender's expandAperture); by default the stage's render settings' resolution,
     else the aperture's own aspect."""
-    return _Reader(Path(path), resolution).read()
+    reader = _Reader(Path(path), resolution)
+    try:
+        return reader.read()
+    except Exception as e:  # noqa: BLE001 - pxr's Tf.ErrorException is not importable by name here
+        if type(e).__name__ != "ErrorException":
+            raise
+        # E.g. an xformOp whose value type does not match its op (found by fuzzing):
+        # a ValueError naming the file and the prim, not pxr's internal exception.
+        import re
+
+        messages = [" ".join(m.split()) for m in re.findall(r" : '(.*?)'\s*(?=\n\s*Error in|$)", str(e), re.S)]
+        detail = messages[0] if messages else (str(e).strip().splitlines() or ["USD error"])[0]
+        where = getattr(reader, "current_prim", None)
+        raise ValueError(f"{path}: " + (f"prim {where}: " if where else "") + detail) from None
 
 
 def read_settings(path) -> dict[str, Any]:

@@ -3,6 +3,9 @@
 use crate::{Error, Result};
 use glam::{Affine3A, Mat3A, Vec2, Vec3A};
 
+/// Largest coordinate magnitude a mesh vertex may have, in object or world space.
+pub const MAX_COORDINATE: f32 = 1e12;
+
 #[derive(Clone, Debug)]
 pub struct Mesh {
     pub name: String,
@@ -37,6 +40,12 @@ impl Mesh {
         let nt = indices.len() / 3;
         if let Some(i) = positions.iter().position(|v| !v.is_finite()) {
             return Err(bad(format!("vertex {} has a non-finite coordinate ({})", i / 3, positions[i])));
+        }
+        // Beyond this magnitude the BVH's box extents and areas overflow f32 (obvhs then
+        // panics building its compressed nodes: found by the scene-builder proptest), and
+        // no ray could resolve the geometry anyway (one ulp at 1e12 is 65536 units).
+        if let Some(i) = positions.iter().position(|v| v.abs() > MAX_COORDINATE) {
+            return Err(bad(format!("vertex {} has a coordinate {:e} beyond ±{MAX_COORDINATE:e}", i / 3, positions[i])));
         }
         if let Some(i) = indices.iter().position(|&k| k as usize >= nv) {
             return Err(bad(format!(

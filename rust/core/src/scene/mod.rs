@@ -254,6 +254,14 @@ impl Scene {
                 })
                 .collect::<Result<_>>()?,
         };
+        // A transform can carry valid vertices out of range, which overflows the BVH's
+        // boxes (obvhs panics): reject it naming the instance (found by proptest).
+        for inst in &instances {
+            let limit = crate::geometry::mesh::MAX_COORDINATE;
+            if let Some(w) = meshes[inst.mesh as usize].positions.iter().map(|p| inst.to_world.transform_point3a(*p)).find(|w| !(w.is_finite() && w.abs().max_element() <= limit)) {
+                return Err(Error::object("instance", &inst.name, format!("places a vertex at {w} (beyond ±{limit:e})")));
+            }
+        }
         let accel = Accel::build(&meshes, &instances);
 
         // Scene bounds, for infinite lights.
