@@ -416,6 +416,7 @@ fn solve_dense(mat: &mut [f64], m: usize, b: &mut [f64]) -> bool {
         return false;
     }
     for col in 0..m {
+        // unwrap: col < m, so the range is never empty (not user data).
         let piv = (col..m).max_by(|&r, &s| mat[r * m + col].abs().total_cmp(&mat[s * m + col].abs())).unwrap();
         if !(mat[piv * m + col].abs() > 1e-14 * scale) {
             return false;
