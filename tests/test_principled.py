@@ -182,3 +182,16 @@ def test_fresnel_mix_factor_is_view_dependent():
     assert d["factor_from"] == {"type": "layer_weight_facing", "blend": 0.3}
     with pytest.raises(ValueError, match="blend"):
         pc.Mix(pc.Diffuse(), pc.Diffuse(), pc.LayerWeight(1.5))
+
+
+def test_textured_base_colour_of_principled_and_inside_mix():
+    """A Principled base colour and a Diffuse inside a Mix may be image textures
+    (converted per hit): a white texture under the layer is invisible in a white world
+    (energy conservation), and a Mix of a red-textured and a blue diffuse at 0.5 is the
+    mixed colour."""
+    white = pc.Texture.from_array(np.ones((4, 4, 3), np.float32), name="white")
+    out = pc.render(convex_scene(pc.Principled(white, roughness=0.4)), width=12, height=12, samples=32, max_bounces=4)
+    assert np.allclose(on_sphere(out).mean(axis=0), 1.0, atol=0.01)
+    red = pc.Texture.from_array(np.tile(np.array([0.8, 0.1, 0.1], np.float32), (4, 4, 1)), name="red")
+    out = pc.render(convex_scene(pc.Mix(pc.Diffuse(red), pc.Diffuse((0.1, 0.1, 0.8)), 0.5)), width=12, height=12, samples=16, max_bounces=2)
+    assert np.allclose(on_sphere(out).mean(axis=0), [0.45, 0.1, 0.45], atol=0.01)
