@@ -1,5 +1,6 @@
 //! Integrators: how a camera sample's radiance is estimated. One file per method.
 
+pub mod bidir;
 pub mod forward;
 pub mod monochromatic;
 pub mod path;

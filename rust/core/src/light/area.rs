@@ -78,4 +78,9 @@ impl Light for AreaTriangle {
         le.copy_from(&self.radiance);
         Some(EmissionSample { origin, direction: Frame::from_normal(n).to_world(local), normal: Some(n), pdf_pos: 1.0 / self.area, pdf_dir, delta_position: false })
     }
+    fn pdf_le(&self, _origin: Vec3A, dir: Vec3A) -> Option<super::LeDensity> {
+        // Either face with probability 1/2, cosine-distributed about it.
+        let cos = self.normal.dot(dir).abs();
+        Some(super::LeDensity { pos: 1.0 / self.area, dir: 0.5 * cos / PI, cos, directional: false })
+    }
 }

@@ -41,4 +41,8 @@ impl Light for DistantLight {
         le.copy_from(&self.irradiance);
         Some(EmissionSample { origin, direction: self.direction, normal: None, pdf_pos: 1.0 / (PI * r * r), pdf_dir: 1.0, delta_position: true })
     }
+    fn pdf_le(&self, _origin: Vec3A, _dir: Vec3A) -> Option<super::LeDensity> {
+        let r = self.scene_radius.max(1e-3);
+        Some(super::LeDensity { pos: 1.0 / (PI * r * r), dir: 1.0, cos: 1.0, directional: true })
+    }
 }

@@ -164,6 +164,9 @@ impl<T: Light + ?Sized> Light for Arc<T> {
     fn sample_le(&self, u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<super::EmissionSample> {
         (**self).sample_le(u_pos, u_dir, le)
     }
+    fn pdf_le(&self, origin: Vec3A, dir: Vec3A) -> Option<super::LeDensity> {
+        (**self).pdf_le(origin, dir)
+    }
 }
 
 const LUMA: [f32; 3] = [0.2126, 0.7152, 0.0722];

@@ -44,6 +44,22 @@ pub struct EmissionSample {
     pub delta_position: bool,
 }
 
+/// The densities with which [`Light::sample_le`] starts a given ray, for bidirectional
+/// MIS weights.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LeDensity {
+    /// Area pdf of the origin (1 for a delta position; for a distant light, per unit
+    /// area of its start disk, perpendicular to the direction).
+    pub pos: f32,
+    /// Solid-angle pdf of the direction (1 for a delta direction).
+    pub dir: f32,
+    /// |cos| between the light's surface normal and the direction (1 without a normal).
+    pub cos: f32,
+    /// Parallel light (distant): the direction is a delta and the position density is
+    /// per unit area perpendicular to it.
+    pub directional: bool,
+}
+
 pub trait Light: Send + Sync {
     /// Total emitted power integrated over the grid with its quadrature weights (eq. 7):
     /// the light-selection weight.
@@ -59,6 +75,11 @@ pub trait Light: Send + Sync {
     /// Samples an emitted ray (forward tracing); `le` receives the radiance along it
     /// (intensity for point-like lights). None: this light cannot start light paths.
     fn sample_le(&self, _u_pos: Vec2, _u_dir: Vec2, _le: &mut SampledSpectrum) -> Option<EmissionSample> {
+        None
+    }
+    /// Densities of `sample_le` starting at `origin` (a point of the light) in direction
+    /// `dir` (unit). None: this light cannot start light paths, or not this ray.
+    fn pdf_le(&self, _origin: Vec3A, _dir: Vec3A) -> Option<LeDensity> {
         None
     }
 }

@@ -31,4 +31,7 @@ impl Light for PointLight {
         le.copy_from(&self.intensity);
         Some(EmissionSample { origin: self.position, direction: uniform_sphere(u_dir), normal: None, pdf_pos: 1.0, pdf_dir: 1.0 / (4.0 * PI), delta_position: true })
     }
+    fn pdf_le(&self, _origin: Vec3A, _dir: Vec3A) -> Option<super::LeDensity> {
+        Some(super::LeDensity { pos: 1.0, dir: 1.0 / (4.0 * PI), cos: 1.0, directional: false })
+    }
 }

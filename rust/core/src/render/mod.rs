@@ -6,6 +6,7 @@
 use crate::color::uplift::UpliftMethod;
 use crate::color::RgbSpace;
 use crate::film::{Film, FilmBuffer, FilmImages, PixelSample};
+use crate::integrator::bidir::{MisLightTracer, MisPathTracer};
 use crate::integrator::forward::{ForwardPart, LightTracer, Splat};
 use crate::integrator::monochromatic::{stratified_wavelength, wavelength_distribution, MonochromaticTracer, Scratch};
 use crate::integrator::path::PathTracer;
@@ -397,6 +398,11 @@ fn render_built(
         rr_depth: 3,
         part: if settings.direction == Direction::Forward { ForwardPart::All } else { ForwardPart::BackwardUnreachable },
     };
+    // BIDIRECTIONAL with MIS for the whole-spectrum methods (integrator/bidir.rs); the
+    // monochromatic methods keep the 0/1 partition.
+    let mis = settings.direction == Direction::Bidirectional && matches!(settings.method, Method::Polychromatic | Method::Rgb);
+    let mis_camera = MisPathTracer { max_bounces: settings.max_bounces, rr_depth: 3, dispersion_splitting: settings.dispersion_splitting };
+    let mis_light = MisLightTracer { max_bounces: settings.max_bounces, rr_depth: 3 };
     let lambda_dist = wavelength_distribution(scene);
     let samples = settings.samples;
     let seed = settings.seed;
@@ -446,6 +452,7 @@ fn render_built(
                     let jitter = rng.uniform2();
                     let (fx, fy) = (x as f32 + jitter.x, y as f32 + jitter.y);
                     match settings.method {
+                        Method::Polychromatic | Method::Rgb if mis => mis_camera.sample(scene, fx, fy, &mut rng, ps),
                         Method::Polychromatic | Method::Rgb => integrator.sample(scene, fx, fy, &mut rng, ps),
                         Method::MonochromaticRays => {
                             let lambda = stratified_wavelength(&lambda_dist, seed, pixel, s, samples);
@@ -522,7 +529,11 @@ fn render_built(
                                 }
                                 Method::MonochromaticScenes => Some((round, n as f32)),
                             };
-                            light_tracer.trace(scene, &mut rng, wavelength, &mut splats);
+                            if mis {
+                                mis_light.trace(scene, &mut rng, &mut splats);
+                            } else {
+                                light_tracer.trace(scene, &mut rng, wavelength, &mut splats);
+                            }
                         }
                         control.done.fetch_add(end - c * LIGHT_CHUNK, Ordering::Relaxed);
                         Some(splats)
