@@ -27,6 +27,7 @@ from common import write_section  # noqa: E402
 
 # Function-name patterns → category (first match wins).
 CATEGORIES = [
+    ("memory allocation (malloc/free/memset)", r"_int_free|malloc|calloc|realloc|^free|cfree|memset|memcpy|memmove|_int_"),
     ("traversal (BVH + triangle tests)", r"obvhs|accel|bvh|Bvh|traverse|intersect|triangle|Triangle|ray_|Ray"),
     ("spectral arithmetic (SampledSpectrum, observer)", r"SampledSpectrum|sampled::|spectrum::|Observer|xyz"),
     ("film", r"film::|Film"),
@@ -51,8 +52,8 @@ def dump(path: Path) -> None:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--spp", type=int, default=16)
-    ap.add_argument("--size", type=int, default=64)
+    ap.add_argument("--spp", type=int, default=128)
+    ap.add_argument("--size", type=int, default=48)
     ap.add_argument("--wavelengths", type=int, default=41)
     ap.add_argument("--write", type=Path)
     args = ap.parse_args(argv)
@@ -74,7 +75,7 @@ def main(argv=None) -> int:
     for line in report.splitlines():
         m = re.match(r"\s*([\d.]+)%\s+\[\.\]\s+(.*)", line)
         if m:
-            rows.append((float(m.group(1)), m.group(2).strip()))
+            rows.append((float(m.group(1)), re.sub(r"\s+-\s+-\s*$", "", m.group(2)).strip()))
     totals: dict[str, float] = {}
     for pct, sym in rows:
         cat = next((c for c, pat in CATEGORIES if re.search(pat, sym)), "other")

@@ -8,7 +8,10 @@ the AUTO quality preset at several noise thresholds.
 Each curve renders at doubling sample counts (1, 2, 4, ... spp; MONOCHROMATIC_RAYS
 counts paths, so it starts at n spp) until one render takes more than `budget`
 seconds. Times are render seconds of the core (scene build excluded), release build.
-The reference is POLYCHROMATIC on 81 wavelengths at `--ref-samples` spp.
+The reference is POLYCHROMATIC on 81 wavelengths at `--ref-samples` spp. (The
+first run of this script, recorded in docs/BENCHMARKS.md on 2026-11-23, timed
+stats["seconds"], which includes the scene build: up to ~0.1 s, visible only at the
+left end of the curves.)
 Plots: docs/images/quality_room.png, docs/images/quality_glass_room.png.
 """
 
@@ -34,9 +37,8 @@ METHODS = ("POLYCHROMATIC", "MONOCHROMATIC_RAYS", "MONOCHROMATIC_SCENES")
 
 
 def render(scene, size, **kw):
-    t = time.perf_counter()
     r = pc.render(scene, width=size, height=size, max_bounces=8, seed=7, **kw)
-    return r, r.stats.get("seconds", time.perf_counter() - t)
+    return r, r.stats["seconds"] - r.stats["build_seconds"]
 
 
 def curve(scene, ref, size, budget, **kw):
