@@ -30,12 +30,13 @@ def plane_scene(material: pc.Material) -> pc.Scene:
     return scene
 
 
-@pytest.mark.parametrize("n", [1.33, 1.5, 2.4])
-def test_black_base_reflects_normal_incidence_fresnel(n):
-    scene = plane_scene(pc.Principled((0.0, 0.0, 0.0), roughness=0.0, ior=n))
+@pytest.mark.parametrize("n,level", [(1.33, 0.5), (1.5, 0.5), (2.4, 0.5), (1.5, 0.0), (1.5, 0.8)])
+def test_black_base_reflects_normal_incidence_fresnel(n, level):
+    """((n − 1)/(n + 1))², scaled by 2·level (Blender's Specular IOR Level)."""
+    scene = plane_scene(pc.Principled((0.0, 0.0, 0.0), roughness=0.0, ior=n, specular_ior_level=level))
     out = pc.render(scene, width=4, height=4, samples=2, max_bounces=4)
-    expected = ((n - 1) / (n + 1)) ** 2
-    assert np.allclose(luminance(out.rgba), expected, rtol=2e-3), (luminance(out.rgba).mean(), expected)
+    expected = ((n - 1) / (n + 1)) ** 2 * 2 * level
+    assert np.allclose(luminance(out.rgba), expected, rtol=2e-3, atol=1e-6), (luminance(out.rgba).mean(), expected)
 
 
 def film_reflectance(lam: np.ndarray, d: float, n1: float, n2: float) -> np.ndarray:

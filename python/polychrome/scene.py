@@ -298,7 +298,9 @@ class Principled(Material):
     colour as F0, ``specular_tint`` at grazing angles) and a rough glass
     (``transmission``, tinted by the base colour). ``thin_film_thickness`` (nm) and
     ``thin_film_ior`` put an interference film on the specular interface (and on the
-    metal). ``roughness`` as Blender's (alpha = roughness²). Defaults are Blender's."""
+    metal). ``specular_ior_level`` scales the specular layer's normal-incidence reflectance
+    by 2·level (0.5 keeps ``ior``). ``roughness`` as Blender's (alpha = roughness²).
+    Defaults are Blender's."""
 
     def __init__(
         self,
@@ -311,6 +313,7 @@ class Principled(Material):
         specular_tint: Any = None,
         thin_film_thickness: float = 0.0,
         thin_film_ior: float = 1.33,
+        specular_ior_level: float = 0.5,
         emission: Any = None,
         name: str = "Principled",
     ):
@@ -329,6 +332,7 @@ class Principled(Material):
         if not (math.isfinite(n) and 1.0 <= n <= 10.0):
             raise ValueError(f"material '{name}': thin_film_ior {thin_film_ior} must be in 1..10")
         self.thin_film_thickness, self.thin_film_ior = t, n
+        self.specular_ior_level = _unit(specular_ior_level, "specular_ior_level", name)
         self.emission = None if emission is None else as_spectrum(emission)
         self.name = name
 
@@ -342,6 +346,7 @@ class Principled(Material):
             "transmission": self.transmission,
             "thin_film_thickness": self.thin_film_thickness,
             "thin_film_ior": self.thin_film_ior,
+            "specular_ior_level": self.specular_ior_level,
         }
         if self.specular_tint is not None:
             d["specular_tint"] = self.specular_tint.to_dict()

@@ -29,7 +29,7 @@ def test_principled_mix_add_map_to_polychrome(tmp_path):
     p.inputs['Metallic'].default_value = 0.25; p.inputs['Transmission Weight'].default_value = 0.5
     p.inputs['Roughness'].default_value = 0.2; p.inputs['IOR'].default_value = 1.45
     p.inputs['Thin Film Thickness'].default_value = 420.0; p.inputs['Thin Film IOR'].default_value = 1.38
-    p.inputs['Specular Tint'].default_value = (1.0, 0.8, 0.6, 1.0)
+    p.inputs['Specular Tint'].default_value = (1.0, 0.8, 0.6, 1.0); p.inputs['Specular IOR Level'].default_value = 0.25
     p.inputs['Emission Color'].default_value = (1.0, 0.5, 0.0, 1.0); p.inputs['Emission Strength'].default_value = 2.0
     out(nt, p); mats.append(m)
     m, nt = fresh('Mixed'); mix = nt.nodes.new('ShaderNodeMixShader'); mix.inputs[0].default_value = 0.3
@@ -89,6 +89,7 @@ def test_principled_mix_add_map_to_polychrome(tmp_path):
     assert fb["roughness"] == pytest.approx(0.2) and fb["ior"]["ior"] == pytest.approx(1.45)
     assert fb["thin_film_thickness"] == pytest.approx(420.0) and fb["thin_film_ior"] == pytest.approx(1.38)
     assert fb["specular_tint"]["rgb"] == pytest.approx([1.0, 0.8, 0.6])
+    assert fb["specular_ior_level"] == pytest.approx(0.25) and d["specular_ior_level"] == 0.5
     assert f["emission"]["rgb"] == pytest.approx([1.0, 0.5, 0.0]) and f["emission"]["scale"] == pytest.approx(2.0)
     mx = m["Mixed"]
     assert mx["bsdf"]["type"] == "mix" and mx["bsdf"]["factor"] == pytest.approx(0.3)

@@ -134,9 +134,13 @@ def _principled_full(pc, mat, node, warnings, base, emission):
             warnings.add(("link", mat.name, src.name, name),
                          f"material '{mat.name}': node '{src.name}' ({src.bl_idname}) driving '{name}' is not supported; its default value is used")
     level = node.inputs.get("Specular IOR Level")
-    if level is not None and abs(float(level.default_value) - 0.5) > 1e-6:
-        warnings.add(("principled-level", mat.name),
-                     f"material '{mat.name}': '{node.name}' Specular IOR Level is ignored (0.5 assumed)")
+    extra = {}
+    if level is not None:
+        if level.is_linked:
+            warnings.add(("link", mat.name, node.name, "level"),
+                         f"material '{mat.name}': a node driving 'Specular IOR Level' of '{node.name}' is not supported; its default value is used")
+        if abs(float(level.default_value) - 0.5) > 1e-6:
+            extra["specular_ior_level"] = _clamp01(level.default_value)
     tint = None
     if node.inputs.get("Specular Tint") is not None:
         t = _input_colour(mat, node, "Specular Tint", warnings, pc)
@@ -160,6 +164,7 @@ def _principled_full(pc, mat, node, warnings, base, emission):
         thin_film_ior=film_n,
         emission=emission,
         name=mat.name,
+        **extra,
     )
 
 

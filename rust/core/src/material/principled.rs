@@ -171,6 +171,9 @@ pub struct PrincipledParams {
     pub transmission: f32,
     pub roughness: f32,
     pub ior: IndexOfRefraction,
+    /// Blender's "Specular IOR Level": 0.5 keeps `ior`; otherwise the specular layer's F0
+    /// is scaled by 2·level (0: no specular reflection), as Cycles does.
+    pub specular_ior_level: f32,
     /// Blender's "Specular Tint" (the metal's tint at ~82°); white for none.
     pub specular_tint: SampledSpectrum,
     pub thin_film: Option<ThinFilm>,
@@ -231,14 +234,15 @@ impl Principled {
         };
         let film = p.thin_film.filter(|f| f.active());
         let lanes = grid.len();
+        let ior = specular_index(&p.ior, p.specular_ior_level);
         // The Fresnel of the specular layer depends on λ only through a film or a
         // varying index: then one table per lane.
-        let per_lane = film.is_some() || (0..lanes).any(|i| p.ior.at(i) != p.ior.at(0));
+        let per_lane = film.is_some() || (0..lanes).any(|i| ior.at(i) != ior.at(0));
         let rows = if per_lane { lanes } else { 1 };
         let lambdas = grid.lambdas();
         let e_table: Vec<Vec<f32>> = (0..rows)
             .map(|i| {
-                let n = p.ior.at(i) as f64;
+                let n = ior.at(i) as f64;
                 let lambda = lambdas[i] as f64;
                 match film {
                     Some(fl) => albedo_table(&distribution, smooth, &|c| {
@@ -293,7 +297,7 @@ impl Principled {
             w_glass: (1.0 - metallic) * transmission,
             distribution,
             smooth,
-            ior: p.ior,
+            ior,
             film,
             glass: if transmission > 0.0 { p.glass } else { None },
             e_table,
@@ -487,6 +491,22 @@ impl Principled {
         }
         HitSpectra { rho, metal_f, fms }
     }
+}
+
+/// The specular layer's index for Blender's Specular IOR Level (Cycles:
+/// F0 = F0(ior)·2·level, η = ior_from_F0(F0)); level 0.5 keeps the index.
+fn specular_index(ior: &IndexOfRefraction, level: f32) -> IndexOfRefraction {
+    if !level.is_finite() || (level - 0.5).abs() < 1e-6 {
+        return ior.clone();
+    }
+    let mut out = ior.clone();
+    for v in out.values.values_mut() {
+        let n = *v as f64;
+        let f0 = ((n - 1.0) / (n + 1.0)).powi(2) * 2.0 * level.max(0.0) as f64;
+        let s = f0.min(0.99).sqrt();
+        *v = ((1.0 + s) / (1.0 - s)) as f32;
+    }
+    out
 }
 
 fn clone_param(p: &SpectralParam) -> SpectralParam {
@@ -709,6 +729,7 @@ mod tests {
                 transmission,
                 roughness,
                 ior: ior_v,
+                specular_ior_level: 0.5,
                 specular_tint: SampledSpectrum::splat(n, 1.0),
                 thin_film: film,
                 glass,
@@ -1020,6 +1041,31 @@ mod tests {
                 (mean - 1.0).abs() < 4.0 * se + 5e-3,
                 "θ {theta}: {mean} ± {se}"
             );
+        }
+    }
+
+    /// Specular IOR Level scales the layer's F0 by 2·level (0: no reflection, 1: twice
+    /// ((n − 1)/(n + 1))²), seen on a black base at normal incidence.
+    #[test]
+    fn specular_ior_level_scales_f0() {
+        let grid = WavelengthGrid::uniform(4, 400.0, 700.0).unwrap();
+        let ctx = ShadingContext::new(&grid);
+        for &level in &[0.0f32, 0.25, 0.5, 1.0] {
+            let mut m = principled(&grid, 0.0, 0.0, 0.0, 0.0, 1.5, None);
+            m.ior = specular_index(&IndexOfRefraction::constant(4, 1.5), level);
+            m.e_table = vec![albedo_table(&m.distribution, true, &|c| {
+                fresnel_dielectric_f64(c, m.ior.at(0) as f64)
+            })];
+            let mut tp = SampledSpectrum::splat(4, 1.0);
+            let expected = 0.04 * 2.0 * level;
+            match m.sample(&ctx, Vec3A::Z, Vec2::new(0.5, 0.5), 0.5, &mut tp) {
+                Some(s) => assert!(
+                    (tp.get(0) * s.pdf - expected).abs() < 1e-5,
+                    "level {level}: {}",
+                    tp.get(0) * s.pdf
+                ),
+                None => assert_eq!(expected, 0.0),
+            }
         }
     }
 

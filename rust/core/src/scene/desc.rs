@@ -129,6 +129,9 @@ pub enum BsdfDesc {
         thin_film_thickness: f32,
         #[serde(default = "default_thin_film_ior")]
         thin_film_ior: f32,
+        /// Blender's Specular IOR Level (0.5: F0 from `ior`; F0 scales by 2·level).
+        #[serde(default = "half")]
+        specular_ior_level: f32,
     },
     /// Blender's Mix Shader: (1 − factor)·a + factor·b; `factor_from` (a Fresnel or
     /// Layer Weight node on Fac) replaces the constant by a function of the view angle.

@@ -158,10 +158,13 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
             specular_tint,
             thin_film_thickness,
             thin_film_ior,
+            specular_ior_level,
         } => {
             let base_color = b.reflectance(base_color, material, "base_color")?;
             let metallic = unit_weight(material, "metallic", *metallic)?;
             let transmission = unit_weight(material, "transmission", *transmission)?;
+            let specular_ior_level =
+                unit_weight(material, "specular_ior_level", *specular_ior_level)?;
             let roughness = unit_weight(material, "roughness", *roughness)?;
             let index = IndexOfRefraction::build(ior, b.grid, material)?;
             let n = b.grid.len();
@@ -214,6 +217,7 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
                     transmission,
                     roughness,
                     ior: index,
+                    specular_ior_level,
                     specular_tint,
                     thin_film,
                     glass,
