@@ -150,3 +150,16 @@ def test_narrow_band_at_589_keeps_energy_and_colour_on_the_auto_grid():
     # Energy: the directly seen lamp and the lit walls keep their luminance.
     y = lambda r: float(np.mean(r.rgba[..., :3] @ np.array([0.2126, 0.7152, 0.0722])))
     assert abs(y(auto) / y(ref) - 1.0) < 0.01
+
+
+def test_cli_quality_flags_become_explicit_settings():
+    from polychrome.cli import _render_overrides, _settings_from, build_parser
+
+    args = build_parser().parse_args(["render", "s.usda", "-o", "o.exr", "--quality", "final", "--noise-threshold", "0.5"])
+    o = _render_overrides(args)
+    assert o == {"quality": "FINAL", "noise_threshold": 0.5}
+    s = _settings_from(o)
+    d = json.loads(s.to_json())
+    assert d["quality"] == "FINAL" and d["noise_threshold"] == 0.5 and "samples" not in d
+    with pytest.raises(ValueError, match="quality"):
+        _render_overrides(build_parser().parse_args(["render", "s.usda", "-o", "o.exr", "--quality", "ultra"]))
