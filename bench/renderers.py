@@ -124,10 +124,7 @@ def ensure_mitsuba(py: Path) -> bool:
     if py.exists():
         return True
     venv = py.parent.parent
-    try:
-        subprocess.run([sys.executable.replace(".venv/bin/python", "") or "python3", "-m", "venv", str(venv)], check=True)
-    except Exception:  # noqa: BLE001
-        subprocess.run(["python3", "-m", "venv", str(venv)], check=True)
+    subprocess.run(["python3", "-m", "venv", str(venv)], check=True)
     subprocess.run([str(py), "-m", "pip", "install", "-q", "mitsuba"], check=True)
     return py.exists()
 
