@@ -131,14 +131,16 @@ def mutate_buffers(buffers, rng: random.Random):
         if r < 0.25:
             out[i] = a[: rng.randrange(a.size + 1)].copy()
         elif r < 0.4:
-            out[i] = a.astype(rng.choice([np.float32, np.uint32, np.uint8, np.float64, np.int64]))
+            with np.errstate(invalid="ignore"):
+                out[i] = a.astype(rng.choice([np.float32, np.uint32, np.uint8, np.float64, np.int64]))
         elif r < 0.7 and a.size:
             b = a.copy()
             k = rng.randrange(b.size)
-            if b.dtype == np.float32:
+            if np.issubdtype(b.dtype, np.floating):
                 b[k] = rng.choice([np.nan, np.inf, -np.inf, 1e38, -1e-38, 0.0])
             else:
-                b[k] = rng.choice([0, 1, 2**31, np.iinfo(b.dtype).max])
+                info = np.iinfo(b.dtype)
+                b[k] = rng.choice([0, 1, info.max // 2 + 1, info.max])
             out[i] = b
         elif r < 0.85:
             del out[i]
