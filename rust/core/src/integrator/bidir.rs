@@ -515,7 +515,9 @@ impl MisLightTracer {
                 let origin =
                     offset_ray_origin(es.origin, if nl.dot(c.wi) > 0.0 { nl } else { -nl });
                 if cos > 0.0
-                    && !scene.occluded(&Ray::segment(origin, c.wi, c.distance * (1.0 - 1e-4)))
+                    // Aimed from the offset origin at the camera: along c.wi from the unshifted
+                    // point it missed by the offset (16 units at 1e6) and hit walls behind it.
+                    && !scene.occluded(&crate::geometry::shadow_ray(es.origin, origin, c.wi, c.distance))
                 {
                     let end = LightEnd {
                         p: es.origin,
@@ -583,11 +585,9 @@ impl MisLightTracer {
                         let wc_local = frame.to_local(c.wi);
                         material.bsdf.eval(&ctx, wo_local, wc_local, &mut f);
                         if !f.is_black()
-                            && !scene.occluded(&Ray::segment(
-                                offset_ray_origin(si.p, ng),
-                                c.wi,
-                                c.distance * (1.0 - 1e-4),
-                            ))
+                            // Aimed from the offset origin at the camera: along c.wi from the unshifted
+                            // point it missed by the offset (16 units at 1e6) and hit walls behind it.
+                            && !scene.occluded(&crate::geometry::shadow_ray(si.p, offset_ray_origin(si.p, ng), c.wi, c.distance))
                         {
                             // Camera order: x1 = here, x2 … = the light path reversed.
                             ctx.mode = TransportMode::Radiance;

@@ -87,7 +87,9 @@ impl LightTracer {
                 let origin =
                     offset_ray_origin(es.origin, if nl.dot(c.wi) > 0.0 { nl } else { -nl });
                 if cos > 0.0
-                    && !scene.occluded(&Ray::segment(origin, c.wi, c.distance * (1.0 - 1e-4)))
+                    // Aimed from the offset origin at the camera: along c.wi from the unshifted
+                    // point it missed by the offset (16 units at 1e6) and hit walls behind it.
+                    && !scene.occluded(&crate::geometry::shadow_ray(es.origin, origin, c.wi, c.distance))
                 {
                     let mut r = le.clone();
                     r.scale(cos * c.importance / (pmf * es.pdf_pos));
@@ -142,11 +144,9 @@ impl LightTracer {
                             .eval(&ctx, wo_local, frame.to_local(c.wi), &mut f);
                         if !f.is_black() {
                             let origin = offset_ray_origin(si.p, ng);
-                            if !scene.occluded(&Ray::segment(
-                                origin,
-                                c.wi,
-                                c.distance * (1.0 - 1e-4),
-                            )) {
+                            // Aimed from the offset origin at the camera: along c.wi from the unshifted
+                            // point it missed by the offset (16 units at 1e6) and hit walls behind it.
+                            if !scene.occluded(&crate::geometry::shadow_ray(si.p, origin, c.wi, c.distance)) {
                                 let mut r = f.clone();
                                 r.mul_assign(&beta);
                                 r.scale(c.importance);
@@ -248,11 +248,9 @@ impl LightTracer {
                             .bsdf
                             .eval(&ctx, wo_local, frame.to_local(c.wi), &mut f);
                         if !f.is_black()
-                            && !scene.occluded(&Ray::segment(
-                                offset_ray_origin(si.p, ng),
-                                c.wi,
-                                c.distance * (1.0 - 1e-4),
-                            ))
+                            // Aimed from the offset origin at the camera: along c.wi from the unshifted
+                            // point it missed by the offset (16 units at 1e6) and hit walls behind it.
+                            && !scene.occluded(&crate::geometry::shadow_ray(si.p, offset_ray_origin(si.p, ng), c.wi, c.distance))
                         {
                             let mut r = f.clone();
                             r.mul_assign(&beta);
