@@ -52,6 +52,19 @@ impl Observer {
         Self { x: fold(0), y: fold(1), z: fold(2) }
     }
 
+    /// XYZ of the per-wavelength product of two spectra (e.g. reflectance × illuminant),
+    /// without allocating the product.
+    pub fn xyz_of_product(&self, a: &[f32], b: &[f32]) -> [f64; 3] {
+        let mut out = [0.0f64; 3];
+        for (i, (&x, &y)) in a.iter().zip(b).enumerate() {
+            let v = (x * y) as f64;
+            out[0] += v * self.x[i] as f64;
+            out[1] += v * self.y[i] as f64;
+            out[2] += v * self.z[i] as f64;
+        }
+        out
+    }
+
     /// XYZ of a spectrum sampled on the grid.
     pub fn xyz(&self, s: &[f32]) -> [f64; 3] {
         let dot = |w: &[f32]| s.iter().zip(w).map(|(&a, &b)| a as f64 * b as f64).sum::<f64>();

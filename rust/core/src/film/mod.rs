@@ -62,9 +62,8 @@ impl FilmBuffer {
             self.nonfinite += 1;
             return;
         }
-        let mut a = s.albedo.clone();
-        a.mul_assign(albedo_white);
-        let axyz = observer.xyz(a.values());
+        // Folded without a temporary spectrum: this runs once per camera sample.
+        let axyz = observer.xyz_of_product(s.albedo.values(), albedo_white.values());
         // The auxiliary passes are guarded too: a NaN depth, normal or albedo would
         // otherwise reach its pass unseen (SPEC §8: no NaN in any pass).
         if !(s.depth.is_finite() && s.normal.is_finite() && axyz.iter().all(|v| v.is_finite())) {

@@ -37,9 +37,7 @@ impl Bsdf for Diffuse {
             return None;
         }
         // f·cos/pdf = ρ for a cosine-sampled Lambertian lobe.
-        let mut rho = SampledSpectrum::zeros(throughput.len());
-        self.reflectance.evaluate_into(ctx, &mut rho);
-        throughput.mul_assign(&rho);
+        self.reflectance.multiply_into(ctx, throughput);
         Some(BsdfSample { wi, pdf, specular: false, collapsed_to: None })
     }
     fn albedo(&self, ctx: &ShadingContext, out: &mut SampledSpectrum) {

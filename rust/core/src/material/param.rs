@@ -16,6 +16,20 @@ pub enum SpectralParam {
 }
 
 impl SpectralParam {
+    /// Multiplies `target` by the parameter's spectrum at this hit; constant spectra need
+    /// no temporary (the common case on every diffuse bounce).
+    #[inline]
+    pub fn multiply_into(&self, ctx: &ShadingContext, target: &mut SampledSpectrum) {
+        match self {
+            SpectralParam::Constant(s) => target.mul_assign(s),
+            SpectralParam::Texture { .. } => {
+                let mut tmp = SampledSpectrum::zeros(target.len());
+                self.evaluate_into(ctx, &mut tmp);
+                target.mul_assign(&tmp);
+            }
+        }
+    }
+
     /// Writes the parameter's spectrum at this hit into `out`.
     #[inline]
     pub fn evaluate_into(&self, ctx: &ShadingContext, out: &mut SampledSpectrum) {
