@@ -22,6 +22,7 @@
 //! camera strategy can produce the path): there the two sides collapse to different
 //! wavelengths with different probabilities (eq. 9), which these weights do not model.
 
+use super::scatter;
 use crate::camera::CameraConnection;
 use crate::film::PixelSample;
 use crate::geometry::{offset_ray_origin, shadow_ray, Frame, Ray};
@@ -368,24 +369,13 @@ impl Integrator for MisPathTracer {
                     ctx.single_wavelength = Some(i);
                     tp.fill(0.0);
                     tp.set(i, b);
-                    let u = rng.uniform2();
-                    let uc = rng.uniform();
-                    let Some(bs) = material.bsdf.sample(&ctx, wo_local, u, uc, &mut tp) else {
+                    let Some(sc) = scatter(material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, rng, &mut tp) else {
                         continue;
                     };
-                    let wi = frame.to_world(bs.wi);
-                    let geometric_transmit = wi.dot(ng) < 0.0;
-                    if (bs.wi.z * wo_local.z < 0.0) != geometric_transmit {
-                        continue;
-                    }
-                    let ray = Ray::new(
-                        offset_ray_origin(si.p, if geometric_transmit { -ng } else { ng }),
-                        wi,
-                    );
                     let st = PathState {
-                        ray,
-                        specular: bs.specular,
-                        prev_pdf: bs.pdf,
+                        ray: sc.ray,
+                        specular: sc.sample.specular,
+                        prev_pdf: sc.sample.pdf,
                         prev_p: si.p,
                         depth: depth + 1,
                     };
@@ -396,18 +386,14 @@ impl Integrator for MisPathTracer {
             }
 
             // Continue by sampling the BSDF (strategy A on the next emitter hit).
-            let u = rng.uniform2();
-            let uc = rng.uniform();
-            let Some(bs) = material.bsdf.sample(&ctx, wo_local, u, uc, &mut beta) else {
+            let Some(sc) = scatter(material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, rng, &mut beta) else {
                 break;
             };
-            let wi = frame.to_world(bs.wi);
-            let local_transmit = bs.wi.z * wo_local.z < 0.0;
-            let geometric_transmit = wi.dot(ng) < 0.0;
-            if local_transmit != geometric_transmit || !beta.is_finite() {
+            if !beta.is_finite() {
                 break;
             }
-            if depth == 0 && geometric_transmit {
+            let bs = sc.sample;
+            if depth == 0 && sc.transmitted {
                 // Light paths connect to the camera only on the side they arrive from.
                 cam.connectable = false;
             }
@@ -430,10 +416,7 @@ impl Integrator for MisPathTracer {
                 ..here
             });
             prev_p = si.p;
-            ray = Ray::new(
-                offset_ray_origin(si.p, if geometric_transmit { -ng } else { ng }),
-                wi,
-            );
+            ray = sc.ray;
             depth += 1;
             if let Some(i) = bs.collapsed_to {
                 if ctx.single_wavelength.is_none() {
@@ -635,16 +618,13 @@ impl MisLightTracer {
             if depth + 1 >= self.max_bounces {
                 break;
             }
-            let u = rng.uniform2();
-            let uc = rng.uniform();
-            let Some(bs) = material.bsdf.sample(&ctx, wo_local, u, uc, &mut beta) else {
+            let Some(sc) = scatter(material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, rng, &mut beta) else {
                 break;
             };
-            let wi = frame.to_world(bs.wi);
-            let geometric_transmit = wi.dot(ng) < 0.0;
-            if (bs.wi.z * wo_local.z < 0.0) != geometric_transmit || !beta.is_finite() {
+            if !beta.is_finite() {
                 break;
             }
+            let bs = sc.sample;
             if let Some(i) = bs.collapsed_to {
                 ctx.single_wavelength = Some(i);
             }
@@ -669,10 +649,7 @@ impl MisLightTracer {
                 pdf_cam,
                 pdf_light,
             });
-            ray = Ray::new(
-                offset_ray_origin(si.p, if geometric_transmit { -ng } else { ng }),
-                wi,
-            );
+            ray = sc.ray;
             depth += 1;
             if depth >= self.rr_depth {
                 let q = beta.max_value().min(1.0);

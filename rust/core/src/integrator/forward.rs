@@ -14,6 +14,7 @@
 //! - Environment lights and orthographic cameras are not reachable this way (their
 //!   light has no `sample_le`, the camera no pinhole to connect to).
 
+use super::scatter;
 use crate::geometry::{offset_ray_origin, Frame, Ray};
 use crate::material::{ShadingContext, TransportMode};
 use crate::sampling::Rng;
@@ -162,30 +163,22 @@ impl LightTracer {
             if depth + 1 >= self.max_bounces {
                 break;
             }
-            let u = rng.uniform2();
-            let uc = rng.uniform();
-            let Some(bs) = material.bsdf.sample(&ctx, wo_local, u, uc, &mut beta) else {
+            let Some(sc) = scatter(material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, rng, &mut beta) else {
                 break;
             };
-            let wi = frame.to_world(bs.wi);
-            let local_transmit = bs.wi.z * wo_local.z < 0.0;
-            let geometric_transmit = wi.dot(ng) < 0.0;
-            if local_transmit != geometric_transmit || !beta.is_finite() {
+            if !beta.is_finite() {
                 break;
             }
-            if let Some(i) = bs.collapsed_to {
+            if let Some(i) = sc.sample.collapsed_to {
                 ctx.single_wavelength = Some(i);
             }
             if !all && depth == 0 {
                 // Keep only caustic paths of delta lights: specular first vertex.
-                if !(es.delta_position && bs.specular) {
+                if !(es.delta_position && sc.sample.specular) {
                     return;
                 }
             }
-            ray = Ray::new(
-                offset_ray_origin(si.p, if geometric_transmit { -ng } else { ng }),
-                wi,
-            );
+            ray = sc.ray;
             depth += 1;
             if !all && depth >= 1 {
                 // Connect the subsequent smooth vertices to the camera.
@@ -266,23 +259,16 @@ impl LightTracer {
             if depth + 1 >= self.max_bounces {
                 break;
             }
-            let u = rng.uniform2();
-            let uc = rng.uniform();
-            let Some(bs) = material.bsdf.sample(&ctx, wo_local, u, uc, &mut beta) else {
+            let Some(sc) = scatter(material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, rng, &mut beta) else {
                 break;
             };
-            let wi = frame.to_world(bs.wi);
-            let geometric_transmit = wi.dot(ng) < 0.0;
-            if (bs.wi.z * wo_local.z < 0.0) != geometric_transmit || !beta.is_finite() {
+            if !beta.is_finite() {
                 break;
             }
-            if let Some(i) = bs.collapsed_to {
+            if let Some(i) = sc.sample.collapsed_to {
                 ctx.single_wavelength = Some(i);
             }
-            ray = Ray::new(
-                offset_ray_origin(si.p, if geometric_transmit { -ng } else { ng }),
-                wi,
-            );
+            ray = sc.ray;
             depth += 1;
             if depth >= self.rr_depth {
                 let q = beta.max_value().min(1.0);

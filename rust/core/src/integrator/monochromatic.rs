@@ -8,6 +8,7 @@
 //! spectral); the tracer only reads the one component it carries and keeps all of its
 //! own arithmetic scalar. BSDFs see `ShadingContext.single_wavelength = Some(λ)`.
 
+use super::scatter;
 use crate::film::PixelSample;
 use crate::geometry::{offset_ray_origin, Frame, Ray};
 use crate::material::ShadingContext;
@@ -194,27 +195,19 @@ impl MonochromaticTracer {
                     }
                 }
             }
-            let u = rng.uniform2();
-            let uc = rng.uniform();
             s.tp.fill(0.0);
             s.tp.set(lambda, beta);
-            let Some(bs) = material.bsdf.sample(&ctx, wo_local, u, uc, &mut s.tp) else {
+            let Some(sc) = scatter(material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, rng, &mut s.tp) else {
                 break;
             };
             beta = s.tp.get(lambda);
-            let wi = frame.to_world(bs.wi);
-            let local_transmit = bs.wi.z * wo_local.z < 0.0;
-            let geometric_transmit = wi.dot(ng) < 0.0;
-            if local_transmit != geometric_transmit || !(beta > 0.0 && beta.is_finite()) {
+            if !(beta > 0.0 && beta.is_finite()) {
                 break;
             }
-            specular = bs.specular;
-            prev_pdf = bs.pdf;
+            specular = sc.sample.specular;
+            prev_pdf = sc.sample.pdf;
             prev_p = si.p;
-            ray = Ray::new(
-                offset_ray_origin(si.p, if geometric_transmit { -ng } else { ng }),
-                wi,
-            );
+            ray = sc.ray;
             depth += 1;
             if depth >= self.rr_depth {
                 let q = beta.min(1.0);

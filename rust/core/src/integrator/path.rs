@@ -3,9 +3,10 @@
 //! combined with multiple importance sampling (power heuristic); Russian roulette on
 //! the largest throughput over the grid.
 
+use super::scatter;
 use super::Integrator;
 use crate::film::PixelSample;
-use crate::geometry::{offset_ray_origin, Frame, Ray};
+use crate::geometry::{offset_ray_origin, Frame};
 use crate::material::ShadingContext;
 use crate::sampling::{power_heuristic, Rng};
 use crate::scene::Scene;
@@ -138,16 +139,8 @@ impl Integrator for PathTracer {
                     ctx.single_wavelength = Some(i);
                     tp.fill(0.0);
                     tp.set(i, b);
-                    let u = rng.uniform2();
-                    let uc = rng.uniform();
-                    let Some(bs) = material.bsdf.sample(&ctx, wo_local, u, uc, &mut tp) else { continue };
-                    let wi = frame.to_world(bs.wi);
-                    let geometric_transmit = wi.dot(ng) < 0.0;
-                    if (bs.wi.z * wo_local.z < 0.0) != geometric_transmit {
-                        continue;
-                    }
-                    let ray = Ray::new(offset_ray_origin(si.p, if geometric_transmit { -ng } else { ng }), wi);
-                    let st = PathState { ray, specular: bs.specular, prev_pdf: bs.pdf, prev_p: si.p, depth: depth + 1 };
+                    let Some(sc) = scatter(material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, rng, &mut tp) else { continue };
+                    let st = PathState { ray: sc.ray, specular: sc.sample.specular, prev_pdf: sc.sample.pdf, prev_p: si.p, depth: depth + 1 };
                     let l = mono.trace(scene, i, tp.get(i), st, rng, None, &mut scratch);
                     radiance.set(i, radiance.get(i) + l);
                 }
@@ -155,21 +148,15 @@ impl Integrator for PathTracer {
             }
 
             // Continue the path by sampling the BSDF.
-            let u = rng.uniform2();
-            let uc = rng.uniform();
-            let Some(bs) = material.bsdf.sample(&ctx, wo_local, u, uc, &mut beta) else { break };
-            let wi = frame.to_world(bs.wi);
-            // Reject directions whose side disagrees between shading and geometric normals
-            // (they would leak light through the surface).
-            let local_transmit = bs.wi.z * wo_local.z < 0.0;
-            let geometric_transmit = wi.dot(ng) < 0.0;
-            if local_transmit != geometric_transmit || !beta.is_finite() {
+            let Some(sc) = scatter(material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, rng, &mut beta) else { break };
+            if !beta.is_finite() {
                 break;
             }
+            let bs = sc.sample;
             specular = bs.specular;
             prev_pdf = bs.pdf;
             prev_p = si.p;
-            ray = Ray::new(offset_ray_origin(si.p, if geometric_transmit { -ng } else { ng }), wi);
+            ray = sc.ray;
             depth += 1;
             if let Some(i) = bs.collapsed_to {
                 if ctx.single_wavelength.is_none() {
