@@ -488,7 +488,6 @@ def test_cli_renders_a_blend_file(tmp_path):
     png = tmp_path / "cube.png"
     script = textwrap.dedent(f"""
         import sys
-        sys.path.insert(0, {str(ROOT / 'python')!r})
         import bpy
         bpy.ops.wm.read_factory_settings()
         bpy.context.scene.render.resolution_x, bpy.context.scene.render.resolution_y = 32, 24
@@ -511,7 +510,6 @@ def test_blender_export_operator_writes_a_stage_polychrome_reads_back(tmp_path):
     stage = tmp_path / "default.usda"
     script = textwrap.dedent(f"""
         import json, sys
-        sys.path.insert(0, {str(ROOT / 'python')!r})
         import bpy
         import polychrome_blender
         polychrome_blender.register()
@@ -753,7 +751,6 @@ def test_blenders_own_usd_export_renders_like_the_addon_export(tmp_path):
     stage = tmp_path / "blender.usda"
     script = textwrap.dedent(f"""
         import json, sys, warnings
-        sys.path.insert(0, {str(ROOT / 'python')!r})
         import bpy
         import polychrome as pc, polychrome_blender
         polychrome_blender.register()

@@ -14,7 +14,6 @@ ROOT = Path(__file__).resolve().parents[2]
 
 PRELUDE = f"""
 import atexit, json, math, os, sys
-sys.path.insert(0, {str(ROOT / 'python')!r})
 import numpy as np
 import bpy
 import polychrome_blender

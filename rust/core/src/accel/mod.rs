@@ -38,9 +38,13 @@ pub struct Accel {
     tlas_instances: Vec<u32>,
 }
 
-fn build_params() -> BvhBuildParams {
-    BvhBuildParams::medium_build()
+/// Large meshes use obvhs's fast preset: on 1M triangles it builds about twice as fast
+/// as the medium one for a few percent of traversal speed, which keeps interactive
+/// re-exports (Blender's viewport) responsive.
+fn build_params_for(primitives: usize) -> BvhBuildParams {
+    if primitives > 200_000 { BvhBuildParams::fast_build() } else { BvhBuildParams::medium_build() }
 }
+
 
 impl Accel {
     pub fn build(meshes: &[Mesh], instances: &[Instance]) -> Self {
@@ -56,7 +60,7 @@ impl Accel {
                         Aabb::new(a.min(b).min(c), a.max(b).max(c))
                     })
                     .collect();
-                let bvh = build_cwbvh(&aabbs, build_params(), &mut Duration::default());
+                let bvh = build_cwbvh(&aabbs, build_params_for(aabbs.len()), &mut Duration::default());
                 let triangles = bvh.primitive_indices.iter().map(|&i| m.triangle(i as usize)).collect();
                 Some(MeshBvh { bvh, triangles })
             })
@@ -72,7 +76,7 @@ impl Accel {
         let tlas = if boxes.is_empty() {
             None
         } else {
-            Some(build_cwbvh(&boxes, build_params(), &mut Duration::default()))
+            Some(build_cwbvh(&boxes, build_params_for(boxes.len()), &mut Duration::default()))
         };
         let tlas_instances = match &tlas {
             Some(t) => t.primitive_indices.iter().map(|&i| tlas_instances[i as usize]).collect(),
