@@ -358,30 +358,7 @@ impl Integrator for MisPathTracer {
             // Deterministic (splitting) mode: one monochromatic sub-path per wavelength
             // (dispersive paths: the camera side's own MIS, as BACKWARD).
             if self.dispersion_splitting && flags.dispersive && ctx.single_wavelength.is_none() {
-                let mono = self.mono();
-                let mut scratch = Scratch::new(n);
-                let mut tp = SampledSpectrum::zeros(n);
-                for i in 0..n {
-                    let b = beta.get(i);
-                    if !(b > 0.0) {
-                        continue;
-                    }
-                    ctx.single_wavelength = Some(i);
-                    tp.fill(0.0);
-                    tp.set(i, b);
-                    let Some(sc) = scatter(material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, rng, &mut tp) else {
-                        continue;
-                    };
-                    let st = PathState {
-                        ray: sc.ray,
-                        specular: sc.sample.specular,
-                        prev_pdf: sc.sample.pdf,
-                        prev_p: si.p,
-                        depth: depth + 1,
-                    };
-                    let l = mono.trace(scene, i, tp.get(i), st, rng, None, &mut scratch);
-                    radiance.set(i, radiance.get(i) + l);
-                }
+                self.mono().split_per_wavelength(scene, material.bsdf.as_ref(), &mut ctx, &frame, wo_local, si.p, ng, &beta, depth, rng, radiance);
                 break;
             }
 

@@ -89,6 +89,43 @@ impl MonochromaticTracer {
     /// Continues a path at wavelength `lambda` with scalar throughput `beta`; returns the
     /// radiance it gathers (already multiplied by `beta`).
     #[allow(clippy::too_many_arguments)]
+    /// Deterministic (splitting) mode at a dispersive surface: instead of collapsing to
+    /// one wavelength (eq. 9), continue one scalar sub-path per wavelength that still
+    /// carries energy, and add each sub-path's radiance to its own lane of `radiance`.
+    /// `ctx` is left set to the last wavelength; callers end the polychromatic path here.
+    #[allow(clippy::too_many_arguments)]
+    pub fn split_per_wavelength(
+        &self,
+        scene: &Scene,
+        bsdf: &dyn crate::material::Bsdf,
+        ctx: &mut ShadingContext,
+        frame: &Frame,
+        wo_local: Vec3A,
+        p: Vec3A,
+        ng: Vec3A,
+        beta: &SampledSpectrum,
+        depth: u32,
+        rng: &mut Rng,
+        radiance: &mut SampledSpectrum,
+    ) {
+        let n = beta.len();
+        let mut scratch = Scratch::new(n);
+        let mut tp = SampledSpectrum::zeros(n);
+        for i in 0..n {
+            let b = beta.get(i);
+            if !(b > 0.0) {
+                continue;
+            }
+            ctx.single_wavelength = Some(i);
+            tp.fill(0.0);
+            tp.set(i, b);
+            let Some(sc) = scatter(bsdf, ctx, frame, wo_local, p, ng, rng, &mut tp) else { continue };
+            let st = PathState { ray: sc.ray, specular: sc.sample.specular, prev_pdf: sc.sample.pdf, prev_p: p, depth: depth + 1 };
+            let l = self.trace(scene, i, tp.get(i), st, rng, None, &mut scratch);
+            radiance.set(i, radiance.get(i) + l);
+        }
+    }
+
     pub fn trace(
         &self,
         scene: &Scene,
