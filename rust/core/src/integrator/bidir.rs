@@ -22,6 +22,7 @@
 //! camera strategy can produce the path): there the two sides collapse to different
 //! wavelengths with different probabilities (eq. 9), which these weights do not model.
 
+use super::{facing, Facing};
 use super::scatter;
 use crate::camera::CameraConnection;
 use crate::film::PixelSample;
@@ -253,13 +254,8 @@ impl Integrator for MisPathTracer {
                 break;
             };
             let si = scene.interaction(&ray, &hit);
-            let wo = -ray.direction;
-            let front = si.ng.dot(wo) >= 0.0;
-            let ng = if front { si.ng } else { -si.ng };
-            let ns = if front { si.ns } else { -si.ns };
-            let material = &scene.materials[si.material as usize];
-            ctx.uv = si.uv;
-            ctx.front_face = front;
+            // Surfaces are two-sided: shade on the side the ray arrived from.
+            let Facing { wo, ng, ns, material } = facing(scene, &ray, &si, &mut ctx);
             if depth == 0 {
                 out.depth = si.t * ray.direction.dot(scene.camera.forward());
                 out.normal = si.ns;
@@ -524,13 +520,8 @@ impl MisLightTracer {
                 break;
             };
             let si = scene.interaction(&ray, &hit);
-            let wo = -ray.direction;
-            let front = si.ng.dot(wo) >= 0.0;
-            let ng = if front { si.ng } else { -si.ng };
-            let ns = if front { si.ns } else { -si.ns };
-            let material = &scene.materials[si.material as usize];
-            ctx.uv = si.uv;
-            ctx.front_face = front;
+            // Surfaces are two-sided: shade on the side the ray arrived from.
+            let Facing { wo, ng, ns, material } = facing(scene, &ray, &si, &mut ctx);
             let frame = Frame::from_normal(ns);
             let wo_local = frame.to_local(wo);
             if wo_local.z == 0.0 {

@@ -14,6 +14,7 @@
 //! - Environment lights and orthographic cameras are not reachable this way (their
 //!   light has no `sample_le`, the camera no pinhole to connect to).
 
+use super::{facing, Facing};
 use super::scatter;
 use crate::geometry::{offset_ray_origin, Frame, Ray};
 use crate::material::{ShadingContext, TransportMode};
@@ -122,13 +123,8 @@ impl LightTracer {
                 break;
             };
             let si = scene.interaction(&ray, &hit);
-            let wo = -ray.direction;
-            let front = si.ng.dot(wo) >= 0.0;
-            let ng = if front { si.ng } else { -si.ng };
-            let ns = if front { si.ns } else { -si.ns };
-            let material = &scene.materials[si.material as usize];
-            ctx.uv = si.uv;
-            ctx.front_face = front;
+            // Surfaces are two-sided: shade on the side the ray arrived from.
+            let Facing { wo, ng, ns, material } = facing(scene, &ray, &si, &mut ctx);
             let frame = Frame::from_normal(ns);
             let wo_local = frame.to_local(wo);
             if wo_local.z == 0.0 {
@@ -222,13 +218,8 @@ impl LightTracer {
                 break;
             };
             let si = scene.interaction(&ray, &hit);
-            let wo = -ray.direction;
-            let front = si.ng.dot(wo) >= 0.0;
-            let ng = if front { si.ng } else { -si.ng };
-            let ns = if front { si.ns } else { -si.ns };
-            let material = &scene.materials[si.material as usize];
-            ctx.uv = si.uv;
-            ctx.front_face = front;
+            // Surfaces are two-sided: shade on the side the ray arrived from.
+            let Facing { wo, ng, ns, material } = facing(scene, &ray, &si, &mut ctx);
             let frame = Frame::from_normal(ns);
             let wo_local = frame.to_local(wo);
             if wo_local.z == 0.0 {

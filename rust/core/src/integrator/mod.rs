@@ -52,3 +52,33 @@ pub fn scatter(
     let origin = crate::geometry::offset_ray_origin(p, if transmitted { -ng } else { ng });
     Some(Scatter { sample, wi, transmitted, ray: crate::geometry::Ray::new(origin, wi) })
 }
+
+/// A hit seen from the side the ray arrived on: surfaces are two-sided, so normals are
+/// flipped to face the incoming ray and the shading context learns which face it is.
+pub struct Facing<'s> {
+    /// Unit direction back along the ray.
+    pub wo: glam::Vec3A,
+    /// Geometric and shading normals, facing `wo`.
+    pub ng: glam::Vec3A,
+    pub ns: glam::Vec3A,
+    pub material: &'s crate::material::Material,
+}
+
+/// Orients a hit towards the incoming ray and points `ctx` at it (uv, face).
+pub fn facing<'s>(
+    scene: &'s Scene,
+    ray: &crate::geometry::Ray,
+    si: &crate::scene::SurfaceInteraction,
+    ctx: &mut crate::material::ShadingContext,
+) -> Facing<'s> {
+    let wo = -ray.direction;
+    let front = si.ng.dot(wo) >= 0.0;
+    ctx.uv = si.uv;
+    ctx.front_face = front;
+    Facing {
+        wo,
+        ng: if front { si.ng } else { -si.ng },
+        ns: if front { si.ns } else { -si.ns },
+        material: &scene.materials[si.material as usize],
+    }
+}

@@ -8,6 +8,7 @@
 //! spectral); the tracer only reads the one component it carries and keeps all of its
 //! own arithmetic scalar. BSDFs see `ShadingContext.single_wavelength = Some(λ)`.
 
+use super::{facing, Facing};
 use super::scatter;
 use crate::film::PixelSample;
 use crate::geometry::{offset_ray_origin, Frame, Ray};
@@ -164,13 +165,8 @@ impl MonochromaticTracer {
                 break;
             };
             let si = scene.interaction(&ray, &hit);
-            let wo = -ray.direction;
-            let front = si.ng.dot(wo) >= 0.0;
-            let ng = if front { si.ng } else { -si.ng };
-            let ns = if front { si.ns } else { -si.ns };
-            let material = &scene.materials[si.material as usize];
-            ctx.uv = si.uv;
-            ctx.front_face = front;
+            // Surfaces are two-sided: shade on the side the ray arrived from.
+            let Facing { wo, ng, ns, material } = facing(scene, &ray, &si, &mut ctx);
             if let Some(out) = aux.take() {
                 if depth == 0 {
                     out.depth = si.t * ray.direction.dot(scene.camera.forward());

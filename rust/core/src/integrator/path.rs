@@ -3,6 +3,7 @@
 //! combined with multiple importance sampling (power heuristic); Russian roulette on
 //! the largest throughput over the grid.
 
+use super::{facing, Facing};
 use super::scatter;
 use super::Integrator;
 use crate::film::PixelSample;
@@ -64,14 +65,8 @@ impl Integrator for PathTracer {
                 break;
             };
             let si = scene.interaction(&ray, &hit);
-            let wo = -ray.direction;
             // Surfaces are two-sided: shade on the side the ray arrived from.
-            let front = si.ng.dot(wo) >= 0.0;
-            let ng = if front { si.ng } else { -si.ng };
-            let ns = if front { si.ns } else { -si.ns };
-            let material = &scene.materials[si.material as usize];
-            ctx.uv = si.uv;
-            ctx.front_face = front;
+            let Facing { wo, ng, ns, material } = facing(scene, &ray, &si, &mut ctx);
             if depth == 0 {
                 out.depth = si.t * ray.direction.dot(scene.camera.forward());
                 out.normal = si.ns;
