@@ -27,7 +27,7 @@ use super::scatter;
 use crate::camera::CameraConnection;
 use crate::film::PixelSample;
 use crate::geometry::{offset_ray_origin, shadow_ray, Frame, Ray};
-use crate::integrator::forward::Splat;
+use crate::integrator::forward::{connect_to_camera, Splat};
 use crate::integrator::monochromatic::{MonochromaticTracer, PathState, Scratch};
 use crate::integrator::Integrator;
 use crate::light::LeDensity;
@@ -531,55 +531,40 @@ impl MisLightTracer {
             legacy |= flags.dispersive;
             // Connect to the camera: a path with depth + 1 scattering events (strategy C).
             if flags.smooth && depth < self.max_bounces {
-                if let Some(c) = scene.camera.connect(si.p) {
-                    if c.wi.dot(ng) > 0.0 {
-                        let wc_local = frame.to_local(c.wi);
-                        material.bsdf.eval(&ctx, wo_local, wc_local, &mut f);
-                        if !f.is_black()
-                            // Aimed from the offset origin at the camera: along c.wi from the unshifted
-                            // point it missed by the offset (16 units at 1e6) and hit walls behind it.
-                            && !scene.occluded(&crate::geometry::shadow_ray(si.p, offset_ray_origin(si.p, ng), c.wi, c.distance))
-                        {
-                            // Camera order: x1 = here, x2 … = the light path reversed.
-                            ctx.mode = TransportMode::Radiance;
-                            let pdf_cam = material.bsdf.pdf(&ctx, wc_local, wo_local);
-                            ctx.mode = TransportMode::Importance;
-                            cam_verts.clear();
-                            cam_verts.push(Vtx {
-                                p: si.p,
-                                n: si.ng,
-                                specular: false,
-                                pdf_cam,
-                                pdf_light: 0.0,
-                            });
-                            cam_verts.extend(path.iter().rev().copied());
-                            let first = path.first().map_or(si.p, |v| v.p);
-                            let to_light = es.origin - first;
-                            let dist = to_light.length();
-                            let end = LightEnd {
-                                p: es.origin,
-                                pmf,
-                                le: dens,
-                                delta: es.delta_position,
-                                infinite: false,
-                                pdf_li: if es.delta_position {
-                                    1.0
-                                } else {
-                                    light.pdf_li(first, to_light / dist, dist)
-                                },
-                                cos: dens.map_or(1.0, |d| d.cos),
-                            };
-                            let w = weights(&cam_end(si.p, &c), &cam_verts, &end, legacy)[2] as f32;
-                            if w > 0.0 {
-                                let mut r = f.clone();
-                                r.mul_assign(&beta);
-                                r.scale(w * c.importance);
-                                splats.push(Splat {
-                                    pixel: pixel_of(&c),
-                                    radiance: r,
-                                });
-                            }
-                        }
+                if let Some(c) = connect_to_camera(scene, material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, &mut f) {
+                    let wc_local = frame.to_local(c.wi);
+                    // Camera order: x1 = here, x2 … = the light path reversed.
+                    ctx.mode = TransportMode::Radiance;
+                    let pdf_cam = material.bsdf.pdf(&ctx, wc_local, wo_local);
+                    ctx.mode = TransportMode::Importance;
+                    cam_verts.clear();
+                    cam_verts.push(Vtx {
+                        p: si.p,
+                        n: si.ng,
+                        specular: false,
+                        pdf_cam,
+                        pdf_light: 0.0,
+                    });
+                    cam_verts.extend(path.iter().rev().copied());
+                    let first = path.first().map_or(si.p, |v| v.p);
+                    let to_light = es.origin - first;
+                    let dist = to_light.length();
+                    let end = LightEnd {
+                        p: es.origin,
+                        pmf,
+                        le: dens,
+                        delta: es.delta_position,
+                        infinite: false,
+                        pdf_li: if es.delta_position {
+                            1.0
+                        } else {
+                            light.pdf_li(first, to_light / dist, dist)
+                        },
+                        cos: dens.map_or(1.0, |d| d.cos),
+                    };
+                    let w = weights(&cam_end(si.p, &c), &cam_verts, &end, legacy)[2] as f32;
+                    if w > 0.0 {
+                        splats.push(Splat::new(pixel_of(&c), &f, &beta, w * c.importance));
                     }
                 }
             }

@@ -39,6 +39,43 @@ pub struct Splat {
     pub radiance: SampledSpectrum,
 }
 
+impl Splat {
+    /// The contribution `β · f · scale` of a light-path vertex to one pixel.
+    pub fn new(pixel: u32, f: &SampledSpectrum, beta: &SampledSpectrum, scale: f32) -> Self {
+        let mut radiance = f.clone();
+        radiance.mul_assign(beta);
+        radiance.scale(scale);
+        Self { pixel, radiance }
+    }
+}
+
+/// Connects a light-path surface vertex at `p` to the pinhole camera. On success `f`
+/// holds f·|cos θ| towards the camera; None when the camera is on the other side of the
+/// surface than the path, the BSDF sends nothing that way, or something blocks the view.
+#[allow(clippy::too_many_arguments)]
+pub fn connect_to_camera(
+    scene: &Scene,
+    bsdf: &dyn crate::material::Bsdf,
+    ctx: &ShadingContext,
+    frame: &Frame,
+    wo_local: glam::Vec3A,
+    p: glam::Vec3A,
+    ng: glam::Vec3A,
+    f: &mut SampledSpectrum,
+) -> Option<crate::camera::CameraConnection> {
+    let c = scene.camera.connect(p)?;
+    if c.wi.dot(ng) <= 0.0 {
+        return None;
+    }
+    bsdf.eval(ctx, wo_local, frame.to_local(c.wi), f);
+    // Aimed from the offset origin at the camera: along c.wi from the unshifted point it
+    // missed by the offset (16 units at 1e6) and hit walls behind it.
+    if f.is_black() || scene.occluded(&crate::geometry::shadow_ray(p, offset_ray_origin(p, ng), c.wi, c.distance)) {
+        return None;
+    }
+    Some(c)
+}
+
 pub struct LightTracer {
     pub max_bounces: u32,
     pub rr_depth: u32,
@@ -133,27 +170,8 @@ impl LightTracer {
             let flags = material.bsdf.flags();
             // Connect this vertex to the camera: a path with depth + 1 scattering events.
             if all && flags.smooth && depth < self.max_bounces {
-                if let Some(c) = scene.camera.connect(si.p) {
-                    let same_side = c.wi.dot(ng) > 0.0;
-                    if same_side {
-                        material
-                            .bsdf
-                            .eval(&ctx, wo_local, frame.to_local(c.wi), &mut f);
-                        if !f.is_black() {
-                            let origin = offset_ray_origin(si.p, ng);
-                            // Aimed from the offset origin at the camera: along c.wi from the unshifted
-                            // point it missed by the offset (16 units at 1e6) and hit walls behind it.
-                            if !scene.occluded(&crate::geometry::shadow_ray(si.p, origin, c.wi, c.distance)) {
-                                let mut r = f.clone();
-                                r.mul_assign(&beta);
-                                r.scale(c.importance);
-                                splats.push(Splat {
-                                    pixel: pixel_of(&c),
-                                    radiance: r,
-                                });
-                            }
-                        }
-                    }
+                if let Some(c) = connect_to_camera(scene, material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, &mut f) {
+                    splats.push(Splat::new(pixel_of(&c), &f, &beta, c.importance));
                 }
             }
             if depth + 1 >= self.max_bounces {
@@ -226,25 +244,8 @@ impl LightTracer {
                 break;
             }
             if material.bsdf.flags().smooth && depth < self.max_bounces {
-                if let Some(c) = scene.camera.connect(si.p) {
-                    if c.wi.dot(ng) > 0.0 {
-                        material
-                            .bsdf
-                            .eval(&ctx, wo_local, frame.to_local(c.wi), &mut f);
-                        if !f.is_black()
-                            // Aimed from the offset origin at the camera: along c.wi from the unshifted
-                            // point it missed by the offset (16 units at 1e6) and hit walls behind it.
-                            && !scene.occluded(&crate::geometry::shadow_ray(si.p, offset_ray_origin(si.p, ng), c.wi, c.distance))
-                        {
-                            let mut r = f.clone();
-                            r.mul_assign(&beta);
-                            r.scale(c.importance);
-                            splats.push(Splat {
-                                pixel: pixel_of(&c),
-                                radiance: r,
-                            });
-                        }
-                    }
+                if let Some(c) = connect_to_camera(scene, material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, &mut f) {
+                    splats.push(Splat::new(pixel_of(&c), &f, &beta, c.importance));
                 }
             }
             if depth + 1 >= self.max_bounces {
