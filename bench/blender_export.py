@@ -50,22 +50,28 @@ def main(argv=None) -> int:
         result = polychrome.render(scene, width=8, height=8, samples=1, quality="FINAL")
         rows.append((t_export, result.stats["build_seconds"], result.stats["triangles"]))
     best = min(rows, key=lambda r: r[0] + r[1])
-    text = "\n".join([
-        f"Suzanne + Subdivision Surface level {args.level}: {best[2]:,} triangles; best of {args.repeat} "
-        "(the first export also evaluates the modifier).",
-        "",
-        "| step | seconds |",
-        "| --- | ---: |",
-        f"| export from the depsgraph (polychrome_blender.export) | {best[0]:.3f} |",
-        f"| scene build incl. BVH (core `build_seconds`) | {best[1]:.3f} |",
-        f"| total | {best[0] + best[1]:.3f} |",
-        "",
-        "Target (issue 6): under 1 s in total. All runs: " + ", ".join(f"{a + b:.2f} s" for a, b, _ in rows) + ".",
-    ])
+    text = "\n".join(
+        [
+            f"Suzanne + Subdivision Surface level {args.level}: {best[2]:,} triangles; best of {args.repeat} "
+            "(the first export also evaluates the modifier).",
+            "",
+            "| step | seconds |",
+            "| --- | ---: |",
+            f"| export from the depsgraph (polychrome_blender.export) | {best[0]:.3f} |",
+            f"| scene build incl. BVH (core `build_seconds`) | {best[1]:.3f} |",
+            f"| total | {best[0] + best[1]:.3f} |",
+            "",
+            "Target (issue 6): under 1 s in total. All runs: " + ", ".join(f"{a + b:.2f} s" for a, b, _ in rows) + ".",
+        ]
+    )
     print(text)
     if args.write:
-        write_section(Path(args.write), "Blender export of 1M triangles", text,
-                      f"python bench/blender_export.py --level {args.level} --write {args.write}")
+        write_section(
+            Path(args.write),
+            "Blender export of 1M triangles",
+            text,
+            f"python bench/blender_export.py --level {args.level} --write {args.write}",
+        )
     return 0
 
 

@@ -10,7 +10,11 @@ import re
 def write_section(path: Path, title: str, body: str, command: str) -> None:
     """Replaces (or appends) the `## title` section, keeping every other section."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    text = path.read_text() if path.exists() else "# Benchmarks\n\nEvery figure below was measured on this project's machine (2 cores, 24 GiB, noisy), in one run per table, with a release build. Compare rows within a table.\n"
+    text = (
+        path.read_text()
+        if path.exists()
+        else "# Benchmarks\n\nEvery figure below was measured on this project's machine (2 cores, 24 GiB, noisy), in one run per table, with a release build. Compare rows within a table.\n"
+    )
     stamp = datetime.date.today().isoformat()
     section = f"## {title}\n\nCommand: `{command}` ({stamp})\n\n{body}\n"
     pattern = re.compile(rf"^## {re.escape(title)}\n.*?(?=^## |\Z)", re.S | re.M)

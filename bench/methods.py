@@ -90,7 +90,17 @@ def room(glass: bool) -> pc.Scene:
 def run(scene, method, samples, size, seed=1):
     split = method == SPLIT
     method = "POLYCHROMATIC" if split else method
-    r = pc.render(scene, width=size, height=size, samples=samples, method=method, dispersion_splitting=split, wavelength_count=N, max_bounces=8, seed=seed)
+    r = pc.render(
+        scene,
+        width=size,
+        height=size,
+        samples=samples,
+        method=method,
+        dispersion_splitting=split,
+        wavelength_count=N,
+        max_bounces=8,
+        seed=seed,
+    )
     return r.rgba, r.stats["seconds"] - r.stats["build_seconds"]
 
 

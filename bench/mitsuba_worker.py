@@ -25,8 +25,15 @@ def main() -> int:
 
     def spectrum(entry, emitter):
         if rgb:
-            return {"type": "rgb", "value": mi.spectrum_list_to_srgb(entry["wavelengths"], entry["values"], bounded=not emitter, d65=not emitter)}
-        return {"type": "irregular", "wavelengths": ", ".join(f"{x:g}" for x in entry["wavelengths"]), "values": ", ".join(f"{x:g}" for x in entry["values"])}
+            return {
+                "type": "rgb",
+                "value": mi.spectrum_list_to_srgb(entry["wavelengths"], entry["values"], bounded=not emitter, d65=not emitter),
+            }
+        return {
+            "type": "irregular",
+            "wavelengths": ", ".join(f"{x:g}" for x in entry["wavelengths"]),
+            "values": ", ".join(f"{x:g}" for x in entry["values"]),
+        }
 
     d = {"type": "scene", "integrator": {"type": "path", "max_depth": s["max_depth"]}}
     cam = s["camera"]

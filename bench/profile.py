@@ -58,7 +58,9 @@ def main(argv=None) -> int:
     ap.add_argument("--write", type=Path)
     args = ap.parse_args(argv)
     env = dict(os.environ, CARGO_PROFILE_RELEASE_DEBUG="true")
-    subprocess.run(["cargo", "build", "--release", "-q", "-p", "polychrome-core", "--example", "profile_render"], cwd=ROOT, env=env, check=True)
+    subprocess.run(
+        ["cargo", "build", "--release", "-q", "-p", "polychrome-core", "--example", "profile_render"], cwd=ROOT, env=env, check=True
+    )
     exe = ROOT / "target" / "release" / "examples" / "profile_render"
     with tempfile.TemporaryDirectory() as tmp:
         scene = Path(tmp) / "scene.json"
@@ -66,10 +68,14 @@ def main(argv=None) -> int:
         run = [str(exe), str(scene), str(args.spp), str(args.wavelengths), str(args.size)]
         plain = subprocess.run(run, capture_output=True, text=True, check=True).stdout.strip()
         data = Path(tmp) / "perf.data"
-        subprocess.run(["perf", "record", "-q", "-e", "cpu-clock", "-F", "2000", "-g", "-o", str(data), *run], capture_output=True, check=True)
+        subprocess.run(
+            ["perf", "record", "-q", "-e", "cpu-clock", "-F", "2000", "-g", "-o", str(data), *run], capture_output=True, check=True
+        )
         report = subprocess.run(
             ["perf", "report", "-i", str(data), "--no-children", "--stdio", "--sort", "symbol", "--percent-limit", "0.3", "-g", "none"],
-            capture_output=True, text=True, check=True,
+            capture_output=True,
+            text=True,
+            check=True,
         ).stdout
     rows = []
     for line in report.splitlines():
@@ -96,8 +102,12 @@ def main(argv=None) -> int:
     )
     print(body)
     if args.write:
-        write_section(args.write, "Profile of the polychromatic path", body,
-                      f"python bench/profile.py --spp {args.spp} --size {args.size} --wavelengths {args.wavelengths} --write {args.write}")
+        write_section(
+            args.write,
+            "Profile of the polychromatic path",
+            body,
+            f"python bench/profile.py --spp {args.spp} --size {args.size} --wavelengths {args.wavelengths} --write {args.write}",
+        )
     return 0
 
 

@@ -121,19 +121,25 @@ def main(argv=None) -> int:
         for (m, n), p in curves.items():
             t1 = time_to(p)
             best = min(p, key=lambda x: x[1])
-            rows.append(f"| {m} | {'RGB' if m == 'RGB' else n} | {'not reached' if t1 is None else f'{t1:.2f}'} | {best[1]:.2f} ({best[0]:.1f}) |")
+            rows.append(
+                f"| {m} | {'RGB' if m == 'RGB' else n} | {'not reached' if t1 is None else f'{t1:.2f}'} | {best[1]:.2f} ({best[0]:.1f}) |"
+            )
         for sec, de, thr, nw, spp in auto:
             rows.append(f"| AUTO, noise_threshold {thr} | {nw} (fitted) | — | {de:.2f} ({sec:.1f}; mean {spp:.0f} spp) |")
         text.append(f"### {name}\n\n![{name}](images/quality_{name}.png)\n\n" + "\n".join(rows))
     body = (
         "Mean ΔE00 against a converged reference (POLYCHROMATIC, 81 wavelengths) as a function of render "
         f"time, {args.size}×{args.size} pixels, max 8 bounces, doubling samples per point. "
-        "Wavelength counts below the scene's needs converge to a biased image (the curve flattens above 0).\n\n"
-        + "\n\n".join(text)
+        "Wavelength counts below the scene's needs converge to a biased image (the curve flattens above 0).\n\n" + "\n\n".join(text)
     )
     print(body)
     if args.write:
-        write_section(args.write, "Speed against accuracy", body, f"python bench/quality.py --size {args.size} --budget {args.budget} --ref-samples {args.ref_samples} --write {args.write}")
+        write_section(
+            args.write,
+            "Speed against accuracy",
+            body,
+            f"python bench/quality.py --size {args.size} --budget {args.budget} --ref-samples {args.ref_samples} --write {args.write}",
+        )
     return 0
 
 

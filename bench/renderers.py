@@ -96,8 +96,15 @@ def export(scene: pc.Scene, tmp: Path, size: int, max_bounces: int) -> dict:
     M = np.asarray(cam["to_world"], float)
     origin = M[:3, 3]
     fov_x = math.degrees(2 * math.atan(cam["sensor_width"] / 2 / cam["focal_length"]))
-    camera = {"origin": origin.tolist(), "target": (origin - M[:3, 2]).tolist(), "up": M[:3, 1].tolist(), "fov_x": fov_x,
-              "matrix": M.tolist(), "focal_length": cam["focal_length"], "sensor_width": cam["sensor_width"]}
+    camera = {
+        "origin": origin.tolist(),
+        "target": (origin - M[:3, 2]).tolist(),
+        "up": M[:3, 1].tolist(),
+        "fov_x": fov_x,
+        "matrix": M.tolist(),
+        "focal_length": cam["focal_length"],
+        "sensor_width": cam["sensor_width"],
+    }
     s = {"materials": mats, "meshes": meshes, "camera": camera, "size": size, "max_depth": max_bounces + 1}
     (tmp / "scene.json").write_text(json.dumps(s))
     return s
@@ -216,28 +223,56 @@ def main(argv=None) -> int:
     ref = pc.render(scene, samples=args.ref_samples, wavelength_count=81, seed=12345, **common).rgba[..., :3]
     print(f"reference: {time.perf_counter() - t0:.0f} s", flush=True)
     results = {}
-    for label, kw in (("Polychrome POLYCHROMATIC, 41 λ", dict(wavelength_count=41)), ("Polychrome POLYCHROMATIC, AUTO grid", {}), ("Polychrome RGB", dict(method="RGB", wavelength_count=41))):
+    for label, kw in (
+        ("Polychrome POLYCHROMATIC, 41 λ", dict(wavelength_count=41)),
+        ("Polychrome POLYCHROMATIC, AUTO grid", {}),
+        ("Polychrome RGB", dict(method="RGB", wavelength_count=41)),
+    ):
         rows = []
         for spp in spps:
             r = pc.render(scene, samples=spp, seed=spp, **kw, **common)
-            rows.append({"spp": spp, "seconds": r.stats["seconds"] - r.stats["build_seconds"], "de": mean_de(r.rgba, ref), "wavelengths": r.stats["wavelengths"]})
+            rows.append(
+                {
+                    "spp": spp,
+                    "seconds": r.stats["seconds"] - r.stats["build_seconds"],
+                    "de": mean_de(r.rgba, ref),
+                    "wavelengths": r.stats["wavelengths"],
+                }
+            )
             print(label, rows[-1], flush=True)
         results[label] = rows
     # AUTO as shipped: adaptive to ΔE00 1 with the fitted grid.
     r = pc.render(scene, width=size, height=size, threads=2, seed=1)
-    auto = {"seconds": r.stats["seconds"] - r.stats["build_seconds"], "de": mean_de(r.rgba, ref), "spp": r.stats["total_samples"] / px, "wavelengths": r.stats["wavelengths"]}
+    auto = {
+        "seconds": r.stats["seconds"] - r.stats["build_seconds"],
+        "de": mean_de(r.rgba, ref),
+        "spp": r.stats["total_samples"] / px,
+        "wavelengths": r.stats["wavelengths"],
+    }
     print("AUTO", auto, r.stats["auto_reason"], flush=True)
     skip = set(args.skip.split(","))
     blend_note = ""
     if "mitsuba" not in skip and ensure_mitsuba(args.mitsuba_python):
         for variant in ("scalar_spectral", "scalar_rgb"):
-            p = subprocess.run([str(args.mitsuba_python), str(ROOT / "bench" / "mitsuba_worker.py"), str(tmp / "scene.json"), variant, str(tmp), ",".join(map(str, spps))],
-                               capture_output=True, text=True, env=dict(os.environ, THREADS="2"), timeout=7200)
+            p = subprocess.run(
+                [
+                    str(args.mitsuba_python),
+                    str(ROOT / "bench" / "mitsuba_worker.py"),
+                    str(tmp / "scene.json"),
+                    variant,
+                    str(tmp),
+                    ",".join(map(str, spps)),
+                ],
+                capture_output=True,
+                text=True,
+                env=dict(os.environ, THREADS="2"),
+                timeout=7200,
+            )
             if p.returncode != 0:
                 print(p.stderr[-3000:])
                 continue
             last = [ln for ln in p.stdout.splitlines() if "[{" in ln][-1]
-            rows = json.loads(last[last.index("[{"):])
+            rows = json.loads(last[last.index("[{") :])
             for row in rows:
                 row["de"] = mean_de(read_exr(row["exr"]), ref)
                 print("Mitsuba", variant, row, flush=True)
@@ -251,30 +286,69 @@ def main(argv=None) -> int:
             results["Blender Cycles CPU"] = rows
             # The same .blend through the add-on (`polychrome render`, RGB materials uplifted).
             blend_out = tmp / "polychrome_blend.exr"
-            p = subprocess.run([sys.executable, "-m", "polychrome.cli", "render", str(tmp / "cornell.blend"), "-o", str(blend_out),
-                                "--samples", str(args.ref_samples), "--wavelengths", "41", "--threads", "2", "--seed", "3", "--quiet"],
-                               capture_output=True, text=True, timeout=3600)
+            p = subprocess.run(
+                [
+                    sys.executable,
+                    "-m",
+                    "polychrome.cli",
+                    "render",
+                    str(tmp / "cornell.blend"),
+                    "-o",
+                    str(blend_out),
+                    "--samples",
+                    str(args.ref_samples),
+                    "--wavelengths",
+                    "41",
+                    "--threads",
+                    "2",
+                    "--seed",
+                    "3",
+                    "--quiet",
+                ],
+                capture_output=True,
+                text=True,
+                timeout=3600,
+            )
             if p.returncode == 0:
                 same_blend = read_exr(blend_out)
                 cyc = read_exr(rows[-1]["exr"])
-                blend_note = (f"The Cycles scene saved as .blend and rendered by Polychrome through the add-on (`polychrome render cornell.blend "
-                              f"--samples {args.ref_samples} --wavelengths 41`; RGB diffuse colours uplifted, emission as Blender gives it): "
-                              f"mean ΔE00 {mean_de(same_blend, ref):.2f} to the spectral reference, {mean_de(same_blend, cyc):.2f} to Cycles at {rows[-1]['spp']} spp.")
+                blend_note = (
+                    f"The Cycles scene saved as .blend and rendered by Polychrome through the add-on (`polychrome render cornell.blend "
+                    f"--samples {args.ref_samples} --wavelengths 41`; RGB diffuse colours uplifted, emission as Blender gives it): "
+                    f"mean ΔE00 {mean_de(same_blend, ref):.2f} to the spectral reference, {mean_de(same_blend, cyc):.2f} to Cycles at {rows[-1]['spp']} spp."
+                )
                 print(blend_note, flush=True)
             else:
                 print("polychrome render of the .blend failed:", p.stderr[-2000:])
         except Exception as e:  # noqa: BLE001
             print("Cycles failed:", e)
 
-    lines = ["| renderer | camera samples/s (at max spp) | time to mean ΔE00 ≤ 1 | mean ΔE00 at max spp vs reference |", "| --- | --- | --- | --- |"]
+    lines = [
+        "| renderer | camera samples/s (at max spp) | time to mean ΔE00 ≤ 1 | mean ΔE00 at max spp vs reference |",
+        "| --- | --- | --- | --- |",
+    ]
     for label, rows in results.items():
         last = rows[-1]
         t1 = time_to(rows)
-        lines.append(f"| {label} | {px * last['spp'] / last['seconds'] / 1e6:.3f} M | {'not reached' if t1 is None else f'{t1:.2f} s'} | {last['de']:.2f} ({last['spp']} spp) |")
-    lines.append(f"| Polychrome AUTO (adaptive to ΔE00 1, {auto['wavelengths']} λ) | — | {auto['seconds']:.2f} s (mean ΔE00 {auto['de']:.2f}, mean {auto['spp']:.0f} spp) | — |")
-    detail = ["", "Mean ΔE00 against the reference at each sample count (seconds in brackets):", "", "| spp | " + " | ".join(results) + " |", "| --- |" + " --- |" * len(results)]
+        lines.append(
+            f"| {label} | {px * last['spp'] / last['seconds'] / 1e6:.3f} M | {'not reached' if t1 is None else f'{t1:.2f} s'} | {last['de']:.2f} ({last['spp']} spp) |"
+        )
+    lines.append(
+        f"| Polychrome AUTO (adaptive to ΔE00 1, {auto['wavelengths']} λ) | — | {auto['seconds']:.2f} s (mean ΔE00 {auto['de']:.2f}, mean {auto['spp']:.0f} spp) | — |"
+    )
+    detail = [
+        "",
+        "Mean ΔE00 against the reference at each sample count (seconds in brackets):",
+        "",
+        "| spp | " + " | ".join(results) + " |",
+        "| --- |" + " --- |" * len(results),
+    ]
     for i, spp in enumerate(spps):
-        detail.append(f"| {spp} | " + " | ".join(f"{rows[i]['de']:.2f} ({rows[i]['seconds']:.2f})" if i < len(rows) else "" for rows in results.values()) + " |")
+        detail.append(
+            f"| {spp} | "
+            + " | ".join(f"{rows[i]['de']:.2f} ({rows[i]['seconds']:.2f})" if i < len(rows) else "" for rows in results.values())
+            + " |"
+        )
     body = (
         f"Cornell box (examples/cornell_box.py), {size}×{size}, path depth {args.max_bounces} bounces, 2 threads for every renderer, "
         f"reference Polychrome POLYCHROMATIC 81 λ {args.ref_samples} spp. Render seconds exclude scene loading/building "
@@ -284,8 +358,12 @@ def main(argv=None) -> int:
     )
     print(body)
     if args.write:
-        write_section(args.write, "Against other renderers", body,
-                      f"python bench/renderers.py --size {size} --ref-samples {args.ref_samples} --max-spp {args.max_spp} --write {args.write}")
+        write_section(
+            args.write,
+            "Against other renderers",
+            body,
+            f"python bench/renderers.py --size {size} --ref-samples {args.ref_samples} --max-spp {args.max_spp} --write {args.write}",
+        )
     return 0
 
 

@@ -54,7 +54,10 @@ def memory(width: int, height: int) -> dict:
 def micro() -> dict[str, float]:
     out = subprocess.run(
         ["cargo", "run", "--release", "-q", "-p", "polychrome-core", "--example", "texture_lookup"],
-        cwd=ROOT, check=True, capture_output=True, text=True,
+        cwd=ROOT,
+        check=True,
+        capture_output=True,
+        text=True,
     ).stdout
     return {k: float(v) for k, v in (line.split() for line in out.strip().splitlines())}
 
@@ -99,7 +102,7 @@ def main(argv=None) -> int:
     t_const = timed_render(mean, args.size, args.samples)
     t_tex = timed_render(tex, args.size, args.samples)
 
-    mib = 1024.0 ** 2
+    mib = 1024.0**2
     lines = [
         f"{platform.processor() or platform.machine()}, release build; {ns.get('wavelengths', 41):.0f} wavelengths.",
         "",
@@ -134,9 +137,12 @@ def main(argv=None) -> int:
     body = "\n".join(lines)
     print(body)
     if args.write:
-        write_section(ROOT / args.write if not Path(args.write).is_absolute() else Path(args.write),
-                      "Textures and HDRIs (deferred RGB → spectrum)", body,
-                      "python bench/textures.py --write docs/BENCHMARKS.md")
+        write_section(
+            ROOT / args.write if not Path(args.write).is_absolute() else Path(args.write),
+            "Textures and HDRIs (deferred RGB → spectrum)",
+            body,
+            "python bench/textures.py --write docs/BENCHMARKS.md",
+        )
     return 0
 
 

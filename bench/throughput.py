@@ -53,12 +53,20 @@ def main(argv=None) -> int:
         "| ---: | ---: | ---: |",
     ]
     lines += [f"| {n} | {rate / 1e6:.3f} M | {ratio:.2f}× |" for n, rate, ratio in rows]
-    lines += ["", "The grid's minimum is 4 samples, so 4 stands in for the single-wavelength path; "
-              "a true 1-wavelength path is the MONOCHROMATIC_RAYS method (see the methods table)."]
+    lines += [
+        "",
+        "The grid's minimum is 4 samples, so 4 stands in for the single-wavelength path; "
+        "a true 1-wavelength path is the MONOCHROMATIC_RAYS method (see the methods table).",
+    ]
     text = "\n".join(lines)
     print(text)
     if args.write:
-        write_section(Path(args.write), "Throughput", text, f"python bench/throughput.py --size {args.size} --samples {args.samples} --write {args.write}")
+        write_section(
+            Path(args.write),
+            "Throughput",
+            text,
+            f"python bench/throughput.py --size {args.size} --samples {args.samples} --write {args.write}",
+        )
     return 0
 
 

@@ -113,7 +113,14 @@ def main(argv=None) -> int:
         path = Path(tmp) / "quads.usdc"
         quad_tris = foreign_quads(path, int(round((triangles / 2) ** 0.5)))
         t_read, _ = timed(lambda: usd.read_stage(path), args.repeat)
-        rows.append((f".usdc, {quad_tris:,} triangles as quads with face-varying st and normals (written with pxr)", "-", t_read, path.stat().st_size / 2**20))
+        rows.append(
+            (
+                f".usdc, {quad_tris:,} triangles as quads with face-varying st and normals (written with pxr)",
+                "-",
+                t_read,
+                path.stat().st_size / 2**20,
+            )
+        )
         print(f"foreign quads: read {t_read:.2f} s", flush=True)
 
     table = [

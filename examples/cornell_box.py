@@ -48,10 +48,15 @@ def build_scene() -> pc.Scene:
     scene = pc.Scene()
     white = scene.add_material(pc.Diffuse(sigmoid_reflectance(0.55, 0.75, 450, 20), name="white"))
     red = scene.add_material(pc.Diffuse(sigmoid_reflectance(0.05, 0.65, 600, 12), name="red"))
-    green = scene.add_material(pc.Diffuse(pc.spectra.tabulated(
-        np.arange(360.0, 831.0, 5.0),
-        0.05 + 0.45 * np.exp(-0.5 * ((np.arange(360.0, 831.0, 5.0) - 530.0) / 35.0) ** 2),
-    ), name="green"))
+    green = scene.add_material(
+        pc.Diffuse(
+            pc.spectra.tabulated(
+                np.arange(360.0, 831.0, 5.0),
+                0.05 + 0.45 * np.exp(-0.5 * ((np.arange(360.0, 831.0, 5.0) - 530.0) / 35.0) ** 2),
+            ),
+            name="green",
+        )
+    )
     light = scene.add_material(pc.Emitter(pc.spectra.blackbody(3000.0), strength=30.0, name="light"))
 
     s = 1.0  # the box spans [-1, 1] in x and y, [0, 2] in z
@@ -75,7 +80,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--wavelengths", type=int, default=41, help="wavelength_count")
     parser.add_argument("--out", default=str(Path(__file__).parent / "out" / "cornell_box"), help="output path without extension")
     args = parser.parse_args(argv)
-    result = pc.render(build_scene(), width=args.size, height=args.size, samples=args.samples, wavelength_count=args.wavelengths, progress=True)
+    result = pc.render(
+        build_scene(), width=args.size, height=args.size, samples=args.samples, wavelength_count=args.wavelengths, progress=True
+    )
     out = Path(args.out)
     print("wrote", result.save(out.with_suffix(".png")), "and", result.save(out.with_suffix(".exr"), passes=True))
     s = result.stats

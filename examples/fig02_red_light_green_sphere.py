@@ -83,7 +83,15 @@ def run(light: spectra.Spectrum, default_out: str, what: str, argv=None) -> dict
     parser.add_argument("--out", default=str(figlib.OUT / default_out))
     parser.add_argument("--docs", action="store_true", help="also write a PNG to docs/images/")
     args = parser.parse_args(argv)
-    settings = dict(width=args.width, height=args.height, samples=args.samples, wavelength_count=args.wavelengths, max_bounces=6, seed=1, **figlib.fixed())
+    settings = dict(
+        width=args.width,
+        height=args.height,
+        samples=args.samples,
+        wavelength_count=args.wavelengths,
+        max_bounces=6,
+        seed=1,
+        **figlib.fixed(),
+    )
     rgb, spectral = render_pair(build_scene(light), **settings)
     out = Path(args.out)
     figlib.save(rgb.rgba, out.with_name(out.name + "_rgb"))

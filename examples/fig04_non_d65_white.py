@@ -42,8 +42,10 @@ def main(argv=None) -> int:
     known, rest = parser.parse_known_args(argv)
     light = white_light(known.light)
     rgb_of_light = figlib.spectrum_rgb(light)
-    print(f"light '{known.light}': linear RGB {np.round(rgb_of_light, 4)}, D65 of the same luminance: "
-          f"{np.round(figlib.spectrum_rgb(figlib.with_luminance(spectra.d65(), LUMINANCE)), 4)}")
+    print(
+        f"light '{known.light}': linear RGB {np.round(rgb_of_light, 4)}, D65 of the same luminance: "
+        f"{np.round(figlib.spectrum_rgb(figlib.with_luminance(spectra.d65(), LUMINANCE)), 4)}"
+    )
     run(light, "fig04_non_d65_white", f"'white' light ({known.light}, same RGB as D65)", rest)
     # Control: under real D65 of the same luminance, RGB and spectral agree.
     d65 = figlib.with_luminance(spectra.d65(), LUMINANCE)

@@ -64,13 +64,31 @@ def geometry(glass: str = "N-SF11", throw: float = 1.5, screen: float = 6.0) -> 
     exit_ = np.array([-entry[0], y_entry])
     center = exit_ + screen * d_out
     return {
-        "glass": glass, "corners": corners, "n_ref": n_ref, "alpha": alpha, "d_in": d_in, "d_out": d_out,
-        "entry": entry, "exit": exit_, "light": entry - throw * d_in, "screen_center": center, "screen_normal": -d_out,
+        "glass": glass,
+        "corners": corners,
+        "n_ref": n_ref,
+        "alpha": alpha,
+        "d_in": d_in,
+        "d_out": d_out,
+        "entry": entry,
+        "exit": exit_,
+        "light": entry - throw * d_in,
+        "screen_center": center,
+        "screen_normal": -d_out,
     }
 
 
-def build_scene(light: spectra.Spectrum, *, glass: str = "N-SF11", power: float = 2000.0, spot_deg: float = 0.8,
-                camera: str = "view", ambient: float = 0.0, table: bool = True, spot: bool = True) -> tuple[pc.Scene, dict]:
+def build_scene(
+    light: spectra.Spectrum,
+    *,
+    glass: str = "N-SF11",
+    power: float = 2000.0,
+    spot_deg: float = 0.8,
+    camera: str = "view",
+    ambient: float = 0.0,
+    table: bool = True,
+    spot: bool = True,
+) -> tuple[pc.Scene, dict]:
     """The prism scene and its geometry. ``camera="view"``: the figure's view from above
     the table; ``camera="screen"``: a pinhole 1.5 in front of the screen on its normal,
     looking straight at it (image x = the screen's horizontal axis; for the tests).
@@ -92,8 +110,17 @@ def build_scene(light: spectra.Spectrum, *, glass: str = "N-SF11", power: float 
         s = 8.0
         scene.add_mesh("table", *figlib.quad((-s, -s, 0), (s, -s, 0), (s, s, 0), (-s, s, 0)), material=table_mat)
     if spot:
-        scene.add_light(pc.SpotLight(position=(*g["light"], HEIGHT), direction=(*g["d_in"], 0.0), power=power, color=light,
-                                     spot_size=math.radians(spot_deg), spot_blend=0.0, name="cone light"))
+        scene.add_light(
+            pc.SpotLight(
+                position=(*g["light"], HEIGHT),
+                direction=(*g["d_in"], 0.0),
+                power=power,
+                color=light,
+                spot_size=math.radians(spot_deg),
+                spot_blend=0.0,
+                name="cone light",
+            )
+        )
     if ambient > 0:
         scene.set_world(spectra.d65(ambient))
     if camera == "screen":
@@ -127,8 +154,15 @@ def main(argv=None) -> int:
     # are rendered separately and added. Rendered together, light selection ∝ power
     # (eq. 7) would start almost every light path at the far more powerful world.
     scene, g = build_scene(spectra.d65(), glass=args.glass)
-    settings = dict(width=args.width, height=args.height, samples=args.samples, wavelength_count=args.wavelengths,
-                    max_bounces=8, seed=1, **figlib.fixed())
+    settings = dict(
+        width=args.width,
+        height=args.height,
+        samples=args.samples,
+        wavelength_count=args.wavelengths,
+        max_bounces=8,
+        seed=1,
+        **figlib.fixed(),
+    )
     images = {}
     for method in ("RGB", "POLYCHROMATIC"):
         r = pc.render(scene, method=method, direction=args.direction, **settings)
@@ -157,7 +191,9 @@ def main(argv=None) -> int:
         print(f"  {lam:5.0f} nm  n = {n:.5f}  deviation {dev:6.3f}°")
     lit = lambda img: int((img[..., :3].sum(axis=-1) > 0.3).sum())
     print(f"screen pixels brighter than 0.3: spectral {lit(spectral)}, RGB mode {lit(rgb)}")
-    print(f"{images['POLYCHROMATIC'][1]:.1f} s spectral ({args.wavelengths} wavelengths), {images['RGB'][1]:.1f} s RGB; cone light {args.direction}")
+    print(
+        f"{images['POLYCHROMATIC'][1]:.1f} s spectral ({args.wavelengths} wavelengths), {images['RGB'][1]:.1f} s RGB; cone light {args.direction}"
+    )
     return 0
 
 

@@ -98,8 +98,10 @@ def run(glass: bool, default_out: str, argv=None) -> int:
             r = pc.render(scene, samples=spp, method=method, progress=True, **base)
             de = delta_e_stats(image_delta_e(r.rgba, poly.rgba))["mean"]
             figlib.save(r.rgba, Path(args.out).with_name(Path(args.out).name + "_" + method.lower()))
-            print(f"{method}: {spp} spp{' per wavelength image' if method.endswith('SCENES') else ''}, {r.stats['seconds']:.1f} s "
-                  f"= {r.stats['seconds'] / t_poly:.1f}x POLYCHROMATIC; mean ΔE00 to it {de:.2f} (both noisy)")
+            print(
+                f"{method}: {spp} spp{' per wavelength image' if method.endswith('SCENES') else ''}, {r.stats['seconds']:.1f} s "
+                f"= {r.stats['seconds'] / t_poly:.1f}x POLYCHROMATIC; mean ΔE00 to it {de:.2f} (both noisy)"
+            )
     return 0
 
 

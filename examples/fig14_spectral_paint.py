@@ -107,8 +107,13 @@ def build_scene() -> tuple[pc.Scene, np.ndarray]:
     stripes[0, 1::2] = (230, 220, 200)
 
     ground = np.array([[-6, -6, 0], [6, -6, 0], [6, 6, 0], [-6, 6, 0]], np.float32)
-    scene.add_mesh("ground", ground, [[0, 1, 2], [0, 2, 3]], uvs=[[0, 0], [3, 0], [3, 3], [0, 3]],
-                   material=pc.Diffuse(pc.Texture.from_array(checker, encoding="srgb", name="checker"), name="ground"))
+    scene.add_mesh(
+        "ground",
+        ground,
+        [[0, 1, 2], [0, 2, 3]],
+        uvs=[[0, 0], [3, 0], [3, 3], [0, 3]],
+        material=pc.Diffuse(pc.Texture.from_array(checker, encoding="srgb", name="checker"), name="ground"),
+    )
     for name, x, refl in [
         ("measured paint", -1.1, paint),
         ("RGB twin", 0.0, twin),
@@ -141,7 +146,9 @@ def main(argv: list[str] | None = None) -> int:
     de = float(image_delta_e(left[None, None, :3], mid[None, None, :3]).mean())
     print(f"measured paint {left[:3].round(4)} vs RGB twin {mid[:3].round(4)}: ΔE00 {de:.2f}")
     s = result.stats
-    print(f"{s['samples_per_pixel']} spp, {s['wavelengths']} wavelengths, {s['seconds']:.2f} s, textures {s['texture_bytes'] / 1024:.0f} KiB")
+    print(
+        f"{s['samples_per_pixel']} spp, {s['wavelengths']} wavelengths, {s['seconds']:.2f} s, textures {s['texture_bytes'] / 1024:.0f} KiB"
+    )
     return 0
 
 

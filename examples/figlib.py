@@ -21,9 +21,7 @@ OUT = Path(__file__).resolve().parent / "out"
 DOCS_IMAGES = Path(__file__).resolve().parents[1] / "docs" / "images"
 
 # Linear Rec.709 (D65) <-> CIE XYZ.
-XYZ_TO_RGB = np.array(
-    [[3.2404542, -1.5371385, -0.4985314], [-0.9692660, 1.8760108, 0.0415560], [0.0556434, -0.2040259, 1.0572252]]
-)
+XYZ_TO_RGB = np.array([[3.2404542, -1.5371385, -0.4985314], [-0.9692660, 1.8760108, 0.0415560], [0.0556434, -0.2040259, 1.0572252]])
 RGB_TO_XYZ = np.linalg.inv(XYZ_TO_RGB)
 
 

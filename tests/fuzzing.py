@@ -104,8 +104,13 @@ def seed_scene():
     scene.add_material(pc.Diffuse((0.8, 0.2, 0.1), name="red"))
     glass = scene.add_material(pc.Dielectric(pc.ior.named("N-BK7"), roughness=0.2, name="glass"))
     lamp = scene.add_material(pc.Emitter(pc.spectra.blackbody(3000), strength=5.0, name="lamp"))
-    scene.add_mesh("floor", [[-2, -2, 0], [2, -2, 0], [2, 2, 0], [-2, 2, 0]], [[0, 1, 2], [0, 2, 3]],
-                   normals=[[0, 0, 1]] * 4, uvs=[[0, 0], [1, 0], [1, 1], [0, 1]])
+    scene.add_mesh(
+        "floor",
+        [[-2, -2, 0], [2, -2, 0], [2, 2, 0], [-2, 2, 0]],
+        [[0, 1, 2], [0, 2, 3]],
+        normals=[[0, 0, 1]] * 4,
+        uvs=[[0, 0], [1, 0], [1, 1], [0, 1]],
+    )
     scene.add_mesh("pane", [[-1, 0, 0.5], [1, 0, 0.5], [0, 0, 1.5]], [[0, 1, 2]], material=glass)
     scene.add_mesh("lamp", [[-0.5, -0.5, 3], [0.5, -0.5, 3], [0, 0.5, 3]], [[0, 1, 2]], material=lamp)
     scene.add_light(pc.PointLight((0, 0, 2), power=20.0, name="bulb"))
@@ -266,7 +271,7 @@ def mutate_usda(text: str, rng: random.Random) -> str:
             i, m = rng.choice(spots)
             value = rng.choice(["nan", "inf", "-inf", "0", "-1", "1e38", "1e-45", "99999999999", "-0", "2147483648"])
             line = lines[i]
-            lines[i] = line[: m.start()] + value + line[m.end():]
+            lines[i] = line[: m.start()] + value + line[m.end() :]
             spots = [(j, mm) for j, l2 in enumerate(lines) for mm in re.finditer(r"-?\d+(\.\d+)?", l2)]
         return "\n".join(lines) + "\n"
     if r < 0.75:
@@ -317,9 +322,11 @@ def image_seeds(workdir: Path) -> dict[str, bytes]:
     img = np.linspace(0, 4, 6 * 10 * 4, dtype=np.float32).reshape(6, 10, 4)
     img[..., 3] = 1
     seeds = {}
-    for name, write in [("seed.exr", lambda p: imageio.write_exr(p, img)),
-                        ("seed.png", lambda p: imageio.write_png(p, img)),
-                        ("seed.hdr", lambda p: texture.write_radiance_hdr(p, img[..., :3]))]:
+    for name, write in [
+        ("seed.exr", lambda p: imageio.write_exr(p, img)),
+        ("seed.png", lambda p: imageio.write_png(p, img)),
+        ("seed.hdr", lambda p: texture.write_radiance_hdr(p, img[..., :3])),
+    ]:
         p = workdir / name
         write(p)
         seeds[name] = p.read_bytes()

@@ -21,10 +21,18 @@ render_module = sys.modules["polychrome.render"]  # the module (polychrome.rende
 def small_stage(tmp_path):
     """A lit diffuse plane and a glass slab, seen from above; 8×6 pixels, 2 spp."""
     scene = pc.Scene()
-    scene.add_mesh("floor", np.array([[-2, -2, 0], [2, -2, 0], [2, 2, 0], [-2, 2, 0]], float), [[0, 1, 2], [0, 2, 3]],
-                   material=pc.Diffuse(pc.spectra.narrow_band(560.0, 80.0) * 0.7, name="paint"))
-    scene.add_mesh("slab", np.array([[-1, -1, 0.5], [1, -1, 0.5], [1, 1, 0.5], [-1, 1, 0.5]], float), [[0, 1, 2], [0, 2, 3]],
-                   material=pc.Dielectric(pc.ior.named("N-SF11"), name="flint"))
+    scene.add_mesh(
+        "floor",
+        np.array([[-2, -2, 0], [2, -2, 0], [2, 2, 0], [-2, 2, 0]], float),
+        [[0, 1, 2], [0, 2, 3]],
+        material=pc.Diffuse(pc.spectra.narrow_band(560.0, 80.0) * 0.7, name="paint"),
+    )
+    scene.add_mesh(
+        "slab",
+        np.array([[-1, -1, 0.5], [1, -1, 0.5], [1, 1, 0.5], [-1, 1, 0.5]], float),
+        [[0, 1, 2], [0, 2, 3]],
+        material=pc.Dielectric(pc.ior.named("N-SF11"), name="flint"),
+    )
     scene.add_light(pc.PointLight((0.5, -0.5, 3.0), power=300.0, color=pc.spectra.d65(), name="key"))
     scene.camera = pc.Camera.looking_at((0.0, -4.0, 3.0), (0.0, 0.0, 0.0), focal_length=35.0)
     return usd.write_stage(scene, tmp_path / "shot.usda", pc.RenderSettings(width=8, height=6, samples=2, seed=1))
@@ -48,9 +56,28 @@ def captured(monkeypatch):
 def test_spectral_flags_reach_the_render_settings(tmp_path, captured):
     stage = small_stage(tmp_path)
     out = tmp_path / "a.exr"
-    argv = ["render", str(stage), "-o", str(out), "--quiet", "--method", "polychromatic", "--direction", "bidirectional",
-            "--dispersion-splitting", "--wavelengths", "21", "--wavelength-min", "400", "--wavelength-max", "700",
-            "--max-bounces", "3", "--uplift", "smooth"]
+    argv = [
+        "render",
+        str(stage),
+        "-o",
+        str(out),
+        "--quiet",
+        "--method",
+        "polychromatic",
+        "--direction",
+        "bidirectional",
+        "--dispersion-splitting",
+        "--wavelengths",
+        "21",
+        "--wavelength-min",
+        "400",
+        "--wavelength-max",
+        "700",
+        "--max-bounces",
+        "3",
+        "--uplift",
+        "smooth",
+    ]
     assert cli.main(argv) == 0
     settings, stats = captured[-1]
     assert (settings.method, settings.direction, settings.dispersion_splitting) == ("POLYCHROMATIC", "BIDIRECTIONAL", True)
@@ -58,8 +85,25 @@ def test_spectral_flags_reach_the_render_settings(tmp_path, captured):
     assert (settings.max_bounces, settings.uplift) == (3, "SMOOTH")
     assert stats["direction"] == "BIDIRECTIONAL" and stats["wavelengths"] == 21 and stats["max_bounces"] == 3
     # --no-dispersion-splitting and the other methods/directions.
-    assert cli.main(["render", str(stage), "-o", str(out), "--quiet", "--method", "MONOCHROMATIC_RAYS", "--direction", "FORWARD",
-                     "--no-dispersion-splitting", "--wavelengths", "16"]) == 0
+    assert (
+        cli.main(
+            [
+                "render",
+                str(stage),
+                "-o",
+                str(out),
+                "--quiet",
+                "--method",
+                "MONOCHROMATIC_RAYS",
+                "--direction",
+                "FORWARD",
+                "--no-dispersion-splitting",
+                "--wavelengths",
+                "16",
+            ]
+        )
+        == 0
+    )
     settings, stats = captured[-1]
     assert (settings.method, settings.direction, settings.dispersion_splitting) == ("MONOCHROMATIC_RAYS", "FORWARD", False)
     assert stats["method"] == "MONOCHROMATIC_RAYS" and stats["direction"] == "FORWARD" and stats["wavelengths"] == 16
@@ -73,8 +117,10 @@ def test_explicit_wavelength_list_and_spectral_output_write_a_spectral_exr(tmp_p
     stage = small_stage(tmp_path)
     out = tmp_path / "spectral.exr"
     grid = [400.0, 450.0, 500.0, 540.0, 560.0, 580.0, 620.0, 700.0]  # non-uniform
-    assert cli.main(["render", str(stage), "-o", str(out), "--quiet", "--wavelengths", ",".join(f"{x:g}" for x in grid),
-                     "--spectral-output"]) == 0
+    assert (
+        cli.main(["render", str(stage), "-o", str(out), "--quiet", "--wavelengths", ",".join(f"{x:g}" for x in grid), "--spectral-output"])
+        == 0
+    )
     settings, stats = captured[-1]
     assert settings.wavelengths == grid and settings.spectral_output is True and stats["wavelengths"] == len(grid)
     wavelengths, spectral = imageio.read_spectral_exr(out)

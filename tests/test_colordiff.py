@@ -172,9 +172,7 @@ def test_xyz_to_lab_matches_colour_science():
     xyz = linear_rgb_to_xyz(rng.uniform(0.0, 1.5, size=(1000, 3)))
     xyz[:10] *= 1e-4  # the linear segment below (6/29)^3
     white_xy = colour.XYZ_to_xy(D65_WHITE_XYZ)
-    np.testing.assert_allclose(
-        xyz_to_lab(xyz), colour.XYZ_to_Lab(xyz, illuminant=white_xy), rtol=1e-9, atol=1e-9
-    )
+    np.testing.assert_allclose(xyz_to_lab(xyz), colour.XYZ_to_Lab(xyz, illuminant=white_xy), rtol=1e-9, atol=1e-9)
 
 
 def test_white_and_black_map_to_lab_endpoints():
@@ -206,9 +204,7 @@ def test_image_delta_e_matches_colour_pipeline():
     rng = np.random.default_rng(9)
     a, b = _image(rng), _image(rng)
     white_xy = colour.XYZ_to_xy(D65_WHITE_XYZ)
-    to_lab = lambda rgb: colour.XYZ_to_Lab(
-        colour.RGB_to_XYZ(rgb.astype(np.float64), "sRGB"), illuminant=white_xy
-    )
+    to_lab = lambda rgb: colour.XYZ_to_Lab(colour.RGB_to_XYZ(rgb.astype(np.float64), "sRGB"), illuminant=white_xy)
     expected = colour.delta_E(to_lab(a), to_lab(b), method="CIE 2000")
     np.testing.assert_allclose(image_delta_e(a, b), expected, rtol=1e-9, atol=1e-9)
 
@@ -225,9 +221,7 @@ def test_alpha_is_ignored():
 def test_white_luminance_rescales_the_white():
     rng = np.random.default_rng(11)
     a, b = _image(rng).astype(np.float64), _image(rng).astype(np.float64)
-    np.testing.assert_allclose(
-        image_delta_e(a * 8.0, b * 8.0, white_luminance=8.0), image_delta_e(a, b), rtol=1e-9, atol=1e-12
-    )
+    np.testing.assert_allclose(image_delta_e(a * 8.0, b * 8.0, white_luminance=8.0), image_delta_e(a, b), rtol=1e-9, atol=1e-12)
 
 
 def test_shape_mismatch_names_both_shapes():

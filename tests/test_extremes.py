@@ -107,14 +107,18 @@ def box(lo, hi):
 # --- grazing incidence -------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("material", [
-    pc.Diffuse(0.7, name="diffuse"),
-    pc.Dielectric(1.5, name="glass"),
-    pc.Dielectric(1.5, roughness=0.3, name="rough glass"),
-    pc.Conductor("gold", roughness=0.2, name="rough gold"),
-    pc.Conductor("silver", name="silver"),
-    pc.Glossy(0.8, roughness=0.05, name="glossy"),
-], ids=lambda m: m.name)
+@pytest.mark.parametrize(
+    "material",
+    [
+        pc.Diffuse(0.7, name="diffuse"),
+        pc.Dielectric(1.5, name="glass"),
+        pc.Dielectric(1.5, roughness=0.3, name="rough glass"),
+        pc.Conductor("gold", roughness=0.2, name="rough gold"),
+        pc.Conductor("silver", name="silver"),
+        pc.Glossy(0.8, roughness=0.05, name="glossy"),
+    ],
+    ids=lambda m: m.name,
+)
 def test_grazing_camera_rays_at_89_99_degrees(material):
     """Camera rays skim a plane at 89.99° from its normal (cos θ ≈ 1.7e-4)."""
     scene = pc.Scene()
@@ -373,11 +377,17 @@ def test_zero_power_light_beside_a_real_one_changes_nothing():
 
 # --- degenerate triangles ----------------------------------------------------------------
 
-DEGENERATE_V = np.array([
-    [0, 0, 0], [1, 0, 0], [2, 0, 0],  # collinear
-    [0, 1, 0],  # repeated below
-    [1e-30, 0, 0], [0, 1e-30, 0],  # area underflows to 0 in f32
-], float)
+DEGENERATE_V = np.array(
+    [
+        [0, 0, 0],
+        [1, 0, 0],
+        [2, 0, 0],  # collinear
+        [0, 1, 0],  # repeated below
+        [1e-30, 0, 0],
+        [0, 1e-30, 0],  # area underflows to 0 in f32
+    ],
+    float,
+)
 DEGENERATE_T = np.array([[0, 1, 2], [3, 3, 3], [3, 3, 0], [0, 4, 5]])
 
 

@@ -77,10 +77,12 @@ def sun_over_plane() -> pc.Scene:
     paint = scene.add_material(pc.Diffuse(spectra.tabulated(PAINT_LAM, PAINT), name="green paint"))
     s = 50.0
     scene.add_mesh("plane", *figlib.quad((-s, -s, 0), (s, -s, 0), (s, s, 0), (-s, s, 0)), material=paint)
-    scene.add_light(pc.SunLight(direction=(0.0, 0.0, -1.0), strength=SUN_STRENGTH,
-                                color=spectra.narrow_band(SUN_CENTER, SUN_FWHM), name="sun"))
-    scene.camera = pc.Camera(to_world=pc.look_at((0.0, 0.0, 5.0), (0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0)),
-                             projection="ORTHOGRAPHIC", ortho_scale=2.0)
+    scene.add_light(
+        pc.SunLight(direction=(0.0, 0.0, -1.0), strength=SUN_STRENGTH, color=spectra.narrow_band(SUN_CENTER, SUN_FWHM), name="sun")
+    )
+    scene.camera = pc.Camera(
+        to_world=pc.look_at((0.0, 0.0, 5.0), (0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0)), projection="ORTHOGRAPHIC", ortho_scale=2.0
+    )
     return scene
 
 
@@ -248,8 +250,18 @@ def prism_render(request):
     paths stop at the screen (max_bounces 3: entry, exit, screen) so no
     inter-reflection lands elsewhere."""
     scene, g = fig06.build_scene(spectra.d65(), glass="N-BK7", camera="screen", table=False, spot_deg=SPOT_DEG)
-    result = pc.render(scene, width=PRISM_W, height=PRISM_H, samples=48, wavelength_count=41, direction=request.param,
-                       max_bounces=3, spectral_output=True, seed=11, **FIXED)
+    result = pc.render(
+        scene,
+        width=PRISM_W,
+        height=PRISM_H,
+        samples=48,
+        wavelength_count=41,
+        direction=request.param,
+        max_bounces=3,
+        spectral_output=True,
+        seed=11,
+        **FIXED,
+    )
     assert result.stats["direction"] == request.param
     return result, g
 
@@ -304,10 +316,10 @@ def test_prism_narrow_band_light_lands_where_snell_puts_it(center):
     """A red and a blue narrow-band cone light (2 nm wide: all its energy in one 10 nm
     grid cell) each light one spot; its centroid in the RGB image (luminance-free: the
     sum of |R|, |G|, |B|) is where Snell's law puts that wavelength."""
-    scene, g = fig06.build_scene(spectra.narrow_band(center, 2.0), glass="N-BK7", camera="screen", table=False,
-                                 spot_deg=SPOT_DEG)
-    result = pc.render(scene, width=PRISM_W, height=PRISM_H, samples=16, wavelength_count=41, direction="FORWARD",
-                       max_bounces=3, seed=3, **FIXED)
+    scene, g = fig06.build_scene(spectra.narrow_band(center, 2.0), glass="N-BK7", camera="screen", table=False, spot_deg=SPOT_DEG)
+    result = pc.render(
+        scene, width=PRISM_W, height=PRISM_H, samples=16, wavelength_count=41, direction="FORWARD", max_bounces=3, seed=3, **FIXED
+    )
     u = pixel_u(g)
     m, _ = column_moments(np.abs(result.rgba[..., :3]).sum(axis=-1), u)
     mean, _ = snell_spots(g, [center], SPOT_DEG)
@@ -319,8 +331,7 @@ def test_prism_narrow_band_light_lands_where_snell_puts_it(center):
 
 def test_prism_in_rgb_mode_gives_three_spots_at_620_540_460():
     scene, g = fig06.build_scene(spectra.d65(), glass="N-BK7", camera="screen", table=False, spot_deg=SPOT_DEG)
-    result = pc.render(scene, width=PRISM_W, height=PRISM_H, samples=32, method="RGB", direction="FORWARD",
-                       max_bounces=3, seed=11, **FIXED)
+    result = pc.render(scene, width=PRISM_W, height=PRISM_H, samples=32, method="RGB", direction="FORWARD", max_bounces=3, seed=11, **FIXED)
     u = pixel_u(g)
     mean, _ = snell_spots(g, [620.0, 540.0, 460.0], SPOT_DEG)
     for channel in range(3):

@@ -94,6 +94,10 @@ def test_garbage_json_and_buffers_are_clear_errors():
         with pytest.raises(ValueError):
             _core.render(scene_json, [], settings)
     with pytest.raises(TypeError, match="buffer 0"):
-        _core.render('{"meshes": [{"name": "m", "vertices": 0, "triangles": 1}]}', [np.zeros(3, np.int16), np.zeros(3, np.uint32)], settings)
+        _core.render(
+            '{"meshes": [{"name": "m", "vertices": 0, "triangles": 1}]}', [np.zeros(3, np.int16), np.zeros(3, np.uint32)], settings
+        )
     with pytest.raises(ValueError, match="'m'"):
-        _core.render('{"meshes": [{"name": "m", "vertices": 0, "triangles": 1}]}', [np.zeros(3, np.uint32), np.zeros(3, np.uint32)], settings)
+        _core.render(
+            '{"meshes": [{"name": "m", "vertices": 0, "triangles": 1}]}', [np.zeros(3, np.uint32), np.zeros(3, np.uint32)], settings
+        )

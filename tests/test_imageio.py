@@ -22,9 +22,7 @@ from polychrome.imageio import (
 def _srgb_reference(x):
     """IEC 61966-2-1 encoding written out independently of the module under test."""
     x = np.asarray(x, dtype=np.float64)
-    return np.array([12.92 * v if v <= 0.0031308 else 1.055 * v ** (1 / 2.4) - 0.055 for v in x.ravel()]).reshape(
-        x.shape
-    )
+    return np.array([12.92 * v if v <= 0.0031308 else 1.055 * v ** (1 / 2.4) - 0.055 for v in x.ravel()]).reshape(x.shape)
 
 
 def _read_channels(path):

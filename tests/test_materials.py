@@ -23,9 +23,7 @@ def quad(z: float, half: float) -> tuple[np.ndarray, np.ndarray]:
 
 def box(z0: float, z1: float, half: float) -> tuple[np.ndarray, np.ndarray]:
     """An axis-aligned slab, wound outwards."""
-    v = np.array(
-        [[x, y, z] for z in (z0, z1) for y in (-half, half) for x in (-half, half)], dtype=np.float32
-    )
+    v = np.array([[x, y, z] for z in (z0, z1) for y in (-half, half) for x in (-half, half)], dtype=np.float32)
     # Vertex index: x + 2y + 4z (0/1 each).
     faces = [
         (0, 2, 3, 1),  # bottom (−z)
@@ -117,7 +115,9 @@ def test_spot_light_matches_blender_power_convention():
     scene.camera = top_camera(4.0)
     v, t = quad(0.0, 4.0)
     scene.add_mesh("floor", v, t, material=pc.Diffuse(pc.spectra.constant(rho)))
-    scene.add_light(pc.SpotLight((0, 0, h), (0, 0, -1), power=power, color=pc.spectra.constant(1.0), spot_size=math.radians(40), spot_blend=0.0))
+    scene.add_light(
+        pc.SpotLight((0, 0, h), (0, 0, -1), power=power, color=pc.spectra.constant(1.0), spot_size=math.radians(40), spot_blend=0.0)
+    )
     out = pc.render(scene, width=21, height=21, samples=8, max_bounces=1)
     y = luminance(out.rgba)
     expected = rho / math.pi * power / (4 * math.pi) / h**2

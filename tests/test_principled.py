@@ -64,8 +64,15 @@ def test_thin_film_interference_is_spectral():
     i550 = int(np.argmin(np.abs(out.wavelengths - 550.0)))
     assert spectrum[i550] < 1e-5
     # Without the film: the flat 4 % of bare glass.
-    bare = pc.render(plane_scene(pc.Principled(0.0, roughness=0.0, ior=n_sub)), width=2, height=2, samples=1,
-                     max_bounces=4, wavelength_count=41, spectral_output=True)
+    bare = pc.render(
+        plane_scene(pc.Principled(0.0, roughness=0.0, ior=n_sub)),
+        width=2,
+        height=2,
+        samples=1,
+        max_bounces=4,
+        wavelength_count=41,
+        spectral_output=True,
+    )
     assert np.allclose(bare.spectral, 0.04, atol=1e-5)
 
 
@@ -134,9 +141,11 @@ def test_mix_of_red_and_blue_diffuse_is_the_mixed_colour():
 
 def test_add_and_mix_emission_and_description():
     a = pc.Diffuse(0.5, emission=(1.0, 0.0, 0.0))
-    b = pc.Principled((0.2, 0.3, 0.4), metallic=0.3, transmission=0.2, ior=pc.ior.named("N-BK7"),
-                      specular_tint=(1.0, 0.9, 0.8), thin_film_thickness=300.0)
+    b = pc.Principled(
+        (0.2, 0.3, 0.4), metallic=0.3, transmission=0.2, ior=pc.ior.named("N-BK7"), specular_tint=(1.0, 0.9, 0.8), thin_film_thickness=300.0
+    )
     m = pc.Mix(a, b, 0.25)
+
     def rgb(e):
         return [c * e.scale for c in e.params["rgb"]]
 

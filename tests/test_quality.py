@@ -108,7 +108,15 @@ def test_auto_reaches_its_target_with_fewer_samples_than_final(name, build):
     assert target == 1.0 and auto.stats["quality"] == "AUTO"
     de_auto = float(np.mean(image_delta_e(auto.rgba, ref.rgba)))
     de_final = float(np.mean(image_delta_e(final.rgba, ref.rgba)))
-    print(name, auto.stats["auto_reason"], auto.stats["wavelengths"], auto.stats["total_samples"], final.stats["total_samples"], de_auto, de_final)
+    print(
+        name,
+        auto.stats["auto_reason"],
+        auto.stats["wavelengths"],
+        auto.stats["total_samples"],
+        final.stats["total_samples"],
+        de_auto,
+        de_final,
+    )
     assert de_auto <= target, (de_auto, auto.stats["auto_reason"])
     assert auto.stats["total_samples"] < final.stats["total_samples"] == size * size * 256
     assert auto.stats["converged_pixels"] > 0

@@ -47,7 +47,9 @@ def test_point_light_on_plane_matches_closed_form():
     scene.add_material(pc.Diffuse(rho))
     scene.add_mesh("plane", [[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], [[0, 1, 2], [0, 2, 3]])
     scene.add_light(pc.PointLight((0, 0, h), power=power, color=1.0))
-    scene.camera = pc.Camera(to_world=np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 4.0], [0, 0, 0, 1]]), projection="ORTHOGRAPHIC", ortho_scale=2.0)
+    scene.camera = pc.Camera(
+        to_world=np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 4.0], [0, 0, 0, 1]]), projection="ORTHOGRAPHIC", ortho_scale=2.0
+    )
     # Only the random position inside each pixel is noisy here; 256 samples keep it < 0.3 %.
     result = pc.render(scene, width=21, height=21, samples=256, max_bounces=1)
     intensity = power / (4 * math.pi)
@@ -127,7 +129,10 @@ def test_bad_mesh_data_names_the_object(vertices, triangles, message):
     [
         (pc.Diffuse(-0.5, name="Neg"), "material 'Neg': reflectance: value -0.5"),
         (pc.Diffuse(1.5, name="Bright"), "material 'Bright': reflectance 1.5 exceeds 1"),
-        (pc.Diffuse(pc.spectra.tabulated([500, 400], [0.1, 0.2]), name="Order"), "material 'Order': reflectance: wavelengths not strictly ascending"),
+        (
+            pc.Diffuse(pc.spectra.tabulated([500, 400], [0.1, 0.2]), name="Order"),
+            "material 'Order': reflectance: wavelengths not strictly ascending",
+        ),
         (pc.Emitter(pc.spectra.constant(-2), name="Dark"), "material 'Dark': emission: value -2"),
     ],
 )

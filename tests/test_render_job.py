@@ -68,8 +68,7 @@ def test_render_with_previews_calls_back_on_this_thread():
     def on_preview(p):
         got.append((p, threading.get_ident()))
 
-    result = render_with_previews(furnace_scene(EMISSION, ALBEDO), preview=on_preview, width=16, height=16, samples=64,
-                                  max_bounces=100)
+    result = render_with_previews(furnace_scene(EMISSION, ALBEDO), preview=on_preview, width=16, height=16, samples=64, max_bounces=100)
     assert got and all(t == me for _, t in got)
     assert got[-1][0].last
     np.testing.assert_array_equal(got[-1][0].rgba, result.rgba)
@@ -77,8 +76,9 @@ def test_render_with_previews_calls_back_on_this_thread():
 
 
 def test_preview_callback_returning_false_cancels():
-    result = render_with_previews(furnace_scene(EMISSION, ALBEDO), preview=lambda p: False, width=16, height=16,
-                                  samples=100_000, max_bounces=100)
+    result = render_with_previews(
+        furnace_scene(EMISSION, ALBEDO), preview=lambda p: False, width=16, height=16, samples=100_000, max_bounces=100
+    )
     assert result.stats["cancelled"]
     assert 1 <= result.stats["samples_per_pixel"] < 100_000
 

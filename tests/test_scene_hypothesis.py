@@ -60,8 +60,10 @@ def test_random_arrays_build_and_render_or_raise_naming_the_mesh(vertices, trian
 
 
 @settings(max_examples=60, deadline=None)
-@given(position=st.lists(st.one_of(st.floats(-5, 5), st.sampled_from([np.nan, np.inf])), min_size=0, max_size=4),
-       power=st.one_of(st.floats(0, 1e6), st.sampled_from([np.nan, np.inf, -1.0])))
+@given(
+    position=st.lists(st.one_of(st.floats(-5, 5), st.sampled_from([np.nan, np.inf])), min_size=0, max_size=4),
+    power=st.one_of(st.floats(0, 1e6), st.sampled_from([np.nan, np.inf, -1.0])),
+)
 def test_random_point_lights_render_or_raise_naming_the_light(position, power):
     scene = pc.Scene()
     scene.add_mesh("floor", [[-2, -2, 0], [2, -2, 0], [2, 2, 0], [-2, 2, 0]], [[0, 1, 2], [0, 2, 3]])

@@ -45,7 +45,9 @@ def spectral_scene():
     """Every kind of spectrum, a mesh with normals and uvs, per-triangle materials, a
     mesh placed three times, a camera with shift, point lights and a world."""
     scene = pc.Scene()
-    paint = scene.add_material(pc.Diffuse(pc.spectra.tabulated([400, 450, 500, 550, 600, 650, 700], [0.05, 0.1, 0.6, 0.8, 0.3, 0.1, 0.05]), name="green paint"))
+    paint = scene.add_material(
+        pc.Diffuse(pc.spectra.tabulated([400, 450, 500, 550, 600, 650, 700], [0.05, 0.1, 0.6, 0.8, 0.3, 0.1, 0.05]), name="green paint")
+    )
     red = scene.add_material(pc.Diffuse((0.8, 0.2, 0.1), name="red"))
     grey = scene.add_material(pc.Diffuse(0.5, name="grey"))
     scene.add_material(pc.Emitter(pc.spectra.blackbody(3200), strength=8.0, name="lamp"))
@@ -65,7 +67,9 @@ def spectral_scene():
         scene.add_instance(small, m, f"pebble {k}")
     lamp = scene.add_mesh("lamp", v * 0.3, t, material=3, place=False)
     scene.add_instance(lamp, np.array([[1, 0, 0, 1.5], [0, 1, 0, -1.5], [0, 0, 1, 2.0], [0, 0, 0, 1]]), "lamp")
-    scene.camera = pc.Camera.looking_at((0.5, -6, 2), (0, 0, 0), focal_length=35.0, shift_x=0.05, shift_y=-0.02, clip_start=0.05, name="Shot cam")
+    scene.camera = pc.Camera.looking_at(
+        (0.5, -6, 2), (0, 0, 0), focal_length=35.0, shift_x=0.05, shift_y=-0.02, clip_start=0.05, name="Shot cam"
+    )
     scene.add_light(pc.PointLight((2, -2, 3), power=40.0, color=pc.spectra.blackbody(4500), name="key"))
     scene.add_light(pc.PointLight((-3, -1, 2), power=15.0, color=(0.2, 0.4, 1.0), name="fill"))
     scene.set_world(pc.spectra.d65(0.05))
@@ -100,7 +104,14 @@ def test_round_trip_keeps_every_spectrum_mesh_transform_camera_and_light(tmp_pat
     assert [type(m).__name__ for m in back.materials] == ["Diffuse", "Diffuse", "Diffuse", "Emitter", "Diffuse"]
     stored = usd.read_settings(path)
     assert {k: stored[k] for k in ("width", "height", "samples", "max_bounces", "seed", "wavelength_count", "method")} == {
-        "width": 24, "height": 16, "samples": 4, "max_bounces": 3, "seed": 7, "wavelength_count": 21, "method": "POLYCHROMATIC"}
+        "width": 24,
+        "height": 16,
+        "samples": 4,
+        "max_bounces": 3,
+        "seed": 7,
+        "wavelength_count": 21,
+        "method": "POLYCHROMATIC",
+    }
 
 
 def test_written_stage_follows_the_usd_schemas(tmp_path):
@@ -122,7 +133,9 @@ def test_written_stage_follows_the_usd_schemas(tmp_path):
     # Per-triangle materials are GeomSubsets bound to the right materials.
     floor = stage.GetPrimAtPath("/World/floor")
     subsets = UsdShade.MaterialBindingAPI(floor).GetMaterialBindSubsets()
-    bound = {tuple(s.GetIndicesAttr().Get()): UsdShade.MaterialBindingAPI(s.GetPrim()).ComputeBoundMaterial()[0].GetPath().name for s in subsets}
+    bound = {
+        tuple(s.GetIndicesAttr().Get()): UsdShade.MaterialBindingAPI(s.GetPrim()).ComputeBoundMaterial()[0].GetPath().name for s in subsets
+    }
     assert bound == {(0,): "grey", (1,): "red"}
     # Lights and world.
     key = UsdLux.SphereLight(stage.GetPrimAtPath("/World/Lights/key"))
@@ -382,7 +395,7 @@ def test_missing_and_malformed_files_raise_value_error_naming_the_file(tmp_path)
     with pytest.raises(ValueError, match="nothere.usda"):
         usd.read_stage(tmp_path / "nothere.usda")
     junk = tmp_path / "junk.usda"
-    junk.write_text("#usda 1.0\ndef Xform \"World\" {\n  float3 x = (1, 2\n")
+    junk.write_text('#usda 1.0\ndef Xform "World" {\n  float3 x = (1, 2\n')
     with pytest.raises(ValueError, match="junk.usda"):
         usd.read_stage(junk)
     binary = tmp_path / "noise.usdc"
@@ -548,7 +561,11 @@ def test_round_trip_of_glass_metals_spot_sun_and_textures(tmp_path):
     linear = pc.Texture.from_array(rng.random((4, 5, 3)).astype(np.float32) * 2, "linear", "EXTEND", name="floats")
     scene.add_material(pc.Diffuse(srgb, name="printed"))
     scene.add_material(pc.Diffuse(linear, emission=pc.spectra.rgb(0.1, 0.2, 0.3), name="lit print"))
-    scene.add_material(pc.Dielectric(ior.sellmeier([1.03961212, 0.231792344, 1.01046945], [0.00600069867, 0.0200179144, 103.560653]), roughness=0.1, name="bk7"))
+    scene.add_material(
+        pc.Dielectric(
+            ior.sellmeier([1.03961212, 0.231792344, 1.01046945], [0.00600069867, 0.0200179144, 103.560653]), roughness=0.1, name="bk7"
+        )
+    )
     scene.add_material(pc.Dielectric(ior.abbe(1.5, 40.0), name="abbe glass"))
     scene.add_material(pc.Dielectric("Diamond", name="diamond"))
     scene.add_material(pc.Dielectric(ior.cauchy(1.5, 0.0042), name="cauchy"))
@@ -561,7 +578,9 @@ def test_round_trip_of_glass_metals_spot_sun_and_textures(tmp_path):
         m = np.eye(4)
         m[:3, 3] = [i % 3 - 1.0, 0.0, i // 3 - 1.0]
         scene.add_mesh(f"ball{i}", v, t, uvs=uvs, material=i, transform=m)
-    scene.add_light(pc.SpotLight((0, -3, 3), (0, 1, -1), power=80, color=pc.spectra.blackbody(3000), spot_size=0.7, spot_blend=0.3, name="spot"))
+    scene.add_light(
+        pc.SpotLight((0, -3, 3), (0, 1, -1), power=80, color=pc.spectra.blackbody(3000), spot_size=0.7, spot_blend=0.3, name="spot")
+    )
     scene.add_light(pc.SunLight((0.2, 0.3, -1.0), strength=2.5, color=pc.spectra.d65(), name="sun"))
     hdri = pc.Texture.from_array(rng.random((8, 16, 3)).astype(np.float32), name="sky.exr")
     scene.set_world(texture=hdri, strength=1.5, rotation=0.4, importance_sampling=False)
@@ -576,10 +595,22 @@ def test_round_trip_of_glass_metals_spot_sun_and_textures(tmp_path):
     db, bb = back.description()
     for key in ("materials", "lights", "world", "instances", "meshes"):
         assert a[key] == b[key], key
-    assert [{k: v for k, v in t.items() if k != "buffer"} for t in da["textures"]] == [{k: v for k, v in t.items() if k != "buffer"} for t in db["textures"]]
+    assert [{k: v for k, v in t.items() if k != "buffer"} for t in da["textures"]] == [
+        {k: v for k, v in t.items() if k != "buffer"} for t in db["textures"]
+    ]
     for ta, tb in zip(da["textures"], db["textures"]):
         assert np.array_equal(np.asarray(ba[ta["buffer"]]), np.asarray(bb[tb["buffer"]])), ta["name"]
-    assert [type(m).__name__ for m in back.materials] == ["Diffuse", "Diffuse", "Dielectric", "Dielectric", "Dielectric", "Dielectric", "Conductor", "Conductor", "Glossy"]
+    assert [type(m).__name__ for m in back.materials] == [
+        "Diffuse",
+        "Diffuse",
+        "Dielectric",
+        "Dielectric",
+        "Dielectric",
+        "Dielectric",
+        "Conductor",
+        "Conductor",
+        "Glossy",
+    ]
     assert [type(light).__name__ for light in back.lights] == ["SpotLight", "SunLight"]
     r1 = pc.render(scene, SETTINGS)
     r2 = pc.render(back, SETTINGS)
@@ -704,11 +735,23 @@ def test_preview_surface_glass_metal_and_emission_map_to_polychrome_materials(tm
 @pytest.mark.parametrize(
     "edit, prim, problem",
     [
-        (lambda st: UsdGeom.Xformable(st.GetPrimAtPath("/World/broken")).AddTranslateOp().Set(Gf.Vec3d(0, float("nan"), 0)), "/World/broken", "transform is not finite"),
+        (
+            lambda st: UsdGeom.Xformable(st.GetPrimAtPath("/World/broken")).AddTranslateOp().Set(Gf.Vec3d(0, float("nan"), 0)),
+            "/World/broken",
+            "transform is not finite",
+        ),
         (lambda st: UsdLux.SphereLight.Define(st, "/World/bulb").CreateIntensityAttr(float("inf")), "/World/bulb", "not finite"),
         (lambda st: UsdGeom.Camera(st.GetPrimAtPath("/World/cam")).CreateHorizontalApertureAttr(float("nan")), "/World/cam", "not finite"),
-        (lambda st: st.GetPrimAtPath("/World/cam").CreateAttribute("polychrome:camera", Sdf.ValueTypeNames.String).Set("{oops"), "/World/cam", "not valid JSON"),
-        (lambda st: UsdGeom.Mesh(st.GetPrimAtPath("/World/broken")).CreateNormalsAttr([(0, 0, 1), (0, 0, float("nan")), (0, 0, 1)]), "/World/broken", r"normals\[1\] is not finite"),
+        (
+            lambda st: st.GetPrimAtPath("/World/cam").CreateAttribute("polychrome:camera", Sdf.ValueTypeNames.String).Set("{oops"),
+            "/World/cam",
+            "not valid JSON",
+        ),
+        (
+            lambda st: UsdGeom.Mesh(st.GetPrimAtPath("/World/broken")).CreateNormalsAttr([(0, 0, 1), (0, 0, float("nan")), (0, 0, 1)]),
+            "/World/broken",
+            r"normals\[1\] is not finite",
+        ),
     ],
 )
 def test_non_finite_values_and_bad_json_raise_value_error_naming_the_prim(tmp_path, edit, prim, problem):
@@ -735,8 +778,18 @@ def test_every_render_setting_but_threads_round_trips(tmp_path):
 
     scene = pc.Scene()
     scene.add_mesh("t", [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
-    settings = pc.RenderSettings(width=10, height=7, samples=3, wavelengths=[400, 450, 500, 550, 600, 650, 700], uplift="SMOOTH",
-                                 spectral_output=True, time_limit=2.5, seed=11, max_bounces=2, threads=3)
+    settings = pc.RenderSettings(
+        width=10,
+        height=7,
+        samples=3,
+        wavelengths=[400, 450, 500, 550, 600, 650, 700],
+        uplift="SMOOTH",
+        spectral_output=True,
+        time_limit=2.5,
+        seed=11,
+        max_bounces=2,
+        threads=3,
+    )
     path = usd.write_stage(scene, tmp_path / "settings.usdc", settings)
     back = pc.RenderSettings(**usd.read_settings(path))
     assert back == dataclasses.replace(settings, threads=0)
@@ -846,7 +899,9 @@ def addon_style_area_light(scene, name, shape, size, matrix, radiance):
 def test_area_lights_become_rect_and_disk_lights_that_render_the_same(tmp_path):
     rho, h = 0.8, 1.0
     scene = pc.Scene()
-    scene.add_mesh("floor", [[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], [[0, 1, 2], [0, 2, 3]], material=pc.Diffuse(rho, name="floor"))
+    scene.add_mesh(
+        "floor", [[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], [[0, 1, 2], [0, 2, 3]], material=pc.Diffuse(rho, name="floor")
+    )
     down = np.eye(4)
     down[:3, 3] = [0.0, 0.0, h]  # local −Z is world −Z: shining down
     addon_style_area_light(scene, "panel", "rect", (0.6, 0.4), down, pc.spectra.blackbody(5000) * 6.0)
@@ -855,7 +910,9 @@ def test_area_lights_become_rect_and_disk_lights_that_render_the_same(tmp_path):
     tilted[:3, :3] = [[1, 0, 0], [0, c, -s_], [0, s_, c]]
     tilted[:3, 3] = [3.0, 0.0, 1.5]
     addon_style_area_light(scene, "spot disk", "disk", (0.5, 0.5), tilted, pc.spectra.rgb(1.0, 0.5, 0.2) * 4.0)
-    scene.camera = pc.Camera(to_world=np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0.5], [0, 0, 0, 1.0]]), projection="ORTHOGRAPHIC", ortho_scale=0.2)
+    scene.camera = pc.Camera(
+        to_world=np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0.5], [0, 0, 0, 1.0]]), projection="ORTHOGRAPHIC", ortho_scale=0.2
+    )
     path = usd.write_stage(scene, tmp_path / "area.usda", SETTINGS)
 
     stage = Usd.Stage.Open(str(path))
@@ -901,13 +958,16 @@ def test_cli_prints_each_stage_warning_on_one_line(tmp_path, capsys):
     stage.Save()
     assert cli.main(["render", str(path), "-o", str(tmp_path / "w.png"), "--samples", "1", "--quiet"]) == 0
     err = capsys.readouterr().err.splitlines()
-    assert [line for line in err if "warning" in line] == [f"polychrome render: warning: {path}: prim /World/dust: prim type 'Points' is not supported and is skipped"]
+    assert [line for line in err if "warning" in line] == [
+        f"polychrome render: warning: {path}: prim /World/dust: prim type 'Points' is not supported and is skipped"
+    ]
 
 
 def test_pre_2102_usdlux_attribute_names_are_read(tmp_path):
     """Old stages name light attributes without "inputs:" (intensity, radius, ...)."""
     path = tmp_path / "old.usda"
-    path.write_text(textwrap.dedent("""\
+    path.write_text(
+        textwrap.dedent("""\
         #usda 1.0
         (
             metersPerUnit = 1
@@ -921,7 +981,8 @@ def test_pre_2102_usdlux_attribute_names_are_read(tmp_path):
             double3 xformOp:translate = (0, 0, 2)
             uniform token[] xformOpOrder = ["xformOp:translate"]
         }
-    """))
+    """)
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         scene = usd.read_stage(path)

@@ -135,13 +135,25 @@ def test_render_errors_are_kept_not_raised():
 
 
 def gl_perspective(l, r, b, t, n, f):
-    return np.array([[2 * n / (r - l), 0, (r + l) / (r - l), 0], [0, 2 * n / (t - b), (t + b) / (t - b), 0],
-                     [0, 0, -(f + n) / (f - n), -2 * f * n / (f - n)], [0, 0, -1, 0]])
+    return np.array(
+        [
+            [2 * n / (r - l), 0, (r + l) / (r - l), 0],
+            [0, 2 * n / (t - b), (t + b) / (t - b), 0],
+            [0, 0, -(f + n) / (f - n), -2 * f * n / (f - n)],
+            [0, 0, -1, 0],
+        ]
+    )
 
 
 def gl_ortho(l, r, b, t, n, f):
-    return np.array([[2 / (r - l), 0, 0, -(r + l) / (r - l)], [0, 2 / (t - b), 0, -(t + b) / (t - b)],
-                     [0, 0, -2 / (f - n), -(f + n) / (f - n)], [0, 0, 0, 1]])
+    return np.array(
+        [
+            [2 / (r - l), 0, 0, -(r + l) / (r - l)],
+            [0, 2 / (t - b), 0, -(t + b) / (t - b)],
+            [0, 0, -2 / (f - n), -(f + n) / (f - n)],
+            [0, 0, 0, 1],
+        ]
+    )
 
 
 @pytest.mark.parametrize("width,height", [(40, 30), (30, 40)])

@@ -70,7 +70,7 @@ def stage(wheel: Path, staging: Path) -> Path:
     (dest / "wheels").mkdir()
     shutil.copy2(wheel, dest / "wheels" / wheel.name)
     manifest = (dest / "blender_manifest.toml").read_text()
-    manifest = re.sub(r'(?m)^platforms = .*$', f'platforms = ["{platform_of(wheel)}"]', manifest)
+    manifest = re.sub(r"(?m)^platforms = .*$", f'platforms = ["{platform_of(wheel)}"]', manifest)
     manifest = manifest.replace("[permissions]", f'wheels = ["./wheels/{wheel.name}"]\n\n[permissions]', 1)
     (dest / "blender_manifest.toml").write_text(manifest)
     return dest
@@ -89,8 +89,7 @@ def main(argv: list[str] | None = None) -> int:
         tool = find_blender_ext()
         if tool is not None:
             subprocess.run([sys.executable, str(tool), "validate", str(src)], check=True)
-            subprocess.run([sys.executable, str(tool), "build", "--source-dir", str(src), "--output-dir", str(out)],
-                           check=True)
+            subprocess.run([sys.executable, str(tool), "build", "--source-dir", str(src), "--output-dir", str(out)], check=True)
             zips = sorted(out.glob("polychrome_blender-*.zip"), key=lambda p: p.stat().st_mtime)
             target = zips[-1]
         else:

@@ -66,8 +66,7 @@ FL_NAMES = ("FL2", "FL7", "FL11")
 # ---------------------------------------------------------------------------
 
 JOHNSON_CHRISTY_REF = (
-    "P. B. Johnson and R. W. Christy, Optical constants of the noble metals, "
-    "Phys. Rev. B 6, 4370-4379 (1972), doi:10.1103/PhysRevB.6.4370"
+    "P. B. Johnson and R. W. Christy, Optical constants of the noble metals, Phys. Rev. B 6, 4370-4379 (1972), doi:10.1103/PhysRevB.6.4370"
 )
 RAKIC_REF = (
     "A. D. Rakic, Algorithm for the determination of intrinsic optical "
@@ -188,14 +187,10 @@ AL_RAKIC = """
 
 METALS = (
     # (rust prefix, element, raw data, publication, database file)
-    ("AU", "Gold (Au)", AU_JOHNSON_CHRISTY, JOHNSON_CHRISTY_REF,
-     "database/data-nk/main/Au/Johnson.yml"),
-    ("AG", "Silver (Ag)", AG_JOHNSON_CHRISTY, JOHNSON_CHRISTY_REF,
-     "database/data-nk/main/Ag/Johnson.yml"),
-    ("CU", "Copper (Cu)", CU_JOHNSON_CHRISTY, JOHNSON_CHRISTY_REF,
-     "database/data-nk/main/Cu/Johnson.yml"),
-    ("AL", "Aluminium (Al)", AL_RAKIC, RAKIC_REF,
-     "database/data-nk/main/Al/Rakic.yml"),
+    ("AU", "Gold (Au)", AU_JOHNSON_CHRISTY, JOHNSON_CHRISTY_REF, "database/data-nk/main/Au/Johnson.yml"),
+    ("AG", "Silver (Ag)", AG_JOHNSON_CHRISTY, JOHNSON_CHRISTY_REF, "database/data-nk/main/Ag/Johnson.yml"),
+    ("CU", "Copper (Cu)", CU_JOHNSON_CHRISTY, JOHNSON_CHRISTY_REF, "database/data-nk/main/Cu/Johnson.yml"),
+    ("AL", "Aluminium (Al)", AL_RAKIC, RAKIC_REF, "database/data-nk/main/Al/Rakic.yml"),
 )
 
 # Range the metal tables are restricted to (bracketing rows are kept) and
@@ -231,7 +226,7 @@ def format_f32_array(values, per_line: int = 8, indent: str = "    ") -> str:
     per_line = max(1, min(per_line, (MAX_LINE - len(indent) + 1) // (width + 2)))
     lines = []
     for i in range(0, len(items), per_line):
-        chunk = items[i:i + per_line]
+        chunk = items[i : i + per_line]
         lines.append(indent + " ".join((s + ",").ljust(width + 1) for s in chunk).rstrip())
     return "\n".join(lines)
 
@@ -242,7 +237,7 @@ def format_pairs(pairs, per_line: int = 4, indent: str = "    ") -> str:
     per_line = max(1, min(per_line, (MAX_LINE - len(indent) + 1) // (width + 1)))
     lines = []
     for i in range(0, len(items), per_line):
-        chunk = items[i:i + per_line]
+        chunk = items[i : i + per_line]
         lines.append(indent + " ".join(s.ljust(width) for s in chunk).rstrip())
     return "\n".join(lines)
 
@@ -320,7 +315,7 @@ def build_tables_rs():
     w("// CIE 1931 2 degree standard observer colour matching functions.")
     w(f"// Source: colour.MSDS_CMFS['{CMFS_NAME}'] (colour-science {colour.__version__}),")
     w("// which holds the CIE 1931 2 deg XYZ CMFs at 1 nm as distributed by CVRL")
-    w("// (http://www.cvrl.org, \"Older CIE Standards\"), i.e. the 1 nm table of")
+    w('// (http://www.cvrl.org, "Older CIE Standards"), i.e. the 1 nm table of')
     w("// CIE 015:2004 / ISO 11664-1:2007 (CIE S 014-1/E:2006).")
     w(f"// Range {start:g}..={end:g} nm, step {step:g} nm, {n_cmf} samples; index i <-> {start:g} + i nm.")
     w("// ---------------------------------------------------------------------------")
@@ -420,14 +415,14 @@ def build_tables_rs():
     w("            .fold((0, f32::MIN), |acc, (i, &v)| if v > acc.1 { (i, v) } else { acc });")
     w("        assert_eq!(CIE_LAMBDA_MIN + imax as f32 * CIE_LAMBDA_STEP, 555.0);")
     w(f"        assert_eq!(imax, {idx_555});")
-    w("        assert!((vmax - 1.0).abs() < 1e-6, \"peak {vmax}\");")
+    w('        assert!((vmax - 1.0).abs() < 1e-6, "peak {vmax}");')
     w("    }")
     w("")
     w("    #[test]")
     w("    fn cie_y_integral() {")
     w("        let sum: f64 = CIE_Y.iter().map(|&v| v as f64).sum::<f64>() * CIE_LAMBDA_STEP as f64;")
-    w("        assert!((sum - CIE_Y_INTEGRAL as f64).abs() < 1e-4, \"{sum} vs {CIE_Y_INTEGRAL}\");")
-    w("        assert!((CIE_Y_INTEGRAL - 106.857).abs() < 1e-3, \"{CIE_Y_INTEGRAL}\");")
+    w('        assert!((sum - CIE_Y_INTEGRAL as f64).abs() < 1e-4, "{sum} vs {CIE_Y_INTEGRAL}");')
+    w('        assert!((CIE_Y_INTEGRAL - 106.857).abs() < 1e-3, "{CIE_Y_INTEGRAL}");')
     w("    }")
     w("")
     w("    #[test]")
@@ -463,8 +458,8 @@ def build_tables_rs():
     w("        }")
     w("        let sum = x + y + z;")
     w("        let (cx, cy) = (x / sum, y / sum);")
-    w("        assert!((cx - 0.3127).abs() < 2e-4, \"x = {cx}\");")
-    w("        assert!((cy - 0.3290).abs() < 2e-4, \"y = {cy}\");")
+    w('        assert!((cx - 0.3127).abs() < 2e-4, "x = {cx}");')
+    w('        assert!((cy - 0.3290).abs() < 2e-4, "y = {cy}");')
     w("    }")
     w("")
     w("    #[test]")
@@ -483,7 +478,10 @@ def build_tables_rs():
     w("}")
     w("")
     info = {
-        "CIE_X": n_cmf, "CIE_Y": n_cmf, "CIE_Z": n_cmf, "D65": n_d65,
+        "CIE_X": n_cmf,
+        "CIE_Y": n_cmf,
+        "CIE_Z": n_cmf,
+        "D65": n_d65,
         **{n: n_fl for n in FL_NAMES},
         "_y_integral": y_integral,
         "_d65_shape": (d65_start, d65_end, d65_step),
@@ -511,7 +509,7 @@ def restrict(rows, lo, hi):
     """Keep rows inside [lo, hi] plus the nearest row outside on each side."""
     i0 = max(i for i, r in enumerate(rows) if r[0] <= lo) if rows[0][0] <= lo else 0
     i1 = min(i for i, r in enumerate(rows) if r[0] >= hi) if rows[-1][0] >= hi else len(rows) - 1
-    return rows[i0:i1 + 1]
+    return rows[i0 : i1 + 1]
 
 
 def build_measured_rs():
@@ -538,7 +536,7 @@ def build_measured_rs():
     w("// ---------------------------------------------------------------------------")
     w("// X-Rite / Macbeth ColorChecker Classic, 24 patch spectral reflectance factors.")
     w(f"// Source: colour.SDS_COLOURCHECKERS['{COLORCHECKER_NAME}'] (colour-science {colour.__version__}):")
-    w("// measured by N. Ohta (1997), \"The basis of color reproduction engineering\",")
+    w('// measured by N. Ohta (1997), "The basis of color reproduction engineering",')
     w("// distributed by Munsell Color Science Lab (RIT, MacbethColorChecker.xls);")
     w("// colour-science notes the data equals ISO 17321-1:2012. This is the")
     w("// pre-November-2014 ColorChecker formulation.")
@@ -555,7 +553,7 @@ def build_measured_rs():
     w("#[rustfmt::skip]")
     w("pub static COLORCHECKER_NAMES: [&str; 24] = [")
     for i in range(0, 24, 4):
-        w("    " + " ".join(f'"{n}",' for n in names[i:i + 4]))
+        w("    " + " ".join(f'"{n}",' for n in names[i : i + 4]))
     w("];")
     w("")
     w(f"/// Spectral reflectance factor of each patch, {cc_start:g}..={cc_end:g} nm at {cc_step:g} nm.")
@@ -591,8 +589,7 @@ def build_measured_rs():
             w(f"// {line}")
         w(f"// Data file: {dbfile}")
         w(f"// in {RII_DB}.")
-        w(f"// {len(rows)} samples, {lo:g}..{hi:g} nm "
-          + ("(covers 360..830 nm)." if covers else "(DOES NOT cover 360..830 nm)."))
+        w(f"// {len(rows)} samples, {lo:g}..{hi:g} nm " + ("(covers 360..830 nm)." if covers else "(DOES NOT cover 360..830 nm)."))
         w("#[rustfmt::skip]")
         w(f"pub static {prefix}_ETA: &[(f32, f32)] = &[")
         w(format_pairs([(r[0], r[1]) for r in rows]))
@@ -618,9 +615,9 @@ def build_measured_rs():
     w("        for patch in COLORCHECKER.iter() {")
     w("            assert!(patch.iter().all(|&r| r.is_finite() && r > 0.0 && r < 1.0));")
     w("        }")
-    w("        assert_eq!(COLORCHECKER_NAMES[0], \"dark skin\");")
-    w("        assert!(COLORCHECKER_NAMES[18].starts_with(\"white\"));")
-    w("        assert!(COLORCHECKER_NAMES[23].starts_with(\"black\"));")
+    w('        assert_eq!(COLORCHECKER_NAMES[0], "dark skin");')
+    w('        assert!(COLORCHECKER_NAMES[18].starts_with("white"));')
+    w('        assert!(COLORCHECKER_NAMES[23].starts_with("black"));')
     w("    }")
     w("")
     w("    #[test]")
@@ -628,26 +625,26 @@ def build_measured_rs():
     w("        // Patches 19..24 are the neutral ramp, white to black.")
     w("        let mean = |p: &[f32]| p.iter().sum::<f32>() / p.len() as f32;")
     w("        let means: Vec<f32> = (18..24).map(|i| mean(&COLORCHECKER[i])).collect();")
-    w("        assert!(means.windows(2).all(|w| w[0] > w[1]), \"{means:?}\");")
-    w("        assert!(means[0] > 0.8 && means[5] < 0.05, \"{means:?}\");")
+    w('        assert!(means.windows(2).all(|w| w[0] > w[1]), "{means:?}");')
+    w('        assert!(means[0] > 0.8 && means[5] < 0.05, "{means:?}");')
     w("    }")
     w("")
     w("    type Table = &'static [(f32, f32)];")
     w("")
     w("    fn all_metals() -> [(&'static str, Table, Table); 4] {")
-    w("        [(\"Au\", AU_ETA, AU_K), (\"Ag\", AG_ETA, AG_K), (\"Cu\", CU_ETA, CU_K), (\"Al\", AL_ETA, AL_K)]")
+    w('        [("Au", AU_ETA, AU_K), ("Ag", AG_ETA, AG_K), ("Cu", CU_ETA, CU_K), ("Al", AL_ETA, AL_K)]')
     w("    }")
     w("")
     w("    #[test]")
     w("    fn metal_tables_ascending_and_cover_visible() {")
     w("        for (name, eta, k) in all_metals() {")
-    w("            assert_eq!(eta.len(), k.len(), \"{name}\");")
-    w("            assert!(eta.windows(2).all(|w| w[0].0 < w[1].0), \"{name} eta not ascending\");")
-    w("            assert!(eta.iter().zip(k.iter()).all(|(a, b)| a.0 == b.0), \"{name} grids differ\");")
-    w("            assert!(eta.first().unwrap().0 <= 360.0, \"{name} starts too late\");")
-    w("            assert!(eta.last().unwrap().0 >= 830.0, \"{name} ends too early\");")
+    w('            assert_eq!(eta.len(), k.len(), "{name}");')
+    w('            assert!(eta.windows(2).all(|w| w[0].0 < w[1].0), "{name} eta not ascending");')
+    w('            assert!(eta.iter().zip(k.iter()).all(|(a, b)| a.0 == b.0), "{name} grids differ");')
+    w('            assert!(eta.first().unwrap().0 <= 360.0, "{name} starts too late");')
+    w('            assert!(eta.last().unwrap().0 >= 830.0, "{name} ends too early");')
     w("            assert!(eta.first().unwrap().0 >= 240.0 && eta.last().unwrap().0 <= 1000.0);")
-    w("            assert!(eta.iter().all(|p| p.1 > 0.0) && k.iter().all(|p| p.1 > 0.0), \"{name}\");")
+    w('            assert!(eta.iter().all(|p| p.1 > 0.0) && k.iter().all(|p| p.1 > 0.0), "{name}");')
     w("        }")
     w("    }")
     w("")
@@ -661,7 +658,7 @@ def build_measured_rs():
     w("        assert_eq!(at(CU_K, 659.5), 3.747);")
     w("        // Rakic 1995 aluminium: interband absorption peak in n near 800 nm.")
     w("        let (lmax, _) = AL_ETA.iter().fold((0.0, 0.0), |m, p| if p.1 > m.1 { *p } else { m });")
-    w("        assert!((790.0..820.0).contains(&lmax), \"{lmax}\");")
+    w('        assert!((790.0..820.0).contains(&lmax), "{lmax}");')
     w("    }")
     w("}")
     w("")
@@ -723,8 +720,7 @@ def verify(tables_text: str, measured_text: str) -> None:
     ref_n = ref / ref[1] * 100.0
 
     # (2) the same computation fed with the tables read back from tables.rs.
-    cie_wl = (read_rust_const(tables_text, "CIE_LAMBDA_MIN")
-              + read_rust_const(tables_text, "CIE_LAMBDA_STEP") * np.arange(len(Y)))
+    cie_wl = read_rust_const(tables_text, "CIE_LAMBDA_MIN") + read_rust_const(tables_text, "CIE_LAMBDA_STEP") * np.arange(len(Y))
     cmfs_rs = colour.colorimetry.XYZ_ColourMatchingFunctions(
         np.column_stack([X, Y, Z]).astype(np.float64),
         cie_wl,
@@ -797,8 +793,7 @@ def rustfmt(*paths: Path) -> None:
 
 def main() -> int:
     if colour.__version__ != EXPECTED_COLOUR_VERSION:
-        print(f"warning: colour-science {colour.__version__}, expected {EXPECTED_COLOUR_VERSION}",
-              file=sys.stderr)
+        print(f"warning: colour-science {colour.__version__}, expected {EXPECTED_COLOUR_VERSION}", file=sys.stderr)
     tables_text, tinfo = build_tables_rs()
     measured_text, minfo = build_measured_rs()
     TABLES_RS.parent.mkdir(parents=True, exist_ok=True)

@@ -65,8 +65,9 @@ def build_scene(samples):
     bpy.ops.mesh.primitive_plane_add(size=2.0, location=(4.0, -1.5, 5.5))
     lamp = bpy.context.object
     lamp.rotation_euler = (Vector((0, 0, 1)) - lamp.location).to_track_quat("-Z", "Y").to_euler()
-    lamp.data.materials.append(node_material("Red Light", "PolychromeSpectralEmissionNode",
-                                             kind="NARROW_BAND", center=650.0, width=20.0, strength=80.0))
+    lamp.data.materials.append(
+        node_material("Red Light", "PolychromeSpectralEmissionNode", kind="NARROW_BAND", center=650.0, width=20.0, strength=80.0)
+    )
 
     cam_data = bpy.data.cameras.new("Camera")
     cam_data.lens = 40

@@ -26,9 +26,7 @@ def _version() -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     """The top-level parser with one subparser per subcommand."""
-    parser = argparse.ArgumentParser(
-        prog="polychrome", description="Polychrome spectral path tracer tools."
-    )
+    parser = argparse.ArgumentParser(prog="polychrome", description="Polychrome spectral path tracer tools.")
     parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     _add_diff_parser(subparsers)
@@ -102,24 +100,39 @@ def _add_render_parser(subparsers) -> None:
     p.add_argument("--samples", type=int, metavar="N", help="samples per pixel")
     p.add_argument("--method", metavar="M", help="POLYCHROMATIC, MONOCHROMATIC_RAYS, MONOCHROMATIC_SCENES or RGB")
     p.add_argument("--direction", metavar="D", help="BACKWARD (from the camera), FORWARD (light tracing) or BIDIRECTIONAL")
-    p.add_argument("--dispersion-splitting", action=argparse.BooleanOptionalAction, default=None,
-                   help="POLYCHROMATIC: one monochromatic path per wavelength at the first dispersive surface (deterministic mode)")
-    p.add_argument("--wavelengths", metavar="N|L1,L2,...",
-                   help="wavelength grid: a sample count (uniform over --wavelength-min..--wavelength-max, default 380-780 nm) "
-                   "or an explicit ascending list of wavelengths in nm")
+    p.add_argument(
+        "--dispersion-splitting",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="POLYCHROMATIC: one monochromatic path per wavelength at the first dispersive surface (deterministic mode)",
+    )
+    p.add_argument(
+        "--wavelengths",
+        metavar="N|L1,L2,...",
+        help="wavelength grid: a sample count (uniform over --wavelength-min..--wavelength-max, default 380-780 nm) "
+        "or an explicit ascending list of wavelengths in nm",
+    )
     p.add_argument("--wavelength-min", type=float, metavar="NM", help="start of the uniform grid (default 380)")
     p.add_argument("--wavelength-max", type=float, metavar="NM", help="end of the uniform grid (default 780)")
     p.add_argument("--max-bounces", type=int, metavar="B", help="scattering events per path (0: only what the camera sees)")
     p.add_argument("--uplift", metavar="U", help="RGB to spectrum map: LINEAR (the paper's eq. 10) or SMOOTH")
-    p.add_argument("--spectral-output", action=argparse.BooleanOptionalAction, default=None,
-                   help="keep each pixel's spectrum (.exr output then uses the spectral EXR layout)")
+    p.add_argument(
+        "--spectral-output",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="keep each pixel's spectrum (.exr output then uses the spectral EXR layout)",
+    )
     p.add_argument("--seed", type=int, metavar="S", help="random seed (same seed, same pixels)")
     p.add_argument("--threads", type=int, metavar="T", help="worker threads (0: every core)")
     p.add_argument("--time-limit", type=float, metavar="SEC", help="seconds after which no new pass starts (0: none)")
     p.add_argument("--width", type=int, metavar="W", help="image width in pixels")
     p.add_argument("--height", type=int, metavar="H", help="image height in pixels")
-    p.add_argument("--quality", metavar="Q", help="AUTO (default: grid fitted to the scene, adaptive sampling), PREVIEW, FINAL or REFERENCE; "
-                   "explicit flags override what the preset chooses")
+    p.add_argument(
+        "--quality",
+        metavar="Q",
+        help="AUTO (default: grid fitted to the scene, adaptive sampling), PREVIEW, FINAL or REFERENCE; "
+        "explicit flags override what the preset chooses",
+    )
     p.add_argument("--noise-threshold", type=float, metavar="DE", help="adaptive sampling: stop a pixel at this estimated dE00 (0: off)")
     p.add_argument("--passes", action="store_true", help="EXR only: also write Depth, Normal and Albedo layers")
     p.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -41,13 +41,24 @@ SPECTRAL_LAYOUT_VERSION = "1.0"
 EMISSIVE_UNITS = "W.m^-2.sr^-1"
 
 # Channel-name grammar of Fichet et al. 2021 (emissive, unpolarised Stokes component S0).
-_SPECTRAL_CHANNEL = re.compile(
-    r"^S0\.(\d*,?\d*(?:[Ee][+-]?\d+)?)(Y|Z|E|P|T|G|M|k|h|da|d|c|m|u|n|p)?(m|Hz)$"
-)
+_SPECTRAL_CHANNEL = re.compile(r"^S0\.(\d*,?\d*(?:[Ee][+-]?\d+)?)(Y|Z|E|P|T|G|M|k|h|da|d|c|m|u|n|p)?(m|Hz)$")
 _SI_PREFIX = {
-    "Y": 1e24, "Z": 1e21, "E": 1e18, "P": 1e15, "T": 1e12, "G": 1e9, "M": 1e6,
-    "k": 1e3, "h": 1e2, "da": 1e1, "d": 1e-1, "c": 1e-2, "m": 1e-3, "u": 1e-6,
-    "n": 1e-9, "p": 1e-12,
+    "Y": 1e24,
+    "Z": 1e21,
+    "E": 1e18,
+    "P": 1e15,
+    "T": 1e12,
+    "G": 1e9,
+    "M": 1e6,
+    "k": 1e3,
+    "h": 1e2,
+    "da": 1e1,
+    "d": 1e-1,
+    "c": 1e-2,
+    "m": 1e-3,
+    "u": 1e-6,
+    "n": 1e-9,
+    "p": 1e-12,
 }
 _SPEED_OF_LIGHT = 299_792_458.0
 
@@ -265,7 +276,7 @@ def write_png(path, rgba, exposure: float = 0.0) -> None:
 
     image = np.asarray(_check_image(rgba), dtype=np.float64)
     image = np.nan_to_num(image, nan=0.0, posinf=1.0, neginf=0.0)
-    colour = linear_to_srgb(image[:, :, :3] * (2.0 ** exposure))
+    colour = linear_to_srgb(image[:, :, :3] * (2.0**exposure))
     encoded = np.concatenate([colour, image[:, :, 3:]], axis=-1)
     pixels = np.rint(np.clip(np.nan_to_num(encoded), 0.0, 1.0) * 255.0).astype(np.uint8)
     Image.fromarray(pixels, "RGBA" if pixels.shape[2] == 4 else "RGB").save(os.fspath(path), format="PNG")

@@ -60,8 +60,15 @@ class RenderJob:
     """A render of ``scene`` on a background thread. Settings as :func:`polychrome.render`
     (``settings`` plus keyword overrides). ``previews=False`` skips the snapshots."""
 
-    def __init__(self, scene: Scene | None = None, settings: RenderSettings | None = None, *, previews: bool = True,
-                 description: tuple[dict[str, Any], list[np.ndarray]] | None = None, **overrides: Any):
+    def __init__(
+        self,
+        scene: Scene | None = None,
+        settings: RenderSettings | None = None,
+        *,
+        previews: bool = True,
+        description: tuple[dict[str, Any], list[np.ndarray]] | None = None,
+        **overrides: Any,
+    ):
         self.settings = replace(settings or RenderSettings(), **overrides)
         check_settings(self.settings)
         if description is None:
@@ -75,8 +82,9 @@ class RenderJob:
         self._started: float | None = None
 
     @classmethod
-    def from_description(cls, desc: dict[str, Any], buffers: list[np.ndarray], settings: RenderSettings | None = None,
-                         **kw: Any) -> "RenderJob":
+    def from_description(
+        cls, desc: dict[str, Any], buffers: list[np.ndarray], settings: RenderSettings | None = None, **kw: Any
+    ) -> "RenderJob":
         """A job for an already built description (``Scene.description()``)."""
         return cls(None, settings, description=(desc, buffers), **kw)
 
@@ -127,8 +135,15 @@ class RenderJob:
                 raise
             stats = json.loads(out["stats"])
             stats["wall_seconds"] = time.perf_counter() - (self._started or time.perf_counter())
-            self._result = RenderResult(rgba=out["rgba"], depth=out["depth"], normal=out["normal"], albedo=out["albedo"],
-                                        spectral=out["spectral"], wavelengths=out["wavelengths"], stats=stats)
+            self._result = RenderResult(
+                rgba=out["rgba"],
+                depth=out["depth"],
+                normal=out["normal"],
+                albedo=out["albedo"],
+                spectral=out["spectral"],
+                wavelengths=out["wavelengths"],
+                stats=stats,
+            )
         return self._result
 
     def __enter__(self) -> "RenderJob":
@@ -141,9 +156,15 @@ class RenderJob:
         self.wait()
 
 
-def render_with_previews(scene: Scene, settings: RenderSettings | None = None, *,
-                         preview: Callable[[Preview], Any], progress: Callable[[int, int], Any] | None = None,
-                         interval: float = 0.05, **overrides: Any) -> RenderResult:
+def render_with_previews(
+    scene: Scene,
+    settings: RenderSettings | None = None,
+    *,
+    preview: Callable[[Preview], Any],
+    progress: Callable[[int, int], Any] | None = None,
+    interval: float = 0.05,
+    **overrides: Any,
+) -> RenderResult:
     """:func:`polychrome.render` with ``preview(Preview)`` called on this thread for every
     new snapshot (the last one is the final image). ``preview`` or ``progress`` returning
     False cancels; Ctrl-C cancels and raises KeyboardInterrupt."""

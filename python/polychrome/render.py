@@ -103,7 +103,9 @@ class RenderResult:
             if self.spectral is not None:
                 imageio.write_spectral_exr(path, self.spectral, self.wavelengths, rgba=self.rgba)
             elif passes:
-                imageio.write_exr_layers(path, {"Combined": self.rgba, "Depth": self.depth[..., None], "Normal": self.normal, "Albedo": self.albedo})
+                imageio.write_exr_layers(
+                    path, {"Combined": self.rgba, "Depth": self.depth[..., None], "Normal": self.normal, "Albedo": self.albedo}
+                )
             else:
                 imageio.write_exr(path, self.rgba)
         else:

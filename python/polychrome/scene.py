@@ -414,7 +414,11 @@ class Mix(Material):
             self.factor_from = None
             self.factor = _unit(factor, "factor", name)
         self.name = name
-        self.emission = as_spectrum(emission) if emission is not None else _sum_emission([(1.0 - self.factor, a.emission), (self.factor, b.emission)], name)
+        self.emission = (
+            as_spectrum(emission)
+            if emission is not None
+            else _sum_emission([(1.0 - self.factor, a.emission), (self.factor, b.emission)], name)
+        )
 
     def bsdf_dict(self) -> dict[str, Any]:
         d = {"type": "mix", "a": self.a.bsdf_dict(), "b": self.b.bsdf_dict(), "factor": self.factor}
@@ -539,7 +543,9 @@ class Scene:
         """Places mesh ``mesh`` again with ``transform``; instances share the mesh's data."""
         if not 0 <= mesh < len(self._meshes):
             raise ValueError(f"instance '{name}': mesh {mesh} does not exist")
-        self._instances.append({"name": name or self._meshes[mesh]["name"], "mesh": int(mesh), "transform": _matrix(transform, f"instance '{name}'")})
+        self._instances.append(
+            {"name": name or self._meshes[mesh]["name"], "mesh": int(mesh), "transform": _matrix(transform, f"instance '{name}'")}
+        )
 
     def add_light(self, light: Any) -> None:
         self.lights.append(light)
@@ -595,10 +601,17 @@ class Scene:
                     return i
             textures.append(t)
             buffers.append(t.pixels.ravel())
-            entries.append({
-                "name": t.name, "width": t.width, "height": t.height, "channels": int(t.pixels.shape[2]),
-                "buffer": len(buffers) - 1, "encoding": t.encoding, "wrap": t.wrap,
-            })
+            entries.append(
+                {
+                    "name": t.name,
+                    "width": t.width,
+                    "height": t.height,
+                    "channels": int(t.pixels.shape[2]),
+                    "buffer": len(buffers) - 1,
+                    "encoding": t.encoding,
+                    "wrap": t.wrap,
+                }
+            )
             return len(textures) - 1
 
         def walk(value: Any) -> Any:

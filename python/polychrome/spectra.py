@@ -90,4 +90,3 @@ def as_spectrum(value: Any) -> Spectrum:
     if seq is not None and len(seq) == 3 and all(isinstance(c, (int, float, np.floating, np.integer)) for c in seq):
         return rgb(*seq)
     raise TypeError(f"cannot use {value!r} as a spectrum: give a number, an (r, g, b) triple or a polychrome.spectra function's result")
-

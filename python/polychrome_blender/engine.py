@@ -18,9 +18,18 @@ from . import passes, viewport
 def settings_from_scene(pc, props, width, height):
     """``scene.polychrome`` → ``polychrome.RenderSettings`` (same names)."""
     fields = {f.name for f in dataclasses.fields(pc.RenderSettings)}
-    values = dict(width=width, height=height, samples=props.samples, method=props.method,
-                  wavelength_count=props.wavelength_count, max_bounces=props.max_bounces, seed=props.seed,
-                  threads=props.threads, time_limit=props.time_limit, uplift=props.uplift)
+    values = dict(
+        width=width,
+        height=height,
+        samples=props.samples,
+        method=props.method,
+        wavelength_count=props.wavelength_count,
+        max_bounces=props.max_bounces,
+        seed=props.seed,
+        threads=props.threads,
+        time_limit=props.time_limit,
+        uplift=props.uplift,
+    )
     if "spectral_output" in fields:
         values["spectral_output"] = bool(getattr(props, "spectral_output", False))
     if "dispersion_splitting" in fields:
@@ -179,8 +188,7 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
             # settings edits do not always reach view_update (Python property sets); the
             # redraw that follows them does
             session.set_settings(viewport_settings(pc, props))
-            sync_viewport_view(session, pc, context.region_data, region.width, region.height,
-                               props.viewport_pixel_size)
+            sync_viewport_view(session, pc, context.region_data, region.width, region.height, props.viewport_pixel_size)
             session.poll()
             if session.error:
                 self._report_once("ERROR", session.error)
@@ -333,8 +341,11 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
                 if total:
                     self.update_progress(min(1.0, done / total))
                 spp = settings.samples * done / total if total else 0.0  # totals differ per method
-                self.update_stats("", f"Polychrome | {method} | {settings.wavelength_count or props.quality.lower()} wavelengths | "
-                                      f"sample {spp:.1f}/{settings.samples} | {time.perf_counter() - start:.1f} s")
+                self.update_stats(
+                    "",
+                    f"Polychrome | {method} | {settings.wavelength_count or props.quality.lower()} wavelengths | "
+                    f"sample {spp:.1f}/{settings.samples} | {time.perf_counter() - start:.1f} s",
+                )
                 hook = cls.test_break_hook
                 if hook is not None and hook(done, total):
                     return False
@@ -348,8 +359,11 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
         stats["export_seconds"] = export_time
         cls.last_stats = stats
         self.update_progress(1.0)
-        self.update_stats("", f"Polychrome | {method} | {stats.get('wavelengths', settings.wavelength_count)} wavelengths | "
-                              f"done in {time.perf_counter() - start:.1f} s")
+        self.update_stats(
+            "",
+            f"Polychrome | {method} | {stats.get('wavelengths', settings.wavelength_count)} wavelengths | "
+            f"done in {time.perf_counter() - start:.1f} s",
+        )
         return passes.pass_arrays(out, width, height)
 
 

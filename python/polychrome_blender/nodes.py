@@ -29,9 +29,14 @@ CATALOGUE = {
     "N-BK7": ((1.03961212, 0.231792344, 1.01046945), (0.00600069867, 0.0200179144, 103.560653)),
     "Fused Silica": ((0.6961663, 0.4079426, 0.8974794), (0.0684043**2, 0.1162414**2, 9.896161**2)),
     "N-SF11": ((1.73759695, 0.313747346, 1.89878101), (0.013188707, 0.0623068142, 155.23629)),
-    "Water": ((5.684027565e-1, 1.726177391e-1 + 2.086189578e-2, 1.130748688e-1),
-              (5.101829712e-3, (1.726177391e-1 * 1.821153936e-2 + 2.086189578e-2 * 2.620722293e-2)
-               / (1.726177391e-1 + 2.086189578e-2), 1.069792721e1)),
+    "Water": (
+        (5.684027565e-1, 1.726177391e-1 + 2.086189578e-2, 1.130748688e-1),
+        (
+            5.101829712e-3,
+            (1.726177391e-1 * 1.821153936e-2 + 2.086189578e-2 * 2.620722293e-2) / (1.726177391e-1 + 2.086189578e-2),
+            1.069792721e1,
+        ),
+    ),
     "Diamond": ((0.3306, 4.3356, 0.0), (0.1750**2, 0.1060**2, 0.0)),
 }
 NAMED_ITEMS = [(k.upper().replace(" ", "_").replace("-", "_"), k, f"{k} (Sellmeier)") for k in CATALOGUE]
@@ -50,11 +55,19 @@ class PolychromeSpectralReflectanceNode(bpy.types.Node):
     bl_icon = "COLOR"
     bl_width_default = 220
 
-    mode: EnumProperty(name="Mode", items=[("CURVE", "Curve", "32 samples from 380 to 780 nm"),
-                                            ("COLORCHECKER", "ColorChecker", "A ColorChecker Classic patch")],
-                       default="CURVE")
-    curve: FloatVectorProperty(name="Reflectance", size=CURVE_SAMPLES, min=0.0, max=1.0, default=[0.5] * CURVE_SAMPLES,
-                               description="Reflectance at 32 evenly spaced wavelengths, 380 to 780 nm")
+    mode: EnumProperty(
+        name="Mode",
+        items=[("CURVE", "Curve", "32 samples from 380 to 780 nm"), ("COLORCHECKER", "ColorChecker", "A ColorChecker Classic patch")],
+        default="CURVE",
+    )
+    curve: FloatVectorProperty(
+        name="Reflectance",
+        size=CURVE_SAMPLES,
+        min=0.0,
+        max=1.0,
+        default=[0.5] * CURVE_SAMPLES,
+        description="Reflectance at 32 evenly spaced wavelengths, 380 to 780 nm",
+    )
     patch: EnumProperty(name="Patch", items=PATCH_ITEMS, default="P01")
 
     poll = classmethod(_tree_poll)
@@ -104,11 +117,16 @@ class PolychromeDispersionNode(bpy.types.Node):
     bl_icon = "LIGHT_SUN"
     bl_width_default = 220
 
-    model: EnumProperty(name="Model", items=[("CAUCHY", "Cauchy", "n = A + B/λ² + C/λ⁴ (λ in µm)"),
-                                              ("SELLMEIER", "Sellmeier", "n² = 1 + Σ Bk λ²/(λ² − Ck) (λ in µm)"),
-                                              ("NAMED", "Named Glass", "A catalogue material"),
-                                              ("ABBE", "IOR + Abbe", "nd and Abbe number Vd, as Blender gives them")],
-                        default="NAMED")
+    model: EnumProperty(
+        name="Model",
+        items=[
+            ("CAUCHY", "Cauchy", "n = A + B/λ² + C/λ⁴ (λ in µm)"),
+            ("SELLMEIER", "Sellmeier", "n² = 1 + Σ Bk λ²/(λ² − Ck) (λ in µm)"),
+            ("NAMED", "Named Glass", "A catalogue material"),
+            ("ABBE", "IOR + Abbe", "nd and Abbe number Vd, as Blender gives them"),
+        ],
+        default="NAMED",
+    )
     cauchy_a: FloatProperty(name="A", default=1.5046, min=1.0, soft_max=3.0, precision=5)
     cauchy_b: FloatProperty(name="B (µm²)", default=0.0042, precision=6)
     cauchy_c: FloatProperty(name="C (µm⁴)", default=0.0, precision=6)
@@ -144,13 +162,17 @@ class PolychromeDispersionNode(bpy.types.Node):
         layout.prop(self, "model", text="")
         col = layout.column(align=True)
         if self.model == "CAUCHY":
-            col.prop(self, "cauchy_a"); col.prop(self, "cauchy_b"); col.prop(self, "cauchy_c")  # noqa: E702
+            col.prop(self, "cauchy_a")
+            col.prop(self, "cauchy_b")
+            col.prop(self, "cauchy_c")  # noqa: E702
         elif self.model == "SELLMEIER":
-            col.prop(self, "sellmeier_b"); col.prop(self, "sellmeier_c")  # noqa: E702
+            col.prop(self, "sellmeier_b")
+            col.prop(self, "sellmeier_c")  # noqa: E702
         elif self.model == "NAMED":
             col.prop(self, "named", text="")
         else:
-            col.prop(self, "abbe_nd"); col.prop(self, "abbe_vd")  # noqa: E702
+            col.prop(self, "abbe_nd")
+            col.prop(self, "abbe_vd")  # noqa: E702
         layout.prop(self, "roughness")
         box = layout.box().column(align=True)
         for label, lam in (("F 486", LINE_F), ("d 588", LINE_D), ("C 656", LINE_C)):
@@ -178,12 +200,17 @@ class PolychromeDispersionNode(bpy.types.Node):
         for lam in range(380, 781, 5):
             n = self.ior(float(lam))
             if not (math.isfinite(n) and n >= 1.0):
-                raise ValueError(f"material '{mat.name}': Dispersion node '{self.name}' gives index {n:.4g} at {lam} nm "
-                                 "(below 1, near a Sellmeier pole or undefined)")
+                raise ValueError(
+                    f"material '{mat.name}': Dispersion node '{self.name}' gives index {n:.4g} at {lam} nm "
+                    "(below 1, near a Sellmeier pole or undefined)"
+                )
         if hasattr(pc, "Dielectric") and hasattr(pc, "ior"):
             return pc.Dielectric(self.polychrome_ior(pc), roughness=self.roughness, name=mat.name)
-        warnings.add(("disp", mat.name), f"material '{mat.name}': Dispersion node '{self.name}' needs polychrome.Dielectric, "
-                                         "which this polychrome lacks; rendered as grey diffuse")
+        warnings.add(
+            ("disp", mat.name),
+            f"material '{mat.name}': Dispersion node '{self.name}' needs polychrome.Dielectric, "
+            "which this polychrome lacks; rendered as grey diffuse",
+        )
         return pc.Diffuse((0.8, 0.8, 0.8), name=mat.name)
 
 
@@ -194,17 +221,23 @@ class PolychromeSpectralEmissionNode(bpy.types.Node):
     bl_label = "Spectral Emission"
     bl_icon = "LIGHT"
 
-    kind: EnumProperty(name="Spectrum", items=[("BLACKBODY", "Blackbody", "Planck's law (peak normalised to 1)"),
-                                                ("D65", "D65", "CIE daylight D65 (1 at 560 nm)"),
-                                                ("A", "A", "CIE incandescent A (1 at 560 nm)"),
-                                                ("E", "E", "Equal energy (1 everywhere)"),
-                                                ("NARROW_BAND", "Narrow Band", "Gaussian band of peak 1")],
-                       default="BLACKBODY")
+    kind: EnumProperty(
+        name="Spectrum",
+        items=[
+            ("BLACKBODY", "Blackbody", "Planck's law (peak normalised to 1)"),
+            ("D65", "D65", "CIE daylight D65 (1 at 560 nm)"),
+            ("A", "A", "CIE incandescent A (1 at 560 nm)"),
+            ("E", "E", "Equal energy (1 everywhere)"),
+            ("NARROW_BAND", "Narrow Band", "Gaussian band of peak 1"),
+        ],
+        default="BLACKBODY",
+    )
     temperature: FloatProperty(name="Temperature (K)", default=6500.0, min=100.0, soft_max=20000.0)
     center: FloatProperty(name="Centre (nm)", default=650.0, min=300.0, max=900.0)
     width: FloatProperty(name="Width (nm)", description="Full width at half maximum", default=10.0, min=0.1, max=400.0)
-    strength: FloatProperty(name="Strength", description="Radiance scale (W·sr⁻¹·m⁻²·nm⁻¹ at the normalisation point)",
-                            default=1.0, min=0.0)
+    strength: FloatProperty(
+        name="Strength", description="Radiance scale (W·sr⁻¹·m⁻²·nm⁻¹ at the normalisation point)", default=1.0, min=0.0
+    )
 
     poll = classmethod(_tree_poll)
 
@@ -216,7 +249,8 @@ class PolychromeSpectralEmissionNode(bpy.types.Node):
         if self.kind == "BLACKBODY":
             layout.prop(self, "temperature")
         elif self.kind == "NARROW_BAND":
-            layout.prop(self, "center"); layout.prop(self, "width")  # noqa: E702
+            layout.prop(self, "center")
+            layout.prop(self, "width")  # noqa: E702
         layout.prop(self, "strength")
 
     def spectrum(self, pc):

@@ -36,8 +36,12 @@ def pass_arrays(result, width, height):
     if result is None:
         rgba = np.zeros((height, width, 4), np.float32)
         rgba[..., 3] = 1.0
-        return {"Combined": rgba, "Depth": np.full((height, width, 1), NO_HIT_DEPTH, np.float32),
-                "Normal": np.zeros((height, width, 3), np.float32), "Albedo": np.zeros((height, width, 3), np.float32)}
+        return {
+            "Combined": rgba,
+            "Depth": np.full((height, width, 1), NO_HIT_DEPTH, np.float32),
+            "Normal": np.zeros((height, width, 3), np.float32),
+            "Albedo": np.zeros((height, width, 3), np.float32),
+        }
     depth = np.asarray(result.depth, np.float32).reshape(height, width, 1)
     depth = np.where(depth > 0.0, depth, NO_HIT_DEPTH).astype(np.float32)
     out = {
@@ -50,7 +54,7 @@ def pass_arrays(result, width, height):
     if spectral is not None:
         spectral = np.asarray(spectral, np.float32).reshape(height, width, -1)
         for i, name in enumerate(spectral_pass_names(spectral.shape[2])):
-            out[name] = spectral[:, :, i:i + 1]
+            out[name] = spectral[:, :, i : i + 1]
     for k, v in out.items():
         out[k] = np.nan_to_num(v[::-1], nan=0.0, posinf=0.0, neginf=0.0) if k != "Depth" else v[::-1]
     return out

@@ -8,12 +8,23 @@ ENGINE = "POLYCHROME"
 
 # Built-in panels whose settings polychrome reads.
 EXTRA_PANELS = (
-    "RENDER_PT_color_management", "RENDER_PT_format", "RENDER_PT_frame_range", "RENDER_PT_output",
-    "DATA_PT_context_light", "DATA_PT_light", "DATA_PT_EEVEE_light", "NODE_DATA_PT_EEVEE_light",
-    "VIEWLAYER_PT_eevee_next_layer_passes_data", "VIEWLAYER_PT_layer_passes",
-    "DATA_PT_camera", "DATA_PT_lens", "DATA_PT_camera_display",
-    "EEVEE_MATERIAL_PT_context_material", "EEVEE_MATERIAL_PT_surface",
-    "EEVEE_WORLD_PT_surface", "WORLD_PT_context_world",
+    "RENDER_PT_color_management",
+    "RENDER_PT_format",
+    "RENDER_PT_frame_range",
+    "RENDER_PT_output",
+    "DATA_PT_context_light",
+    "DATA_PT_light",
+    "DATA_PT_EEVEE_light",
+    "NODE_DATA_PT_EEVEE_light",
+    "VIEWLAYER_PT_eevee_next_layer_passes_data",
+    "VIEWLAYER_PT_layer_passes",
+    "DATA_PT_camera",
+    "DATA_PT_lens",
+    "DATA_PT_camera_display",
+    "EEVEE_MATERIAL_PT_context_material",
+    "EEVEE_MATERIAL_PT_surface",
+    "EEVEE_WORLD_PT_surface",
+    "WORLD_PT_context_world",
 )
 _added = []
 

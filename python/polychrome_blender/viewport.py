@@ -58,9 +58,16 @@ def view_camera(pc, view_matrix, window_matrix, width, height, name="Viewport"):
         near = max(float(near), 1e-6)
         far = max(float(far), near * 2.0)
         # sensor / focal = full width at distance 1
-        return pc.Camera(to_world=to_world, projection="PERSPECTIVE", focal_length=50.0,
-                         sensor_width=float(100.0 * half_w), sensor_height=float(100.0 * half_h),
-                         clip_start=near, clip_end=far, **common)
+        return pc.Camera(
+            to_world=to_world,
+            projection="PERSPECTIVE",
+            focal_length=50.0,
+            sensor_width=float(100.0 * half_w),
+            sensor_height=float(100.0 * half_h),
+            clip_start=near,
+            clip_end=far,
+            **common,
+        )
     # Orthographic user views clip on both sides of the view origin: move the origin
     # back along the view axis (which changes nothing else) so the near plane is ahead.
     near, far = float(near), float(far)
@@ -68,8 +75,14 @@ def view_camera(pc, view_matrix, window_matrix, width, height, name="Viewport"):
         back = 1e-4 - near
         to_world[:3, 3] += to_world[:3, 2] * back
         near, far = near + back, far + back
-    return pc.Camera(to_world=to_world, projection="ORTHOGRAPHIC", ortho_scale=float(2.0 * half_w),
-                     clip_start=near, clip_end=max(far, near * 2.0), **common)
+    return pc.Camera(
+        to_world=to_world,
+        projection="ORTHOGRAPHIC",
+        ortho_scale=float(2.0 * half_w),
+        clip_start=near,
+        clip_end=max(far, near * 2.0),
+        **common,
+    )
 
 
 def viewport_size(region_width, region_height, pixel_size=1):

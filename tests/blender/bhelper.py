@@ -73,8 +73,7 @@ def run_bpy(tmp_path, body, timeout=180):
     res = tmp_path / "blender_user"
     res.mkdir(exist_ok=True)
     env["BLENDER_USER_RESOURCES"] = str(res)
-    proc = subprocess.run([sys.executable, str(script)], cwd=tmp_path, env=env, capture_output=True,
-                          text=True, timeout=timeout)
+    proc = subprocess.run([sys.executable, str(script)], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=timeout)
     results = [json.loads(line[7:]) for line in proc.stdout.splitlines() if line.startswith("RESULT ")]
     return proc, results
 

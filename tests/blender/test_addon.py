@@ -8,7 +8,9 @@ pytestmark = pytest.mark.blender
 
 
 def test_register_adds_engine_and_unregister_removes_it(tmp_path):
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     def engines():
         try:
             bpy.context.scene.render.engine = 'NOPE'
@@ -25,19 +27,32 @@ def test_register_adds_engine_and_unregister_removes_it(tmp_path):
     again = engines()
     emit(before=before, after=after, again=again, has_props=has_props,
          names=sorted(p.identifier for p in bpy.types.Scene.bl_rna.properties['polychrome'].fixed_type.properties))
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     assert "'POLYCHROME'" in r["before"] and "'CYCLES'" in r["before"]
     assert "POLYCHROME" not in r["after"]
     assert "'POLYCHROME'" in r["again"]
     assert r["has_props"]
-    for name in ("method", "direction", "wavelength_count", "samples", "max_bounces", "seed", "time_limit", "uplift", "threads",
-                 "dispersion_splitting"):
+    for name in (
+        "method",
+        "direction",
+        "wavelength_count",
+        "samples",
+        "max_bounces",
+        "seed",
+        "time_limit",
+        "uplift",
+        "threads",
+        "dispersion_splitting",
+    ):
         assert name in r["names"]
 
 
 def test_default_scene_renders_png_and_multilayer_exr_with_passes(tmp_path):
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     bpy.ops.wm.read_factory_settings()          # the default cube, light and camera
     sc = bpy.context.scene
     sc.render.engine = 'POLYCHROME'
@@ -60,14 +75,26 @@ def test_default_scene_renders_png_and_multilayer_exr_with_passes(tmp_path):
          zmin=min(zs), zmax=max(zs),
          depth=ch['ViewLayer.Depth.Z'].tolist(), nlen=np.sqrt(sum(ch['ViewLayer.Normal.' + c] ** 2 for c in 'XYZ')).tolist(),
          combined=float(ch['ViewLayer.Combined.R'].mean()), size=list(ch['ViewLayer.Combined.R'].shape))
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     assert r["png"] == ["FINISHED"] and r["exr"] == ["FINISHED"]
     assert r["err_png"] is None and r["err"] is None
     assert (tmp_path / "out.png").stat().st_size > 0
     assert r["size"] == [48, 64]
-    for p in ("Combined.R", "Combined.G", "Combined.B", "Combined.A", "Depth.Z", "Normal.X", "Normal.Y", "Normal.Z",
-              "Albedo.R", "Albedo.G", "Albedo.B"):
+    for p in (
+        "Combined.R",
+        "Combined.G",
+        "Combined.B",
+        "Combined.A",
+        "Depth.Z",
+        "Normal.X",
+        "Normal.Y",
+        "Normal.Z",
+        "Albedo.R",
+        "Albedo.G",
+        "Albedo.B",
+    ):
         assert "ViewLayer." + p in r["channels"], r["channels"]
     assert all(r["finite"].values()), r["finite"]
     assert r["combined"] > 0.0
@@ -76,7 +103,7 @@ def test_default_scene_renders_png_and_multilayer_exr_with_passes(tmp_path):
     depth = np.array(r["depth"])
     nlen = np.array(r["nlen"])
     hit = depth < 1e9
-    assert 0.05 * depth.size < hit.sum() < depth.size          # the cube covers part of the frame
+    assert 0.05 * depth.size < hit.sum() < depth.size  # the cube covers part of the frame
     # pixels wholly on the cube lie between its nearest and farthest corner along the view axis
     inner = depth[hit & (depth > 0)]
     assert np.median(inner) > r["zmin"] - 1e-3 and np.median(inner) < r["zmax"] + 1e-3
@@ -88,7 +115,9 @@ def test_diffuse_scene_matches_cycles(tmp_path):
     """Same scene (diffuse floor and cube, one-sided area light + point light, no world)
     in Cycles CPU and Polychrome: mean CIEDE2000 below 2. Checks the area/point light unit
     mapping, the camera and the colour pipeline against an independent renderer."""
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     sc = empty_scene(48, 36)
     sc.world = None
     bpy.ops.mesh.primitive_plane_add(size=8)
@@ -116,7 +145,8 @@ def test_diffuse_scene_matches_cycles(tmp_path):
     de = cd.image_delta_e(A, B, white_luminance=white)
     emit(mean=float(de.mean()), err=Engine.last_error, warn=Engine.last_warnings,
          ma=A.mean(axis=(0, 1)).tolist(), mb=B.mean(axis=(0, 1)).tolist())
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     assert r["err"] is None and r["warn"] == []
     assert r["mean"] < 2.0, r
@@ -126,7 +156,9 @@ def test_diffuse_scene_matches_cycles(tmp_path):
 
 
 def test_cancel_and_time_limit_stop_the_render(tmp_path):
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     bpy.ops.wm.read_factory_settings()
     sc = bpy.context.scene
     sc.render.engine = 'POLYCHROME'
@@ -146,7 +178,8 @@ def test_cancel_and_time_limit_stop_the_render(tmp_path):
     s2 = dict(Engine.last_stats or {})
     emit(r1=list(r1), s1=s1, e1=e1, calls=len(calls), r2=list(r2), s2=s2,
          finite=bool(all(np.isfinite(v).all() for v in exr_channels('c.exr').values())))
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     assert r["r1"] == ["FINISHED"] and r["e1"] is None
     assert r["calls"] >= 1
@@ -156,7 +189,9 @@ def test_cancel_and_time_limit_stop_the_render(tmp_path):
 
 
 def test_non_finite_vertex_is_reported_without_crash(tmp_path):
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     bpy.ops.wm.read_factory_settings()
     sc = bpy.context.scene
     sc.render.engine = 'POLYCHROME'
@@ -170,7 +205,8 @@ def test_non_finite_vertex_is_reported_without_crash(tmp_path):
     except RuntimeError as e:                               # an ERROR report makes the operator raise
         raised = str(e)
     emit(raised=raised, err=Engine.last_error, exists=os.path.exists('bad.exr'))
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     assert r["err"] is not None
     assert "Cube" in r["err"] and "finite" in r["err"]
@@ -179,7 +215,9 @@ def test_non_finite_vertex_is_reported_without_crash(tmp_path):
 
 
 def test_unsupported_method_and_node_are_reported(tmp_path):
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     from polychrome.render import METHODS
     bpy.ops.wm.read_factory_settings()
     sc = bpy.context.scene
@@ -203,7 +241,8 @@ def test_unsupported_method_and_node_are_reported(tmp_path):
     nt.links.new(g.outputs[0], nt.nodes['Material Output'].inputs['Surface'])
     bpy.ops.render.render()
     emit(errs=errs, err=Engine.last_error, warn=Engine.last_warnings)
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     for m, e in r["errs"].items():
         assert e is not None and m in e
@@ -214,7 +253,9 @@ def test_unsupported_method_and_node_are_reported(tmp_path):
 def test_mesh_export_matches_blender_triangles_and_instances_share_data(tmp_path):
     """The split-vertex export gives the same triangle corner positions, normals and UVs
     as Blender's own loop triangles; linked instances are exported once."""
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     from polychrome_blender.export.meshes import mesh_arrays
     import polychrome as pc
     from polychrome_blender.export import export_scene
@@ -249,7 +290,8 @@ def test_mesh_export_matches_blender_triangles_and_instances_share_data(tmp_path
     emit(dp=float(np.abs(v[t.astype(int)] - ref_p).max()), dn=float(np.abs(n[t.astype(int)] - ref_n).max()),
          duv=float(np.abs(uv[t.astype(int)] - ref_uv).max()), nv=nv, split=int(len(v)),
          meshes=[m['name'] for m in desc['meshes']], inst=[i['mesh'] for i in desc['instances']])
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     assert r["dp"] < 1e-6 and r["dn"] < 1e-6 and r["duv"] < 1e-6
     assert r["split"] >= r["nv"]
@@ -261,7 +303,9 @@ def test_mesh_export_matches_blender_triangles_and_instances_share_data(tmp_path
 def test_geometry_node_instances_keep_their_own_mesh(tmp_path):
     """Geometry-node instances carry the instancer's name; each must export its own
     geometry (the instanced ico sphere, not the instancer's realised mesh), shared once."""
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     import polychrome as pc
     from polychrome_blender.export import export_scene
     sc = empty_scene(8, 8)
@@ -289,16 +333,17 @@ def test_geometry_node_instances_keep_their_own_mesh(tmp_path):
     desc, bufs = scene.description()
     nverts = [len(np.unique(bufs[m['triangles']])) for m in desc['meshes']]
     emit(inst=[i['mesh'] for i in desc['instances']], nverts=nverts, ref_inst=sorted(ref[True]), ref_base=sorted(ref[False]))
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     from collections import Counter
 
-    assert r["ref_inst"] == [12] and len(r["nverts"]) == 2       # ico sphere + the instancer's realised mesh
+    assert r["ref_inst"] == [12] and len(r["nverts"]) == 2  # ico sphere + the instancer's realised mesh
     counts = Counter(r["inst"])
-    shared = [m for m, c in counts.items() if c == 4]             # one per plane vertex, sharing one mesh
+    shared = [m for m, c in counts.items() if c == 4]  # one per plane vertex, sharing one mesh
     base = [m for m, c in counts.items() if c == 1]
     assert len(shared) == 1 and len(base) == 1, r
-    assert r["nverts"][shared[0]] in (12, 60)                     # 12 vertices, or 20 flat faces × 3 split
+    assert r["nverts"][shared[0]] in (12, 60)  # 12 vertices, or 20 flat faces × 3 split
     assert r["nverts"][base[0]] not in (12, 60)
 
 
@@ -306,7 +351,9 @@ def test_border_render_places_the_region(tmp_path):
     """Border render, cropped and not: the region's pixels sit where Blender puts the
     border (x 0.25-0.75, y 0-0.5 from the bottom) and equal the whole frame's pixels
     there (same seed); outside an uncropped border Blender leaves zeros."""
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     bpy.ops.wm.read_factory_settings()
     sc = bpy.context.scene; r = sc.render
     r.engine = 'POLYCHROME'; r.resolution_x, r.resolution_y, r.resolution_percentage = 64, 48, 100
@@ -326,7 +373,8 @@ def test_border_render_places_the_region(tmp_path):
     emit(shape0=list(b0.shape), shape1=list(b1.shape), d_crop=float(np.abs(b1 - region).max()),
          d_uncrop=float(np.abs(b0[24:48, 16:48] - region).max()), outside=float(np.abs(outside).max()),
          region_mean=float(region.mean()), **out)
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     assert r["err0"] is None and r["err1"] is None
     assert r["shape0"] == [48, 64] and r["shape1"] == [24, 32]
@@ -340,7 +388,9 @@ def test_emissive_mesh_with_blackbody_matches_cycles(tmp_path):
     same luminance normalisation of Blackbody. The colours may differ slightly — Cycles
     multiplies RGB, Polychrome spectra (the paper's point) — so mean ΔE00 < 2 and mean
     luminance within 5 %."""
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     sc = empty_scene(48, 36)
     sc.world = None
     bpy.ops.mesh.primitive_plane_add(size=8)
@@ -372,7 +422,8 @@ def test_emissive_mesh_with_blackbody_matches_cycles(tmp_path):
     de = cd.image_delta_e(A, B, white_luminance=float(np.percentile(A[..., 1], 99)))
     emit(mean=float(de.mean()), err=Engine.last_error, warn=Engine.last_warnings,
          ya=float((A.mean(axis=(0, 1)) @ [0.2126, 0.7152, 0.0722])), yb=float((B.mean(axis=(0, 1)) @ [0.2126, 0.7152, 0.0722])))
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     assert r["err"] is None and r["warn"] == []
     assert r["mean"] < 2.0, r
@@ -380,7 +431,9 @@ def test_emissive_mesh_with_blackbody_matches_cycles(tmp_path):
 
 
 def test_settings_reach_the_core_and_seed_is_deterministic(tmp_path):
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     bpy.ops.wm.read_factory_settings()
     sc = bpy.context.scene; p = sc.polychrome
     sc.render.engine = 'POLYCHROME'
@@ -394,12 +447,13 @@ def test_settings_reach_the_core_and_seed_is_deterministic(tmp_path):
         imgs.append(exr_channels(f's{i}.exr')['R']); stats.append(Engine.last_stats)
     emit(stats=stats[0], shape=list(imgs[0].shape), same=float(np.abs(imgs[0] - imgs[1]).max()),
          diff=float(np.abs(imgs[0] - imgs[2]).max()))
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     s = r["stats"]
     assert s["method"] == "MONOCHROMATIC_RAYS" and s["wavelengths"] == 16 and s["samples_per_pixel"] == 3
     assert s["threads"] == 1
-    assert r["shape"] == [15, 20]                      # resolution × 50 %
+    assert r["shape"] == [15, 20]  # resolution × 50 %
     assert r["same"] == 0.0 and r["diff"] > 0.0
 
 
@@ -407,7 +461,9 @@ def test_spectral_passes_integrate_to_the_combined_pass(tmp_path):
     """With spectral_output, the multilayer EXR holds one pass per wavelength; integrating
     them with colour-science's CIE 1931 CMFs (trapezoid weights, normalised by ∫ȳ as the
     core does) gives the Combined pass's luminance."""
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     bpy.ops.wm.read_factory_settings()
     sc = bpy.context.scene; p = sc.polychrome
     sc.render.engine = 'POLYCHROME'
@@ -419,7 +475,8 @@ def test_spectral_passes_integrate_to_the_combined_pass(tmp_path):
     names = sorted((k for k in ch if k.startswith('ViewLayer.Spectral ')), key=lambda k: float(k.split()[1]))
     emit(err=Engine.last_error, names=names, bands=[ch[k].tolist() for k in names],
          rgb=[ch['ViewLayer.Combined.' + c].tolist() for c in 'RGB'])
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     assert r["err"] is None
     assert len(r["names"]) == 21 and r["names"][0] == "ViewLayer.Spectral 380.0 nm.V" and r["names"][-1] == "ViewLayer.Spectral 780.0 nm.V"
@@ -429,8 +486,9 @@ def test_spectral_passes_integrate_to_the_combined_pass(tmp_path):
     lam = np.linspace(380.0, 780.0, 21)
     cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
     ybar = np.array([cmfs[l][1] for l in lam])
-    w = np.full(21, lam[1] - lam[0]); w[0] = w[-1] = (lam[1] - lam[0]) / 2   # eq. 6 weights
-    bands = np.array(r["bands"])                                               # (21, H, W)
+    w = np.full(21, lam[1] - lam[0])
+    w[0] = w[-1] = (lam[1] - lam[0]) / 2  # eq. 6 weights
+    bands = np.array(r["bands"])  # (21, H, W)
     y_spec = np.tensordot(ybar * w, bands, axes=1) / np.sum(ybar * w)
     rgb = np.array(r["rgb"])
     y_rgb = 0.2126729 * rgb[0] + 0.7151522 * rgb[1] + 0.0721750 * rgb[2]
@@ -439,7 +497,9 @@ def test_spectral_passes_integrate_to_the_combined_pass(tmp_path):
 
 
 def test_material_slots_loose_vertices_and_empty_meshes(tmp_path):
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     import polychrome as pc
     from polychrome_blender.export import export_scene
     sc = empty_scene(8, 8)
@@ -462,9 +522,10 @@ def test_material_slots_loose_vertices_and_empty_meshes(tmp_path):
     emit(mats=mats, ids=[mats[i] for i in bufs[two['material_ids']].tolist()],
          nverts=len(bufs[two['vertices']]) // 3, verts=bufs[two['vertices']].reshape(-1, 3).tolist(),
          names=sorted(meshes), nomat=mats[int(bufs[meshes['NoMat']['material_ids']][0])], warns=warns)
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     assert r["ids"] == ["Red", "Red", "Blue", "Blue"]
-    assert r["nverts"] == 6 and [9.0, 9.0, 9.0] not in r["verts"]     # the loose vertex is dropped
-    assert r["names"] == ["NoMat", "Two"]                             # the empty mesh is skipped
+    assert r["nverts"] == 6 and [9.0, 9.0, 9.0] not in r["verts"]  # the loose vertex is dropped
+    assert r["names"] == ["NoMat", "Two"]  # the empty mesh is skipped
     assert r["nomat"] == "default" and r["warns"] == []

@@ -12,7 +12,9 @@ pytestmark = pytest.mark.blender
 
 
 def test_sun_and_spot_light_units(tmp_path):
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     import polychrome as pc
     if not (hasattr(pc, 'SunLight') and hasattr(pc, 'SpotLight')):
         emit(skip='no SunLight/SpotLight'); raise SystemExit(0)
@@ -36,7 +38,8 @@ def test_sun_and_spot_light_units(tmp_path):
     sc.render.filepath = os.path.abspath('spot.exr'); bpy.ops.render.render(write_still=True)
     out['spot'] = [float(exr_channels('spot.exr')[c].mean()) for c in 'RGB']; out['e_spot'] = Engine.last_error
     emit(**out)
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     if "skip" in r:
         pytest.skip(r["skip"])
@@ -49,7 +52,9 @@ def test_sun_and_spot_light_units(tmp_path):
 
 
 def test_standard_nodes_map_to_polychrome_bsdfs(tmp_path):
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     import polychrome as pc
     from polychrome_blender.export import export_scene
     sc = empty_scene(8, 8)
@@ -80,7 +85,8 @@ def test_standard_nodes_map_to_polychrome_bsdfs(tmp_path):
     scene, warns = export_scene(pc, dg)
     desc, _ = scene.description()
     emit(m={x['name']: x for x in desc['materials']}, warns=warns)
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     m = r["m"]
     assert r["warns"] == []
@@ -102,7 +108,7 @@ def test_standard_nodes_map_to_polychrome_bsdfs(tmp_path):
     shape = colour.SpectralShape(380, 780, 1)
     sd = colour.sd_blackbody(3000.0, shape)
     ybar = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape).values[:, 1]
-    peak = colour.sd_blackbody(3000.0, colour.SpectralShape(380, 3000, 1)).values.max()   # Wien peak 966 nm
+    peak = colour.sd_blackbody(3000.0, colour.SpectralShape(380, 3000, 1)).values.max()  # Wien peak 966 nm
     planck = sd.values / peak
     luminance = warm["scale"] * np.trapz(ybar * planck) / np.trapz(ybar)
     assert luminance == pytest.approx(2.0, rel=0.01)
@@ -112,7 +118,9 @@ def test_standard_nodes_map_to_polychrome_bsdfs(tmp_path):
 def test_area_light_radiance_follows_cycles_convention(tmp_path):
     """Exported emitter radiance = P / (π A) (Normalize on) or P / π (off), A the true area of
     the square / rectangle / disk / ellipse (the 32-gon's area, so the power is exact)."""
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     import polychrome as pc
     from polychrome_blender.export import export_scene
     sc = empty_scene(8, 8); add_camera(sc, (0, -10, 0))
@@ -134,7 +142,8 @@ def test_area_light_radiance_follows_cycles_convention(tmp_path):
             v = bufs[mesh['vertices']].reshape(-1, 3).astype(float); t = bufs[mesh['triangles']].reshape(-1, 3)
             areas[mesh['name']] = float(0.5 * np.linalg.norm(np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]]), axis=1).sum())
     emit(scale=out, areas=areas, warns=warns, cases=cases)
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     assert r["warns"] == []
     exact = [4.0, 1.0, math.pi / 4, math.pi / 2, 4.0]
@@ -146,7 +155,9 @@ def test_area_light_radiance_follows_cycles_convention(tmp_path):
 
 
 def test_light_exposure_and_temperature(tmp_path):
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     import polychrome as pc
     from polychrome_blender.export import export_scene
     sc = empty_scene(8, 8); add_camera(sc, (0, -10, 0))
@@ -156,7 +167,8 @@ def test_light_exposure_and_temperature(tmp_path):
     scene, warns = export_scene(pc, bpy.context.evaluated_depsgraph_get())
     desc, _ = scene.description()
     emit(light=desc['lights'][0], warns=warns)
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     i = r["light"]["intensity"]
     assert r["warns"] == [] and i["type"] == "blackbody" and i["temperature"] == 2700.0

@@ -9,7 +9,9 @@ pytestmark = pytest.mark.blender
 
 def test_custom_nodes_survive_save_and_reload_and_render(tmp_path):
     blend = tmp_path / "nodes.blend"
-    proc, res = run_bpy(tmp_path, f"""
+    proc, res = run_bpy(
+        tmp_path,
+        f"""
     sc = empty_scene(24, 16)
     def node_material(name, idname):
         m = bpy.data.materials.new(name); m.use_nodes = True
@@ -31,9 +33,12 @@ def test_custom_nodes_survive_save_and_reload_and_render(tmp_path):
     m1.use_fake_user = m2.use_fake_user = m3.use_fake_user = m4.use_fake_user = True
     bpy.ops.wm.save_as_mainfile(filepath={str(blend)!r})
     emit(saved=True)
-    """)
+    """,
+    )
     check(proc, res)
-    proc, res = run_bpy(tmp_path, f"""
+    proc, res = run_bpy(
+        tmp_path,
+        f"""
     bpy.ops.wm.open_mainfile(filepath={str(blend)!r})
     mats = bpy.data.materials
     n1 = mats['Curve'].node_tree.nodes['CurveNode']; n2 = mats['Checker'].node_tree.nodes['CheckerNode']
@@ -68,7 +73,8 @@ def test_custom_nodes_survive_save_and_reload_and_render(tmp_path):
         out['err_' + name] = Engine.last_error
     out['means'] = means
     emit(**out)
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     assert r["types"] == ["PolychromeSpectralReflectanceNode"] * 2 + ["PolychromeDispersionNode", "PolychromeSpectralEmissionNode"]
     assert r["curve"] == pytest.approx([0.5] * 32)

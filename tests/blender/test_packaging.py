@@ -39,8 +39,12 @@ def fake_wheel(folder: Path) -> Path:
 
 
 def test_manifest_validates():
-    proc = subprocess.run([sys.executable, str(blender_ext()), "validate", str(ROOT / "addon" / "polychrome_blender")],
-                          capture_output=True, text=True, timeout=60)
+    proc = subprocess.run(
+        [sys.executable, str(blender_ext()), "validate", str(ROOT / "addon" / "polychrome_blender")],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
@@ -48,8 +52,12 @@ def test_extension_zip_installs_and_renders(tmp_path):
     blender_ext()
     whl = fake_wheel(tmp_path)
     out = tmp_path / "dist"
-    proc = subprocess.run([sys.executable, str(ROOT / "tools" / "build_blender_extension.py"), "--out", str(out), "--wheel", str(whl)],
-                          capture_output=True, text=True, timeout=120)
+    proc = subprocess.run(
+        [sys.executable, str(ROOT / "tools" / "build_blender_extension.py"), "--out", str(out), "--wheel", str(whl)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert proc.returncode == 0, proc.stdout + proc.stderr
     zips = list(out.glob("polychrome_blender-*.zip"))
     assert len(zips) == 1
@@ -58,7 +66,9 @@ def test_extension_zip_installs_and_renders(tmp_path):
         manifest = z.read("blender_manifest.toml").decode()
     assert f"wheels/{whl.name}" in names and "engine.py" in names and "export/meshes.py" in names
     assert f'wheels = ["./wheels/{whl.name}"]' in manifest
-    proc, res = run_bpy(tmp_path, f"""
+    proc, res = run_bpy(
+        tmp_path,
+        f"""
     polychrome_blender.unregister()            # use the installed copy, not the source tree
     import addon_utils
     mod = 'bl_ext.user_default.polychrome_blender'
@@ -76,7 +86,8 @@ def test_extension_zip_installs_and_renders(tmp_path):
     emit(r=list(r), enabled=enabled, value=polychrome_pkgtest.VALUE, rr=list(rr), err=eng.last_error,
          png=os.path.exists('inst.png'))
     addon_utils.disable(mod, default_set=True)
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     assert r["r"] == ["FINISHED"] and r["enabled"] and r["value"] == 42
     assert r["rr"] == ["FINISHED"] and r["err"] is None and r["png"]

@@ -11,7 +11,9 @@ pytestmark = pytest.mark.blender
 
 
 def test_principled_mix_add_map_to_polychrome(tmp_path):
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     import polychrome as pc
     from polychrome_blender.export import export_scene
     sc = empty_scene(8, 8)
@@ -69,7 +71,8 @@ def test_principled_mix_add_map_to_polychrome(tmp_path):
     scene, warns = export_scene(pc, dg)
     desc, _ = scene.description()
     emit(m={x['name']: x for x in desc['materials']}, warns=warns)
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     m = r["m"]
     # Only the unsupported Principled inputs of 'Coated' are reported, once each.
@@ -112,7 +115,9 @@ def test_default_principled_cube_matches_cycles(tmp_path):
     """A cube with Blender's default material (Principled BSDF: base 0.8, roughness 0.5,
     IOR 1.5) on a Principled floor, lit by an area and a point light, in Cycles CPU and in
     Polychrome: mean CIEDE2000 below 2."""
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     sc = empty_scene(48, 36)
     sc.world = None
     def principled(name, rgb, roughness=0.5):
@@ -146,7 +151,8 @@ def test_default_principled_cube_matches_cycles(tmp_path):
     de = cd.image_delta_e(A, B, white_luminance=white)
     emit(mean=float(de.mean()), err=Engine.last_error, warn=Engine.last_warnings,
          ma=A.mean(axis=(0, 1)).tolist(), mb=B.mean(axis=(0, 1)).tolist())
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     assert r["err"] is None and r["warn"] == []
     print("default Principled vs Cycles:", r)
@@ -159,7 +165,9 @@ def test_mix_of_red_and_blue_diffuse_renders_the_mixed_colour(tmp_path):
     """A Mix Shader (factor 0.5) of red and blue Diffuse BSDFs on a plane under a uniform
     white world, seen straight down: each pixel is the mixed reflectance × the world
     (the plane's upper hemisphere is all world), i.e. 0.5·(red + blue)."""
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     sc = empty_scene(8, 8)
     w = bpy.data.worlds.new('W'); w.use_nodes = True; sc.world = w
     bg = w.node_tree.nodes['Background']; bg.inputs['Color'].default_value = (1, 1, 1, 1); bg.inputs['Strength'].default_value = 1.0
@@ -182,7 +190,8 @@ def test_mix_of_red_and_blue_diffuse_renders_the_mixed_colour(tmp_path):
     sc.render.filepath = os.path.abspath('mix.exr'); bpy.ops.render.render(write_still=True)
     ch = exr_channels('mix.exr')
     emit(rgb=[float(ch[k].mean()) for k in ('R', 'G', 'B')], err=Engine.last_error, warn=Engine.last_warnings)
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     assert r["err"] is None and r["warn"] == []
     expected = 0.5 * (np.array([0.8, 0.05, 0.05]) + np.array([0.05, 0.05, 0.8]))
@@ -196,7 +205,9 @@ def test_metal_and_thin_film_principled_match_cycles(tmp_path):
     300 nm film, on a Principled floor, area light and a blue world, with Blender's default
     Multiscatter GGX (Polychrome compensates the metal's multiple scattering, Kulla & Conty)
     and Cycles' glossy filter off: mean CIEDE2000 below 2 on 2×2 blocks."""
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     sc = empty_scene(64, 36)
     w = bpy.data.worlds.new('W'); w.use_nodes = True; sc.world = w
     bg = w.node_tree.nodes['Background']; bg.inputs['Color'].default_value = (0.6, 0.7, 0.9, 1); bg.inputs['Strength'].default_value = 0.5
@@ -237,7 +248,9 @@ def test_metal_and_thin_film_principled_match_cycles(tmp_path):
     de = cd.image_delta_e(A, B, white_luminance=white)
     emit(mean=float(de.mean()), err=Engine.last_error, warn=Engine.last_warnings,
          ma=A.reshape(-1, 3).mean(axis=0).tolist(), mb=B.reshape(-1, 3).mean(axis=0).tolist())
-    """, timeout=300)
+    """,
+        timeout=300,
+    )
     r = check(proc, res)[0]
     print("metal/thin film Principled vs Cycles:", r)
     assert r["err"] is None and r["warn"] == []
@@ -250,7 +263,9 @@ def test_fresnel_and_layer_weight_mixes_match_cycles(tmp_path):
     """Mix Shaders of a red diffuse and a blue glossy driven by a Fresnel node (IOR 1.45)
     and Layer Weight nodes (Fresnel output, blend 0.3; Facing output, blend 0.6) on three
     spheres, Cycles CPU vs Polychrome: mean CIEDE2000 below 2 on 2×2 blocks (≈ 0.7)."""
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     sc = empty_scene(64, 36)
     w = bpy.data.worlds.new('W'); w.use_nodes = True; sc.world = w
     bg = w.node_tree.nodes['Background']; bg.inputs['Color'].default_value = (0.6, 0.7, 0.9, 1); bg.inputs['Strength'].default_value = 0.5
@@ -291,7 +306,9 @@ def test_fresnel_and_layer_weight_mixes_match_cycles(tmp_path):
     de = cd.image_delta_e(A, B, white_luminance=white)
     emit(mean=float(de.mean()), err=Engine.last_error, warn=Engine.last_warnings,
          ma=A.reshape(-1, 3).mean(axis=0).tolist(), mb=B.reshape(-1, 3).mean(axis=0).tolist())
-""", timeout=300)
+""",
+        timeout=300,
+    )
     r = check(proc, res)[0]
     print("Fresnel/Layer Weight mixes vs Cycles:", r)
     assert r["err"] is None and r["warn"] == []

@@ -9,7 +9,9 @@ pytestmark = pytest.mark.blender
 
 
 def test_quality_preset_fills_untouched_settings_and_explicit_ones_win(tmp_path):
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     bpy.ops.wm.read_factory_settings()
     sc = bpy.context.scene; p = sc.polychrome
     sc.render.engine = 'POLYCHROME'
@@ -25,7 +27,8 @@ def test_quality_preset_fills_untouched_settings_and_explicit_ones_win(tmp_path)
     sc.render.filepath = os.path.abspath('explicit.exr'); bpy.ops.render.render(write_still=True)
     stats['explicit'] = Engine.last_stats
     emit(stats=stats, items=[i.identifier for i in p.bl_rna.properties['quality'].enum_items])
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     s = r["stats"]
     assert r["items"] == ["AUTO", "PREVIEW", "FINAL", "REFERENCE"]

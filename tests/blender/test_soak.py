@@ -16,7 +16,9 @@ RSS_MARGIN_MB = 50.0
 
 
 def test_fifty_renders_ten_cancelled_memory_flat_and_clean_unregister(tmp_path):
-    proc, res = run_bpy(tmp_path, f"""
+    proc, res = run_bpy(
+        tmp_path,
+        f"""
     import gc, time
 
     def rss_mb():
@@ -81,7 +83,9 @@ def test_fifty_renders_ten_cancelled_memory_flat_and_clean_unregister(tmp_path):
         still_there = False
     polychrome_blender.register()             # so the epilogue's unregister has something to undo
     emit(rss=rss, outcomes=outcomes, seconds=seconds, still_there=still_there)
-    """, timeout=240)
+    """,
+        timeout=240,
+    )
     r = check(proc, res)[0]
     outs = r["outcomes"]
     assert len(outs) == RENDERS
@@ -101,5 +105,7 @@ def test_fifty_renders_ten_cancelled_memory_flat_and_clean_unregister(tmp_path):
     assert growth < RSS_MARGIN_MB, (growth, r["rss"])
     assert r["rss"][-1] - r["rss"][0] < RSS_MARGIN_MB
     assert r["still_there"] is False
-    print(f"soak: {RENDERS} renders in {sum(r['seconds']):.1f} s, RSS first {r['rss'][0]:.0f} MB, "
-          f"max {max(r['rss']):.0f} MB, last {r['rss'][-1]:.0f} MB")
+    print(
+        f"soak: {RENDERS} renders in {sum(r['seconds']):.1f} s, RSS first {r['rss'][0]:.0f} MB, "
+        f"max {max(r['rss']):.0f} MB, last {r['rss'][-1]:.0f} MB"
+    )

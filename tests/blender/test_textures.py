@@ -16,7 +16,9 @@ def srgb_to_linear(v):
 
 
 def test_image_texture_and_hdri_world(tmp_path):
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     import polychrome as pc
     if not hasattr(pc, 'Texture'):
         emit(skip='polychrome has no Texture'); raise SystemExit(0)
@@ -56,7 +58,8 @@ def test_image_texture_and_hdri_world(tmp_path):
     ch = exr_channels('sky.exr')
     sky = [float(ch[c].mean()) for c in 'RGB']
     emit(e1=e1, w1=w1, left=left, right=right, e2=Engine.last_error, w2=Engine.last_warnings, sky=sky)
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     if "skip" in r:
         pytest.skip(r["skip"])

@@ -54,7 +54,10 @@ def lum(rgba):
 
 
 def test_view_camera_matches_the_exported_scene_camera(tmp_path):
-    proc, res = run_bpy(tmp_path, VIEWPORT_HELPERS + textwrap.dedent("""
+    proc, res = run_bpy(
+        tmp_path,
+        VIEWPORT_HELPERS
+        + textwrap.dedent("""
     from polychrome_blender.export.camera import export_camera
     from polychrome_blender.export.warnings import Warnings
     out = []
@@ -74,14 +77,18 @@ def test_view_camera_matches_the_exported_scene_camera(tmp_path):
         close = np.isclose(got.depth, ref.depth, rtol=1e-3, atol=1e-4)
         out.append(dict(kind=kind, fit=fit, frac=float(close.mean()), hit=float((ref.depth > 0).mean())))
     emit(out=out)
-    """))
+    """),
+    )
     for r in check(proc, res)[0]["out"]:
         assert 0.2 < r["hit"] < 1.0, r  # the test view shows both objects and background
-        assert r["frac"] > 0.98, r      # the same rays (edges may flip by rounding)
+        assert r["frac"] > 0.98, r  # the same rays (edges may flip by rounding)
 
 
 def test_view_update_and_view_draw_restart_on_edits_and_refine(tmp_path):
-    proc, res = run_bpy(tmp_path, VIEWPORT_HELPERS + textwrap.dedent("""
+    proc, res = run_bpy(
+        tmp_path,
+        VIEWPORT_HELPERS
+        + textwrap.dedent("""
     sc = empty_scene(32, 24)
     sc.render.engine = 'POLYCHROME'
     sc.polychrome.viewport_samples = 16
@@ -129,7 +136,8 @@ def test_view_update_and_view_draw_restart_on_edits_and_refine(tmp_path):
     fake.__del__()                                           # the engine is freed
     emit(steps=steps, freed=fake.session is None and job.done(), reports=fake.reports,
          redraws=fake.redraws, draw_only=draw_only)
-    """))
+    """),
+    )
     r = check(proc, res)[0]
     st = r["steps"]
     assert not r["reports"], r["reports"]
@@ -139,9 +147,9 @@ def test_view_update_and_view_draw_restart_on_edits_and_refine(tmp_path):
     assert first["samples"] == 16 and first["size"] == [24, 32, 4]
     samples = [d[1] for d in first["drawn"]]
     assert samples[-1] == 16 and samples == sorted(samples) and len(samples) >= 1
-    assert all(d[2:] == [64, 48] for d in first["drawn"])      # drawn over the whole region
-    assert st["again"]["samples"] == 16                           # the finished image stays
-    assert st["first"]["rg"] > 3 and st["material"]["rg"] < 0.5   # red paint, then green
+    assert all(d[2:] == [64, 48] for d in first["drawn"])  # drawn over the whole region
+    assert st["again"]["samples"] == 16  # the finished image stays
+    assert st["first"]["rg"] > 3 and st["material"]["rg"] < 0.5  # red paint, then green
     # same seed and paths, only the point light's power doubled: exactly twice as bright
     assert st["light"]["lum"] == pytest.approx(2 * st["material"]["lum"], rel=1e-3)
     assert st["settings"]["samples"] == 8
@@ -150,7 +158,10 @@ def test_view_update_and_view_draw_restart_on_edits_and_refine(tmp_path):
 
 
 def test_viewport_image_equals_the_final_render_of_the_same_view(tmp_path):
-    proc, res = run_bpy(tmp_path, VIEWPORT_HELPERS + textwrap.dedent("""
+    proc, res = run_bpy(
+        tmp_path,
+        VIEWPORT_HELPERS
+        + textwrap.dedent("""
     sc = empty_scene(32, 24)
     sc.render.engine = 'POLYCHROME'
     sc.polychrome.viewport_samples = sc.polychrome.samples = 8
@@ -175,7 +186,8 @@ def test_viewport_image_equals_the_final_render_of_the_same_view(tmp_path):
     de = image_delta_e(view[..., :3], f12)
     emit(de_mean=float(np.mean(de)), lum_view=lum(view), lum_f12=float(f12.mean()), err=Engine.last_error,
          same=bool(np.allclose(view[..., :3], f12, rtol=1e-3, atol=1e-4)))
-    """))
+    """),
+    )
     r = check(proc, res)[0]
     assert r["err"] is None
     assert r["lum_view"] > 0
@@ -185,7 +197,10 @@ def test_viewport_image_equals_the_final_render_of_the_same_view(tmp_path):
 
 
 def test_unregister_stops_viewport_renders(tmp_path):
-    proc, res = run_bpy(tmp_path, VIEWPORT_HELPERS + textwrap.dedent("""
+    proc, res = run_bpy(
+        tmp_path,
+        VIEWPORT_HELPERS
+        + textwrap.dedent("""
     sc = empty_scene(32, 24)
     sc.render.engine = 'POLYCHROME'
     sc.polychrome.viewport_samples = 1000000
@@ -201,13 +216,16 @@ def test_unregister_stops_viewport_renders(tmp_path):
     t0 = time.monotonic()
     polychrome_blender.unregister()
     emit(done=job.done(), seconds=time.monotonic() - t0, cancelled=job.result().stats['cancelled'])
-    """))
+    """),
+    )
     r = check(proc, res)[0]
     assert r["done"] and r["cancelled"]
 
 
 def test_material_preview_renders_through_the_engine(tmp_path):
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     bpy.ops.wm.read_factory_settings()
     sc = bpy.context.scene
     sc.render.engine = 'POLYCHROME'
@@ -223,7 +241,8 @@ def test_material_preview_renders_through_the_engine(tmp_path):
         out[name] = dict(size=[w, h], centre=c.tolist(), err=Engine.last_error,
                          spp=(Engine.last_stats or {}).get('samples_per_pixel'))
     emit(**out)
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     red, green = r["Red"], r["Green"]
     for m in (red, green):
@@ -234,7 +253,9 @@ def test_material_preview_renders_through_the_engine(tmp_path):
 
 
 def test_final_render_shows_intermediate_images_and_ends_with_the_same_pixels(tmp_path):
-    proc, res = run_bpy(tmp_path, """
+    proc, res = run_bpy(
+        tmp_path,
+        """
     bpy.ops.wm.read_factory_settings()
     sc = bpy.context.scene
     sc.render.engine = 'POLYCHROME'
@@ -258,7 +279,8 @@ def test_final_render_shows_intermediate_images_and_ends_with_the_same_pixels(tm
     bpy.ops.render.render(write_still=True)
     emit(off=out[False], on=out[True], same=all(np.array_equal(a[k], b[k]) for k in a), keys=sorted(a),
          cancelled=Engine.last_stats['cancelled'], err2=Engine.last_error)
-    """)
+    """,
+    )
     r = check(proc, res)[0]
     assert r["off"]["err"] is None and r["on"]["err"] is None
     assert r["off"]["n"] == 0 and r["on"]["n"] >= 1

@@ -93,8 +93,25 @@ def settings_items(settings):
         if f.name not in NOT_STORED and value is not None:
             yield f.name, value
 
+
 ALL = [
-    BSDF, BSDF_EXTRA, REFLECTANCE, EMISSION, IOR_MODEL, IOR_COEFFICIENTS, IOR_NAME, NAME,
-    MESH_INDEX, INSTANCE_NAME, CAMERA, POWER, COLOR, INTENSITY, RADIANCE, LIGHT, MATERIAL_NAME, HAS_BACKING,
+    BSDF,
+    BSDF_EXTRA,
+    REFLECTANCE,
+    EMISSION,
+    IOR_MODEL,
+    IOR_COEFFICIENTS,
+    IOR_NAME,
+    NAME,
+    MESH_INDEX,
+    INSTANCE_NAME,
+    CAMERA,
+    POWER,
+    COLOR,
+    INTENSITY,
+    RADIANCE,
+    LIGHT,
+    MATERIAL_NAME,
+    HAS_BACKING,
     *(name for name, _ in SETTINGS.values()),
 ]

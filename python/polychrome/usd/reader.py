@@ -32,9 +32,23 @@ DISK_SEGMENTS = 32
 FALLBACK_GREY = (0.18, 0.18, 0.18)
 
 _SILENT_TYPES = {
-    "", "Xform", "Scope", "Material", "Shader", "NodeGraph", "GeomSubset", "RenderSettings",
-    "RenderProduct", "RenderVar", "RenderPass", "SkelRoot", "Skeleton", "SkelAnimation",
-    "BlendShape", "PhysicsScene", "Backdrop",
+    "",
+    "Xform",
+    "Scope",
+    "Material",
+    "Shader",
+    "NodeGraph",
+    "GeomSubset",
+    "RenderSettings",
+    "RenderProduct",
+    "RenderVar",
+    "RenderPass",
+    "SkelRoot",
+    "Skeleton",
+    "SkelAnimation",
+    "BlendShape",
+    "PhysicsScene",
+    "Backdrop",
 }
 _LIGHTS_SKIPPED = {"CylinderLight", "GeometryLight", "PortalLight", "PluginLight", "MeshLight", "VolumeLight"}
 
@@ -142,8 +156,15 @@ def light_from_description(d: dict[str, Any], power=None, colour=None):
             if kind == "point":
                 light = pc.PointLight(list(d["position"]), power=p, color=c, name=name)
             else:
-                light = pc.SpotLight(list(d["position"]), list(d["direction"]), power=p, color=c,
-                                     spot_size=d["spot_size"], spot_blend=d["spot_blend"], name=name)
+                light = pc.SpotLight(
+                    list(d["position"]),
+                    list(d["direction"]),
+                    power=p,
+                    color=c,
+                    spot_size=d["spot_size"],
+                    spot_blend=d["spot_blend"],
+                    name=name,
+                )
         elif kind == "distant" and hasattr(pc, "SunLight"):
             light = pc.SunLight(list(d["direction"]), strength=1.0, color=_spectrum_from_dict(d["irradiance"]), name=name)
         else:
@@ -176,7 +197,14 @@ class _Reader:
     def __init__(self, path: Path, resolution=None):
         Gf, Sdf, Usd, UsdGeom, UsdLux, UsdRender, UsdShade = _pxr()
         self.Gf, self.Sdf, self.Usd, self.UsdGeom, self.UsdLux, self.UsdRender, self.UsdShade = (
-            Gf, Sdf, Usd, UsdGeom, UsdLux, UsdRender, UsdShade)
+            Gf,
+            Sdf,
+            Usd,
+            UsdGeom,
+            UsdLux,
+            UsdRender,
+            UsdShade,
+        )
         self.path = path
         self.stage = open_stage(path)
         self.time = Usd.TimeCode.EarliestTime()
@@ -230,7 +258,7 @@ class _Reader:
     def get(self, attr, default=None):
         if attr and not attr.HasAuthoredValue() and attr.GetName().startswith("inputs:"):
             # UsdLux before 21.02 named its attributes without "inputs:".
-            legacy = attr.GetPrim().GetAttribute(attr.GetName()[len("inputs:"):])
+            legacy = attr.GetPrim().GetAttribute(attr.GetName()[len("inputs:") :])
             if legacy and legacy.HasAuthoredValue():
                 attr = legacy
         if not attr or not attr.HasAuthoredValue() and not attr.HasFallbackValue():
@@ -324,9 +352,16 @@ class _Reader:
             if src is not None:
                 fb = src.GetInput("fallback")
                 fallback = fb.Get(self.time) if fb else None
-            self.warn(f"tex:{material_prim.GetPath()}:{name}", f"prim {material_prim.GetPath()}: input '{name}' is connected to a texture or node, which is not supported yet; its fallback value is used")
+            self.warn(
+                f"tex:{material_prim.GetPath()}:{name}",
+                f"prim {material_prim.GetPath()}: input '{name}' is connected to a texture or node, which is not supported yet; its fallback value is used",
+            )
             if fallback is not None:
-                return tuple(fallback)[:3] if isinstance(default, tuple) else float(tuple(fallback)[0] if hasattr(fallback, "__len__") else fallback)
+                return (
+                    tuple(fallback)[:3]
+                    if isinstance(default, tuple)
+                    else float(tuple(fallback)[0] if hasattr(fallback, "__len__") else fallback)
+                )
             return default
         v = inp.Get(self.time)
         if v is None:
@@ -426,7 +461,10 @@ class _Reader:
             shader = surface[0]
             shader_id = shader.GetShaderId()
             if shader_id != "UsdPreviewSurface":
-                self.warn(f"shader:{self.key_of(prim)}", f"prim {prim.GetPath()}: surface shader '{shader_id}' is not supported; rendered as grey diffuse")
+                self.warn(
+                    f"shader:{self.key_of(prim)}",
+                    f"prim {prim.GetPath()}: surface shader '{shader_id}' is not supported; rendered as grey diffuse",
+                )
                 shader = None
         if shader is not None:
             diffuse = self.shader_input(shader, "diffuseColor", FALLBACK_GREY, prim)
@@ -449,13 +487,27 @@ class _Reader:
             # UsdPreviewSurface transparency: a clear (or rough) glass of index `ior`.
             if opacity > 0.0 and ior is None:
                 self.warn(f"opacity:{self.key_of(prim)}", f"prim {prim.GetPath()}: partial opacity {opacity:g} is rendered as clear glass")
-            desc = {"name": name, "bsdf": {"type": "dielectric", "ior": ior if ior is not None else {"type": "constant", "ior": float(ior_value)}, "roughness": rough}}
+            desc = {
+                "name": name,
+                "bsdf": {
+                    "type": "dielectric",
+                    "ior": ior if ior is not None else {"type": "constant", "ior": float(ior_value)},
+                    "roughness": rough,
+                },
+            }
             if emission is not None:
                 desc["emission"] = emission.to_dict()
             return material_from_description(desc)
         if metallic > 0.5:
             # UsdPreviewSurface metal: Fresnel tinted by the base colour (Blender's Glossy).
-            desc = {"name": name, "bsdf": {"type": "glossy", "reflectance": reflectance.to_dict() if hasattr(reflectance, "kind") else rgb(*diffuse).to_dict(), "roughness": rough}}
+            desc = {
+                "name": name,
+                "bsdf": {
+                    "type": "glossy",
+                    "reflectance": reflectance.to_dict() if hasattr(reflectance, "kind") else rgb(*diffuse).to_dict(),
+                    "roughness": rough,
+                },
+            }
             if emission is not None:
                 desc["emission"] = emission.to_dict()
             return material_from_description(desc)
@@ -474,7 +526,9 @@ class _Reader:
             raise self.error(prim, f"{A.IOR_COEFFICIENTS} are not finite")
         need = {"constant": 1, "cauchy": 3, "sellmeier": 6, "abbe": 2}
         if model in need and (c is None or len(c) != need[model]):
-            raise self.error(prim, f"{A.IOR_COEFFICIENTS} of the {model} model needs {need[model]} values, got {0 if c is None else len(c)}")
+            raise self.error(
+                prim, f"{A.IOR_COEFFICIENTS} of the {model} model needs {need[model]} values, got {0 if c is None else len(c)}"
+            )
         if model == "constant":
             return {"type": "constant", "ior": c[0]}
         if model == "cauchy":
@@ -609,7 +663,9 @@ class _Reader:
             raise self.error(where.pathString, f"faceVertexCounts add up to {int(counts.sum())} but there are {len(idx)} faceVertexIndices")
         if len(idx) and (idx.min() < 0 or idx.max() >= len(pts)):
             bad = int(np.argwhere((idx < 0) | (idx >= len(pts)))[0][0])
-            raise self.error(where.pathString, f"faceVertexIndices[{bad}] = {int(idx[bad])} is out of range (the mesh has {len(pts)} points)")
+            raise self.error(
+                where.pathString, f"faceVertexIndices[{bad}] = {int(idx[bad])} is out of range (the mesh has {len(pts)} points)"
+            )
         n_faces, n_corners = len(counts), len(idx)
         first = np.concatenate([[0], np.cumsum(counts)[:-1]])
         keep = counts >= 3
@@ -763,7 +819,10 @@ class _Reader:
             for sub in Usd.PrimRange(root, Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)):
                 if sub.GetTypeName() not in ("Mesh", "Sphere", "Cube", "Cylinder", "Cone", "Plane"):
                     if sub.GetTypeName() not in _SILENT_TYPES:
-                        self.warn(f"proto:{sub.GetPath()}", f"prim {sub.GetPath()}: {sub.GetTypeName()} inside a PointInstancer prototype is not supported and is skipped")
+                        self.warn(
+                            f"proto:{sub.GetPath()}",
+                            f"prim {sub.GetPath()}: {sub.GetTypeName()} inside a PointInstancer prototype is not supported and is skipped",
+                        )
                     continue
                 key = self.mesh_key(sub)
                 if key is None:
@@ -775,7 +834,7 @@ class _Reader:
                 if not self.identity_correction:
                     mats = self.correction[None] @ mats
                 for j, m in zip(which, mats):
-                    self.instances.append((key, m, f"{prim.GetPath()}[{int(j)}]{str(sub.GetPath())[len(str(root.GetPath())):]}"))
+                    self.instances.append((key, m, f"{prim.GetPath()}[{int(j)}]{str(sub.GetPath())[len(str(root.GetPath())) :]}"))
 
     # -- lights ---------------------------------------------------------------------------
     def light_rgb(self, prim, light) -> tuple[float, tuple[float, float, float], Any]:
@@ -856,7 +915,10 @@ class _Reader:
         else:
             factor = 1.0
         if not treat_as_point and r > 0:
-            self.warn(f"sphere:{prim.GetPath()}", f"prim {prim.GetPath()}: sphere light of radius {r:g} m is rendered as a point light of the same power")
+            self.warn(
+                f"sphere:{prim.GetPath()}",
+                f"prim {prim.GetPath()}: sphere light of radius {r:g} m is rendered as a point light of the same power",
+            )
         spectrum = self.emitted(scalar * factor, colour, blackbody)
         if prim.HasAPI(self.UsdLux.ShapingAPI):
             shaping = self.UsdLux.ShapingAPI(prim)
@@ -869,9 +931,17 @@ class _Reader:
                 raise self.error(prim, "its shaping cone angle or softness is not finite")
             if cone < 90.0 and hasattr(pc, "SpotLight"):
                 axis = -m[:3, 2] / np.linalg.norm(m[:3, 2])
-                self.lights.append(pc.SpotLight(pos, axis.tolist(), power=4.0 * math.pi, color=spectrum,
-                                                spot_size=2.0 * math.radians(max(cone, 0.0)),
-                                                spot_blend=min(max(softness, 0.0), 1.0), name=name))
+                self.lights.append(
+                    pc.SpotLight(
+                        pos,
+                        axis.tolist(),
+                        power=4.0 * math.pi,
+                        color=spectrum,
+                        spot_size=2.0 * math.radians(max(cone, 0.0)),
+                        spot_blend=min(max(softness, 0.0), 1.0),
+                        name=name,
+                    )
+                )
                 return
         self.lights.append(PointLight(pos, power=4.0 * math.pi, color=spectrum, name=name))
 
@@ -885,7 +955,9 @@ class _Reader:
         verts = np.concatenate([pts2d, np.zeros((n, 1))], axis=1).astype(np.float32)
         tris = np.stack([np.zeros(n - 2, np.int64), np.arange(1, n - 1), np.arange(2, n)], axis=1)
         world = (m[:3, :3] @ verts.T.astype(np.float64)).T
-        area = 0.5 * float(np.linalg.norm(np.cross(world[tris[:, 1]] - world[tris[:, 0]], world[tris[:, 2]] - world[tris[:, 0]]), axis=1).sum())
+        area = 0.5 * float(
+            np.linalg.norm(np.cross(world[tris[:, 1]] - world[tris[:, 0]], world[tris[:, 2]] - world[tris[:, 0]]), axis=1).sum()
+        )
         if not area > 0.0 or scalar == 0.0:
             return
         if normalize:
@@ -895,7 +967,16 @@ class _Reader:
         radiance = exact if exact is not None else self.emitted(scalar, colour, blackbody)
         emitter = self.add_material(Emitter(radiance, name=str(self.custom(prim, A.MATERIAL_NAME, name))))
         key = f"light:{prim.GetPath()}"
-        self.meshes[key] = {"name": name, "order": None, "vertices": verts, "triangles": tris, "normals": None, "uvs": None, "material_ids": None, "material": emitter}
+        self.meshes[key] = {
+            "name": name,
+            "order": None,
+            "vertices": verts,
+            "triangles": tris,
+            "normals": None,
+            "uvs": None,
+            "material_ids": None,
+            "material": emitter,
+        }
         self.instances.append((key, m, name))
         if self.custom(prim, A.HAS_BACKING, False):
             return  # the stage holds the backing as a mesh already
@@ -913,7 +994,7 @@ class _Reader:
         h = float(self.get(light.GetHeightAttr(), 1.0))
         if not (math.isfinite(w) and math.isfinite(h)):
             raise self.error(prim, "its width or height is not finite")
-        if self.get(light.GetTextureFileAttr()) :
+        if self.get(light.GetTextureFileAttr()):
             self.warn(f"recttex:{prim.GetPath()}", f"prim {prim.GetPath()}: rect light textures are not supported; its colour is used")
         pts = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], np.float64) * [w / 2, h / 2]
         self.add_emitter_polygon(prim, pts, max(w, h), bool(self.get(light.GetNormalizeAttr(), False)), scalar, colour, blackbody)
@@ -938,7 +1019,9 @@ class _Reader:
             return
         light = self.UsdLux.DistantLight(prim)
         if not hasattr(pc, "SunLight"):
-            self.warn(f"distant:{prim.GetPath()}", f"prim {prim.GetPath()}: DistantLight is not supported by this polychrome and is skipped")
+            self.warn(
+                f"distant:{prim.GetPath()}", f"prim {prim.GetPath()}: DistantLight is not supported by this polychrome and is skipped"
+            )
             return
         scalar, colour, blackbody = self.light_rgb(prim, light)
         axis = -m[:3, 2] / np.linalg.norm(m[:3, 2])
@@ -950,9 +1033,18 @@ class _Reader:
         if not self.get(light.GetNormalizeAttr(), False) and angle > 0:
             scalar *= math.pi * math.sin(angle / 2) ** 2
         if angle > math.radians(1.0):
-            self.warn(f"angle:{prim.GetPath()}", f"prim {prim.GetPath()}: the sun's angular size is not supported; it is rendered as a parallel light")
-        self.lights.append(pc.SunLight(axis.tolist(), strength=1.0, color=self.emitted(scalar, colour, blackbody),
-                                       name=str(self.custom(prim, A.NAME, str(prim.GetPath())))))
+            self.warn(
+                f"angle:{prim.GetPath()}",
+                f"prim {prim.GetPath()}: the sun's angular size is not supported; it is rendered as a parallel light",
+            )
+        self.lights.append(
+            pc.SunLight(
+                axis.tolist(),
+                strength=1.0,
+                color=self.emitted(scalar, colour, blackbody),
+                name=str(self.custom(prim, A.NAME, str(prim.GetPath()))),
+            )
+        )
 
     def read_dome_light(self, prim) -> None:
         from ..texture import Texture
@@ -974,7 +1066,9 @@ class _Reader:
         if fmt not in ("automatic", "latlong"):
             self.warn(f"domefmt:{prim.GetPath()}", f"prim {prim.GetPath()}: dome texture format '{fmt}' is not supported; read as latlong")
         if colour != (1.0, 1.0, 1.0) or blackbody is not None:
-            self.warn(f"dometint:{prim.GetPath()}", f"prim {prim.GetPath()}: a colour tint on a dome texture is not supported and is ignored")
+            self.warn(
+                f"dometint:{prim.GetPath()}", f"prim {prim.GetPath()}: a colour tint on a dome texture is not supported and is ignored"
+            )
         path = self.asset_path(tex, prim, "dome texture")
         try:
             texture = Texture.from_file(path, name=path.name)
@@ -988,7 +1082,10 @@ class _Reader:
         rx = np.array([[1, 0, 0], [0, 0, -1], [0, 1, 0]], dtype=np.float64)
         wz = w @ rx.T
         if abs(wz[2, 2] - 1.0) > 1e-4:
-            self.warn(f"dometilt:{prim.GetPath()}", f"prim {prim.GetPath()}: a dome tilted away from the up axis is not supported; only its turn about the up axis is used")
+            self.warn(
+                f"dometilt:{prim.GetPath()}",
+                f"prim {prim.GetPath()}: a dome tilted away from the up axis is not supported; only its turn about the up axis is used",
+            )
         phi = math.atan2(wz[1, 0], wz[0, 0])
         extra = self.json_attr(prim, A.LIGHT) or {}
         rotation = extra.get("rotation") if "rotation" in extra else math.remainder(math.pi / 2 - phi, 2 * math.pi)
@@ -1071,8 +1168,10 @@ class _Reader:
             self.current_prim = str(prim.GetPath())  # named by read_stage if pxr raises
             t = str(prim.GetTypeName())
             img = UsdGeom.Imageable(prim)
-            if img and (img.ComputeVisibility(self.time) == UsdGeom.Tokens.invisible
-                        or img.ComputePurpose() in (UsdGeom.Tokens.guide, UsdGeom.Tokens.proxy)):
+            if img and (
+                img.ComputeVisibility(self.time) == UsdGeom.Tokens.invisible
+                or img.ComputePurpose() in (UsdGeom.Tokens.guide, UsdGeom.Tokens.proxy)
+            ):
                 it.PruneChildren()
                 continue
             if t in ("Mesh", "Sphere", "Cube", "Cylinder", "Cone", "Plane"):
@@ -1119,15 +1218,28 @@ class _Reader:
             self.warn("camera", "the stage has no UsdGeom.Camera; the default camera at the origin looking down −Z is used")
             scene.camera = Camera()
 
-        order = sorted(self.meshes, key=lambda k: (self.meshes[k] is None, float("inf") if self.meshes[k] is None or self.meshes[k]["order"] is None else self.meshes[k]["order"]))
+        order = sorted(
+            self.meshes,
+            key=lambda k: (
+                self.meshes[k] is None,
+                float("inf") if self.meshes[k] is None or self.meshes[k]["order"] is None else self.meshes[k]["order"],
+            ),
+        )
         index: dict[str, int] = {}
         for key in order:
             m = self.meshes[key]
             if m is None:
                 continue
             index[key] = scene.add_mesh(
-                m["name"], m["vertices"], m["triangles"], normals=m["normals"], uvs=m["uvs"],
-                material=m["material"], material_ids=m["material_ids"], place=False)
+                m["name"],
+                m["vertices"],
+                m["triangles"],
+                normals=m["normals"],
+                uvs=m["uvs"],
+                material=m["material"],
+                material_ids=m["material_ids"],
+                place=False,
+            )
         for key, matrix, name in self.instances:
             scene.add_instance(index[key], matrix, name)
         for light in self.lights:
@@ -1224,7 +1336,7 @@ def read_settings_from_stage(stage, path) -> dict[str, Any]:
     fields = {f.name for f in dataclasses.fields(RenderSettings)} - set(A.NOT_STORED)
     for attr in prim.GetAttributes():
         name = attr.GetName()
-        field = name[len(A.NAMESPACE) + 1:] if name.startswith(A.NAMESPACE + ":") else None
+        field = name[len(A.NAMESPACE) + 1 :] if name.startswith(A.NAMESPACE + ":") else None
         if field not in fields or not attr.HasAuthoredValue():
             continue
         v = attr.Get()

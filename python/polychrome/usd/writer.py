@@ -98,7 +98,6 @@ class _Rgb:
             return (1.0, 1.0, 1.0)
         return tuple(float(c) for c in np.clip(np.nan_to_num(rgb), 0.0, None))  # type: ignore[return-value]
 
-
     def metal(self, bsdf: dict[str, Any]) -> tuple[float, float, float]:
         """Normal-incidence reflectance ((n−1)² + k²)/((n+1)² + k²) of a conductor."""
         metal = bsdf.get("metal")
@@ -229,7 +228,13 @@ def _area_lights(desc, buffers, uses) -> dict[int, dict[str, Any]]:
     for k, inst in enumerate(instances):
         index = int(inst["mesh"])
         md = meshes[index]
-        if uses[index] != 1 or md.get("material_ids") is not None or md.get("normals") is not None or md.get("uvs") is not None or not materials:
+        if (
+            uses[index] != 1
+            or md.get("material_ids") is not None
+            or md.get("normals") is not None
+            or md.get("uvs") is not None
+            or not materials
+        ):
             continue
         mat = materials[int(md.get("material") or 0)]
         if (mat.get("bsdf") or {}).get("type") != "none" or mat.get("emission") is None:
@@ -260,7 +265,9 @@ def _area_lights(desc, buffers, uses) -> dict[int, dict[str, Any]]:
         shape: dict[str, Any]
         if n == 4:
             e0, e1 = edges[0], edges[1]
-            if abs(np.dot(e0, e1)) > 1e-6 * np.linalg.norm(e0) * np.linalg.norm(e1) or not np.allclose(edges[0], -edges[2], atol=1e-6 * size):
+            if abs(np.dot(e0, e1)) > 1e-6 * np.linalg.norm(e0) * np.linalg.norm(e1) or not np.allclose(
+                edges[0], -edges[2], atol=1e-6 * size
+            ):
                 continue
             # Width along the edge closest to the instance's own x axis (as Blender sizes it).
             local_x = np.asarray(inst["transform"], dtype=np.float64)[:3, 0]
@@ -283,7 +290,11 @@ def _area_lights(desc, buffers, uses) -> dict[int, dict[str, Any]]:
                 continue
             offset = back.mean(axis=0) - c
             dist = float(np.dot(offset, normal))
-            if 0 < abs(dist) < 0.01 * size and np.allclose(back - offset, p, atol=1e-5 * size) and np.allclose(offset, dist * normal, atol=1e-6 * size):
+            if (
+                0 < abs(dist) < 0.01 * size
+                and np.allclose(back - offset, p, atol=1e-5 * size)
+                and np.allclose(offset, dist * normal, atol=1e-6 * size)
+            ):
                 z = normal if dist > 0 else -normal  # the light's +Z points at the backing
                 x = shape.pop("x")
                 x = x - np.dot(x, z) * z
@@ -456,7 +467,13 @@ def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path
                 prim.CreateAttribute(A.IOR_COEFFICIENTS, Sdf.ValueTypeNames.DoubleArray).Set(Vt.DoubleArray(coeffs))
             if "name" in ior:
                 prim.CreateAttribute(A.IOR_NAME, Sdf.ValueTypeNames.String).Set(str(ior["name"]))
-            extra_ior = {k: v for k, v in ior.items() if k not in ("type", "name") and k not in _IOR_FIELDS.get(str(ior.get("type")), []) and not (ior.get("type") == "sellmeier" and k in ("b", "c"))}
+            extra_ior = {
+                k: v
+                for k, v in ior.items()
+                if k not in ("type", "name")
+                and k not in _IOR_FIELDS.get(str(ior.get("type")), [])
+                and not (ior.get("type") == "sellmeier" and k in ("b", "c"))
+            }
             if extra_ior:
                 bsdf["ior"] = extra_ior  # unknown fields of a future model: kept in extra
             inp("ior", Sdf.ValueTypeNames.Float, float(_ior_nd(ior)))

@@ -126,8 +126,17 @@ def export_lights(pc, depsgraph, scene, warnings):
             export_area(pc, scene, ob, ld, name, m, warnings)
         elif ld.type == "SPOT" and hasattr(pc, "SpotLight"):
             spec = light_colour(pc, ld, name, warnings)
-            scene.add_light(pc.SpotLight(pos.tolist(), _axis(m, name), power=_power(ld, name), color=spec,
-                                         spot_size=float(ld.spot_size), spot_blend=float(ld.spot_blend), name=name))
+            scene.add_light(
+                pc.SpotLight(
+                    pos.tolist(),
+                    _axis(m, name),
+                    power=_power(ld, name),
+                    color=spec,
+                    spot_size=float(ld.spot_size),
+                    spot_blend=float(ld.spot_blend),
+                    name=name,
+                )
+            )
         elif ld.type == "SUN" and hasattr(pc, "SunLight"):
             spec = light_colour(pc, ld, name, warnings)
             if float(getattr(ld, "angle", 0.0)) > 1e-3:

@@ -49,8 +49,10 @@ def _input_colour(mat, node, name, warnings, pc, allow_texture=False):
         from .textures import blender_texture
 
         if src.inputs["Vector"].is_linked:
-            warnings.add(("vec", mat.name, src.name),
-                         f"material '{mat.name}': the Vector input of '{src.name}' is ignored (the active UV map is used)")
+            warnings.add(
+                ("vec", mat.name, src.name),
+                f"material '{mat.name}': the Vector input of '{src.name}' is ignored (the active UV map is used)",
+            )
         tex = blender_texture(pc, src, f"material '{mat.name}'", warnings, _TEXTURES)
         if tex is not None:
             return tex
@@ -64,13 +66,17 @@ def _input_colour(mat, node, name, warnings, pc, allow_texture=False):
             buf = np.empty(w * h * img.channels, np.float32)
             img.pixels.foreach_get(buf)
             mean = buf.reshape(-1, img.channels)[:, :3].mean(axis=0)
-            warnings.add(("tex", mat.name, src.name),
-                         f"material '{mat.name}': image texture '{src.name}' is rendered as its mean colour (textures are not supported yet)")
+            warnings.add(
+                ("tex", mat.name, src.name),
+                f"material '{mat.name}': image texture '{src.name}' is rendered as its mean colour (textures are not supported yet)",
+            )
             return tuple(float(c) for c in np.nan_to_num(mean))
     if src.type == "RGB":
         return _rgb(src.outputs[0].default_value)
-    warnings.add(("link", mat.name, src.name),
-                 f"material '{mat.name}': node '{src.name}' ({src.bl_idname}) driving '{name}' is not supported; its default value is used")
+    warnings.add(
+        ("link", mat.name, src.name),
+        f"material '{mat.name}': node '{src.name}' ({src.bl_idname}) driving '{name}' is not supported; its default value is used",
+    )
     return _rgb(sock.default_value)
 
 
@@ -119,26 +125,39 @@ def _principled_full(pc, mat, node, warnings, base, emission):
         src.polychrome_export(pc, mat, warnings)  # validates the index over 380–780 nm
         ior = src.polychrome_ior(pc)
     elif src is not None:
-        warnings.add(("link", mat.name, src.name),
-                     f"material '{mat.name}': node '{src.name}' ({src.bl_idname}) driving 'IOR' is not supported; its default value is used")
-    for name, value in (("Coat Weight", 0.0), ("Sheen Weight", 0.0), ("Subsurface Weight", 0.0),
-                        ("Diffuse Roughness", 0.0), ("Alpha", 1.0), ("Anisotropic", 0.0)):
+        warnings.add(
+            ("link", mat.name, src.name),
+            f"material '{mat.name}': node '{src.name}' ({src.bl_idname}) driving 'IOR' is not supported; its default value is used",
+        )
+    for name, value in (
+        ("Coat Weight", 0.0),
+        ("Sheen Weight", 0.0),
+        ("Subsurface Weight", 0.0),
+        ("Diffuse Roughness", 0.0),
+        ("Alpha", 1.0),
+        ("Anisotropic", 0.0),
+    ):
         sock = node.inputs.get(name)
         if sock is not None and (sock.is_linked or float(sock.default_value) != value):
-            warnings.add(("principled-lobe", mat.name, name),
-                         f"material '{mat.name}': '{node.name}' {name} is not supported yet and is ignored")
+            warnings.add(
+                ("principled-lobe", mat.name, name), f"material '{mat.name}': '{node.name}' {name} is not supported yet and is ignored"
+            )
     for name in ("Metallic", "Roughness", "Transmission Weight", "Thin Film Thickness", "Thin Film IOR", "Emission Strength"):
         sock = node.inputs.get(name)
         src = _linked_node(sock) if sock is not None else None
         if src is not None:
-            warnings.add(("link", mat.name, src.name, name),
-                         f"material '{mat.name}': node '{src.name}' ({src.bl_idname}) driving '{name}' is not supported; its default value is used")
+            warnings.add(
+                ("link", mat.name, src.name, name),
+                f"material '{mat.name}': node '{src.name}' ({src.bl_idname}) driving '{name}' is not supported; its default value is used",
+            )
     level = node.inputs.get("Specular IOR Level")
     extra = {}
     if level is not None:
         if level.is_linked:
-            warnings.add(("link", mat.name, node.name, "level"),
-                         f"material '{mat.name}': a node driving 'Specular IOR Level' of '{node.name}' is not supported; its default value is used")
+            warnings.add(
+                ("link", mat.name, node.name, "level"),
+                f"material '{mat.name}': a node driving 'Specular IOR Level' of '{node.name}' is not supported; its default value is used",
+            )
         if abs(float(level.default_value) - 0.5) > 1e-6:
             extra["specular_ior_level"] = _clamp01(level.default_value)
     tint = None
@@ -182,18 +201,21 @@ def _principled(pc, mat, node, warnings):
     transmission = _input_value(node, "Transmission Weight")
     roughness = min(max(_input_value(node, "Roughness"), 0.0), 1.0)
     if 0.0 < metallic < 1.0 or 0.0 < transmission < 1.0:
-        warnings.add(("principled", mat.name),
-                     f"material '{mat.name}': '{node.name}' mixes metallic/transmission partially; "
-                     "rendered as the dominant lobe (threshold 0.5)")
+        warnings.add(
+            ("principled", mat.name),
+            f"material '{mat.name}': '{node.name}' mixes metallic/transmission partially; rendered as the dominant lobe (threshold 0.5)",
+        )
     if transmission >= 0.5 and hasattr(pc, "Dielectric"):
         return pc.Dielectric(_ior(node, mat), roughness=roughness, name=mat.name)
     if metallic >= 0.5 and hasattr(pc, "Glossy"):
         if isinstance(base, tuple):
             return pc.Glossy(base, roughness=roughness, name=mat.name)
         warnings.add(("metal-tex", mat.name), f"material '{mat.name}': a textured metallic colour is not supported; diffuse is used")
-    elif (transmission >= 0.5 or metallic >= 0.5):
-        warnings.add(("principled-missing", mat.name),
-                     f"material '{mat.name}': metallic/transmission of '{node.name}' are not supported by this polychrome; rendered as diffuse")
+    elif transmission >= 0.5 or metallic >= 0.5:
+        warnings.add(
+            ("principled-missing", mat.name),
+            f"material '{mat.name}': metallic/transmission of '{node.name}' are not supported by this polychrome; rendered as diffuse",
+        )
     return pc.Diffuse(base, emission=emission, name=mat.name)
 
 
@@ -220,8 +242,10 @@ def _mix_shader(pc, mat, node, warnings, depth):
     """Mix Shader / Add Shader of supported shaders → ``polychrome.Mix`` / ``polychrome.Add``."""
     shaders = [sock for sock in node.inputs if sock.type == "SHADER"]
     if len(shaders) != 2 or depth > 16:
-        warnings.add(("node", mat.name, node.name),
-                     f"material '{mat.name}': node '{node.name}' ({node.bl_idname}) is not supported; rendered as grey diffuse")
+        warnings.add(
+            ("node", mat.name, node.name),
+            f"material '{mat.name}': node '{node.name}' ({node.bl_idname}) is not supported; rendered as grey diffuse",
+        )
         return pc.Diffuse(GREY, name=mat.name)
     parts = []
     for sock in shaders:
@@ -245,16 +269,21 @@ def _mix_factor(pc, mat, node, warnings):
     out = sock.links[0].from_socket if sock.is_linked else None
     if src is not None and hasattr(pc, "Fresnel"):
         if src.inputs.get("Normal") is not None and src.inputs["Normal"].is_linked:
-            warnings.add(("fac-normal", mat.name, src.name),
-                         f"material '{mat.name}': the Normal input of '{src.name}' is ignored (the shading normal is used)")
+            warnings.add(
+                ("fac-normal", mat.name, src.name),
+                f"material '{mat.name}': the Normal input of '{src.name}' is ignored (the shading normal is used)",
+            )
         if src.type == "FRESNEL" and not src.inputs["IOR"].is_linked:
             return pc.Fresnel(float(src.inputs["IOR"].default_value))
         if src.type == "LAYER_WEIGHT" and not src.inputs["Blend"].is_linked:
-            return pc.LayerWeight(_clamp01(src.inputs["Blend"].default_value),
-                                  "FACING" if out is not None and out.name == "Facing" else "FRESNEL")
-    warnings.add(("link", mat.name, node.name),
-                 f"material '{mat.name}': node '{src.name if src else '?'}' driving the factor of '{node.name}' is not supported; "
-                 f"its value {value:.3g} is used")
+            return pc.LayerWeight(
+                _clamp01(src.inputs["Blend"].default_value), "FACING" if out is not None and out.name == "Facing" else "FRESNEL"
+            )
+    warnings.add(
+        ("link", mat.name, node.name),
+        f"material '{mat.name}': node '{src.name if src else '?'}' driving the factor of '{node.name}' is not supported; "
+        f"its value {value:.3g} is used",
+    )
     return value
 
 
@@ -281,8 +310,10 @@ def _export_node(pc, mat, node, warnings, depth=0):
     export_custom = getattr(node, "polychrome_export", None)
     if export_custom is not None:
         return export_custom(pc, mat, warnings)
-    warnings.add(("node", mat.name, node.name),
-                 f"material '{mat.name}': node '{node.name}' ({node.bl_idname}) is not supported; rendered as grey diffuse")
+    warnings.add(
+        ("node", mat.name, node.name),
+        f"material '{mat.name}': node '{node.name}' ({node.bl_idname}) is not supported; rendered as grey diffuse",
+    )
     return pc.Diffuse(GREY, name=mat.name)
 
 

@@ -98,8 +98,10 @@ def export_meshes(pc, depsgraph, scene, material_for_slot, warnings):
         # Instances of one geometry share the evaluated data block; geometry-node instances
         # of different meshes share the instancer's name, so the data pointer is the key.
         data = getattr(ob, "data", None)
-        key = (data.as_pointer() if data is not None else name,
-               tuple(s.material.original.name if s.material else "" for s in ob.material_slots))
+        key = (
+            data.as_pointer() if data is not None else name,
+            tuple(s.material.original.name if s.material else "" for s in ob.material_slots),
+        )
         if key not in placed:
             try:
                 arrays = mesh_arrays(ob, name)
@@ -115,8 +117,7 @@ def export_meshes(pc, depsgraph, scene, material_for_slot, warnings):
             slots = [material_for_slot(ob, s) for s in range(len(ob.material_slots))] or [material_for_slot(ob, None)]
             slot_map = np.asarray(slots, dtype=np.int64)
             ids = slot_map[np.clip(tri_slot, 0, len(slot_map) - 1)]
-            placed[key] = scene.add_mesh(name, vertices, triangles, normals=normals, uvs=uvs,
-                                         material_ids=ids, place=False)
+            placed[key] = scene.add_mesh(name, vertices, triangles, normals=normals, uvs=uvs, material_ids=ids, place=False)
         mesh = placed[key]
         if mesh is None:
             continue

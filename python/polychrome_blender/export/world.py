@@ -62,7 +62,9 @@ def export_world(pc, depsgraph, scene, warnings):
                 buf = np.empty(img.size[0] * img.size[1] * img.channels, np.float32)
                 img.pixels.foreach_get(buf)
                 colour = tuple(float(c) for c in np.nan_to_num(buf.reshape(-1, img.channels)[:, :3].mean(axis=0)))
-                warnings.add(("world", "env"), f"world '{world.name}': environment texture rendered as its mean colour (HDRI not supported yet)")
+                warnings.add(
+                    ("world", "env"), f"world '{world.name}': environment texture rendered as its mean colour (HDRI not supported yet)"
+                )
             else:
                 warnings.add(("world", src.name), f"world '{world.name}': node '{src.name}' is not supported; its default colour is used")
     if strength > 0.0 and max(colour) > 0.0:

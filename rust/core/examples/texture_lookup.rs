@@ -33,25 +33,17 @@ fn best_ns(lookups: usize, mut f: impl FnMut(usize)) -> f64 {
 }
 
 fn main() {
-    let n: usize = std::env::args()
-        .nth(1)
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(41);
+    let n: usize = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(41);
     let grid = WavelengthGrid::uniform(n, 380.0, 780.0).expect("grid");
     let (w, h) = (2048u32, 1024u32);
     let mut rng = Rng::new(1, 2);
     let pixels: Vec<f32> = (0..w * h * 3).map(|_| rng.uniform()).collect();
     let bytes: Vec<u8> = pixels.iter().map(|v| (v * 255.0) as u8).collect();
-    let linear =
-        Arc::new(Texture::from_linear("bench", w, h, 3, &pixels, Wrap::Repeat).expect("texture"));
-    let srgb =
-        Arc::new(Texture::from_srgb8("bench8", w, h, 3, &bytes, Wrap::Repeat).expect("texture"));
-    let up =
-        Arc::new(Uplift::new(&grid, &RgbSpace::rec709(), UpliftMethod::Linear).expect("uplift"));
+    let linear = Arc::new(Texture::from_linear("bench", w, h, 3, &pixels, Wrap::Repeat).expect("texture"));
+    let srgb = Arc::new(Texture::from_srgb8("bench8", w, h, 3, &bytes, Wrap::Repeat).expect("texture"));
+    let up = Arc::new(Uplift::new(&grid, &RgbSpace::rec709(), UpliftMethod::Linear).expect("uplift"));
     let uvs: Vec<Vec2> = (0..1 << 16).map(|_| rng.uniform2()).collect();
-    let dirs: Vec<Vec3A> = (0..1 << 16)
-        .map(|_| polychrome_core::sampling::uniform_sphere(rng.uniform2()))
-        .collect();
+    let dirs: Vec<Vec3A> = (0..1 << 16).map(|_| polychrome_core::sampling::uniform_sphere(rng.uniform2())).collect();
     let lookups = 4_000_000;
     let mut out = SampledSpectrum::zeros(n);
     let mut out2 = SampledSpectrum::zeros(n);
@@ -68,16 +60,8 @@ fn main() {
     println!("bilinear_rgb_only {ns:.2}");
     let mut ctx = ShadingContext::new(&grid);
     let constant = SpectralParam::Constant(SampledSpectrum::splat(n, 0.5));
-    let tex = SpectralParam::Texture {
-        texture: linear.clone(),
-        uplift: up.clone(),
-        scale: 1.0,
-    };
-    let tex8 = SpectralParam::Texture {
-        texture: srgb,
-        uplift: up.clone(),
-        scale: 1.0,
-    };
+    let tex = SpectralParam::Texture { texture: linear.clone(), uplift: up.clone(), scale: 1.0 };
+    let tex8 = SpectralParam::Texture { texture: srgb, uplift: up.clone(), scale: 1.0 };
     let mut run = |name: &str, p: &SpectralParam| {
         let ns = best_ns(lookups, |i| {
             ctx.uv = uvs[i & mask];
@@ -90,18 +74,9 @@ fn main() {
 
     run("texture_linear_f32", &tex);
     run("texture_srgb_u8", &tex8);
-    let small = Arc::new(
-        Texture::from_linear("small", 64, 64, 3, &pixels[..64 * 64 * 3], Wrap::Repeat)
-            .expect("texture"),
-    );
-    run(
-        "texture_linear_f32_64x64",
-        &SpectralParam::Texture {
-            texture: small,
-            uplift: up.clone(),
-            scale: 1.0,
-        },
-    );
+    let small =
+        Arc::new(Texture::from_linear("small", 64, 64, 3, &pixels[..64 * 64 * 3], Wrap::Repeat).expect("texture"));
+    run("texture_linear_f32_64x64", &SpectralParam::Texture { texture: small, uplift: up.clone(), scale: 1.0 });
     let env = ImageEnvironment::new(linear, up, 1.0, 0.3, 1.0, true);
     let ns = best_ns(lookups, |i| {
         env.radiance_into(dirs[i & mask], &mut out);

@@ -18,28 +18,11 @@ const H: usize = 24;
 const SEEDS: u64 = 6;
 
 fn diffuse(name: &str, reflectance: SpectrumDesc, emission: Option<SpectrumDesc>) -> MaterialDesc {
-    MaterialDesc {
-        name: name.into(),
-        bsdf: BsdfDesc::Diffuse { reflectance },
-        emission,
-    }
+    MaterialDesc { name: name.into(), bsdf: BsdfDesc::Diffuse { reflectance }, emission }
 }
 
-fn quad(
-    desc: &mut SceneDesc,
-    buffers: &mut Vec<Buffer>,
-    name: &str,
-    p: [[f32; 3]; 4],
-    material: u32,
-) {
-    add_mesh(
-        desc,
-        buffers,
-        name,
-        p.iter().flatten().copied().collect(),
-        vec![0, 1, 2, 0, 2, 3],
-        material,
-    );
+fn quad(desc: &mut SceneDesc, buffers: &mut Vec<Buffer>, name: &str, p: [[f32; 3]; 4], material: u32) {
+    add_mesh(desc, buffers, name, p.iter().flatten().copied().collect(), vec![0, 1, 2, 0, 2, 3], material);
 }
 
 fn look_at(eye: [f32; 3], target: [f32; 3]) -> [[f32; 4]; 4] {
@@ -48,24 +31,14 @@ fn look_at(eye: [f32; 3], target: [f32; 3]) -> [[f32; 4]; 4] {
     let r = f.cross(Vec3A::Z).normalize();
     let u = r.cross(f);
     let z = -f;
-    [
-        [r.x, u.x, z.x, eye.x],
-        [r.y, u.y, z.y, eye.y],
-        [r.z, u.z, z.z, eye.z],
-        [0.0, 0.0, 0.0, 1.0],
-    ]
+    [[r.x, u.x, z.x, eye.x], [r.y, u.y, z.y, eye.y], [r.z, u.z, z.z, eye.z], [0.0, 0.0, 0.0, 1.0]]
 }
 
 fn lamp(strength: f32) -> MaterialDesc {
     diffuse(
         "lamp",
         SpectrumDesc::constant(0.0),
-        Some(SpectrumDesc {
-            kind: SpectrumKind::Blackbody {
-                temperature: 4500.0,
-            },
-            scale: strength,
-        }),
+        Some(SpectrumDesc { kind: SpectrumKind::Blackbody { temperature: 4500.0 }, scale: strength }),
     )
 }
 
@@ -73,8 +46,7 @@ fn lamp(strength: f32) -> MaterialDesc {
 fn diffuse_room() -> (SceneDesc, Vec<Buffer>) {
     let mut desc = SceneDesc::default();
     let mut b = Vec::new();
-    desc.materials
-        .push(diffuse("white", SpectrumDesc::constant(0.7), None));
+    desc.materials.push(diffuse("white", SpectrumDesc::constant(0.7), None));
     desc.materials.push(diffuse(
         "red",
         SpectrumDesc {
@@ -88,56 +60,14 @@ fn diffuse_room() -> (SceneDesc, Vec<Buffer>) {
     ));
     desc.materials.push(lamp(6.0));
     let s = 1.0f32;
-    quad(
-        &mut desc,
-        &mut b,
-        "floor",
-        [[-s, -s, -s], [s, -s, -s], [s, s, -s], [-s, s, -s]],
-        0,
-    );
-    quad(
-        &mut desc,
-        &mut b,
-        "ceiling",
-        [[-s, -s, s], [-s, s, s], [s, s, s], [s, -s, s]],
-        0,
-    );
-    quad(
-        &mut desc,
-        &mut b,
-        "left",
-        [[-s, -s, -s], [-s, s, -s], [-s, s, s], [-s, -s, s]],
-        1,
-    );
-    quad(
-        &mut desc,
-        &mut b,
-        "right",
-        [[s, -s, -s], [s, -s, s], [s, s, s], [s, s, -s]],
-        0,
-    );
-    quad(
-        &mut desc,
-        &mut b,
-        "back",
-        [[-s, s, -s], [s, s, -s], [s, s, s], [-s, s, s]],
-        1,
-    );
-    quad(
-        &mut desc,
-        &mut b,
-        "front",
-        [[-s, -s, -s], [-s, -s, s], [s, -s, s], [s, -s, -s]],
-        0,
-    );
+    quad(&mut desc, &mut b, "floor", [[-s, -s, -s], [s, -s, -s], [s, s, -s], [-s, s, -s]], 0);
+    quad(&mut desc, &mut b, "ceiling", [[-s, -s, s], [-s, s, s], [s, s, s], [s, -s, s]], 0);
+    quad(&mut desc, &mut b, "left", [[-s, -s, -s], [-s, s, -s], [-s, s, s], [-s, -s, s]], 1);
+    quad(&mut desc, &mut b, "right", [[s, -s, -s], [s, -s, s], [s, s, s], [s, s, -s]], 0);
+    quad(&mut desc, &mut b, "back", [[-s, s, -s], [s, s, -s], [s, s, s], [-s, s, s]], 1);
+    quad(&mut desc, &mut b, "front", [[-s, -s, -s], [-s, -s, s], [s, -s, s], [s, -s, -s]], 0);
     let l = 0.35f32;
-    quad(
-        &mut desc,
-        &mut b,
-        "lamp",
-        [[-l, -l, 0.98], [l, -l, 0.98], [l, l, 0.98], [-l, l, 0.98]],
-        2,
-    );
+    quad(&mut desc, &mut b, "lamp", [[-l, -l, 0.98], [l, -l, 0.98], [l, l, 0.98], [-l, l, 0.98]], 2);
     desc.camera.to_world = look_at([0.0, -0.95, 0.1], [0.0, 1.0, -0.1]);
     desc.camera.focal_length = 18.0;
     (desc, b)
@@ -150,30 +80,15 @@ fn diffuse_room() -> (SceneDesc, Vec<Buffer>) {
 fn mirror_scene() -> (SceneDesc, Vec<Buffer>) {
     let mut desc = SceneDesc::default();
     let mut b = Vec::new();
-    desc.materials
-        .push(diffuse("floor", SpectrumDesc::constant(0.8), None));
+    desc.materials.push(diffuse("floor", SpectrumDesc::constant(0.8), None));
     desc.materials.push(
-        serde_json::from_value(
-            serde_json::json!({"name": "mirror", "bsdf": {"type": "conductor", "metal": "silver"}}),
-        )
-        .unwrap(),
+        serde_json::from_value(serde_json::json!({"name": "mirror", "bsdf": {"type": "conductor", "metal": "silver"}}))
+            .unwrap(),
     );
     desc.materials.push(lamp(150.0));
     let s = 2.5f32;
-    quad(
-        &mut desc,
-        &mut b,
-        "floor",
-        [[-s, -s, 0.0], [s, -s, 0.0], [s, s, 0.0], [-s, s, 0.0]],
-        0,
-    );
-    quad(
-        &mut desc,
-        &mut b,
-        "mirror",
-        [[-s, -s, 2.5], [-s, s, 2.5], [s, s, 2.5], [s, -s, 2.5]],
-        1,
-    );
+    quad(&mut desc, &mut b, "floor", [[-s, -s, 0.0], [s, -s, 0.0], [s, s, 0.0], [-s, s, 0.0]], 0);
+    quad(&mut desc, &mut b, "mirror", [[-s, -s, 2.5], [-s, s, 2.5], [s, s, 2.5], [s, -s, 2.5]], 1);
     let (c, l) = ([-0.6f32, 0.3f32, 1.5f32], 0.1f32);
     quad(
         &mut desc,
@@ -192,12 +107,7 @@ fn mirror_scene() -> (SceneDesc, Vec<Buffer>) {
 }
 
 /// Per-seed luminance images of one direction.
-fn renders(
-    scene: &(SceneDesc, Vec<Buffer>),
-    direction: Direction,
-    samples: u32,
-    max_bounces: u32,
-) -> Vec<Vec<f64>> {
+fn renders(scene: &(SceneDesc, Vec<Buffer>), direction: Direction, samples: u32, max_bounces: u32) -> Vec<Vec<f64>> {
     (0..SEEDS)
         .map(|seed| {
             let s = RenderSettings {
@@ -267,17 +177,10 @@ fn assert_same_image(a: &[Vec<f64>], b: &[Vec<f64>], what: &str) {
         assert!(z < 5.0, "{what}: block {i}: {x} vs {y} (se {se})");
     }
     // The whole image within 4 standard errors as well.
-    let total = |m: &[(f64, f64)]| {
-        (
-            m.iter().map(|v| v.0).sum::<f64>(),
-            m.iter().map(|v| v.1 * v.1).sum::<f64>().sqrt(),
-        )
-    };
+    let total =
+        |m: &[(f64, f64)]| (m.iter().map(|v| v.0).sum::<f64>(), m.iter().map(|v| v.1 * v.1).sum::<f64>().sqrt());
     let ((ta, sa), (tb, sb)) = (total(&ma), total(&mb));
-    assert!(
-        (ta - tb).abs() < 4.0 * (sa * sa + sb * sb).sqrt() + 1e-3 * tb,
-        "{what}: image {ta} vs {tb}"
-    );
+    assert!((ta - tb).abs() < 4.0 * (sa * sa + sb * sb).sqrt() + 1e-3 * tb, "{what}: image {ta} vs {tb}");
     eprintln!("{what}: worst block z {worst:.2}, image {ta:.4} vs {tb:.4}");
 }
 
@@ -299,21 +202,10 @@ fn bidirectional_matches_forward_and_backward_and_beats_both_on_the_mirror_caust
     // BACKWARD finds the mirrored lamp only by rare BSDF hits (a heavy-tailed estimate
     // whose spread over a few seeds understates its error): compare at 512 spp.
     let reference = renders(&scene, Direction::Backward, 512, 3);
-    assert_same_image(
-        &bid,
-        &reference,
-        "BIDIRECTIONAL vs BACKWARD (512 spp), mirror caustic",
-    );
-    let (vb, vf, vk) = (
-        mean_pixel_variance(&bid),
-        mean_pixel_variance(&fwd),
-        mean_pixel_variance(&bwd),
-    );
+    assert_same_image(&bid, &reference, "BIDIRECTIONAL vs BACKWARD (512 spp), mirror caustic");
+    let (vb, vf, vk) = (mean_pixel_variance(&bid), mean_pixel_variance(&fwd), mean_pixel_variance(&bwd));
     eprintln!("mean pixel variance: BIDIRECTIONAL {vb:.3e}, FORWARD {vf:.3e}, BACKWARD {vk:.3e}");
     // Same samples per pixel for each direction (BIDIRECTIONAL traces a camera and a
     // light path per sample, so it costs about their sum).
-    assert!(
-        vb < 0.8 * vf && vb < 0.8 * vk,
-        "BIDIRECTIONAL {vb} vs FORWARD {vf}, BACKWARD {vk}"
-    );
+    assert!(vb < 0.8 * vf && vb < 0.8 * vk, "BIDIRECTIONAL {vb} vs FORWARD {vf}, BACKWARD {vk}");
 }

@@ -12,7 +12,7 @@ use polychrome_core::color::RgbSpace;
 use polychrome_core::geometry::{offset_ray_origin, Frame, Ray};
 use polychrome_core::material::{IorDesc, ShadingContext};
 use polychrome_core::render::{render, RenderControl, RenderSettings};
-use polychrome_core::scene::{BsdfDesc, BuildOptions, Buffer, LightDesc, MaterialDesc, Scene, SceneDesc, WorldDesc};
+use polychrome_core::scene::{BsdfDesc, Buffer, BuildOptions, LightDesc, MaterialDesc, Scene, SceneDesc, WorldDesc};
 use polychrome_core::spectrum::{SpectrumDesc, WavelengthGrid};
 
 fn material(name: &str, bsdf: BsdfDesc) -> MaterialDesc {
@@ -24,7 +24,13 @@ fn glass(name: &str, ior: IorDesc) -> MaterialDesc {
 }
 
 fn build(desc: &SceneDesc, buffers: &[Buffer]) -> Scene {
-    let opts = BuildOptions { grid: WavelengthGrid::default(), space: RgbSpace::rec709(), uplift: UpliftMethod::Linear, width: 8, height: 8 };
+    let opts = BuildOptions {
+        grid: WavelengthGrid::default(),
+        space: RgbSpace::rec709(),
+        uplift: UpliftMethod::Linear,
+        width: 8,
+        height: 8,
+    };
     Scene::build(desc, buffers, &opts).unwrap()
 }
 
@@ -125,7 +131,8 @@ fn furnace_scene(ior: IorDesc, roughness: f32) -> (SceneDesc, Vec<Buffer>) {
     desc.materials.push(material("glass", BsdfDesc::Dielectric { ior, roughness }));
     let (v, t) = uv_sphere([0.0, 0.0, 0.0], 1.0, 24, 48);
     add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
-    let world: WorldDesc = serde_json::from_value(serde_json::json!({"radiance": {"type": "constant", "value": 1.0}})).unwrap();
+    let world: WorldDesc =
+        serde_json::from_value(serde_json::json!({"radiance": {"type": "constant", "value": 1.0}})).unwrap();
     desc.world = Some(world);
     desc.camera = CameraDesc {
         projection: Projection::Orthographic,
@@ -167,13 +174,21 @@ fn glass_ball_in_a_white_furnace_is_invisible() {
             let (d0, _) = furnace_scene(IorDesc::Constant { ior: 1.0 }, 0.0);
             let mut d = d0;
             d.meshes.clear();
-            let o = render(&d, &[], &RenderSettings { width: 2, height: 2, samples: 1, ..Default::default() }, &RenderControl::new()).unwrap();
+            let o = render(
+                &d,
+                &[],
+                &RenderSettings { width: 2, height: 2, samples: 1, ..Default::default() },
+                &RenderControl::new(),
+            )
+            .unwrap();
             (o.images.rgba[0] as f64, o.images.rgba[1] as f64, o.images.rgba[2] as f64)
         };
         // Compare chromaticity (ratios), which the rough glass's energy loss keeps;
         // collapsed paths carry one wavelength each, so the tolerance follows the
         // per-channel standard errors.
-        let se_of = |c: usize, m: f64| (out.images.rgba.chunks_exact(4).map(|p| (p[c] as f64 - m).powi(2)).sum::<f64>() / (px - 1.0) / px).sqrt();
+        let se_of = |c: usize, m: f64| {
+            (out.images.rgba.chunks_exact(4).map(|p| (p[c] as f64 - m).powi(2)).sum::<f64>() / (px - 1.0) / px).sqrt()
+        };
         let (se_r, se_g, se_b) = (se_of(0, r), se_of(1, g), se_of(2, b));
         for (x, se_x, want) in [(r, se_r, e.0 / e.1), (b, se_b, e.2 / e.1)] {
             let tol = 5.0 * (se_x * se_x + want * want * se_g * se_g).sqrt() + 0.02 * want * g;
@@ -188,7 +203,10 @@ fn constant_index_never_collapses_and_dispersive_glass_does() {
     desc.materials.push(glass("crown", IorDesc::Constant { ior: 1.5 }));
     desc.materials.push(glass("flat cauchy", IorDesc::Cauchy { a: 1.5, b: 0.0, c: 0.0 }));
     desc.materials.push(glass("flint", IorDesc::Named { name: "N-SF11".into() }));
-    desc.materials.push(material("rough flint", BsdfDesc::Dielectric { ior: IorDesc::Abbe { nd: 1.7, vd: 30.0 }, roughness: 0.3 }));
+    desc.materials.push(material(
+        "rough flint",
+        BsdfDesc::Dielectric { ior: IorDesc::Abbe { nd: 1.7, vd: 30.0 }, roughness: 0.3 },
+    ));
     let scene = build(&desc, &[]);
     let n = scene.grid.len();
     let mut ctx = ShadingContext::new(&scene.grid);
@@ -220,7 +238,13 @@ fn constant_index_never_collapses_and_dispersive_glass_does() {
 #[test]
 fn bad_glass_and_metals_are_reported_by_name() {
     let cases = [
-        (BsdfDesc::Dielectric { ior: IorDesc::Sellmeier { b: [1.0, 0.0, 0.0], c: [0.5 * 0.5, 0.0, 0.0] }, roughness: 0.0 }, "pole"),
+        (
+            BsdfDesc::Dielectric {
+                ior: IorDesc::Sellmeier { b: [1.0, 0.0, 0.0], c: [0.5 * 0.5, 0.0, 0.0] },
+                roughness: 0.0,
+            },
+            "pole",
+        ),
         (BsdfDesc::Dielectric { ior: IorDesc::Constant { ior: 0.5 }, roughness: 0.0 }, "below 1"),
         (BsdfDesc::Dielectric { ior: IorDesc::Constant { ior: 1.5 }, roughness: f32::NAN }, "roughness"),
         (BsdfDesc::Conductor { metal: Some("mithril".into()), eta: None, k: None, roughness: 0.1 }, "mithril"),
@@ -229,7 +253,13 @@ fn bad_glass_and_metals_are_reported_by_name() {
     for (bsdf, needle) in cases {
         let mut desc = SceneDesc::default();
         desc.materials.push(material("Odd One", bsdf));
-        let opts = BuildOptions { grid: WavelengthGrid::default(), space: RgbSpace::rec709(), uplift: UpliftMethod::Linear, width: 8, height: 8 };
+        let opts = BuildOptions {
+            grid: WavelengthGrid::default(),
+            space: RgbSpace::rec709(),
+            uplift: UpliftMethod::Linear,
+            width: 8,
+            height: 8,
+        };
         let e = Scene::build(&desc, &[], &opts).err().expect("must fail").to_string();
         assert!(e.contains("material 'Odd One'") && e.contains(needle), "{e}");
     }
@@ -244,7 +274,14 @@ fn spot_light_on_a_plane_is_inverse_square_inside_and_black_outside() {
     let mut buffers = Vec::new();
     desc.materials.push(material("plane", BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(rho) }));
     let s = 4.0;
-    add_mesh(&mut desc, &mut buffers, "plane", vec![-s, -s, 0.0, s, -s, 0.0, s, s, 0.0, -s, s, 0.0], vec![0, 1, 2, 0, 2, 3], 0);
+    add_mesh(
+        &mut desc,
+        &mut buffers,
+        "plane",
+        vec![-s, -s, 0.0, s, -s, 0.0, s, s, 0.0, -s, s, 0.0],
+        vec![0, 1, 2, 0, 2, 3],
+        0,
+    );
     // Cone of full angle 60°: radius h·tan 30° ≈ 1.155 on the plane; no blend.
     desc.lights.push(LightDesc::Spot {
         name: "spot".into(),
@@ -297,9 +334,20 @@ fn sun_on_a_plane_gives_irradiance_times_cosine() {
     let mut buffers = Vec::new();
     desc.materials.push(material("plane", BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(rho) }));
     let s = 4.0;
-    add_mesh(&mut desc, &mut buffers, "plane", vec![-s, -s, 0.0, s, -s, 0.0, s, s, 0.0, -s, s, 0.0], vec![0, 1, 2, 0, 2, 3], 0);
+    add_mesh(
+        &mut desc,
+        &mut buffers,
+        "plane",
+        vec![-s, -s, 0.0, s, -s, 0.0, s, s, 0.0, -s, s, 0.0],
+        vec![0, 1, 2, 0, 2, 3],
+        0,
+    );
     let theta = 0.6f32;
-    desc.lights.push(LightDesc::Distant { name: "sun".into(), direction: [theta.sin(), 0.0, -theta.cos()], irradiance: SpectrumDesc::constant(e) });
+    desc.lights.push(LightDesc::Distant {
+        name: "sun".into(),
+        direction: [theta.sin(), 0.0, -theta.cos()],
+        irradiance: SpectrumDesc::constant(e),
+    });
     desc.camera = CameraDesc {
         projection: Projection::Orthographic,
         ortho_scale: 2.0,
@@ -353,7 +401,14 @@ fn sun_through_a_glass_slab_is_found_by_forward_tracing() {
     desc.materials.push(material("floor", BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(rho) }));
     desc.materials.push(glass("slab", IorDesc::Constant { ior: n as f64 }));
     let s = 2.0;
-    add_mesh(&mut desc, &mut buffers, "floor", vec![-s, -s, 0.0, s, -s, 0.0, s, s, 0.0, -s, s, 0.0], vec![0, 1, 2, 0, 2, 3], 0);
+    add_mesh(
+        &mut desc,
+        &mut buffers,
+        "floor",
+        vec![-s, -s, 0.0, s, -s, 0.0, s, s, 0.0, -s, s, 0.0],
+        vec![0, 1, 2, 0, 2, 3],
+        0,
+    );
     // Slab x ∈ [−1.5, 1.5], y ∈ [−2, 2], z ∈ [1, 1.3], wound outwards.
     let (x0, x1, y0, y1, z0, z1) = (-1.5f32, 1.5f32, -2.0f32, 2.0f32, 1.0f32, 1.3f32);
     let mut v = Vec::new();
@@ -367,7 +422,11 @@ fn sun_through_a_glass_slab_is_found_by_forward_tracing() {
     let faces = [[0u32, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
     let t: Vec<u32> = faces.iter().flat_map(|f| [f[0], f[1], f[2], f[0], f[2], f[3]]).collect();
     add_mesh(&mut desc, &mut buffers, "slab", v, t, 1);
-    desc.lights.push(LightDesc::Distant { name: "sun".into(), direction: [0.0, 0.0, -1.0], irradiance: SpectrumDesc::constant(e) });
+    desc.lights.push(LightDesc::Distant {
+        name: "sun".into(),
+        direction: [0.0, 0.0, -1.0],
+        irradiance: SpectrumDesc::constant(e),
+    });
     // Perspective camera at (4, 0, 2) looking at the origin, +z up: its line of sight to
     // the floor near the origin passes beside the slab.
     let eye = Vec3A::new(4.0, 0.0, 2.0);
@@ -387,11 +446,15 @@ fn sun_through_a_glass_slab_is_found_by_forward_tracing() {
     let r = ((n - 1.0) / (n + 1.0)).powi(2);
     let expected = (rho / std::f32::consts::PI * e * (1.0 - r) / (1.0 + r)) as f64;
     for direction in [Direction::Backward, Direction::Forward, Direction::Bidirectional] {
-        let settings = RenderSettings { width: 16, height: 16, samples: 64, max_bounces: 16, direction, ..Default::default() };
+        let settings =
+            RenderSettings { width: 16, height: 16, samples: 64, max_bounces: 16, direction, ..Default::default() };
         let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
         assert_eq!(out.stats.nonfinite_samples, 0);
         // The central 8×8 pixels see the floor within |x| < 0.5 (all under the slab).
-        let ys: Vec<f64> = (4..12).flat_map(|y| (4..12).map(move |x| (x, y))).map(|(x, y)| luminance(&out.images.rgba[((y * 16 + x) * 4) as usize..][..4])).collect();
+        let ys: Vec<f64> = (4..12)
+            .flat_map(|y| (4..12).map(move |x| (x, y)))
+            .map(|(x, y)| luminance(&out.images.rgba[((y * 16 + x) * 4) as usize..][..4]))
+            .collect();
         let m = ys.iter().sum::<f64>() / ys.len() as f64;
         let se = (ys.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (ys.len() as f64 - 1.0) / ys.len() as f64).sqrt();
         match direction {
@@ -407,14 +470,23 @@ fn sun_through_a_glass_slab_is_found_by_forward_tracing() {
 #[test]
 fn extremes_give_finite_results() {
     let mut desc = SceneDesc::default();
-    for (k, ior) in [IorDesc::Constant { ior: 1.0001 }, IorDesc::Constant { ior: 4.0 }, IorDesc::Named { name: "Diamond".into() }].into_iter().enumerate() {
+    for (k, ior) in
+        [IorDesc::Constant { ior: 1.0001 }, IorDesc::Constant { ior: 4.0 }, IorDesc::Named { name: "Diamond".into() }]
+            .into_iter()
+            .enumerate()
+    {
         for roughness in [0.0f32, 0.05, 0.5, 1.0] {
-            desc.materials.push(material(&format!("glass {k} {roughness}"), BsdfDesc::Dielectric { ior: ior.clone(), roughness }));
+            desc.materials.push(material(
+                &format!("glass {k} {roughness}"),
+                BsdfDesc::Dielectric { ior: ior.clone(), roughness },
+            ));
         }
     }
     for roughness in [0.0f32, 0.05, 1.0] {
-        desc.materials.push(material("gold", BsdfDesc::Conductor { metal: Some("gold".into()), eta: None, k: None, roughness }));
-        desc.materials.push(material("glossy", BsdfDesc::Glossy { reflectance: SpectrumDesc::constant(1.0), roughness }));
+        desc.materials
+            .push(material("gold", BsdfDesc::Conductor { metal: Some("gold".into()), eta: None, k: None, roughness }));
+        desc.materials
+            .push(material("glossy", BsdfDesc::Glossy { reflectance: SpectrumDesc::constant(1.0), roughness }));
     }
     let scene = build(&desc, &[]);
     let n = scene.grid.len();
@@ -431,14 +503,23 @@ fn extremes_give_finite_results() {
                     for _ in 0..200 {
                         let mut tp = polychrome_core::spectrum::SampledSpectrum::splat(n, 1.0);
                         if let Some(s) = m.bsdf.sample(&ctx, wo, rng.uniform2(), rng.uniform(), &mut tp) {
-                            assert!(tp.is_finite() && s.pdf.is_finite() && s.pdf >= 0.0 && s.wi.is_finite(), "{} cos {cos}: {:?}", m.name, s);
+                            assert!(
+                                tp.is_finite() && s.pdf.is_finite() && s.pdf >= 0.0 && s.wi.is_finite(),
+                                "{} cos {cos}: {:?}",
+                                m.name,
+                                s
+                            );
                             assert!(tp.values().iter().all(|&v| v >= 0.0));
                             let p = m.bsdf.eval(&ctx, wo, s.wi, &mut f);
                             assert!(p.is_finite() && f.is_finite(), "{}", m.name);
                         }
                         let wi = polychrome_core::sampling::uniform_sphere(rng.uniform2());
                         let p = m.bsdf.eval(&ctx, wo, wi, &mut f);
-                        assert!(p.is_finite() && p >= 0.0 && f.is_finite() && m.bsdf.pdf(&ctx, wo, wi).is_finite(), "{}", m.name);
+                        assert!(
+                            p.is_finite() && p >= 0.0 && f.is_finite() && m.bsdf.pdf(&ctx, wo, wi).is_finite(),
+                            "{}",
+                            m.name
+                        );
                     }
                 }
             }

@@ -35,19 +35,9 @@ impl Light for PoisonLight {
         let d = Vec3A::new(0.0, 0.0, 2.0) - p;
         let distance = d.length();
         self.radiance(le);
-        Some(LightSample {
-            wi: d / distance,
-            distance,
-            pdf: 1.0,
-            delta: true,
-        })
+        Some(LightSample { wi: d / distance, distance, pdf: 1.0, delta: true })
     }
-    fn sample_le(
-        &self,
-        _u_pos: Vec2,
-        u_dir: Vec2,
-        le: &mut SampledSpectrum,
-    ) -> Option<EmissionSample> {
+    fn sample_le(&self, _u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
         self.radiance(le);
         Some(EmissionSample {
             origin: Vec3A::new(0.0, 0.0, 2.0),
@@ -65,22 +55,11 @@ fn floor_scene() -> (SceneDesc, Vec<Buffer>) {
     let mut buffers = Vec::new();
     desc.materials.push(MaterialDesc {
         name: "white".into(),
-        bsdf: BsdfDesc::Diffuse {
-            reflectance: SpectrumDesc::constant(0.8),
-        },
+        bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(0.8) },
         emission: None,
     });
-    let v = vec![
-        -4.0, -4.0, 0.0, 4.0, -4.0, 0.0, 4.0, 4.0, 0.0, -4.0, 4.0, 0.0,
-    ];
-    add_mesh(
-        &mut desc,
-        &mut buffers,
-        "floor",
-        v,
-        vec![0, 1, 2, 0, 2, 3],
-        0,
-    );
+    let v = vec![-4.0, -4.0, 0.0, 4.0, -4.0, 0.0, 4.0, 4.0, 0.0, -4.0, 4.0, 0.0];
+    add_mesh(&mut desc, &mut buffers, "floor", v, vec![0, 1, 2, 0, 2, 3], 0);
     desc.camera = serde_json::from_value(serde_json::json!({
         "to_world": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 5], [0, 0, 0, 1]],
         "focal_length": 30.0
@@ -94,17 +73,8 @@ fn every_method_and_direction_drops_non_finite_samples() {
     let (desc, buffers) = floor_scene();
     let grid = WavelengthGrid::uniform(9, 380.0, 780.0).unwrap();
     let (w, h) = (8, 6);
-    for method in [
-        Method::Polychromatic,
-        Method::MonochromaticRays,
-        Method::MonochromaticScenes,
-        Method::Rgb,
-    ] {
-        for direction in [
-            Direction::Backward,
-            Direction::Forward,
-            Direction::Bidirectional,
-        ] {
+    for method in [Method::Polychromatic, Method::MonochromaticRays, Method::MonochromaticScenes, Method::Rgb] {
+        for direction in [Direction::Backward, Direction::Forward, Direction::Bidirectional] {
             let g = if method == Method::Rgb {
                 WavelengthGrid::rgb_channels(&grid, &RgbSpace::rec709()).unwrap()
             } else {
@@ -134,27 +104,15 @@ fn every_method_and_direction_drops_non_finite_samples() {
             let what = format!("{method:?} {direction:?}");
             // BIDIRECTIONAL's forward part only traces caustic paths (none here), so the
             // poison reaches the film through the backward part there.
-            assert!(
-                out.stats.nonfinite_samples > 0,
-                "{what}: the poisoned light was never counted"
-            );
+            assert!(out.stats.nonfinite_samples > 0, "{what}: the poisoned light was never counted");
             let im = &out.images;
-            for (name, pass) in [
-                ("rgba", &im.rgba),
-                ("depth", &im.depth),
-                ("normal", &im.normal),
-                ("albedo", &im.albedo),
-            ] {
-                assert!(
-                    pass.iter().all(|v| v.is_finite()),
-                    "{what}: {name} pass has a non-finite value"
-                );
+            for (name, pass) in
+                [("rgba", &im.rgba), ("depth", &im.depth), ("normal", &im.normal), ("albedo", &im.albedo)]
+            {
+                assert!(pass.iter().all(|v| v.is_finite()), "{what}: {name} pass has a non-finite value");
             }
             if let Some(s) = &im.spectral {
-                assert!(
-                    s.iter().all(|v| v.is_finite()),
-                    "{what}: spectral pass has a non-finite value"
-                );
+                assert!(s.iter().all(|v| v.is_finite()), "{what}: spectral pass has a non-finite value");
             }
         }
     }
@@ -162,12 +120,7 @@ fn every_method_and_direction_drops_non_finite_samples() {
 
 #[test]
 fn light_distribution_over_zero_or_non_finite_powers_picks_nothing() {
-    for weights in [
-        vec![0.0],
-        vec![0.0, 0.0, 0.0],
-        vec![f64::NAN, 0.0],
-        vec![-1.0, 0.0],
-    ] {
+    for weights in [vec![0.0], vec![0.0, 0.0, 0.0], vec![f64::NAN, 0.0], vec![-1.0, 0.0]] {
         let d = Distribution1D::new(&weights);
         assert!(d.is_empty(), "{weights:?}");
         for u in [0.0, 0.5, 0.999_999] {

@@ -20,30 +20,12 @@ fn furnace_principled_white_mixed_with_black() {
     // Every method and direction sees the same closed form (the base layer is reciprocal,
     // so light tracing agrees with camera tracing).
     let cases = [
-        (
-            0.5f32,
-            1.5f32,
-            0.0f32,
-            Method::Polychromatic,
-            Direction::Backward,
-        ),
+        (0.5f32, 1.5f32, 0.0f32, Method::Polychromatic, Direction::Backward),
         (0.1, 2.0, 0.0, Method::Polychromatic, Direction::Backward),
         (0.3, 1.45, 350.0, Method::Polychromatic, Direction::Backward),
         (0.3, 1.45, 350.0, Method::Polychromatic, Direction::Forward),
-        (
-            0.5,
-            1.5,
-            0.0,
-            Method::Polychromatic,
-            Direction::Bidirectional,
-        ),
-        (
-            0.3,
-            1.45,
-            350.0,
-            Method::MonochromaticRays,
-            Direction::Backward,
-        ),
+        (0.5, 1.5, 0.0, Method::Polychromatic, Direction::Bidirectional),
+        (0.3, 1.45, 350.0, Method::MonochromaticRays, Direction::Backward),
         (0.3, 1.45, 350.0, Method::Rgb, Direction::Backward),
     ];
     for (roughness, ior, film, method, direction) in cases {
@@ -63,11 +45,7 @@ fn furnace_principled_white_mixed_with_black() {
         let (v, tri) = uv_sphere([0.0; 3], 2.0, 24, 48);
         add_mesh(&mut desc, &mut buffers, "sphere", v, tri, 0);
         // Monochromatic and light paths are noisier per sample: more of them.
-        let samples = if method == Method::MonochromaticRays || direction == Direction::Forward {
-            64
-        } else {
-            16
-        };
+        let samples = if method == Method::MonochromaticRays || direction == Direction::Forward { 64 } else { 16 };
         let settings = RenderSettings {
             width: 16,
             height: 16,
@@ -81,10 +59,7 @@ fn furnace_principled_white_mixed_with_black() {
         let (mean, se) = mean_and_standard_error(&out.images.rgba);
         let expected = l / t;
         assert!((mean - expected).abs() < 4.0 * se + 2e-3 * expected, "{method:?} {direction:?} roughness {roughness} ior {ior} film {film}: mean {mean} expected {expected} (se {se})");
-        assert!(
-            se < 0.05 * expected,
-            "{method:?} {direction:?}: too noisy: se {se}"
-        );
+        assert!(se < 0.05 * expected, "{method:?} {direction:?}: too noisy: se {se}");
         assert_eq!(out.stats.nonfinite_samples, 0);
     }
 }
@@ -113,16 +88,8 @@ fn bad_layered_parameters_name_the_material() {
         desc.materials.push(m);
         let (v, tri) = uv_sphere([0.0; 3], 1.0, 4, 8);
         add_mesh(&mut desc, &mut buffers, "s", v, tri, 0);
-        let settings = RenderSettings {
-            width: 2,
-            height: 2,
-            samples: 1,
-            ..Default::default()
-        };
-        let err = render(&desc, &buffers, &settings, &RenderControl::new())
-            .err()
-            .expect("must fail")
-            .to_string();
+        let settings = RenderSettings { width: 2, height: 2, samples: 1, ..Default::default() };
+        let err = render(&desc, &buffers, &settings, &RenderControl::new()).err().expect("must fail").to_string();
         assert!(err.contains(&format!("material '{name}'")), "{err}");
     }
 }

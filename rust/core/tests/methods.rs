@@ -8,22 +8,14 @@ use common::*;
 use glam::{Vec2, Vec3A};
 use polychrome_core::color::{Observer, RgbSpace};
 use polychrome_core::material::{Bsdf, BsdfFlags, BsdfSample, ShadingContext};
-use polychrome_core::render::{
-    render, render_scene, Direction, Method, RenderControl, RenderSettings,
-};
+use polychrome_core::render::{render, render_scene, Direction, Method, RenderControl, RenderSettings};
 use polychrome_core::sampling::cosine_hemisphere;
-use polychrome_core::scene::{
-    BsdfDesc, Buffer, BuildOptions, MaterialDesc, Scene, SceneDesc, WorldDesc,
-};
+use polychrome_core::scene::{BsdfDesc, Buffer, BuildOptions, MaterialDesc, Scene, SceneDesc, WorldDesc};
 use polychrome_core::spectrum::named::{SpectrumKind, SpectrumRole};
 use polychrome_core::spectrum::{SampledSpectrum, SpectrumDesc, WavelengthGrid};
 
 fn diffuse(name: &str, reflectance: SpectrumDesc, emission: Option<SpectrumDesc>) -> MaterialDesc {
-    MaterialDesc {
-        name: name.into(),
-        bsdf: BsdfDesc::Diffuse { reflectance },
-        emission,
-    }
+    MaterialDesc { name: name.into(), bsdf: BsdfDesc::Diffuse { reflectance }, emission }
 }
 
 /// A uniform world of `radiance` (through JSON, as every front end builds it).
@@ -34,11 +26,7 @@ fn world(radiance: &SpectrumDesc) -> WorldDesc {
 fn furnace_scene(l: f32, a: f32) -> (SceneDesc, Vec<Buffer>) {
     let mut desc = SceneDesc::default();
     let mut buffers = Vec::new();
-    desc.materials.push(diffuse(
-        "furnace",
-        SpectrumDesc::constant(a),
-        Some(SpectrumDesc::constant(l)),
-    ));
+    desc.materials.push(diffuse("furnace", SpectrumDesc::constant(a), Some(SpectrumDesc::constant(l))));
     let (v, t) = uv_sphere([0.0; 3], 2.0, 24, 48);
     add_mesh(&mut desc, &mut buffers, "sphere", v, t, 0);
     (desc, buffers)
@@ -50,8 +38,7 @@ fn box_scene() -> (SceneDesc, Vec<Buffer>) {
     let mut desc = SceneDesc::default();
     let mut buffers = Vec::new();
     let refl = |kind| SpectrumDesc { kind, scale: 0.8 };
-    desc.materials
-        .push(diffuse("white", SpectrumDesc::constant(0.75), None));
+    desc.materials.push(diffuse("white", SpectrumDesc::constant(0.75), None));
     desc.materials.push(diffuse(
         "red",
         refl(SpectrumKind::Tabulated {
@@ -60,31 +47,15 @@ fn box_scene() -> (SceneDesc, Vec<Buffer>) {
         }),
         None,
     ));
-    desc.materials.push(diffuse(
-        "green",
-        refl(SpectrumKind::NarrowBand {
-            center: 530.0,
-            width: 80.0,
-        }),
-        None,
-    ));
+    desc.materials.push(diffuse("green", refl(SpectrumKind::NarrowBand { center: 530.0, width: 80.0 }), None));
     desc.materials.push(diffuse(
         "lamp",
         SpectrumDesc::constant(0.0),
-        Some(SpectrumDesc {
-            kind: SpectrumKind::Blackbody {
-                temperature: 4000.0,
-            },
-            scale: 8.0,
-        }),
+        Some(SpectrumDesc { kind: SpectrumKind::Blackbody { temperature: 4000.0 }, scale: 8.0 }),
     ));
     let s = 1.0f32;
-    let quad = |p: [[f32; 3]; 4]| -> (Vec<f32>, Vec<u32>) {
-        (
-            p.iter().flatten().copied().collect(),
-            vec![0, 1, 2, 0, 2, 3],
-        )
-    };
+    let quad =
+        |p: [[f32; 3]; 4]| -> (Vec<f32>, Vec<u32>) { (p.iter().flatten().copied().collect(), vec![0, 1, 2, 0, 2, 3]) };
     // Floor z=-1, ceiling z=1, walls x=±1, back y=1, front y=-1 (behind the camera).
     let (v, t) = quad([[-s, -s, -s], [s, -s, -s], [s, s, -s], [-s, s, -s]]);
     add_mesh(&mut desc, &mut buffers, "floor", v, t, 0);
@@ -102,12 +73,7 @@ fn box_scene() -> (SceneDesc, Vec<Buffer>) {
     let (v, t) = quad([[-l, -l, 0.98], [l, -l, 0.98], [l, l, 0.98], [-l, l, 0.98]]);
     add_mesh(&mut desc, &mut buffers, "lamp", v, t, 3);
     // Camera at y = −0.95 looking along +y (Blender: local −Z → world +y, local +Y → +z).
-    desc.camera.to_world = [
-        [1.0, 0.0, 0.0, 0.0],
-        [0.0, 0.0, -1.0, -0.95],
-        [0.0, 1.0, 0.0, 0.0],
-        [0.0, 0.0, 0.0, 1.0],
-    ];
+    desc.camera.to_world = [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, -1.0, -0.95], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
     desc.camera.focal_length = 18.0;
     (desc, buffers)
 }
@@ -143,10 +109,7 @@ fn quadrant_means(rgba: &[f32], w: usize, h: usize) -> Vec<(f64, f64)> {
 fn assert_close(a: &[(f64, f64)], b: &[(f64, f64)], what: &str) {
     for (k, (&(ma, sa), &(mb, sb))) in a.iter().zip(b).enumerate() {
         let se = (sa * sa + sb * sb).sqrt();
-        assert!(
-            (ma - mb).abs() < 5.0 * se + 2e-3 * mb.abs().max(1e-3),
-            "{what}: value {k}: {ma} vs {mb} (se {se})"
-        );
+        assert!((ma - mb).abs() < 5.0 * se + 2e-3 * mb.abs().max(1e-3), "{what}: value {k}: {ma} vs {mb} (se {se})");
     }
 }
 
@@ -158,11 +121,7 @@ fn furnace_forward_and_bidirectional_see_emission_over_one_minus_albedo() {
     for direction in [Direction::Forward, Direction::Bidirectional] {
         for method in [Method::Polychromatic, Method::MonochromaticRays] {
             // Monochromatic light paths are not stratified per pixel: more of them.
-            let samples = if method == Method::MonochromaticRays {
-                64
-            } else {
-                16
-            };
+            let samples = if method == Method::MonochromaticRays { 64 } else { 16 };
             let settings = RenderSettings {
                 width: 16,
                 height: 16,
@@ -178,10 +137,7 @@ fn furnace_forward_and_bidirectional_see_emission_over_one_minus_albedo() {
                 (mean - expected).abs() < 5.0 * se + 2e-3,
                 "{direction:?} {method:?}: mean {mean} expected {expected} (se {se})"
             );
-            assert!(
-                se < 0.05 * expected,
-                "{direction:?} {method:?}: too noisy: se {se}"
-            );
+            assert!(se < 0.05 * expected, "{direction:?} {method:?}: too noisy: se {se}");
             assert_eq!(out.stats.nonfinite_samples, 0);
         }
     }
@@ -205,21 +161,11 @@ fn furnace_monochromatic_scenes_and_rgb_match_the_closed_form() {
         let control = RenderControl::new();
         let out = render(&desc, &buffers, &settings, &control).unwrap();
         let (mean, se) = mean_and_standard_error(&out.images.rgba);
-        assert!(
-            (mean - expected).abs() < 5.0 * se + 2e-3,
-            "{method:?}: mean {mean} expected {expected} (se {se})"
-        );
+        assert!((mean - expected).abs() < 5.0 * se + 2e-3, "{method:?}: mean {mean} expected {expected} (se {se})");
         let (done, total) = control.progress();
         assert_eq!(done, total);
         let per_image = 12 * 12 * 8;
-        assert_eq!(
-            total,
-            if method == Method::MonochromaticScenes {
-                per_image * n as u64
-            } else {
-                per_image
-            }
-        );
+        assert_eq!(total, if method == Method::MonochromaticScenes { per_image * n as u64 } else { per_image });
     }
 }
 
@@ -234,16 +180,8 @@ fn every_method_and_direction_agrees_with_polychromatic_backward_on_a_lit_box() 
         wavelength_count: 21,
         ..Default::default()
     };
-    let reference = render(
-        &desc,
-        &buffers,
-        &RenderSettings {
-            samples: 256,
-            ..base.clone()
-        },
-        &RenderControl::new(),
-    )
-    .unwrap();
+    let reference =
+        render(&desc, &buffers, &RenderSettings { samples: 256, ..base.clone() }, &RenderControl::new()).unwrap();
     let reference = quadrant_means(&reference.images.rgba, w, h);
     assert!(reference.iter().all(|&(m, _)| m > 0.0));
     let cases = [
@@ -257,21 +195,12 @@ fn every_method_and_direction_agrees_with_polychromatic_backward_on_a_lit_box() 
         let out = render(
             &desc,
             &buffers,
-            &RenderSettings {
-                method,
-                direction,
-                samples,
-                ..base.clone()
-            },
+            &RenderSettings { method, direction, samples, ..base.clone() },
             &RenderControl::new(),
         )
         .unwrap();
         assert_eq!(out.stats.nonfinite_samples, 0);
-        assert_close(
-            &quadrant_means(&out.images.rgba, w, h),
-            &reference,
-            &format!("{method:?} {direction:?}"),
-        );
+        assert_close(&quadrant_means(&out.images.rgba, w, h), &reference, &format!("{method:?} {direction:?}"));
     }
 }
 
@@ -294,26 +223,10 @@ fn same_seed_gives_identical_images_on_one_and_two_threads_for_every_method() {
             wavelength_count: 8,
             ..Default::default()
         };
-        let one = render(
-            &desc,
-            &buffers,
-            &RenderSettings {
-                threads: 1,
-                ..base.clone()
-            },
-            &RenderControl::new(),
-        )
-        .unwrap();
-        let two = render(
-            &desc,
-            &buffers,
-            &RenderSettings {
-                threads: 2,
-                ..base.clone()
-            },
-            &RenderControl::new(),
-        )
-        .unwrap();
+        let one =
+            render(&desc, &buffers, &RenderSettings { threads: 1, ..base.clone() }, &RenderControl::new()).unwrap();
+        let two =
+            render(&desc, &buffers, &RenderSettings { threads: 2, ..base.clone() }, &RenderControl::new()).unwrap();
         assert_eq!(one.images.rgba, two.images.rgba, "{method:?} {direction:?}");
         assert!(one.images.rgba.iter().any(|&v| v > 0.0));
     }
@@ -328,11 +241,7 @@ struct TestDispersive;
 
 impl Bsdf for TestDispersive {
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            smooth: false,
-            specular: true,
-            dispersive: true,
-        }
+        BsdfFlags { smooth: false, specular: true, dispersive: true }
     }
     fn eval(&self, _: &ShadingContext, _: Vec3A, _: Vec3A, out: &mut SampledSpectrum) -> f32 {
         out.fill(0.0);
@@ -356,9 +265,7 @@ impl Bsdf for TestDispersive {
             }
             None => {
                 let w = ctx.grid.weights();
-                let energy: Vec<f32> = (0..throughput.len())
-                    .map(|k| throughput.get(k).max(0.0) * w[k])
-                    .collect();
+                let energy: Vec<f32> = (0..throughput.len()).map(|k| throughput.get(k).max(0.0) * w[k]).collect();
                 let total: f32 = energy.iter().sum();
                 if !(total > 0.0) {
                     return None;
@@ -388,12 +295,7 @@ impl Bsdf for TestDispersive {
         if wo.z < 0.0 {
             wi.z = -wi.z;
         }
-        Some(BsdfSample {
-            wi,
-            pdf: 1.0,
-            specular: true,
-            collapsed_to: Some(i),
-        })
+        Some(BsdfSample { wi, pdf: 1.0, specular: true, collapsed_to: Some(i) })
     }
     fn albedo(&self, _: &ShadingContext, out: &mut SampledSpectrum) {
         out.fill(1.0);
@@ -407,16 +309,10 @@ impl Bsdf for TestDispersive {
 fn dispersive_white_sphere_vanishes_in_a_uniform_environment_in_every_method() {
     let mut desc = SceneDesc::default();
     let mut buffers = Vec::new();
-    desc.materials
-        .push(diffuse("glass", SpectrumDesc::constant(1.0), None));
+    desc.materials.push(diffuse("glass", SpectrumDesc::constant(1.0), None));
     let (v, t) = uv_sphere([0.0, 0.0, -4.0], 1.5, 16, 32);
     add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
-    let env = SpectrumDesc {
-        kind: SpectrumKind::Blackbody {
-            temperature: 2500.0,
-        },
-        scale: 1.0,
-    };
+    let env = SpectrumDesc { kind: SpectrumKind::Blackbody { temperature: 2500.0 }, scale: 1.0 };
     desc.world = Some(world(&env));
     let (w, h) = (12u32, 12u32);
     let grid = WavelengthGrid::uniform(21, 380.0, 780.0).unwrap();
@@ -441,11 +337,7 @@ fn dispersive_white_sphere_vanishes_in_a_uniform_environment_in_every_method() {
         };
         let mut scene = Scene::build(&desc, &buffers, &opts).unwrap();
         scene.materials[0].bsdf = Box::new(TestDispersive);
-        let samples = if method == Method::MonochromaticScenes {
-            8
-        } else {
-            64
-        };
+        let samples = if method == Method::MonochromaticScenes { 8 } else { 64 };
         let settings = RenderSettings {
             width: w,
             height: h,
@@ -458,9 +350,7 @@ fn dispersive_white_sphere_vanishes_in_a_uniform_environment_in_every_method() {
         };
         let out = render_scene(&scene, &settings, &RenderControl::new()).unwrap();
         // Reference: the environment's colour through the CIE observer (or as RGB).
-        let env_values = env
-            .evaluate(&g, SpectrumRole::Illuminant, &NoRgbConv)
-            .unwrap();
+        let env_values = env.evaluate(&g, SpectrumRole::Illuminant, &NoRgbConv).unwrap();
         let expected = RgbSpace::rec709().xyz_to_rgb(Observer::new(&g).xyz(&env_values));
         let means = channel_means(&out.images.rgba);
         for c in 0..3 {
@@ -488,41 +378,15 @@ impl polychrome_core::spectrum::named::RgbToSpectrum for NoRgbConv {
 fn rgb_mode_differs_from_spectral_under_narrow_band_light() {
     let mut desc = SceneDesc::default();
     let mut buffers = Vec::new();
-    let green = SpectrumDesc {
-        kind: SpectrumKind::NarrowBand {
-            center: 540.0,
-            width: 60.0,
-        },
-        scale: 0.9,
-    };
+    let green = SpectrumDesc { kind: SpectrumKind::NarrowBand { center: 540.0, width: 60.0 }, scale: 0.9 };
     desc.materials.push(diffuse("green", green, None));
-    desc.world = Some(world(&SpectrumDesc {
-        kind: SpectrumKind::NarrowBand {
-            center: 610.0,
-            width: 20.0,
-        },
-        scale: 1.0,
-    }));
+    desc.world =
+        Some(world(&SpectrumDesc { kind: SpectrumKind::NarrowBand { center: 610.0, width: 20.0 }, scale: 1.0 }));
     let (v, t) = uv_sphere([0.0, 0.0, -4.0], 3.0, 16, 32);
     add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
-    let base = RenderSettings {
-        width: 8,
-        height: 8,
-        samples: 16,
-        max_bounces: 1,
-        ..Default::default()
-    };
+    let base = RenderSettings { width: 8, height: 8, samples: 16, max_bounces: 1, ..Default::default() };
     let spectral = render(&desc, &buffers, &base, &RenderControl::new()).unwrap();
-    let rgb = render(
-        &desc,
-        &buffers,
-        &RenderSettings {
-            method: Method::Rgb,
-            ..base
-        },
-        &RenderControl::new(),
-    )
-    .unwrap();
+    let rgb = render(&desc, &buffers, &RenderSettings { method: Method::Rgb, ..base }, &RenderControl::new()).unwrap();
     // Centre pixel: the spectral product of a 610 nm band and a 540 nm reflectance is
     // far dimmer than RGB's red × green-channel product predicts, and differently hued.
     let i = (4 * 8 + 4) * 4;
@@ -531,10 +395,7 @@ fn rgb_mode_differs_from_spectral_under_narrow_band_light() {
     assert!(s.iter().chain(r).all(|v| v.is_finite()));
     let ys = luminance(&spectral.images.rgba[i..i + 4]);
     let yr = luminance(&rgb.images.rgba[i..i + 4]);
-    assert!(
-        (ys - yr).abs() > 0.3 * ys.max(yr),
-        "spectral {s:?} vs rgb {r:?}"
-    );
+    assert!((ys - yr).abs() > 0.3 * ys.max(yr), "spectral {s:?} vs rgb {r:?}");
 }
 
 #[test]
@@ -548,17 +409,11 @@ fn bad_combinations_are_reported_as_settings() {
         dispersion_splitting: true,
         ..Default::default()
     };
-    let err = render(&desc, &buffers, &s, &RenderControl::new())
-        .err()
-        .unwrap()
-        .to_string();
+    let err = render(&desc, &buffers, &s, &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("dispersion_splitting"), "{err}");
     let json = r#"{"method": "MONOCHROMATIC_SCENES", "direction": "BIDIRECTIONAL", "dispersion_splitting": false}"#;
     let parsed: RenderSettings = serde_json::from_str(json).unwrap();
-    assert_eq!(
-        (parsed.method, parsed.direction),
-        (Method::MonochromaticScenes, Direction::Bidirectional)
-    );
+    assert_eq!((parsed.method, parsed.direction), (Method::MonochromaticScenes, Direction::Bidirectional));
 }
 
 fn glass(name: &str) -> MaterialDesc {
@@ -579,12 +434,7 @@ fn dispersive_glass_sphere_vanishes_in_a_uniform_environment() {
     desc.materials.push(glass("flint"));
     let (v, t) = uv_sphere([0.0, 0.0, -4.0], 1.5, 24, 48);
     add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
-    let env = SpectrumDesc {
-        kind: SpectrumKind::Blackbody {
-            temperature: 2500.0,
-        },
-        scale: 1.0,
-    };
+    let env = SpectrumDesc { kind: SpectrumKind::Blackbody { temperature: 2500.0 }, scale: 1.0 };
     desc.world = Some(world(&env));
     for (method, splitting, samples) in [
         (Method::Polychromatic, false, 64),
@@ -605,14 +455,8 @@ fn dispersive_glass_sphere_vanishes_in_a_uniform_environment() {
         };
         let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
         let g = settings.grid().unwrap();
-        let g = if method == Method::Rgb {
-            WavelengthGrid::rgb_channels(&g, &RgbSpace::rec709()).unwrap()
-        } else {
-            g
-        };
-        let env_values = env
-            .evaluate(&g, SpectrumRole::Illuminant, &NoRgbConv)
-            .unwrap();
+        let g = if method == Method::Rgb { WavelengthGrid::rgb_channels(&g, &RgbSpace::rec709()).unwrap() } else { g };
+        let env_values = env.evaluate(&g, SpectrumRole::Illuminant, &NoRgbConv).unwrap();
         let expected = RgbSpace::rec709().xyz_to_rgb(Observer::new(&g).xyz(&env_values));
         let means = channel_means(&out.images.rgba);
         for c in 0..3 {
@@ -638,12 +482,7 @@ fn glass_ball_inside_a_furnace_is_invisible_forward_and_backward() {
     let (v, t) = uv_sphere([0.0, 0.6, -0.3], 0.6, 16, 32);
     add_mesh(&mut desc, &mut buffers, "ball", v, t, 1);
     // Camera inside the furnace looking at the ball.
-    desc.camera.to_world = [
-        [1.0, 0.0, 0.0, 0.0],
-        [0.0, 0.0, -1.0, -1.2],
-        [0.0, 1.0, 0.0, 0.0],
-        [0.0, 0.0, 0.0, 1.0],
-    ];
+    desc.camera.to_world = [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, -1.0, -1.2], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
     let expected = l as f64 / (1.0 - a as f64);
     // Light tracing cannot see through glass from a pinhole (camera → specular vertex
     // paths are backward-only), so for FORWARD a second ball sits behind the camera
@@ -660,11 +499,8 @@ fn glass_ball_inside_a_furnace_is_invisible_forward_and_backward() {
         (Method::Polychromatic, Direction::Bidirectional, 32),
         (Method::MonochromaticRays, Direction::Backward, 32),
     ] {
-        let (desc, buffers) = if direction == Direction::Forward {
-            (&behind, &behind_buffers)
-        } else {
-            (&desc, &buffers)
-        };
+        let (desc, buffers) =
+            if direction == Direction::Forward { (&behind, &behind_buffers) } else { (&desc, &buffers) };
         let settings = RenderSettings {
             width: 12,
             height: 12,
@@ -693,13 +529,10 @@ fn glass_ball_inside_a_furnace_is_invisible_forward_and_backward() {
 fn bidirectional_adds_the_point_light_caustic_that_backward_misses() {
     let mut desc = SceneDesc::default();
     let mut buffers = Vec::new();
-    desc.materials
-        .push(diffuse("floor", SpectrumDesc::constant(0.8), None));
+    desc.materials.push(diffuse("floor", SpectrumDesc::constant(0.8), None));
     desc.materials.push(
-        serde_json::from_value(
-            serde_json::json!({"name": "mirror", "bsdf": {"type": "conductor", "metal": "silver"}}),
-        )
-        .unwrap(),
+        serde_json::from_value(serde_json::json!({"name": "mirror", "bsdf": {"type": "conductor", "metal": "silver"}}))
+            .unwrap(),
     );
     let s = 2.0f32;
     add_mesh(
@@ -733,33 +566,21 @@ fn bidirectional_adds_the_point_light_caustic_that_backward_misses() {
     let fwd = render(
         &desc,
         &buffers,
-        &RenderSettings {
-            direction: Direction::Forward,
-            samples: 64,
-            ..base.clone()
-        },
+        &RenderSettings { direction: Direction::Forward, samples: 64, ..base.clone() },
         &RenderControl::new(),
     )
     .unwrap();
     let bid = render(
         &desc,
         &buffers,
-        &RenderSettings {
-            direction: Direction::Bidirectional,
-            samples: 32,
-            ..base.clone()
-        },
+        &RenderSettings { direction: Direction::Bidirectional, samples: 32, ..base.clone() },
         &RenderControl::new(),
     )
     .unwrap();
     let bwd = render(
         &desc,
         &buffers,
-        &RenderSettings {
-            direction: Direction::Backward,
-            samples: 32,
-            ..base.clone()
-        },
+        &RenderSettings { direction: Direction::Backward, samples: 32, ..base.clone() },
         &RenderControl::new(),
     )
     .unwrap();
@@ -770,12 +591,7 @@ fn bidirectional_adds_the_point_light_caustic_that_backward_misses() {
     );
     assert_close(&b, &f, "bidirectional vs forward");
     let total = |q: &[(f64, f64)]| q.iter().map(|v| v.0).sum::<f64>();
-    assert!(
-        total(&k) < 0.85 * total(&b),
-        "backward {} should miss the caustic ({} with it)",
-        total(&k),
-        total(&b)
-    );
+    assert!(total(&k) < 0.85 * total(&b), "backward {} should miss the caustic ({} with it)", total(&k), total(&b));
 }
 
 /// Camera → world rows for a camera at `eye` looking at `target`, world Z up.
@@ -785,33 +601,16 @@ fn look_at(eye: [f32; 3], target: [f32; 3]) -> [[f32; 4]; 4] {
     let r = f.cross(Vec3A::Z).normalize();
     let u = r.cross(f);
     let z = -f;
-    [
-        [r.x, u.x, z.x, eye.x],
-        [r.y, u.y, z.y, eye.y],
-        [r.z, u.z, z.z, eye.z],
-        [0.0, 0.0, 0.0, 1.0],
-    ]
+    [[r.x, u.x, z.x, eye.x], [r.y, u.y, z.y, eye.y], [r.z, u.z, z.z, eye.z], [0.0, 0.0, 0.0, 1.0]]
 }
 
 #[test]
 fn forward_needs_a_perspective_camera_and_time_limited_mono_scenes_say_so() {
     let (mut desc, buffers) = furnace_scene(0.5, 0.5);
     desc.camera.projection = polychrome_core::camera::Projection::Orthographic;
-    let s = RenderSettings {
-        width: 4,
-        height: 4,
-        samples: 1,
-        direction: Direction::Forward,
-        ..Default::default()
-    };
-    let err = render(&desc, &buffers, &s, &RenderControl::new())
-        .err()
-        .unwrap()
-        .to_string();
-    assert!(
-        err.contains("direction") && err.contains("perspective"),
-        "{err}"
-    );
+    let s = RenderSettings { width: 4, height: 4, samples: 1, direction: Direction::Forward, ..Default::default() };
+    let err = render(&desc, &buffers, &s, &RenderControl::new()).err().unwrap().to_string();
+    assert!(err.contains("direction") && err.contains("perspective"), "{err}");
     let (desc, buffers) = furnace_scene(0.5, 0.5);
     let s = RenderSettings {
         width: 8,
@@ -823,15 +622,6 @@ fn forward_needs_a_perspective_camera_and_time_limited_mono_scenes_say_so() {
     };
     let out = render(&desc, &buffers, &s, &RenderControl::new()).unwrap();
     assert!(out.stats.time_limited && out.stats.incomplete_spectrum);
-    let s = RenderSettings {
-        samples: 2,
-        time_limit: 0.0,
-        ..s
-    };
-    assert!(
-        !render(&desc, &buffers, &s, &RenderControl::new())
-            .unwrap()
-            .stats
-            .incomplete_spectrum
-    );
+    let s = RenderSettings { samples: 2, time_limit: 0.0, ..s };
+    assert!(!render(&desc, &buffers, &s, &RenderControl::new()).unwrap().stats.incomplete_spectrum);
 }

@@ -17,9 +17,7 @@ fn furnace() -> (SceneDesc, Vec<Buffer>, f64) {
     let mut buffers: Vec<Buffer> = Vec::new();
     desc.materials.push(MaterialDesc {
         name: "furnace".into(),
-        bsdf: BsdfDesc::Diffuse {
-            reflectance: SpectrumDesc::constant(a),
-        },
+        bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(a) },
         emission: Some(SpectrumDesc::constant(l)),
     });
     let (v, t) = uv_sphere([0.0; 3], 2.0, 12, 24);
@@ -28,10 +26,7 @@ fn furnace() -> (SceneDesc, Vec<Buffer>, f64) {
 }
 
 /// Polls `control` every millisecond until `stop` says so; returns every distinct preview.
-fn watch(
-    control: &RenderControl,
-    stop: &std::sync::atomic::AtomicBool,
-) -> Vec<polychrome_core::render::Preview> {
+fn watch(control: &RenderControl, stop: &std::sync::atomic::AtomicBool) -> Vec<polychrome_core::render::Preview> {
     let mut seen: Vec<polychrome_core::render::Preview> = Vec::new();
     loop {
         let finished = stop.load(std::sync::atomic::Ordering::Acquire);
@@ -50,14 +45,8 @@ fn watch(
 #[test]
 fn previews_arrive_during_the_render_converge_and_the_last_is_the_final_image() {
     let (desc, buffers, expected) = furnace();
-    let settings = RenderSettings {
-        width: 24,
-        height: 24,
-        samples: 400,
-        max_bounces: 100,
-        threads: 2,
-        ..Default::default()
-    };
+    let settings =
+        RenderSettings { width: 24, height: 24, samples: 400, max_bounces: 100, threads: 2, ..Default::default() };
     let control = RenderControl::with_previews();
     let stop = std::sync::atomic::AtomicBool::new(false);
     let (out, seen) = std::thread::scope(|s| {
@@ -67,20 +56,14 @@ fn previews_arrive_during_the_render_converge_and_the_last_is_the_final_image() 
         (out, watcher.join().unwrap())
     });
     let intermediate: Vec<_> = seen.iter().filter(|p| !p.last).collect();
-    assert!(
-        !intermediate.is_empty(),
-        "no intermediate preview in {} s",
-        out.stats.seconds
-    );
+    assert!(!intermediate.is_empty(), "no intermediate preview in {} s", out.stats.seconds);
     eprintln!("{} previews in {} s", seen.len(), out.stats.seconds);
     // Serials and sample counts only grow; the image size is the render's.
     for pair in seen.windows(2) {
         assert!(pair[1].serial > pair[0].serial);
         assert!(pair[1].samples_per_pixel >= pair[0].samples_per_pixel);
     }
-    assert!(seen
-        .iter()
-        .all(|p| p.width == 24 && p.height == 24 && p.rgba.len() == 24 * 24 * 4));
+    assert!(seen.iter().all(|p| p.width == 24 && p.height == 24 && p.rgba.len() == 24 * 24 * 4));
     // Every snapshot is an unbiased estimate of the closed form with its own sample count.
     for p in &seen {
         let (mean, se) = mean_and_standard_error(&p.rgba);
@@ -92,10 +75,7 @@ fn previews_arrive_during_the_render_converge_and_the_last_is_the_final_image() 
         );
     }
     let first = intermediate[0];
-    assert!(
-        first.samples_per_pixel < settings.samples,
-        "the first preview comes early"
-    );
+    assert!(first.samples_per_pixel < settings.samples, "the first preview comes early");
     // Noise falls as samples accumulate.
     let (_, se_first) = mean_and_standard_error(&first.rgba);
     let last = seen.last().unwrap();
@@ -116,12 +96,7 @@ fn previews_arrive_during_the_render_converge_and_the_last_is_the_final_image() 
 #[test]
 fn no_previews_unless_requested() {
     let (desc, buffers, _) = furnace();
-    let settings = RenderSettings {
-        width: 8,
-        height: 8,
-        samples: 4,
-        ..Default::default()
-    };
+    let settings = RenderSettings { width: 8, height: 8, samples: 4, ..Default::default() };
     let control = RenderControl::new();
     render(&desc, &buffers, &settings, &control).unwrap();
     assert!(control.latest_preview().is_none());
@@ -150,18 +125,12 @@ fn cancel_from_another_thread_stops_promptly_and_publishes_what_was_rendered() {
     // Wait (bounded) for a first preview, then cancel.
     let t0 = Instant::now();
     while control.latest_preview().is_none() {
-        assert!(
-            t0.elapsed() < Duration::from_secs(60),
-            "no preview within 60 s"
-        );
+        assert!(t0.elapsed() < Duration::from_secs(60), "no preview within 60 s");
         std::thread::sleep(Duration::from_millis(2));
     }
     std::thread::sleep(Duration::from_millis(150));
     control.cancel();
-    let out = rx
-        .recv_timeout(Duration::from_secs(20))
-        .expect("the render did not stop within 20 s of cancel")
-        .unwrap();
+    let out = rx.recv_timeout(Duration::from_secs(20)).expect("the render did not stop within 20 s of cancel").unwrap();
     worker.join().unwrap();
     assert!(out.stats.cancelled);
     assert!(out.stats.samples_per_pixel >= 1 && out.stats.samples_per_pixel < 1_000_000);
@@ -169,8 +138,5 @@ fn cancel_from_another_thread_stops_promptly_and_publishes_what_was_rendered() {
     assert!(p.last);
     assert_eq!(*p.rgba, out.images.rgba);
     let (mean, se) = mean_and_standard_error(&p.rgba);
-    assert!(
-        (mean - expected).abs() < 5.0 * se + 2e-3,
-        "mean {mean}, expected {expected} (se {se})"
-    );
+    assert!((mean - expected).abs() < 5.0 * se + 2e-3, "mean {mean}, expected {expected} (se {se})");
 }

@@ -19,10 +19,7 @@ use proptest::prelude::*;
 
 /// Case count: `default`, or PROPTEST_CASES for longer runs.
 fn cases(default: u32) -> u32 {
-    std::env::var("PROPTEST_CASES")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
+    std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(default)
 }
 
 fn grid() -> WavelengthGrid {
@@ -66,27 +63,26 @@ fn mesh_case() -> impl Strategy<Value = MeshCase> {
                 )),
             )
         })
-        .prop_map(
-            |(positions, indices, normals, uvs, material, transform)| MeshCase {
-                positions,
-                indices,
-                normals,
-                uvs,
-                material,
-                transform,
-            },
-        )
+        .prop_map(|(positions, indices, normals, uvs, material, transform)| MeshCase {
+            positions,
+            indices,
+            normals,
+            uvs,
+            material,
+            transform,
+        })
 }
 
 fn build_case(c: &MeshCase) -> polychrome_core::Result<Scene> {
     let mut desc = SceneDesc::default();
-    desc.materials
-        .push(serde_json::from_str(r#"{"name": "m0"}"#).unwrap());
-    desc.materials.push(serde_json::from_str(r#"{"name": "lamp", "bsdf": {"type": "none"}, "emission": {"type": "constant", "value": 2.0}}"#).unwrap());
-    let mut buffers = vec![
-        Buffer::F32(c.positions.clone()),
-        Buffer::U32(c.indices.clone()),
-    ];
+    desc.materials.push(serde_json::from_str(r#"{"name": "m0"}"#).unwrap());
+    desc.materials.push(
+        serde_json::from_str(
+            r#"{"name": "lamp", "bsdf": {"type": "none"}, "emission": {"type": "constant", "value": 2.0}}"#,
+        )
+        .unwrap(),
+    );
+    let mut buffers = vec![Buffer::F32(c.positions.clone()), Buffer::U32(c.indices.clone())];
     let normals = c.normals.as_ref().map(|n| {
         buffers.push(Buffer::F32(n.clone()));
         buffers.len() - 1
@@ -104,18 +100,9 @@ fn build_case(c: &MeshCase) -> polychrome_core::Result<Scene> {
         material_ids: None,
         material: Some(c.material),
     });
-    desc.instances = Some(vec![InstanceDesc {
-        name: "prop instance".into(),
-        mesh: 0,
-        transform: c.transform,
-    }]);
-    let opts = BuildOptions {
-        grid: grid(),
-        space: RgbSpace::rec709(),
-        uplift: Default::default(),
-        width: 4,
-        height: 3,
-    };
+    desc.instances = Some(vec![InstanceDesc { name: "prop instance".into(), mesh: 0, transform: c.transform }]);
+    let opts =
+        BuildOptions { grid: grid(), space: RgbSpace::rec709(), uplift: Default::default(), width: 4, height: 3 };
     Scene::build(&desc, &buffers, &opts)
 }
 
@@ -259,12 +246,7 @@ fn check_ior(desc: &IorDesc) -> Result<(), TestCaseError> {
     });
     let r = r.map_err(|_| TestCaseError::fail(format!("panic for {desc:?}")))?;
     match r {
-        Ok(n) => prop_assert!(
-            n.iter().all(|v| v.is_finite() && *v >= 1.0),
-            "{:?}: {:?}",
-            desc,
-            n
-        ),
+        Ok(n) => prop_assert!(n.iter().all(|v| v.is_finite() && *v >= 1.0), "{:?}: {:?}", desc, n),
         Err(e) => prop_assert!(
             e.to_string().contains("prop glass") && e.to_string().contains("nm")
                 || e.to_string().contains("prop glass"),
@@ -278,31 +260,12 @@ fn check_ior(desc: &IorDesc) -> Result<(), TestCaseError> {
 const METALS: [&str; 4] = ["gold", "silver", "copper", "aluminium"];
 
 /// 0: conductor, 1: glossy, 2: dielectric (constant η), 3: dielectric (N-BK7, dispersive).
-fn make_bsdf(
-    kind: usize,
-    roughness: f32,
-    eta: f64,
-    metal: usize,
-    g: &WavelengthGrid,
-) -> Box<dyn Bsdf> {
+fn make_bsdf(kind: usize, roughness: f32, eta: f64, metal: usize, g: &WavelengthGrid) -> Box<dyn Bsdf> {
     match kind {
         0 => build_conductor("metal", Some(METALS[metal]), None, None, roughness, g).unwrap(),
-        1 => build_glossy(
-            "glossy",
-            SampledSpectrum::splat(g.len(), 0.3 + 0.2 * metal as f32),
-            roughness,
-        )
-        .unwrap(),
+        1 => build_glossy("glossy", SampledSpectrum::splat(g.len(), 0.3 + 0.2 * metal as f32), roughness).unwrap(),
         2 => build_dielectric("glass", &IorDesc::Constant { ior: eta }, roughness, g).unwrap(),
-        _ => build_dielectric(
-            "glass",
-            &IorDesc::Named {
-                name: "N-BK7".into(),
-            },
-            roughness,
-            g,
-        )
-        .unwrap(),
+        _ => build_dielectric("glass", &IorDesc::Named { name: "N-BK7".into() }, roughness, g).unwrap(),
     }
 }
 
@@ -328,12 +291,7 @@ fn chi_square(bsdf: &dyn Bsdf, g: &WavelengthGrid, wo: Vec3A, front: bool) {
             continue;
         }
         let p = bsdf.pdf(&ctx, wo, s.wi);
-        assert!(
-            (p - s.pdf).abs() <= 1e-3 * p.max(s.pdf) + 1e-6,
-            "sampled pdf {} vs pdf() {p} at {:?}",
-            s.pdf,
-            s.wi
-        );
+        assert!((p - s.pdf).abs() <= 1e-3 * p.max(s.pdf) + 1e-6, "sampled pdf {} vs pdf() {p} at {:?}", s.pdf, s.wi);
         let ci = (((s.wi.z + 1.0) * 0.5 * nc as f32) as usize).min(nc - 1);
         let phi = s.wi.y.atan2(s.wi.x).rem_euclid(std::f32::consts::TAU);
         let pi = ((phi / std::f32::consts::TAU * np as f32) as usize).min(np - 1);
@@ -349,17 +307,14 @@ fn chi_square(bsdf: &dyn Bsdf, g: &WavelengthGrid, wo: Vec3A, front: bool) {
             for a in 0..k {
                 for b in 0..k {
                     let c = -1.0 + 2.0 * (ci as f64 + (a as f64 + 0.5) / k as f64) / nc as f64;
-                    let phi = std::f64::consts::TAU * (pi as f64 + (b as f64 + 0.5) / k as f64)
-                        / np as f64;
+                    let phi = std::f64::consts::TAU * (pi as f64 + (b as f64 + 0.5) / k as f64) / np as f64;
                     let s = (1.0 - c * c).max(0.0).sqrt();
                     let wi = Vec3A::new((s * phi.cos()) as f32, (s * phi.sin()) as f32, c as f32);
                     acc += bsdf.pdf(&ctx, wo, wi) as f64;
                 }
             }
-            expected[ci * np + pi] = acc / (k * k) as f64
-                * (2.0 / nc as f64)
-                * (std::f64::consts::TAU / np as f64)
-                * n as f64;
+            expected[ci * np + pi] =
+                acc / (k * k) as f64 * (2.0 / nc as f64) * (std::f64::consts::TAU / np as f64) * n as f64;
         }
     }
     let (mut chi2, mut dof, mut pool_e, mut pool_o) = (0.0f64, 0usize, 0.0f64, 0.0f64);
@@ -404,11 +359,9 @@ fn rough_conductor_sampling_matches_pdf_chi_square() {
 #[test]
 fn rough_dielectric_sampling_matches_pdf_chi_square() {
     let g = grid();
-    for (roughness, eta, cos_o, front) in [
-        (0.4f32, 1.5f64, 0.7f32, true),
-        (0.7, 1.33, 0.4, false),
-        (0.5, 2.4, 0.9, true),
-    ] {
+    for (roughness, eta, cos_o, front) in
+        [(0.4f32, 1.5f64, 0.7f32, true), (0.7, 1.33, 0.4, false), (0.5, 2.4, 0.9, true)]
+    {
         let b = build_dielectric("glass", &IorDesc::Constant { ior: eta }, roughness, &g).unwrap();
         let wo = Vec3A::new((1.0 - cos_o * cos_o).sqrt(), 0.0, cos_o);
         chi_square(b.as_ref(), &g, wo, front);

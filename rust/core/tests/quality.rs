@@ -35,11 +35,7 @@ fn json_keys_are_explicit_and_rust_structs_are_fully_explicit() {
     assert_eq!(r.wavelength_count, 81);
     assert!(why.iter().any(|w| w.contains("REFERENCE")), "{why:?}");
     // Rust struct: nothing changes whatever the quality.
-    let rust = RenderSettings {
-        quality: Quality::Preview,
-        samples: 7,
-        ..Default::default()
-    };
+    let rust = RenderSettings { quality: Quality::Preview, samples: 7, ..Default::default() };
     let (r, why) = resolve(&rust, None).unwrap();
     assert_eq!((r.samples, r.max_bounces, r.wavelength_count, r.noise_threshold), (7, 8, 41, 0.0));
     assert!(why.is_empty());
@@ -65,22 +61,14 @@ fn auto_grid_centres_a_589_nm_band_and_keeps_its_energy() {
     assert!((grid.integrate(&v) - exact).abs() < 1e-3 * exact);
     // Its energy-weighted mean wavelength is the band's centre (a uniform 41 grid puts
     // it on 590 nm).
-    let centroid: f64 = v
-        .iter()
-        .zip(grid.weights())
-        .zip(grid.lambdas())
-        .map(|((&x, &w), &l)| (x * w * l) as f64)
-        .sum::<f64>()
-        / grid.integrate(&v);
+    let centroid: f64 =
+        v.iter().zip(grid.weights()).zip(grid.lambdas()).map(|((&x, &w), &l)| (x * w * l) as f64).sum::<f64>()
+            / grid.integrate(&v);
     assert!((centroid - 589.0).abs() < 0.05, "{centroid}");
     let g41 = WavelengthGrid::default();
     let v41 = band.evaluate(&g41, SpectrumRole::Illuminant, &NoRgb).unwrap();
-    let c41: f64 = v41
-        .iter()
-        .zip(g41.weights())
-        .zip(g41.lambdas())
-        .map(|((&x, &w), &l)| (x * w * l) as f64)
-        .sum::<f64>()
-        / g41.integrate(&v41);
+    let c41: f64 =
+        v41.iter().zip(g41.weights()).zip(g41.lambdas()).map(|((&x, &w), &l)| (x * w * l) as f64).sum::<f64>()
+            / g41.integrate(&v41);
     assert!((c41 - 589.0).abs() > 0.5, "{c41}");
 }

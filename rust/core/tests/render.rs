@@ -56,8 +56,19 @@ fn point_light_on_diffuse_plane_matches_inverse_square_cosine_law() {
     let mut buffers: Vec<Buffer> = Vec::new();
     desc.materials.push(diffuse("plane", rho, None));
     let s = 4.0;
-    add_mesh(&mut desc, &mut buffers, "plane", vec![-s, -s, 0.0, s, -s, 0.0, s, s, 0.0, -s, s, 0.0], vec![0, 1, 2, 0, 2, 3], 0);
-    desc.lights.push(LightDesc::Point { name: "lamp".into(), position: [0.0, 0.0, h], intensity: SpectrumDesc::constant(intensity) });
+    add_mesh(
+        &mut desc,
+        &mut buffers,
+        "plane",
+        vec![-s, -s, 0.0, s, -s, 0.0, s, s, 0.0, -s, s, 0.0],
+        vec![0, 1, 2, 0, 2, 3],
+        0,
+    );
+    desc.lights.push(LightDesc::Point {
+        name: "lamp".into(),
+        position: [0.0, 0.0, h],
+        intensity: SpectrumDesc::constant(intensity),
+    });
     // Orthographic camera 5 units above looking down −Z, 4 units wide.
     desc.camera = CameraDesc {
         projection: Projection::Orthographic,
@@ -115,7 +126,14 @@ fn cancel_before_start_returns_no_samples() {
 fn bad_mesh_data_names_the_mesh() {
     let mut desc = SceneDesc::default();
     let mut buffers: Vec<Buffer> = Vec::new();
-    add_mesh(&mut desc, &mut buffers, "Broken", vec![0.0, 0.0, 0.0, 1.0, f32::NAN, 0.0, 0.0, 1.0, 0.0], vec![0, 1, 2], 0);
+    add_mesh(
+        &mut desc,
+        &mut buffers,
+        "Broken",
+        vec![0.0, 0.0, 0.0, 1.0, f32::NAN, 0.0, 0.0, 1.0, 0.0],
+        vec![0, 1, 2],
+        0,
+    );
     let err = render(&desc, &buffers, &RenderSettings::default(), &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("mesh 'Broken'") && err.contains("vertex 1"), "{err}");
     let mut desc = SceneDesc::default();

@@ -8,7 +8,9 @@ use common::*;
 use polychrome_core::camera::{CameraDesc, Projection};
 use polychrome_core::material::texture::{srgb_decode, Texture, Wrap};
 use polychrome_core::render::{render, RenderControl, RenderOutput, RenderSettings};
-use polychrome_core::scene::{BsdfDesc, Buffer, LightDesc, MaterialDesc, SceneDesc, TextureDesc, TextureEncoding, WorldDesc};
+use polychrome_core::scene::{
+    BsdfDesc, Buffer, LightDesc, MaterialDesc, SceneDesc, TextureDesc, TextureEncoding, WorldDesc,
+};
 use polychrome_core::spectrum::named::SpectrumKind;
 use polychrome_core::spectrum::SpectrumDesc;
 use std::f32::consts::PI;
@@ -20,7 +22,12 @@ fn camera_looking(dir: [f32; 3], focal_length: f32) -> CameraDesc {
     let up = right.cross(f);
     let b = -f;
     CameraDesc {
-        to_world: [[right.x, up.x, b.x, 0.0], [right.y, up.y, b.y, 0.0], [right.z, up.z, b.z, 0.0], [0.0, 0.0, 0.0, 1.0]],
+        to_world: [
+            [right.x, up.x, b.x, 0.0],
+            [right.y, up.y, b.y, 0.0],
+            [right.z, up.z, b.z, 0.0],
+            [0.0, 0.0, 0.0, 1.0],
+        ],
         focal_length,
         ..Default::default()
     }
@@ -131,10 +138,19 @@ fn white_sphere_scene(world: WorldDesc, textures: Option<(u32, u32, Vec<f32>)>) 
 fn white_sphere_vanishes_under_a_uniform_world() {
     let c = [0.3f32, 0.6, 0.9];
     let cases = [
-        white_sphere_scene(world_texture(0, 2.0, 0.4, true), Some((8, 4, c.repeat(32).iter().map(|v| v / 2.0).collect()))),
+        white_sphere_scene(
+            world_texture(0, 2.0, 0.4, true),
+            Some((8, 4, c.repeat(32).iter().map(|v| v / 2.0).collect())),
+        ),
         white_sphere_scene(world_texture(0, 1.0, 0.0, false), Some((8, 4, c.repeat(32)))),
         white_sphere_scene(
-            WorldDesc { radiance: Some(SpectrumDesc::new(SpectrumKind::Rgb { rgb: c })), texture: None, strength: 1.0, rotation: 0.0, importance_sampling: true },
+            WorldDesc {
+                radiance: Some(SpectrumDesc::new(SpectrumKind::Rgb { rgb: c })),
+                texture: None,
+                strength: 1.0,
+                rotation: 0.0,
+                importance_sampling: true,
+            },
             None,
         ),
     ];
@@ -148,7 +164,12 @@ fn white_sphere_vanishes_under_a_uniform_world() {
         for ch in 0..3 {
             let var = out.images.rgba.chunks_exact(4).map(|p| (p[ch] as f64 - m[ch]).powi(2)).sum::<f64>() / (n - 1.0);
             let se = (var / n).sqrt();
-            assert!((m[ch] - c[ch] as f64).abs() < 5.0 * se + 2e-4 * c[ch] as f64, "case {k} channel {ch}: {} vs {} (se {se})", m[ch], c[ch]);
+            assert!(
+                (m[ch] - c[ch] as f64).abs() < 5.0 * se + 2e-4 * c[ch] as f64,
+                "case {k} channel {ch}: {} vs {} (se {se})",
+                m[ch],
+                c[ch]
+            );
         }
         assert_eq!(out.stats.nonfinite_samples, 0);
     }
@@ -171,9 +192,20 @@ fn importance_sampling_a_sun_reduces_variance_without_bias() {
     let scene = |importance: bool| {
         let mut desc = SceneDesc::default();
         let mut buffers = Vec::new();
-        desc.materials.push(MaterialDesc { name: "grey".into(), bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(0.5) }, emission: None });
+        desc.materials.push(MaterialDesc {
+            name: "grey".into(),
+            bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(0.5) },
+            emission: None,
+        });
         let s = 50.0;
-        add_mesh(&mut desc, &mut buffers, "ground", vec![-s, -s, 0.0, s, -s, 0.0, s, s, 0.0, -s, s, 0.0], vec![0, 1, 2, 0, 2, 3], 0);
+        add_mesh(
+            &mut desc,
+            &mut buffers,
+            "ground",
+            vec![-s, -s, 0.0, s, -s, 0.0, s, s, 0.0, -s, s, 0.0],
+            vec![0, 1, 2, 0, 2, 3],
+            0,
+        );
         let t = add_texture(&mut desc, &mut buffers, "sun", w, h, rgb.clone());
         desc.world = Some(world_texture(t, 1.0, 0.0, importance));
         desc.camera = CameraDesc {
@@ -214,12 +246,18 @@ fn importance_sampling_a_sun_reduces_variance_without_bias() {
         }
     }
     let expected = 0.5 / PI as f64 * e;
-    assert!((m_is - expected).abs() < 5.0 * (v_is / n).sqrt() + 2e-3 * expected, "IS mean {m_is} vs closed form {expected}");
+    assert!(
+        (m_is - expected).abs() < 5.0 * (v_is / n).sqrt() + 2e-3 * expected,
+        "IS mean {m_is} vs closed form {expected}"
+    );
     // Uniform sampling converges to the same value: more samples, since it is noisy.
     let (desc, buffers) = scene(false);
     let out = render(&desc, &buffers, &RenderSettings { samples: 256, ..settings }, &RenderControl::new()).unwrap();
     let (m_u, se_u) = mean_and_standard_error(&out.images.rgba);
-    assert!((m_u - expected).abs() < 5.0 * se_u + 2e-3 * expected, "uniform mean {m_u} (se {se_u}) vs closed form {expected}");
+    assert!(
+        (m_u - expected).abs() < 5.0 * se_u + 2e-3 * expected,
+        "uniform mean {m_u} (se {se_u}) vs closed form {expected}"
+    );
 }
 
 /// The same colour as a constant RGB reflectance and as a 1×1 texture (linear floats or
@@ -229,10 +267,18 @@ fn constant_colour_and_one_texel_texture_render_identically() {
     let base = |reflectance: SpectrumDesc| {
         let mut desc = SceneDesc::default();
         let mut buffers = Vec::new();
-        desc.materials.push(MaterialDesc { name: "paint".into(), bsdf: BsdfDesc::Diffuse { reflectance }, emission: None });
+        desc.materials.push(MaterialDesc {
+            name: "paint".into(),
+            bsdf: BsdfDesc::Diffuse { reflectance },
+            emission: None,
+        });
         let (v, t) = uv_sphere([0.0, 0.0, -4.0], 1.0, 12, 24);
         add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
-        desc.lights.push(LightDesc::Point { name: "lamp".into(), position: [2.0, 2.0, 0.0], intensity: SpectrumDesc::constant(20.0) });
+        desc.lights.push(LightDesc::Point {
+            name: "lamp".into(),
+            position: [2.0, 2.0, 0.0],
+            intensity: SpectrumDesc::constant(20.0),
+        });
         (desc, buffers)
     };
     let settings = RenderSettings { width: 16, height: 16, samples: 2, seed: 3, ..Default::default() };
@@ -251,7 +297,15 @@ fn constant_colour_and_one_texel_texture_render_identically() {
     let constant = render(&d2, &b2, &settings, &RenderControl::new()).unwrap();
     let (mut d3, mut b3) = base(SpectrumDesc::new(SpectrumKind::Texture { texture: 0 }));
     b3.push(Buffer::U8(bytes.to_vec()));
-    d3.textures.push(TextureDesc { name: "byte".into(), width: 1, height: 1, channels: 3, buffer: b3.len() - 1, encoding: TextureEncoding::Srgb, wrap: Default::default() });
+    d3.textures.push(TextureDesc {
+        name: "byte".into(),
+        width: 1,
+        height: 1,
+        channels: 3,
+        buffer: b3.len() - 1,
+        encoding: TextureEncoding::Srgb,
+        wrap: Default::default(),
+    });
     let textured = render(&d3, &b3, &settings, &RenderControl::new()).unwrap();
     assert_eq!(constant.images.rgba, textured.images.rgba);
     assert_eq!(textured.stats.texture_bytes, 3);
@@ -261,7 +315,11 @@ fn constant_colour_and_one_texel_texture_render_identically() {
 fn texture_errors_name_the_texture_or_material() {
     let mut desc = SceneDesc::default();
     let mut buffers = Vec::new();
-    desc.materials.push(MaterialDesc { name: "Wood".into(), bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::new(SpectrumKind::Texture { texture: 2 }) }, emission: None });
+    desc.materials.push(MaterialDesc {
+        name: "Wood".into(),
+        bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::new(SpectrumKind::Texture { texture: 2 }) },
+        emission: None,
+    });
     let err = render(&desc, &buffers, &RenderSettings::default(), &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("material 'Wood'") && err.contains("texture 2"), "{err}");
 
@@ -272,13 +330,25 @@ fn texture_errors_name_the_texture_or_material() {
     let mut desc = SceneDesc::default();
     buffers.clear();
     buffers.push(Buffer::U32(vec![0, 0, 0]));
-    desc.textures.push(TextureDesc { name: "Sky".into(), width: 1, height: 1, channels: 3, buffer: 0, encoding: TextureEncoding::Linear, wrap: Default::default() });
+    desc.textures.push(TextureDesc {
+        name: "Sky".into(),
+        width: 1,
+        height: 1,
+        channels: 3,
+        buffer: 0,
+        encoding: TextureEncoding::Linear,
+        wrap: Default::default(),
+    });
     let err = render(&desc, &buffers, &RenderSettings::default(), &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("texture 'Sky'") && err.contains("float32"), "{err}");
 
     // A texture where only spectra make sense (a light's intensity) is refused by name.
     let mut desc = SceneDesc::default();
-    desc.lights.push(LightDesc::Point { name: "Lamp".into(), position: [0.0; 3], intensity: SpectrumDesc::new(SpectrumKind::Texture { texture: 0 }) });
+    desc.lights.push(LightDesc::Point {
+        name: "Lamp".into(),
+        position: [0.0; 3],
+        intensity: SpectrumDesc::new(SpectrumKind::Texture { texture: 0 }),
+    });
     let err = render(&desc, &[], &RenderSettings::default(), &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("light 'Lamp'") && err.contains("texture"), "{err}");
 }
@@ -296,7 +366,11 @@ fn extreme_hdri_is_finite_and_description_parses() {
     let mut desc = desc;
     let mut buffers = vec![Buffer::F32(rgb)];
     let (v, t) = uv_sphere([0.0, 0.0, -4.0], 1.0, 12, 24);
-    desc.materials.push(MaterialDesc { name: "grey".into(), bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(0.5) }, emission: None });
+    desc.materials.push(MaterialDesc {
+        name: "grey".into(),
+        bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(0.5) },
+        emission: None,
+    });
     add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
     let settings = RenderSettings { width: 8, height: 8, samples: 4, ..Default::default() };
     let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();

@@ -37,7 +37,9 @@ fn panic_message(p: Box<dyn std::any::Any + Send>) -> String {
 fn guarded<T>(what: &str, f: impl FnOnce() -> Result<T, Error>) -> PyResult<T> {
     match catch_unwind(AssertUnwindSafe(f)) {
         Ok(r) => r.map_err(to_py_err),
-        Err(p) => Err(PyRuntimeError::new_err(format!("internal error in {what} (please report): {}", panic_message(p)))),
+        Err(p) => {
+            Err(PyRuntimeError::new_err(format!("internal error in {what} (please report): {}", panic_message(p))))
+        }
     }
 }
 
@@ -80,7 +82,8 @@ fn render<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let desc: SceneDesc = parse(scene_json, "scene description")?;
     // Keys present in the JSON are the explicit settings; `quality` fills the rest.
-    let settings = RenderSettings::from_json(settings_json).map_err(|e| PyValueError::new_err(format!("render settings: {e}")))?;
+    let settings =
+        RenderSettings::from_json(settings_json).map_err(|e| PyValueError::new_err(format!("render settings: {e}")))?;
     let buffers = convert_buffers(buffers)?;
     let control = RenderControl::new();
     let mut callback_error: Option<PyErr> = None;
@@ -108,7 +111,9 @@ fn render<'py>(
                     }
                 });
             }
-            worker.join().unwrap_or_else(|p| Err(PyRuntimeError::new_err(format!("render thread died: {}", panic_message(p)))))
+            worker
+                .join()
+                .unwrap_or_else(|p| Err(PyRuntimeError::new_err(format!("render thread died: {}", panic_message(p)))))
         })
     });
     if let Some(e) = callback_error {
@@ -148,7 +153,9 @@ impl RenderJob {
                 return false;
             }
             let h = handle.take().expect("checked above");
-            let outcome = h.join().unwrap_or_else(|p| Err(PyRuntimeError::new_err(format!("render thread died: {}", panic_message(p)))));
+            let outcome = h
+                .join()
+                .unwrap_or_else(|p| Err(PyRuntimeError::new_err(format!("render thread died: {}", panic_message(p)))));
             *lock(&self.outcome) = Some(outcome);
         }
         // Not started (callers check) or joined: the outcome is known (or already taken).
@@ -163,7 +170,8 @@ impl RenderJob {
     fn new(scene_json: &str, buffers: Vec<Bound<'_, PyAny>>, settings_json: &str, previews: bool) -> PyResult<Self> {
         let desc: SceneDesc = parse(scene_json, "scene description")?;
         // As `render`: keys present in the JSON are explicit, `quality` fills the rest.
-        let settings = RenderSettings::from_json(settings_json).map_err(|e| PyValueError::new_err(format!("render settings: {e}")))?;
+        let settings = RenderSettings::from_json(settings_json)
+            .map_err(|e| PyValueError::new_err(format!("render settings: {e}")))?;
         let buffers = convert_buffers(buffers)?;
         let control = if previews { RenderControl::with_previews() } else { RenderControl::new() };
         Ok(Self {
@@ -292,7 +300,10 @@ fn output_dict<'py>(py: Python<'py>, out: RenderOutput) -> PyResult<Bound<'py, P
 
 /// wavelength_grid(settings_json) -> (wavelengths, quadrature weights) of the settings' grid.
 #[pyfunction]
-fn wavelength_grid<'py>(py: Python<'py>, settings_json: &str) -> PyResult<(Bound<'py, PyArray1<f32>>, Bound<'py, PyArray1<f32>>)> {
+fn wavelength_grid<'py>(
+    py: Python<'py>,
+    settings_json: &str,
+) -> PyResult<(Bound<'py, PyArray1<f32>>, Bound<'py, PyArray1<f32>>)> {
     let settings: RenderSettings = parse(settings_json, "render settings")?;
     let grid = guarded("wavelength_grid", || settings.grid())?;
     Ok((PyArray1::from_slice(py, grid.lambdas()), PyArray1::from_slice(py, grid.weights())))
@@ -310,7 +321,12 @@ fn role_from(role: &str) -> PyResult<SpectrumRole> {
 /// spectrum_values(spectrum_json, settings_json, role="illuminant") -> values on the grid.
 #[pyfunction]
 #[pyo3(signature = (spectrum_json, settings_json, role="illuminant"))]
-fn spectrum_values<'py>(py: Python<'py>, spectrum_json: &str, settings_json: &str, role: &str) -> PyResult<Bound<'py, PyArray1<f32>>> {
+fn spectrum_values<'py>(
+    py: Python<'py>,
+    spectrum_json: &str,
+    settings_json: &str,
+    role: &str,
+) -> PyResult<Bound<'py, PyArray1<f32>>> {
     let desc: SpectrumDesc = parse(spectrum_json, "spectrum")?;
     let settings: RenderSettings = parse(settings_json, "render settings")?;
     let role = role_from(role)?;
@@ -341,7 +357,12 @@ fn spectrum_xyz(spectrum_json: &str, settings_json: &str) -> PyResult<(f64, f64,
 /// array on the settings' grid, through the same code path textures and HDRIs use at a
 /// hit: role "reflectance" (clamped to [0,1]) or "illuminant" (unbounded).
 #[pyfunction]
-fn uplift<'py>(py: Python<'py>, rgb: PyReadonlyArrayDyn<'py, f32>, role: &str, settings_json: &str) -> PyResult<Bound<'py, numpy::PyArrayDyn<f32>>> {
+fn uplift<'py>(
+    py: Python<'py>,
+    rgb: PyReadonlyArrayDyn<'py, f32>,
+    role: &str,
+    settings_json: &str,
+) -> PyResult<Bound<'py, numpy::PyArrayDyn<f32>>> {
     let settings: RenderSettings = parse(settings_json, "render settings")?;
     let role = role_from(role)?;
     let shape = rgb.as_array().shape().to_vec();

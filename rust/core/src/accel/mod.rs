@@ -42,9 +42,12 @@ pub struct Accel {
 /// as the medium one for a few percent of traversal speed, which keeps interactive
 /// re-exports (Blender's viewport) responsive.
 fn build_params_for(primitives: usize) -> BvhBuildParams {
-    if primitives > 200_000 { BvhBuildParams::fast_build() } else { BvhBuildParams::medium_build() }
+    if primitives > 200_000 {
+        BvhBuildParams::fast_build()
+    } else {
+        BvhBuildParams::medium_build()
+    }
 }
-
 
 impl Accel {
     pub fn build(meshes: &[Mesh], instances: &[Instance]) -> Self {
@@ -144,7 +147,11 @@ impl Accel {
                 let [a, b, c] = mb.triangles[tri];
                 wt.intersect(a, b, c, lr.tmin, lr.tmax).map_or(f32::INFINITY, |h| h.0)
             });
-            if miss { f32::INFINITY } else { r.tmin.max(0.0) }
+            if miss {
+                f32::INFINITY
+            } else {
+                r.tmin.max(0.0)
+            }
         })
     }
 }
@@ -190,7 +197,16 @@ mod tests {
         let meshes = vec![quad("q")];
         let instances = vec![
             Instance::new("near", 0, Affine3A::from_translation(glam::Vec3::new(0.0, 0.0, 1.0))).unwrap(),
-            Instance::new("far", 0, Affine3A::from_scale_rotation_translation(glam::Vec3::splat(3.0), glam::Quat::IDENTITY, glam::Vec3::new(0.0, 0.0, -2.0))).unwrap(),
+            Instance::new(
+                "far",
+                0,
+                Affine3A::from_scale_rotation_translation(
+                    glam::Vec3::splat(3.0),
+                    glam::Quat::IDENTITY,
+                    glam::Vec3::new(0.0, 0.0, -2.0),
+                ),
+            )
+            .unwrap(),
         ];
         let accel = Accel::build(&meshes, &instances);
         let ray = Ray::new(Vec3A::new(0.2, 0.3, 5.0), Vec3A::new(0.0, 0.0, -1.0));
@@ -204,7 +220,9 @@ mod tests {
         assert!((h.t - 7.0).abs() < 1e-5);
         assert!(accel.occluded(&instances, &Ray::segment(Vec3A::new(2.0, 0.0, 5.0), Vec3A::new(0.0, 0.0, -1.0), 8.0)));
         assert!(!accel.occluded(&instances, &Ray::segment(Vec3A::new(2.0, 0.0, 5.0), Vec3A::new(0.0, 0.0, -1.0), 6.0)));
-        assert!(accel.intersect(&instances, &Ray::new(Vec3A::new(9.0, 0.0, 5.0), Vec3A::new(0.0, 0.0, -1.0))).is_none());
+        assert!(accel
+            .intersect(&instances, &Ray::new(Vec3A::new(9.0, 0.0, 5.0), Vec3A::new(0.0, 0.0, -1.0)))
+            .is_none());
     }
 
     #[test]

@@ -119,7 +119,8 @@ impl Camera {
                 if !positive(desc.focal_length) {
                     return Err(bad(format!("focal length {} mm must be positive", desc.focal_length)));
                 }
-                let sensor = if desc.sensor_fit == SensorFit::Vertical { desc.sensor_height } else { desc.sensor_width };
+                let sensor =
+                    if desc.sensor_fit == SensorFit::Vertical { desc.sensor_height } else { desc.sensor_width };
                 sensor / desc.focal_length
             }
             Projection::Orthographic => {
@@ -165,11 +166,12 @@ impl Camera {
         let v = (1.0 - 2.0 * y / self.height as f32) * self.half.y + self.shift.y;
         let (origin, d) = match self.projection {
             // The local direction has z = −1, so a local depth z is reached at t = z·|d|.
-            Projection::Perspective => (self.to_world.translation, self.to_world.transform_vector3a(Vec3A::new(u, v, -1.0))),
-            Projection::Orthographic => (
-                self.to_world.transform_point3a(Vec3A::new(u, v, 0.0)),
-                self.to_world.transform_vector3a(-Vec3A::Z),
-            ),
+            Projection::Perspective => {
+                (self.to_world.translation, self.to_world.transform_vector3a(Vec3A::new(u, v, -1.0)))
+            }
+            Projection::Orthographic => {
+                (self.to_world.transform_point3a(Vec3A::new(u, v, 0.0)), self.to_world.transform_vector3a(-Vec3A::Z))
+            }
         };
         let len = d.length();
         Ray { origin, direction: d / len, tmin: self.clip_start * len, tmax: self.clip_end * len }
@@ -227,7 +229,12 @@ impl Camera {
         let cos = depth / local.length();
         let area = 4.0 * self.half.x * self.half.y;
         let importance = 1.0 / (area * cos * cos * cos * distance * distance);
-        importance.is_finite().then_some(CameraConnection { raster: Vec2::new(x, y), wi: -d / distance, distance, importance })
+        importance.is_finite().then_some(CameraConnection {
+            raster: Vec2::new(x, y),
+            wi: -d / distance,
+            distance,
+            importance,
+        })
     }
 }
 

@@ -43,12 +43,9 @@ impl Observer {
             return channels.observer();
         }
         let cmfs: Vec<[f32; 3]> = grid.lambdas().iter().map(|&l| cmf(l)).collect();
-        let y_integral: f64 =
-            cmfs.iter().zip(grid.weights()).map(|(c, &w)| c[1] as f64 * w as f64).sum();
+        let y_integral: f64 = cmfs.iter().zip(grid.weights()).map(|(c, &w)| c[1] as f64 * w as f64).sum();
         let norm = (1.0 / y_integral) as f32;
-        let fold = |k: usize| -> Vec<f32> {
-            cmfs.iter().zip(grid.weights()).map(|(c, &w)| c[k] * w * norm).collect()
-        };
+        let fold = |k: usize| -> Vec<f32> { cmfs.iter().zip(grid.weights()).map(|(c, &w)| c[k] * w * norm).collect() };
         Self { x: fold(0), y: fold(1), z: fold(2) }
     }
 

@@ -144,7 +144,11 @@ impl Uplift {
         let a: [Vec<f64>; 3] = std::array::from_fn(|c| k[c].iter().map(|v| v / sums[c]).collect());
         let lambdas: Vec<f64> = grid.lambdas().iter().map(|&l| l as f64).collect();
         let h: Vec<f64> = lambdas.windows(2).map(|p| 1.0 / (p[1] - p[0])).collect();
-        let solved = if coverage_fallback { Err("the grid cannot reproduce D65 white".to_string()) } else { solve_basis(&a, &h) };
+        let solved = if coverage_fallback {
+            Err("the grid cannot reproduce D65 white".to_string())
+        } else {
+            solve_basis(&a, &h)
+        };
         let (w, fallback_samples) = match solved {
             Ok(w) => (w, None),
             // Some small grids (4, 5, 7, 8, 9, 11 samples over 380..780 nm) admit no basis
@@ -166,7 +170,8 @@ impl Uplift {
             },
         };
         // Reflectance round trip of the unit colours (exact unless the fallback was used).
-        let aw: [[f64; 3]; 3] = std::array::from_fn(|c| std::array::from_fn(|d| a[d].iter().zip(&w[c]).map(|(x, y)| x * y).sum()));
+        let aw: [[f64; 3]; 3] =
+            std::array::from_fn(|c| std::array::from_fn(|d| a[d].iter().zip(&w[c]).map(|(x, y)| x * y).sum()));
         let round_trip_error = (0..3)
             .flat_map(|c| (0..3).map(move |d| (c, d)))
             .map(|(c, d)| (aw[c][d] - if c == d { 1.0 } else { 0.0 }).abs())
@@ -185,7 +190,18 @@ impl Uplift {
             UpliftMethod::Linear => None,
             UpliftMethod::Smooth => Some(SmoothTable::build(&lambdas, &a, space, SMOOTH_RES)),
         };
-        Ok(Self { method, basis, emission, d65, white, to_rgb, smooth, round_trip_error, fallback_samples, emission_exact })
+        Ok(Self {
+            method,
+            basis,
+            emission,
+            d65,
+            white,
+            to_rgb,
+            smooth,
+            round_trip_error,
+            fallback_samples,
+            emission_exact,
+        })
     }
 
     /// Largest error of the reflectance round trip RGB(basis_c) − unit RGB_c: 0 (up to
@@ -564,7 +580,12 @@ fn exact_emission(em: &[Vec<f32>; 3], aw: &[[f64; 3]; 3], sums: &[f64]) -> ([Vec
             return (mixed, true);
         }
     }
-    (std::array::from_fn(|c| em[c].iter().map(|&v| if g[c][c] > 0.0 { (v as f64 / g[c][c]) as f32 } else { v }).collect()), false)
+    (
+        std::array::from_fn(|c| {
+            em[c].iter().map(|&v| if g[c][c] > 0.0 { (v as f64 / g[c][c]) as f32 } else { v }).collect()
+        }),
+        false,
+    )
 }
 
 /// Minimum-variation bounded reversible basis for the 3 × n map `a` and edge weights `h`.
@@ -1782,7 +1803,13 @@ mod tests {
                 let got = space.xyz_to_rgb(obs.xyz(&out));
                 for d in 0..3 {
                     let want = if c == d { 2.0 } else { 0.0 };
-                    let tol = if n <= 5 { f64::INFINITY } else if up.fallback_samples().is_some() && !up.emission_exact { 0.4 } else { 1e-3 };
+                    let tol = if n <= 5 {
+                        f64::INFINITY
+                    } else if up.fallback_samples().is_some() && !up.emission_exact {
+                        0.4
+                    } else {
+                        1e-3
+                    };
                     assert!((got[d] - want).abs() < tol, "{n}: unit {c} channel {d}: {got:?} (round trip {err})");
                 }
             }

@@ -174,7 +174,11 @@ impl Film {
                 (0..px * n)
                     .map(|j| {
                         let c = b.count[j / n];
-                        if c > 0 { (s[j] / c as f64) as f32 } else { 0.0 }
+                        if c > 0 {
+                            (s[j] / c as f64) as f32
+                        } else {
+                            0.0
+                        }
                     })
                     .collect(),
             ),

@@ -33,7 +33,13 @@ mod tests {
 
     #[test]
     fn frame_is_orthonormal_for_any_normal() {
-        for n in [Vec3A::Z, -Vec3A::Z, Vec3A::X, Vec3A::new(0.3, -0.5, 0.8).normalize(), Vec3A::new(1e-8, 0.0, -1.0).normalize()] {
+        for n in [
+            Vec3A::Z,
+            -Vec3A::Z,
+            Vec3A::X,
+            Vec3A::new(0.3, -0.5, 0.8).normalize(),
+            Vec3A::new(1e-8, 0.0, -1.0).normalize(),
+        ] {
             let f = Frame::from_normal(n);
             assert!(f.s.dot(f.t).abs() < 1e-6 && f.s.dot(f.n).abs() < 1e-6 && f.t.dot(f.n).abs() < 1e-6);
             assert!((f.s.length() - 1.0).abs() < 1e-6 && (f.t.length() - 1.0).abs() < 1e-6);

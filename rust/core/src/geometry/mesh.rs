@@ -45,7 +45,11 @@ impl Mesh {
         // panics building its compressed nodes: found by the scene-builder proptest), and
         // no ray could resolve the geometry anyway (one ulp at 1e12 is 65536 units).
         if let Some(i) = positions.iter().position(|v| v.abs() > MAX_COORDINATE) {
-            return Err(bad(format!("vertex {} has a coordinate {:e} beyond ±{MAX_COORDINATE:e}", i / 3, positions[i])));
+            return Err(bad(format!(
+                "vertex {} has a coordinate {:e} beyond ±{MAX_COORDINATE:e}",
+                i / 3,
+                positions[i]
+            )));
         }
         if let Some(i) = indices.iter().position(|&k| k as usize >= nv) {
             return Err(bad(format!(
@@ -121,12 +125,6 @@ impl Instance {
             return Err(bad("transform is singular (zero scale?)"));
         }
         let to_object = to_world.inverse();
-        Ok(Self {
-            name: name.to_string(),
-            mesh,
-            to_world,
-            to_object,
-            normal_to_world: to_object.matrix3.transpose(),
-        })
+        Ok(Self { name: name.to_string(), mesh, to_world, to_object, normal_to_world: to_object.matrix3.transpose() })
     }
 }

@@ -91,7 +91,11 @@ mod tests {
                 let r = shadow_ray(p, origin, wi, distance);
                 let hit_plane = (p.z + 200.0 - r.origin.z) / r.direction.z;
                 // Short of the light's plane by more than its rounding...
-                assert!(r.tmax < hit_plane - 2.0 * (s + 200.0) * f32::EPSILON / r.direction.z, "{s} {wi}: {} vs {hit_plane}", r.tmax);
+                assert!(
+                    r.tmax < hit_plane - 2.0 * (s + 200.0) * f32::EPSILON / r.direction.z,
+                    "{s} {wi}: {} vs {hit_plane}",
+                    r.tmax
+                );
                 // ...but by no more than 1e-3 of the distance plus 32 ulps of the coordinates.
                 let slack = 1e-3 * hit_plane + 32.0 * f32::EPSILON * (s + 200.0) / r.direction.z;
                 assert!(r.tmax > hit_plane - slack, "{s} {wi}: {} vs {hit_plane}", r.tmax);

@@ -19,7 +19,17 @@ pub struct WatertightRay {
 impl WatertightRay {
     pub fn new(origin: Vec3A, dir: Vec3A) -> Self {
         let a = dir.abs();
-        let kz = if a.x > a.y { if a.x > a.z { 0 } else { 2 } } else if a.y > a.z { 1 } else { 2 };
+        let kz = if a.x > a.y {
+            if a.x > a.z {
+                0
+            } else {
+                2
+            }
+        } else if a.y > a.z {
+            1
+        } else {
+            2
+        };
         let mut kx = (kz + 1) % 3;
         let mut ky = (kx + 1) % 3;
         if dir[kz] < 0.0 {
@@ -93,7 +103,12 @@ mod tests {
     #[test]
     fn shared_edge_is_hit_exactly_once() {
         // Two triangles sharing the diagonal of a quad; rays along the diagonal.
-        let q = [Vec3A::new(0.0, 0.0, 0.0), Vec3A::new(1.0, 0.0, 0.0), Vec3A::new(1.0, 1.0, 0.0), Vec3A::new(0.0, 1.0, 0.0)];
+        let q = [
+            Vec3A::new(0.0, 0.0, 0.0),
+            Vec3A::new(1.0, 0.0, 0.0),
+            Vec3A::new(1.0, 1.0, 0.0),
+            Vec3A::new(0.0, 1.0, 0.0),
+        ];
         for i in 1..50 {
             let s = i as f32 / 50.0;
             let r = WatertightRay::new(Vec3A::new(s, s, 1.0), Vec3A::new(0.0, 0.0, -1.0));

@@ -22,8 +22,8 @@
 //! camera strategy can produce the path): there the two sides collapse to different
 //! wavelengths with different probabilities (eq. 9), which these weights do not model.
 
-use super::{facing, Facing};
 use super::scatter;
+use super::{facing, Facing};
 use crate::camera::CameraConnection;
 use crate::film::PixelSample;
 use crate::geometry::{offset_ray_origin, shadow_ray, Frame, Ray};
@@ -117,11 +117,7 @@ pub fn weights(cam: &CamEnd, verts: &[Vtx], light: &LightEnd, legacy: bool) -> [
             cos_towards(&verts[j - 1], pos(other))
         }
     };
-    let cam_pdf = if cam.pdf_dir > 0.0 {
-        cam.pdf_dir as f64
-    } else {
-        1.0
-    };
+    let cam_pdf = if cam.pdf_dir > 0.0 { cam.pdf_dir as f64 } else { 1.0 };
     let g1 = cam_pdf * cos_at(1, 0) / d2(pos(0), pos(1)).max(1e-30);
     // Density of generating x(j+1) from x(j) on a camera path (1 ≤ j ≤ k−1).
     let fwd = |j: usize| -> f64 {
@@ -143,11 +139,7 @@ pub fn weights(cam: &CamEnd, verts: &[Vtx], light: &LightEnd, legacy: bool) -> [
             v.pdf_light as f64 * cos_at(j - 1, j) / d2(pos(j), pos(j - 1)).max(1e-30)
         }
     };
-    let p_a = if light.delta {
-        0.0
-    } else {
-        (1..k).fold(g1, |acc, j| acc * fwd(j))
-    };
+    let p_a = if light.delta { 0.0 } else { (1..k).fold(g1, |acc, j| acc * fwd(j)) };
     let p_b = if k < 2 || verts[k - 2].specular {
         0.0
     } else {
@@ -179,11 +171,7 @@ pub fn weights(cam: &CamEnd, verts: &[Vtx], light: &LightEnd, legacy: bool) -> [
     let (a, b, c) = (finite(p_a), finite(p_b), finite(p_c));
     if legacy {
         let s = a * a + b * b;
-        return if s > 0.0 {
-            [a * a / s, b * b / s, 0.0]
-        } else {
-            [0.0, 0.0, if c > 0.0 { 1.0 } else { 0.0 }]
-        };
+        return if s > 0.0 { [a * a / s, b * b / s, 0.0] } else { [0.0, 0.0, if c > 0.0 { 1.0 } else { 0.0 }] };
     }
     let s = a * a + b * b + c * c;
     if s > 0.0 {
@@ -202,10 +190,7 @@ pub struct MisPathTracer {
 
 impl MisPathTracer {
     fn mono(&self) -> MonochromaticTracer {
-        MonochromaticTracer {
-            max_bounces: self.max_bounces,
-            rr_depth: self.rr_depth,
-        }
+        MonochromaticTracer { max_bounces: self.max_bounces, rr_depth: self.rr_depth }
     }
 }
 
@@ -213,11 +198,7 @@ impl Integrator for MisPathTracer {
     fn sample(&self, scene: &Scene, x: f32, y: f32, rng: &mut Rng, out: &mut PixelSample) {
         let n = scene.grid.len();
         let mut ray = scene.camera.generate_ray(x, y);
-        let mut cam = CamEnd {
-            p: ray.origin,
-            pdf_dir: 0.0,
-            connectable: false,
-        };
+        let mut cam = CamEnd { p: ray.origin, pdf_dir: 0.0, connectable: false };
         let mut verts: Vec<Vtx> = Vec::with_capacity(self.max_bounces as usize + 1);
         let mut legacy = false;
         let mut beta = SampledSpectrum::splat(n, 1.0);
@@ -236,18 +217,10 @@ impl Integrator for MisPathTracer {
                         le: None,
                         delta: false,
                         infinite: true,
-                        pdf_li: scene.lights[env.light].pdf_li(
-                            prev_p,
-                            ray.direction,
-                            f32::INFINITY,
-                        ),
+                        pdf_li: scene.lights[env.light].pdf_li(prev_p, ray.direction, f32::INFINITY),
                         cos: 1.0,
                     };
-                    let w = if depth == 0 {
-                        1.0
-                    } else {
-                        weights(&cam, &verts, &light, legacy)[0] as f32
-                    };
+                    let w = if depth == 0 { 1.0 } else { weights(&cam, &verts, &light, legacy)[0] as f32 };
                     let l = env.radiance_along(ray.direction, &mut le);
                     radiance.add_product(&beta, l, w);
                 }
@@ -296,13 +269,7 @@ impl Integrator for MisPathTracer {
             }
             let flags = material.bsdf.flags();
             legacy |= flags.dispersive;
-            let here = Vtx {
-                p: si.p,
-                n: si.ng,
-                specular: false,
-                pdf_cam: 0.0,
-                pdf_light: 0.0,
-            };
+            let here = Vtx { p: si.p, n: si.ng, specular: false, pdf_cam: 0.0, pdf_light: 0.0 };
 
             // Next-event estimation (strategy B).
             if flags.smooth {
@@ -316,20 +283,12 @@ impl Integrator for MisPathTracer {
                             let origin = offset_ray_origin(si.p, ng);
                             if !scene.occluded(&shadow_ray(si.p, origin, ls.wi, ls.distance)) {
                                 let infinite = ls.distance.is_infinite();
-                                let lp = if infinite {
-                                    si.p + ls.wi
-                                } else {
-                                    si.p + ls.wi * ls.distance
-                                };
+                                let lp = if infinite { si.p + ls.wi } else { si.p + ls.wi * ls.distance };
                                 let dens = scene.lights[l].pdf_le(lp, -ls.wi);
                                 ctx.mode = TransportMode::Importance;
                                 let pdf_light = material.bsdf.pdf(&ctx, wi_local, wo_local);
                                 ctx.mode = TransportMode::Radiance;
-                                let v = Vtx {
-                                    pdf_cam: bsdf_pdf,
-                                    pdf_light,
-                                    ..here
-                                };
+                                let v = Vtx { pdf_cam: bsdf_pdf, pdf_light, ..here };
                                 verts.push(v);
                                 let light = LightEnd {
                                     p: lp,
@@ -354,7 +313,19 @@ impl Integrator for MisPathTracer {
             // Deterministic (splitting) mode: one monochromatic sub-path per wavelength
             // (dispersive paths: the camera side's own MIS, as BACKWARD).
             if self.dispersion_splitting && flags.dispersive && ctx.single_wavelength.is_none() {
-                self.mono().split_per_wavelength(scene, material.bsdf.as_ref(), &mut ctx, &frame, wo_local, si.p, ng, &beta, depth, rng, radiance);
+                self.mono().split_per_wavelength(
+                    scene,
+                    material.bsdf.as_ref(),
+                    &mut ctx,
+                    &frame,
+                    wo_local,
+                    si.p,
+                    ng,
+                    &beta,
+                    depth,
+                    rng,
+                    radiance,
+                );
                 break;
             }
 
@@ -370,24 +341,11 @@ impl Integrator for MisPathTracer {
                 // Light paths connect to the camera only on the side they arrive from.
                 cam.connectable = false;
             }
-            let pdf_cam = if bs.specular {
-                0.0
-            } else {
-                material.bsdf.pdf(&ctx, wo_local, bs.wi)
-            };
+            let pdf_cam = if bs.specular { 0.0 } else { material.bsdf.pdf(&ctx, wo_local, bs.wi) };
             ctx.mode = TransportMode::Importance;
-            let pdf_light = if bs.specular {
-                0.0
-            } else {
-                material.bsdf.pdf(&ctx, bs.wi, wo_local)
-            };
+            let pdf_light = if bs.specular { 0.0 } else { material.bsdf.pdf(&ctx, bs.wi, wo_local) };
             ctx.mode = TransportMode::Radiance;
-            verts.push(Vtx {
-                specular: bs.specular,
-                pdf_cam,
-                pdf_light,
-                ..here
-            });
+            verts.push(Vtx { specular: bs.specular, pdf_cam, pdf_light, ..here });
             prev_p = si.p;
             ray = sc.ray;
             depth += 1;
@@ -395,22 +353,8 @@ impl Integrator for MisPathTracer {
                 if ctx.single_wavelength.is_none() {
                     // Collapsed (eq. 9): a dispersive path, finished by the scalar tracer
                     // with the camera side's own MIS.
-                    let st = PathState {
-                        ray,
-                        specular: bs.specular,
-                        prev_pdf: bs.pdf,
-                        prev_p,
-                        depth,
-                    };
-                    let l = self.mono().trace(
-                        scene,
-                        i,
-                        beta.get(i),
-                        st,
-                        rng,
-                        None,
-                        &mut Scratch::new(n),
-                    );
+                    let st = PathState { ray, specular: bs.specular, prev_pdf: bs.pdf, prev_p, depth };
+                    let l = self.mono().trace(scene, i, beta.get(i), st, rng, None, &mut Scratch::new(n));
                     radiance.set(i, radiance.get(i) + l);
                     break;
                 }
@@ -468,8 +412,7 @@ impl MisLightTracer {
         if !es.delta_position {
             if let (Some(nl), Some(c)) = (es.normal, scene.camera.connect(es.origin)) {
                 let cos = nl.dot(c.wi).abs();
-                let origin =
-                    offset_ray_origin(es.origin, if nl.dot(c.wi) > 0.0 { nl } else { -nl });
+                let origin = offset_ray_origin(es.origin, if nl.dot(c.wi) > 0.0 { nl } else { -nl });
                 if cos > 0.0
                     // Aimed from the offset origin at the camera: along c.wi from the unshifted
                     // point it missed by the offset (16 units at 1e6) and hit walls behind it.
@@ -488,10 +431,7 @@ impl MisLightTracer {
                     if w > 0.0 {
                         let mut r = le.clone();
                         r.scale(w * cos * c.importance / (pmf * es.pdf_pos));
-                        splats.push(Splat {
-                            pixel: pixel_of(&c),
-                            radiance: r,
-                        });
+                        splats.push(Splat { pixel: pixel_of(&c), radiance: r });
                     }
                 }
             }
@@ -502,9 +442,7 @@ impl MisLightTracer {
         let mut beta = le;
         beta.scale(cos0 / (pmf * es.pdf_pos * es.pdf_dir));
         let start = match es.normal {
-            Some(nl) => {
-                offset_ray_origin(es.origin, if nl.dot(es.direction) > 0.0 { nl } else { -nl })
-            }
+            Some(nl) => offset_ray_origin(es.origin, if nl.dot(es.direction) > 0.0 { nl } else { -nl }),
             None => es.origin,
         };
         let mut ray = Ray::new(start, es.direction);
@@ -531,20 +469,16 @@ impl MisLightTracer {
             legacy |= flags.dispersive;
             // Connect to the camera: a path with depth + 1 scattering events (strategy C).
             if flags.smooth && depth < self.max_bounces {
-                if let Some(c) = connect_to_camera(scene, material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, &mut f) {
+                if let Some(c) =
+                    connect_to_camera(scene, material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, &mut f)
+                {
                     let wc_local = frame.to_local(c.wi);
                     // Camera order: x1 = here, x2 … = the light path reversed.
                     ctx.mode = TransportMode::Radiance;
                     let pdf_cam = material.bsdf.pdf(&ctx, wc_local, wo_local);
                     ctx.mode = TransportMode::Importance;
                     cam_verts.clear();
-                    cam_verts.push(Vtx {
-                        p: si.p,
-                        n: si.ng,
-                        specular: false,
-                        pdf_cam,
-                        pdf_light: 0.0,
-                    });
+                    cam_verts.push(Vtx { p: si.p, n: si.ng, specular: false, pdf_cam, pdf_light: 0.0 });
                     cam_verts.extend(path.iter().rev().copied());
                     let first = path.first().map_or(si.p, |v| v.p);
                     let to_light = es.origin - first;
@@ -555,11 +489,7 @@ impl MisLightTracer {
                         le: dens,
                         delta: es.delta_position,
                         infinite: false,
-                        pdf_li: if es.delta_position {
-                            1.0
-                        } else {
-                            light.pdf_li(first, to_light / dist, dist)
-                        },
+                        pdf_li: if es.delta_position { 1.0 } else { light.pdf_li(first, to_light / dist, dist) },
                         cos: dens.map_or(1.0, |d| d.cos),
                     };
                     let w = weights(&cam_end(si.p, &c), &cam_verts, &end, legacy)[2] as f32;
@@ -583,25 +513,11 @@ impl MisLightTracer {
             }
             // Record this vertex: light-order pdf (wo = light side, wi = camera side) and
             // the camera-order pdf (wo = camera side, wi = light side).
-            let pdf_light = if bs.specular {
-                0.0
-            } else {
-                material.bsdf.pdf(&ctx, wo_local, bs.wi)
-            };
+            let pdf_light = if bs.specular { 0.0 } else { material.bsdf.pdf(&ctx, wo_local, bs.wi) };
             ctx.mode = TransportMode::Radiance;
-            let pdf_cam = if bs.specular {
-                0.0
-            } else {
-                material.bsdf.pdf(&ctx, bs.wi, wo_local)
-            };
+            let pdf_cam = if bs.specular { 0.0 } else { material.bsdf.pdf(&ctx, bs.wi, wo_local) };
             ctx.mode = TransportMode::Importance;
-            path.push(Vtx {
-                p: si.p,
-                n: si.ng,
-                specular: bs.specular,
-                pdf_cam,
-                pdf_light,
-            });
+            path.push(Vtx { p: si.p, n: si.ng, specular: bs.specular, pdf_cam, pdf_light });
             ray = sc.ray;
             depth += 1;
             if depth >= self.rr_depth {
@@ -620,32 +536,14 @@ mod tests {
     use super::*;
 
     fn vtx(p: Vec3A, n: Vec3A, pdf: f32) -> Vtx {
-        Vtx {
-            p,
-            n,
-            specular: false,
-            pdf_cam: pdf,
-            pdf_light: pdf,
-        }
+        Vtx { p, n, specular: false, pdf_cam: pdf, pdf_light: pdf }
     }
 
     #[test]
     fn weights_sum_to_one_and_vanish_for_impossible_strategies() {
-        let cam = CamEnd {
-            p: Vec3A::new(0.0, 0.0, 5.0),
-            pdf_dir: 2.0,
-            connectable: true,
-        };
-        let verts = [
-            vtx(Vec3A::ZERO, Vec3A::Z, 0.3),
-            vtx(Vec3A::new(1.0, 0.0, 0.5), Vec3A::X, 0.2),
-        ];
-        let dens = LeDensity {
-            pos: 4.0,
-            dir: 0.1,
-            cos: 0.6,
-            directional: false,
-        };
+        let cam = CamEnd { p: Vec3A::new(0.0, 0.0, 5.0), pdf_dir: 2.0, connectable: true };
+        let verts = [vtx(Vec3A::ZERO, Vec3A::Z, 0.3), vtx(Vec3A::new(1.0, 0.0, 0.5), Vec3A::X, 0.2)];
+        let dens = LeDensity { pos: 4.0, dir: 0.1, cos: 0.6, directional: false };
         let area = LightEnd {
             p: Vec3A::new(0.5, 0.5, 2.0),
             pmf: 0.5,
@@ -656,16 +554,9 @@ mod tests {
             cos: 0.6,
         };
         let w = weights(&cam, &verts, &area, false);
-        assert!(
-            (w.iter().sum::<f64>() - 1.0).abs() < 1e-9 && w.iter().all(|&x| x > 0.0),
-            "{w:?}"
-        );
+        assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-9 && w.iter().all(|&x| x > 0.0), "{w:?}");
         // Delta light: no A. Specular last vertex: no B. Specular first vertex: no C.
-        let point = LightEnd {
-            delta: true,
-            pdf_li: 1.0,
-            ..area
-        };
+        let point = LightEnd { delta: true, pdf_li: 1.0, ..area };
         assert_eq!(weights(&cam, &verts, &point, false)[0], 0.0);
         let mut spec = verts;
         spec[1].specular = true;

@@ -14,8 +14,8 @@
 //! - Environment lights and orthographic cameras are not reachable this way (their
 //!   light has no `sample_le`, the camera no pinhole to connect to).
 
-use super::{facing, Facing};
 use super::scatter;
+use super::{facing, Facing};
 use crate::geometry::{offset_ray_origin, Frame, Ray};
 use crate::material::{ShadingContext, TransportMode};
 use crate::sampling::Rng;
@@ -87,13 +87,7 @@ impl LightTracer {
     /// the light paths per pixel).
     /// `wavelength`: monochromatic light paths carry only grid sample `i`, weighted by
     /// `w` (1/its selection probability, or n for one of n whole-image rounds).
-    pub fn trace(
-        &self,
-        scene: &Scene,
-        rng: &mut Rng,
-        wavelength: Option<(usize, f32)>,
-        splats: &mut Vec<Splat>,
-    ) {
+    pub fn trace(&self, scene: &Scene, rng: &mut Rng, wavelength: Option<(usize, f32)>, splats: &mut Vec<Splat>) {
         let n = scene.grid.len();
         let Some(l) = scene.light_distribution.sample(rng.uniform()) else {
             return;
@@ -123,8 +117,7 @@ impl LightTracer {
         if all && !es.delta_position {
             if let (Some(nl), Some(c)) = (es.normal, scene.camera.connect(es.origin)) {
                 let cos = nl.dot(c.wi).abs();
-                let origin =
-                    offset_ray_origin(es.origin, if nl.dot(c.wi) > 0.0 { nl } else { -nl });
+                let origin = offset_ray_origin(es.origin, if nl.dot(c.wi) > 0.0 { nl } else { -nl });
                 if cos > 0.0
                     // Aimed from the offset origin at the camera: along c.wi from the unshifted
                     // point it missed by the offset (16 units at 1e6) and hit walls behind it.
@@ -132,10 +125,7 @@ impl LightTracer {
                 {
                     let mut r = le.clone();
                     r.scale(cos * c.importance / (pmf * es.pdf_pos));
-                    splats.push(Splat {
-                        pixel: pixel_of(&c),
-                        radiance: r,
-                    });
+                    splats.push(Splat { pixel: pixel_of(&c), radiance: r });
                 }
             }
         }
@@ -144,9 +134,7 @@ impl LightTracer {
         let mut beta = le;
         beta.scale(cos0 / (pmf * es.pdf_pos * es.pdf_dir));
         let start = match es.normal {
-            Some(nl) => {
-                offset_ray_origin(es.origin, if nl.dot(es.direction) > 0.0 { nl } else { -nl })
-            }
+            Some(nl) => offset_ray_origin(es.origin, if nl.dot(es.direction) > 0.0 { nl } else { -nl }),
             None => es.origin,
         };
         let mut ray = Ray::new(start, es.direction);
@@ -170,7 +158,9 @@ impl LightTracer {
             let flags = material.bsdf.flags();
             // Connect this vertex to the camera: a path with depth + 1 scattering events.
             if all && flags.smooth && depth < self.max_bounces {
-                if let Some(c) = connect_to_camera(scene, material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, &mut f) {
+                if let Some(c) =
+                    connect_to_camera(scene, material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, &mut f)
+                {
                     splats.push(Splat::new(pixel_of(&c), &f, &beta, c.importance));
                 }
             }
@@ -244,7 +234,9 @@ impl LightTracer {
                 break;
             }
             if material.bsdf.flags().smooth && depth < self.max_bounces {
-                if let Some(c) = connect_to_camera(scene, material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, &mut f) {
+                if let Some(c) =
+                    connect_to_camera(scene, material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, &mut f)
+                {
                     splats.push(Splat::new(pixel_of(&c), &f, &beta, c.importance));
                 }
             }

@@ -8,8 +8,8 @@
 //! spectral); the tracer only reads the one component it carries and keeps all of its
 //! own arithmetic scalar. BSDFs see `ShadingContext.single_wavelength = Some(λ)`.
 
-use super::{facing, Facing};
 use super::scatter;
+use super::{facing, Facing};
 use crate::film::PixelSample;
 use crate::geometry::{offset_ray_origin, Frame, Ray};
 use crate::material::ShadingContext;
@@ -40,11 +40,7 @@ pub struct Scratch {
 
 impl Scratch {
     pub fn new(n: usize) -> Self {
-        Self {
-            f: SampledSpectrum::zeros(n),
-            le: SampledSpectrum::zeros(n),
-            tp: SampledSpectrum::zeros(n),
-        }
+        Self { f: SampledSpectrum::zeros(n), le: SampledSpectrum::zeros(n), tp: SampledSpectrum::zeros(n) }
     }
 }
 
@@ -56,10 +52,7 @@ pub struct MonochromaticTracer {
 
 impl Default for MonochromaticTracer {
     fn default() -> Self {
-        Self {
-            max_bounces: 8,
-            rr_depth: 3,
-        }
+        Self { max_bounces: 8, rr_depth: 3 }
     }
 }
 
@@ -77,13 +70,7 @@ impl MonochromaticTracer {
         s: &mut Scratch,
     ) -> f32 {
         let ray = scene.camera.generate_ray(x, y);
-        let st = PathState {
-            ray,
-            specular: true,
-            prev_pdf: 0.0,
-            prev_p: ray.origin,
-            depth: 0,
-        };
+        let st = PathState { ray, specular: true, prev_pdf: 0.0, prev_p: ray.origin, depth: 0 };
         self.trace(scene, lambda, 1.0, st, rng, Some(aux), s)
     }
 
@@ -121,7 +108,13 @@ impl MonochromaticTracer {
             tp.fill(0.0);
             tp.set(i, b);
             let Some(sc) = scatter(bsdf, ctx, frame, wo_local, p, ng, rng, &mut tp) else { continue };
-            let st = PathState { ray: sc.ray, specular: sc.sample.specular, prev_pdf: sc.sample.pdf, prev_p: p, depth: depth + 1 };
+            let st = PathState {
+                ray: sc.ray,
+                specular: sc.sample.specular,
+                prev_pdf: sc.sample.pdf,
+                prev_p: p,
+                depth: depth + 1,
+            };
             let l = self.trace(scene, i, tp.get(i), st, rng, None, &mut scratch);
             radiance.set(i, radiance.get(i) + l);
         }
@@ -137,13 +130,7 @@ impl MonochromaticTracer {
         mut aux: Option<&mut PixelSample>,
         s: &mut Scratch,
     ) -> f32 {
-        let PathState {
-            mut ray,
-            mut specular,
-            mut prev_pdf,
-            mut prev_p,
-            mut depth,
-        } = st;
+        let PathState { mut ray, mut specular, mut prev_pdf, mut prev_p, mut depth } = st;
         let mut ctx = ShadingContext::new(&scene.grid);
         ctx.single_wavelength = Some(lambda);
         let mut radiance = 0.0f32;
@@ -182,8 +169,8 @@ impl MonochromaticTracer {
                 } else {
                     match scene.triangle_light(si.instance, si.triangle) {
                         Some(l) => {
-                            let pl = scene.light_distribution.pmf(l)
-                                * scene.lights[l].pdf_li(prev_p, ray.direction, si.t);
+                            let pl =
+                                scene.light_distribution.pmf(l) * scene.lights[l].pdf_li(prev_p, ray.direction, si.t);
                             power_heuristic(prev_pdf, pl)
                         }
                         None => 1.0,
@@ -216,11 +203,7 @@ impl MonochromaticTracer {
                                 // short of it (robust far from the origin: 1e6 units).
                                 if !scene.occluded(&crate::geometry::shadow_ray(si.p, origin, ls.wi, ls.distance)) {
                                     let light_pdf = pmf * ls.pdf;
-                                    let w = if ls.delta {
-                                        1.0
-                                    } else {
-                                        power_heuristic(light_pdf, bsdf_pdf)
-                                    };
+                                    let w = if ls.delta { 1.0 } else { power_heuristic(light_pdf, bsdf_pdf) };
                                     radiance += beta * f * le * w / light_pdf;
                                 }
                             }
@@ -260,34 +243,17 @@ impl MonochromaticTracer {
 pub fn wavelength_distribution(scene: &Scene) -> Distribution1D {
     let n = scene.grid.len();
     let o = &scene.observer;
-    let cmf: Vec<f64> = (0..n)
-        .map(|i| (o.x[i].abs() + o.y[i].abs() + o.z[i].abs()) as f64)
-        .collect();
+    let cmf: Vec<f64> = (0..n).map(|i| (o.x[i].abs() + o.y[i].abs() + o.z[i].abs()) as f64).collect();
     let total: f64 = cmf.iter().sum();
-    let w: Vec<f64> = cmf
-        .iter()
-        .map(|c| {
-            0.5 / n as f64
-                + if total > 0.0 {
-                    0.5 * c / total
-                } else {
-                    0.5 / n as f64
-                }
-        })
-        .collect();
+    let w: Vec<f64> =
+        cmf.iter().map(|c| 0.5 / n as f64 + if total > 0.0 { 0.5 * c / total } else { 0.5 / n as f64 }).collect();
     Distribution1D::new(&w)
 }
 
 /// The stratified wavelength choice of sample `s` of `count` in a pixel: a rotated
 /// lattice (per-pixel random offset, Cranley–Patterson) through the inverse CDF, so a
 /// pixel's samples cover the grid and each one is marginally distributed as `dist`.
-pub fn stratified_wavelength(
-    dist: &Distribution1D,
-    seed: u64,
-    pixel: u64,
-    s: u32,
-    count: u32,
-) -> usize {
+pub fn stratified_wavelength(dist: &Distribution1D, seed: u64, pixel: u64, s: u32, count: u32) -> usize {
     let mut r = Rng::new(seed ^ 0x6d6f_6e6f_6368_726f, pixel);
     let offset = r.uniform();
     let u = (offset + s as f32 / count.max(1) as f32).fract();

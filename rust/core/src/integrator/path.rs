@@ -3,16 +3,16 @@
 //! combined with multiple importance sampling (power heuristic); Russian roulette on
 //! the largest throughput over the grid.
 
-use super::{facing, Facing};
+use super::monochromatic::{MonochromaticTracer, PathState, Scratch};
 use super::scatter;
 use super::Integrator;
+use super::{facing, Facing};
 use crate::film::PixelSample;
 use crate::geometry::{offset_ray_origin, Frame};
 use crate::material::ShadingContext;
 use crate::sampling::{power_heuristic, Rng};
 use crate::scene::Scene;
 use crate::spectrum::SampledSpectrum;
-use super::monochromatic::{MonochromaticTracer, PathState, Scratch};
 
 pub struct PathTracer {
     /// Scattering events after which a path ends (0: direct emission only).
@@ -56,7 +56,8 @@ impl Integrator for PathTracer {
                     let w = if specular {
                         1.0
                     } else {
-                        let pl = scene.light_distribution.pmf(env.light) * scene.lights[env.light].pdf_li(prev_p, ray.direction, f32::INFINITY);
+                        let pl = scene.light_distribution.pmf(env.light)
+                            * scene.lights[env.light].pdf_li(prev_p, ray.direction, f32::INFINITY);
                         power_heuristic(prev_pdf, pl)
                     };
                     let l = env.radiance_along(ray.direction, &mut le);
@@ -79,7 +80,8 @@ impl Integrator for PathTracer {
                 } else {
                     match scene.triangle_light(si.instance, si.triangle) {
                         Some(l) => {
-                            let pl = scene.light_distribution.pmf(l) * scene.lights[l].pdf_li(prev_p, ray.direction, si.t);
+                            let pl =
+                                scene.light_distribution.pmf(l) * scene.lights[l].pdf_li(prev_p, ray.direction, si.t);
                             power_heuristic(prev_pdf, pl)
                         }
                         None => 1.0,
@@ -123,12 +125,26 @@ impl Integrator for PathTracer {
 
             // Deterministic (splitting) mode: one monochromatic sub-path per wavelength.
             if self.dispersion_splitting && flags.dispersive && ctx.single_wavelength.is_none() {
-                self.mono().split_per_wavelength(scene, material.bsdf.as_ref(), &mut ctx, &frame, wo_local, si.p, ng, &beta, depth, rng, radiance);
+                self.mono().split_per_wavelength(
+                    scene,
+                    material.bsdf.as_ref(),
+                    &mut ctx,
+                    &frame,
+                    wo_local,
+                    si.p,
+                    ng,
+                    &beta,
+                    depth,
+                    rng,
+                    radiance,
+                );
                 break;
             }
 
             // Continue the path by sampling the BSDF.
-            let Some(sc) = scatter(material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, rng, &mut beta) else { break };
+            let Some(sc) = scatter(material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, rng, &mut beta) else {
+                break;
+            };
             if !beta.is_finite() {
                 break;
             }

@@ -1,8 +1,8 @@
 //! One emissive triangle of a mesh (in world space), emitting from both faces.
 
 use super::{EmissionSample, Light, LightSample};
-use crate::sampling::cosine_hemisphere;
 use crate::geometry::Frame;
+use crate::sampling::cosine_hemisphere;
 use crate::sampling::uniform_triangle;
 use crate::spectrum::SampledSpectrum;
 use glam::{Vec2, Vec3A};
@@ -76,7 +76,14 @@ impl Light for AreaTriangle {
             return None;
         }
         le.copy_from(&self.radiance);
-        Some(EmissionSample { origin, direction: Frame::from_normal(n).to_world(local), normal: Some(n), pdf_pos: 1.0 / self.area, pdf_dir, delta_position: false })
+        Some(EmissionSample {
+            origin,
+            direction: Frame::from_normal(n).to_world(local),
+            normal: Some(n),
+            pdf_pos: 1.0 / self.area,
+            pdf_dir,
+            delta_position: false,
+        })
     }
     fn pdf_le(&self, _origin: Vec3A, dir: Vec3A) -> Option<super::LeDensity> {
         // Either face with probability 1/2, cosine-distributed about it.

@@ -39,7 +39,14 @@ impl Light for DistantLight {
         let f = Frame::from_normal(self.direction);
         let origin = self.scene_center - self.direction * r + f.s * d.x + f.t * d.y;
         le.copy_from(&self.irradiance);
-        Some(EmissionSample { origin, direction: self.direction, normal: None, pdf_pos: 1.0 / (PI * r * r), pdf_dir: 1.0, delta_position: true })
+        Some(EmissionSample {
+            origin,
+            direction: self.direction,
+            normal: None,
+            pdf_pos: 1.0 / (PI * r * r),
+            pdf_dir: 1.0,
+            delta_position: true,
+        })
     }
     fn pdf_le(&self, _origin: Vec3A, _dir: Vec3A) -> Option<super::LeDensity> {
         let r = self.scene_radius.max(1e-3);

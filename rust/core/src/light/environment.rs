@@ -174,7 +174,14 @@ const LUMA: [f32; 3] = [0.2126, 0.7152, 0.0722];
 impl ImageEnvironment {
     /// Builds the sampling tables. `importance` false samples directions uniformly (for
     /// comparisons and tests).
-    pub fn new(texture: Arc<Texture>, uplift: Arc<Uplift>, strength: f32, rotation: f32, scene_radius: f32, importance: bool) -> Self {
+    pub fn new(
+        texture: Arc<Texture>,
+        uplift: Arc<Uplift>,
+        strength: f32,
+        rotation: f32,
+        scene_radius: f32,
+        importance: bool,
+    ) -> Self {
         let (w, h) = (texture.width as usize, texture.height as usize);
         // Solid-angle-weighted mean RGB over the sphere (exact sum over texels: each
         // texel row spans a band of elevation).
@@ -219,7 +226,11 @@ impl ImageEnvironment {
             // (pbrt-v4's choice); downsampled tables keep the block mean.
             let cell = |iu: usize, iv: usize| -> f64 {
                 let k = iv * nu + iu;
-                if count[k] > 0 { f[k] / count[k] as f64 } else { 0.0 }
+                if count[k] > 0 {
+                    f[k] / count[k] as f64
+                } else {
+                    0.0
+                }
             };
             let full = nu == w && nv == h;
             let mut func = vec![0.0f32; nu * nv];

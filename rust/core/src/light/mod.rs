@@ -11,8 +11,8 @@ use crate::spectrum::SampledSpectrum;
 use glam::{Vec2, Vec3A};
 
 pub use area::AreaTriangle;
-pub use environment::{ImageEnvironment, UniformEnvironment};
 pub use distant::DistantLight;
+pub use environment::{ImageEnvironment, UniformEnvironment};
 pub use point::PointLight;
 pub use spot::SpotLight;
 

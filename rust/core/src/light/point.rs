@@ -29,7 +29,14 @@ impl Light for PointLight {
     }
     fn sample_le(&self, _u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
         le.copy_from(&self.intensity);
-        Some(EmissionSample { origin: self.position, direction: uniform_sphere(u_dir), normal: None, pdf_pos: 1.0, pdf_dir: 1.0 / (4.0 * PI), delta_position: true })
+        Some(EmissionSample {
+            origin: self.position,
+            direction: uniform_sphere(u_dir),
+            normal: None,
+            pdf_pos: 1.0,
+            pdf_dir: 1.0 / (4.0 * PI),
+            delta_position: true,
+        })
     }
     fn pdf_le(&self, _origin: Vec3A, _dir: Vec3A) -> Option<super::LeDensity> {
         Some(super::LeDensity { pos: 1.0, dir: 1.0 / (4.0 * PI), cos: 1.0, directional: false })

@@ -79,13 +79,24 @@ impl Light for SpotLight {
         let direction = Frame::from_normal(self.direction).to_world(local);
         le.copy_from(&self.intensity);
         le.scale(self.falloff(direction));
-        Some(EmissionSample { origin: self.position, direction, normal: None, pdf_pos: 1.0, pdf_dir: 1.0 / (2.0 * PI * one_minus), delta_position: true })
+        Some(EmissionSample {
+            origin: self.position,
+            direction,
+            normal: None,
+            pdf_pos: 1.0,
+            pdf_dir: 1.0 / (2.0 * PI * one_minus),
+            delta_position: true,
+        })
     }
     fn pdf_le(&self, _origin: Vec3A, dir: Vec3A) -> Option<super::LeDensity> {
         // Uniform in the cone (sample_le).
         let one_minus = 1.0 - self.cos_half_angle;
-        (one_minus > 0.0 && self.direction.dot(dir) >= self.cos_half_angle)
-            .then(|| super::LeDensity { pos: 1.0, dir: 1.0 / (2.0 * PI * one_minus), cos: 1.0, directional: false })
+        (one_minus > 0.0 && self.direction.dot(dir) >= self.cos_half_angle).then(|| super::LeDensity {
+            pos: 1.0,
+            dir: 1.0 / (2.0 * PI * one_minus),
+            cos: 1.0,
+            directional: false,
+        })
     }
 }
 

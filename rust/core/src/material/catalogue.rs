@@ -63,11 +63,7 @@ pub static CATALOGUE: &[NamedMaterial] = &[
         aliases: &["SiO2", "fused_silica"],
         sellmeier: SellmeierCoefficients {
             b: [0.6961663, 0.4079426, 0.8974794],
-            c: [
-                0.0684043 * 0.0684043,
-                0.1162414 * 0.1162414,
-                9.896161 * 9.896161,
-            ],
+            c: [0.0684043 * 0.0684043, 0.1162414 * 0.1162414, 9.896161 * 9.896161],
         },
         source: "I. H. Malitson, J. Opt. Soc. Am. 55, 1205 (1965)",
         nd: 1.45846,
@@ -107,15 +103,10 @@ pub static CATALOGUE: &[NamedMaterial] = &[
         name: "Water",
         aliases: &["H2O"],
         sellmeier: SellmeierCoefficients {
-            b: [
-                5.684027565e-1,
-                1.726177391e-1 + 2.086189578e-2,
-                1.130748688e-1,
-            ],
+            b: [5.684027565e-1, 1.726177391e-1 + 2.086189578e-2, 1.130748688e-1],
             c: [
                 5.101829712e-3,
-                (1.726177391e-1 * 1.821153936e-2 + 2.086189578e-2 * 2.620722293e-2)
-                    / (1.726177391e-1 + 2.086189578e-2),
+                (1.726177391e-1 * 1.821153936e-2 + 2.086189578e-2 * 2.620722293e-2) / (1.726177391e-1 + 2.086189578e-2),
                 1.069792721e1,
             ],
         },
@@ -135,10 +126,7 @@ pub static CATALOGUE: &[NamedMaterial] = &[
     NamedMaterial {
         name: "Diamond",
         aliases: &[],
-        sellmeier: SellmeierCoefficients {
-            b: [0.3306, 4.3356, 0.0],
-            c: [0.1750 * 0.1750, 0.1060 * 0.1060, 0.0],
-        },
+        sellmeier: SellmeierCoefficients { b: [0.3306, 4.3356, 0.0], c: [0.1750 * 0.1750, 0.1060 * 0.1060, 0.0] },
         source: "F. Peter, Z. Physik 15, 358 (1923)",
         nd: 2.4175,
         vd: 55.3,
@@ -155,18 +143,13 @@ fn names_match(a: &str, b: &str) -> bool {
     a.chars()
         .filter(|&c| !is_ignored(c))
         .flat_map(char::to_lowercase)
-        .eq(b
-            .chars()
-            .filter(|&c| !is_ignored(c))
-            .flat_map(char::to_lowercase))
+        .eq(b.chars().filter(|&c| !is_ignored(c)).flat_map(char::to_lowercase))
 }
 
 /// Looks a material up by name or alias: case-insensitive, ignoring '-', '_'
 /// and spaces (so "bk7", "N-BK7", "n_bk7" and "fused silica" all work).
 pub fn find(name: &str) -> Option<&'static NamedMaterial> {
-    CATALOGUE.iter().find(|m| {
-        names_match(m.name, name) || m.aliases.iter().any(|alias| names_match(alias, name))
-    })
+    CATALOGUE.iter().find(|m| names_match(m.name, name) || m.aliases.iter().any(|alias| names_match(alias, name)))
 }
 
 /// Refractive index from Sellmeier coefficients at `lambda_nm` (nanometres).
@@ -175,12 +158,7 @@ pub fn sellmeier_index(c: &SellmeierCoefficients, lambda_nm: f64) -> f64 {
         let l = lambda_nm * 1e-3; // nm -> µm
         l * l
     };
-    let n2 = 1.0
-        + c.b
-            .iter()
-            .zip(c.c.iter())
-            .map(|(&b, &ck)| b * l2 / (l2 - ck))
-            .sum::<f64>();
+    let n2 = 1.0 + c.b.iter().zip(c.c.iter()).map(|(&b, &ck)| b * l2 / (l2 - ck)).sum::<f64>();
     n2.sqrt()
 }
 
@@ -203,18 +181,8 @@ mod tests {
     fn published_nd_and_vd() {
         for m in CATALOGUE {
             let (nd, vd) = nd_vd(&m.sellmeier);
-            assert!(
-                (nd - m.nd).abs() < 2e-4,
-                "{}: computed nd {nd:.6}, published {}",
-                m.name,
-                m.nd
-            );
-            assert!(
-                ((vd - m.vd) / m.vd).abs() < 0.01,
-                "{}: computed Vd {vd:.3}, published {}",
-                m.name,
-                m.vd
-            );
+            assert!((nd - m.nd).abs() < 2e-4, "{}: computed nd {nd:.6}, published {}", m.name, m.nd);
+            assert!(((vd - m.vd) / m.vd).abs() < 0.01, "{}: computed Vd {vd:.3}, published {}", m.name, m.vd);
         }
     }
 
@@ -239,8 +207,7 @@ mod tests {
     fn names_are_unambiguous() {
         // No name or alias of one material may match a name or alias of
         // another (within one material, e.g. "fused_silica", it may).
-        let keys =
-            |m: &'static NamedMaterial| std::iter::once(m.name).chain(m.aliases.iter().copied());
+        let keys = |m: &'static NamedMaterial| std::iter::once(m.name).chain(m.aliases.iter().copied());
         for (i, a) in CATALOGUE.iter().enumerate() {
             for b in &CATALOGUE[i + 1..] {
                 for ka in keys(a) {
@@ -261,18 +228,8 @@ mod tests {
     #[test]
     fn water_three_terms_match_published_four_terms() {
         // Daimon & Masumura 2007, 20.0 °C, 4-term Sellmeier as published.
-        let b = [
-            5.684027565e-1,
-            1.726177391e-1,
-            2.086189578e-2,
-            1.130748688e-1,
-        ];
-        let c = [
-            5.101829712e-3,
-            1.821153936e-2,
-            2.620722293e-2,
-            1.069792721e1,
-        ];
+        let b = [5.684027565e-1, 1.726177391e-1, 2.086189578e-2, 1.130748688e-1];
+        let c = [5.101829712e-3, 1.821153936e-2, 2.620722293e-2, 1.069792721e1];
         let four = |lambda_nm: f64| {
             let l = lambda_nm * 1e-3;
             let l2 = l * l;
@@ -294,11 +251,7 @@ mod tests {
             for i in 0..=47 {
                 let lambda = 360.0 + 10.0 * i as f64;
                 let n = sellmeier_index(&m.sellmeier, lambda);
-                assert!(
-                    n.is_finite() && n > 1.0 && n < 3.0,
-                    "{} at {lambda}: {n}",
-                    m.name
-                );
+                assert!(n.is_finite() && n > 1.0 && n < 3.0, "{} at {lambda}: {n}", m.name);
                 // Normal dispersion: n decreases with wavelength in the visible.
                 assert!(n < prev, "{} not decreasing at {lambda}", m.name);
                 prev = n;

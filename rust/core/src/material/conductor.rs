@@ -97,9 +97,20 @@ impl<F: MetalFresnel> Bsdf for MicrofacetReflection<F> {
             return 0.0;
         }
         let p = self.distribution.d_visible(wo, wm) / (4.0 * c);
-        if p.is_finite() { p } else { 0.0 }
+        if p.is_finite() {
+            p
+        } else {
+            0.0
+        }
     }
-    fn sample(&self, ctx: &ShadingContext, wo: Vec3A, u: Vec2, _uc: f32, throughput: &mut SampledSpectrum) -> Option<BsdfSample> {
+    fn sample(
+        &self,
+        ctx: &ShadingContext,
+        wo: Vec3A,
+        u: Vec2,
+        _uc: f32,
+        throughput: &mut SampledSpectrum,
+    ) -> Option<BsdfSample> {
         if wo.z <= 0.0 {
             return None;
         }
@@ -181,7 +192,10 @@ mod tests {
         let grid = WavelengthGrid::uniform(4, 400.0, 700.0).unwrap();
         let ctx = ShadingContext::new(&grid);
         for &roughness in &[0.1f32, 0.3, 0.6, 1.0] {
-            let m = Glossy::new(SchlickFresnel { reflectance: SpectralParam::Constant(SampledSpectrum::splat(4, 1.0)) }, roughness);
+            let m = Glossy::new(
+                SchlickFresnel { reflectance: SpectralParam::Constant(SampledSpectrum::splat(4, 1.0)) },
+                roughness,
+            );
             for &theta in &[0.0f32, 0.7, 1.2, 1.5] {
                 let wo = dir(theta, 0.3);
                 let mut rng = Rng::new(11, theta.to_bits() as u64);
@@ -214,7 +228,10 @@ mod tests {
                 }
                 assert!(q <= 1.0 + 0.01, "quadrature albedo {q}");
                 if roughness >= 0.3 {
-                    assert!((q - mean).abs() < 5.0 * se + 0.01, "roughness {roughness} θ {theta}: sampled {mean} ± {se} vs quadrature {q}");
+                    assert!(
+                        (q - mean).abs() < 5.0 * se + 0.01,
+                        "roughness {roughness} θ {theta}: sampled {mean} ± {se} vs quadrature {q}"
+                    );
                 }
             }
         }

@@ -27,7 +27,11 @@ use glam::{Vec2, Vec3A};
 /// Relative index crossed from the arriving side.
 #[inline]
 fn relative(n: f32, ctx: &ShadingContext) -> f32 {
-    if ctx.front_face { n } else { 1.0 / n }
+    if ctx.front_face {
+        n
+    } else {
+        1.0 / n
+    }
 }
 
 #[inline]
@@ -85,7 +89,14 @@ impl Bsdf for Dielectric {
     fn pdf(&self, _: &ShadingContext, _: Vec3A, _: Vec3A) -> f32 {
         0.0
     }
-    fn sample(&self, ctx: &ShadingContext, wo: Vec3A, _u: Vec2, uc: f32, throughput: &mut SampledSpectrum) -> Option<BsdfSample> {
+    fn sample(
+        &self,
+        ctx: &ShadingContext,
+        wo: Vec3A,
+        _u: Vec2,
+        uc: f32,
+        throughput: &mut SampledSpectrum,
+    ) -> Option<BsdfSample> {
         if wo.z == 0.0 {
             return None;
         }
@@ -157,7 +168,13 @@ impl RoughDielectric {
             return (0.0, 0.0);
         }
         let reflect = cos_o * cos_i > 0.0;
-        let etap = if reflect { 1.0 } else if cos_o > 0.0 { eta } else { 1.0 / eta };
+        let etap = if reflect {
+            1.0
+        } else if cos_o > 0.0 {
+            eta
+        } else {
+            1.0 / eta
+        };
         let mut wm = wi * etap + wo;
         if wm.length_squared() == 0.0 {
             return (0.0, 0.0);
@@ -182,11 +199,19 @@ impl RoughDielectric {
             if denom == 0.0 {
                 return (0.0, 0.0);
             }
-            let f = g.d(wm) * t * g.g(wo, wi) * (wi.dot(wm) * wo.dot(wm) / (cos_i * cos_o * denom)).abs() * radiance_scale(ctx, etap);
+            let f = g.d(wm)
+                * t
+                * g.g(wo, wi)
+                * (wi.dot(wm) * wo.dot(wm) / (cos_i * cos_o * denom)).abs()
+                * radiance_scale(ctx, etap);
             (f, dvis * wi.dot(wm).abs() / denom * t)
         };
         let fc = f * cos_i.abs();
-        if fc.is_finite() && pdf.is_finite() { (fc, pdf) } else { (0.0, 0.0) }
+        if fc.is_finite() && pdf.is_finite() {
+            (fc, pdf)
+        } else {
+            (0.0, 0.0)
+        }
     }
 }
 
@@ -209,7 +234,14 @@ impl Bsdf for RoughDielectric {
             None => 0.0,
         }
     }
-    fn sample(&self, ctx: &ShadingContext, wo: Vec3A, u: Vec2, uc: f32, throughput: &mut SampledSpectrum) -> Option<BsdfSample> {
+    fn sample(
+        &self,
+        ctx: &ShadingContext,
+        wo: Vec3A,
+        u: Vec2,
+        uc: f32,
+        throughput: &mut SampledSpectrum,
+    ) -> Option<BsdfSample> {
         if wo.z == 0.0 {
             return None;
         }
@@ -389,7 +421,10 @@ mod tests {
             ctx.mode = TransportMode::Importance;
             ctx.front_face = front;
             for &roughness in &[0.3f32, 0.7] {
-                let m = RoughDielectric { ior: IndexOfRefraction::constant(4, 1.5), distribution: Ggx::from_roughness(roughness) };
+                let m = RoughDielectric {
+                    ior: IndexOfRefraction::constant(4, 1.5),
+                    distribution: Ggx::from_roughness(roughness),
+                };
                 for &theta in &[0.2f32, 0.9, 1.4] {
                     let wo = Vec3A::new(theta.sin(), 0.0, theta.cos());
                     let mut rng = Rng::new(9, theta.to_bits() as u64);
@@ -423,7 +458,10 @@ mod tests {
                             q += f.get(0) as f64 * 4.0 * std::f64::consts::PI / (nt * np) as f64;
                         }
                     }
-                    assert!((q - mean).abs() < 5.0 * se + 0.02, "front {front} r {roughness} θ {theta}: sampled {mean} ± {se}, quadrature {q}");
+                    assert!(
+                        (q - mean).abs() < 5.0 * se + 0.02,
+                        "front {front} r {roughness} θ {theta}: sampled {mean} ± {se}, quadrature {q}"
+                    );
                 }
             }
         }

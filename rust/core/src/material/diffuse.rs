@@ -25,9 +25,20 @@ impl Bsdf for Diffuse {
         cos * FRAC_1_PI
     }
     fn pdf(&self, _: &ShadingContext, wo: Vec3A, wi: Vec3A) -> f32 {
-        if wo.z * wi.z <= 0.0 { 0.0 } else { wi.z.abs() * FRAC_1_PI }
+        if wo.z * wi.z <= 0.0 {
+            0.0
+        } else {
+            wi.z.abs() * FRAC_1_PI
+        }
     }
-    fn sample(&self, ctx: &ShadingContext, wo: Vec3A, u: Vec2, _uc: f32, throughput: &mut SampledSpectrum) -> Option<BsdfSample> {
+    fn sample(
+        &self,
+        ctx: &ShadingContext,
+        wo: Vec3A,
+        u: Vec2,
+        _uc: f32,
+        throughput: &mut SampledSpectrum,
+    ) -> Option<BsdfSample> {
         let mut wi = cosine_hemisphere(u);
         if wo.z < 0.0 {
             wi.z = -wi.z;

@@ -61,7 +61,9 @@ impl IorDesc {
         let n = match self {
             IorDesc::Constant { ior } => *ior,
             IorDesc::Cauchy { a, b, c } => a + b / l2 + c / (l2 * l2),
-            IorDesc::Sellmeier { b, c } => return sellmeier_checked(&SellmeierCoefficients { b: *b, c: *c }, lambda_nm),
+            IorDesc::Sellmeier { b, c } => {
+                return sellmeier_checked(&SellmeierCoefficients { b: *b, c: *c }, lambda_nm)
+            }
             IorDesc::Abbe { nd, vd } => {
                 if !(nd.is_finite() && vd.is_finite() && *vd > 0.0) {
                     return Err(format!("Abbe number Vd = {vd} must be positive and finite (nd = {nd})"));
@@ -151,7 +153,11 @@ impl IndexOfRefraction {
                 return Err(Error::object("material", material, format!("index {n:.6} at λ {lambda} nm is below 1")));
             }
             if n > 10.0 {
-                return Err(Error::object("material", material, format!("index {n:.6} at λ {lambda} nm is above 10 (near a pole?)")));
+                return Err(Error::object(
+                    "material",
+                    material,
+                    format!("index {n:.6} at λ {lambda} nm is above 10 (near a pole?)"),
+                ));
             }
             values.push(n as f32);
         }

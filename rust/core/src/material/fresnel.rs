@@ -100,7 +100,11 @@ pub fn fresnel_conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
     let r_par = eta_c.scale(cos_i).sub(cos_t).div(eta_c.scale(cos_i).add(cos_t));
     let r_perp = ci.sub(eta_c.mul(cos_t)).div(ci.add(eta_c.mul(cos_t)));
     let r = 0.5 * (r_par.norm() + r_perp.norm());
-    if r.is_finite() { r.clamp(0.0, 1.0) as f32 } else { 1.0 }
+    if r.is_finite() {
+        r.clamp(0.0, 1.0) as f32
+    } else {
+        1.0
+    }
 }
 
 /// Schlick's approximation with a coloured normal-incidence reflectance `f0`.

@@ -150,7 +150,8 @@ mod tests {
                     for a in 0..sub {
                         for b in 0..sub {
                             let c = (i as f64 + (a as f64 + 0.5) / sub as f64) / nt as f64;
-                            let phi = 2.0 * std::f64::consts::PI * (j as f64 + (b as f64 + 0.5) / sub as f64) / np as f64;
+                            let phi =
+                                2.0 * std::f64::consts::PI * (j as f64 + (b as f64 + 0.5) / sub as f64) / np as f64;
                             let s = (1.0 - c * c).max(0.0).sqrt();
                             let wm = Vec3A::new((s * phi.cos()) as f32, (s * phi.sin()) as f32, c as f32);
                             acc += g.d_visible(wo, wm) as f64;

@@ -88,20 +88,12 @@ pub struct MixBsdf {
 impl MixBsdf {
     /// Blender's Mix Shader with a constant factor (clamped to 0..1).
     pub fn mix(a: Box<dyn Bsdf>, b: Box<dyn Bsdf>, factor: f32) -> Self {
-        let f = if factor.is_finite() {
-            factor.clamp(0.0, 1.0)
-        } else {
-            0.5
-        };
+        let f = if factor.is_finite() { factor.clamp(0.0, 1.0) } else { 0.5 };
         Self::mix_with(a, b, MixFactor::Constant(f))
     }
     /// Blender's Mix Shader with any factor.
     pub fn mix_with(a: Box<dyn Bsdf>, b: Box<dyn Bsdf>, factor: MixFactor) -> Self {
-        Self {
-            a,
-            b,
-            factor: Some(factor),
-        }
+        Self { a, b, factor: Some(factor) }
     }
     /// Blender's Add Shader.
     pub fn add(a: Box<dyn Bsdf>, b: Box<dyn Bsdf>) -> Self {
@@ -220,12 +212,7 @@ impl Bsdf for MixBsdf {
         let (chosen, p, is_a, uc2) = if uc < pa {
             (&self.a, pa, true, (uc / pa).clamp(0.0, 0.999_999_9))
         } else {
-            (
-                &self.b,
-                1.0 - pa,
-                false,
-                ((uc - pa) / (1.0 - pa)).clamp(0.0, 0.999_999_9),
-            )
+            (&self.b, 1.0 - pa, false, ((uc - pa) / (1.0 - pa)).clamp(0.0, 0.999_999_9))
         };
         if !(p > 0.0) {
             return None;
@@ -239,10 +226,7 @@ impl Bsdf for MixBsdf {
                 return None;
             }
             throughput.copy_from(&tp);
-            return Some(BsdfSample {
-                pdf: bs.pdf * p,
-                ..bs
-            });
+            return Some(BsdfSample { pdf: bs.pdf * p, ..bs });
         }
         let mut f = SampledSpectrum::zeros(throughput.len());
         let pdf = self.eval(ctx, wo, bs.wi, &mut f);
@@ -254,12 +238,7 @@ impl Bsdf for MixBsdf {
             return None;
         }
         throughput.mul_assign(&f);
-        Some(BsdfSample {
-            wi: bs.wi,
-            pdf,
-            specular: false,
-            collapsed_to: None,
-        })
+        Some(BsdfSample { wi: bs.wi, pdf, specular: false, collapsed_to: None })
     }
 
     fn albedo(&self, ctx: &ShadingContext, out: &mut SampledSpectrum) {
@@ -283,9 +262,7 @@ mod tests {
     use std::f32::consts::FRAC_1_PI;
 
     fn diffuse(v: &[f32]) -> Box<dyn Bsdf> {
-        Box::new(Diffuse {
-            reflectance: SpectralParam::Constant(SampledSpectrum::from_slice(v)),
-        })
+        Box::new(Diffuse { reflectance: SpectralParam::Constant(SampledSpectrum::from_slice(v)) })
     }
 
     /// Mix of two diffuse BSDFs = diffuse of the mixed albedo: eval equals
@@ -310,18 +287,11 @@ mod tests {
                     assert!((f.get(k) - mixed[k] * FRAC_1_PI * wi.z).abs() < 1e-6);
                 }
                 let mut tp = SampledSpectrum::splat(4, 1.0);
-                let s = m
-                    .sample(&ctx, wo, rng.uniform2(), rng.uniform(), &mut tp)
-                    .unwrap();
+                let s = m.sample(&ctx, wo, rng.uniform2(), rng.uniform(), &mut tp).unwrap();
                 assert!(!s.specular && s.wi.z > 0.0);
                 assert!((s.pdf - s.wi.z * FRAC_1_PI).abs() < 1e-5);
                 for k in 0..4 {
-                    assert!(
-                        (tp.get(k) - mixed[k]).abs() < 1e-5,
-                        "t {t} lane {k}: {} vs {}",
-                        tp.get(k),
-                        mixed[k]
-                    );
+                    assert!((tp.get(k) - mixed[k]).abs() < 1e-5, "t {t} lane {k}: {} vs {}", tp.get(k), mixed[k]);
                 }
             }
             let mut a = SampledSpectrum::zeros(4);
@@ -341,9 +311,7 @@ mod tests {
         // Seen from inside at grazing angles: total internal reflection.
         assert_eq!(MixFactor::Fresnel { ior: 1.5 }.at(0.3, false), 1.0);
         // Layer Weight Fresnel, blend 0.5: η = 2.
-        assert!(
-            (MixFactor::LayerWeightFresnel { blend: 0.5 }.at(1.0, true) - 1.0 / 9.0).abs() < 1e-6
-        );
+        assert!((MixFactor::LayerWeightFresnel { blend: 0.5 }.at(1.0, true) - 1.0 / 9.0).abs() < 1e-6);
         for &c in &[0.0f32, 0.3, 0.7, 1.0] {
             let facing = |blend: f32| MixFactor::LayerWeightFacing { blend }.at(c, true);
             assert!((facing(0.5) - (1.0 - c)).abs() < 1e-6);
@@ -370,17 +338,11 @@ mod tests {
             let t = crate::material::fresnel::fresnel_dielectric(theta.cos(), 1.45);
             for _ in 0..50 {
                 let mut tp = SampledSpectrum::splat(4, 1.0);
-                let s = m
-                    .sample(&ctx, wo, rng.uniform2(), rng.uniform(), &mut tp)
-                    .unwrap();
+                let s = m.sample(&ctx, wo, rng.uniform2(), rng.uniform(), &mut tp).unwrap();
                 assert!((s.pdf - s.wi.z * FRAC_1_PI).abs() < 1e-5);
                 for k in 0..4 {
                     let mixed = (1.0 - t) * ra[k] + t * rb[k];
-                    assert!(
-                        (tp.get(k) - mixed).abs() < 1e-5,
-                        "θ {theta} lane {k}: {} vs {mixed}",
-                        tp.get(k)
-                    );
+                    assert!((tp.get(k) - mixed).abs() < 1e-5, "θ {theta} lane {k}: {} vs {mixed}", tp.get(k));
                 }
             }
         }
@@ -406,10 +368,7 @@ mod tests {
             let t = crate::material::fresnel::fresnel_dielectric_f64(mu, 1.45);
             expected += ((1.0 - t) * ra[2] as f64 + t * rb[2] as f64) * 2.0 * mu / steps as f64;
         }
-        assert!(
-            (mean - expected).abs() < 4.0 * se + 1e-4,
-            "light paths: {mean} ± {se} vs {expected}"
-        );
+        assert!((mean - expected).abs() < 4.0 * se + 1e-4, "light paths: {mean} ± {se} vs {expected}");
     }
 
     /// Add of diffuse and glossy: sampled estimate matches a quadrature of eval (so the
@@ -420,9 +379,7 @@ mod tests {
         let ctx = ShadingContext::new(&grid);
         let glossy = || -> Box<dyn Bsdf> {
             Box::new(Glossy::new(
-                SchlickFresnel {
-                    reflectance: SpectralParam::Constant(SampledSpectrum::splat(4, 0.3)),
-                },
+                SchlickFresnel { reflectance: SpectralParam::Constant(SampledSpectrum::splat(4, 0.3)) },
                 0.4,
             ))
         };
@@ -455,19 +412,11 @@ mod tests {
             let s = (1.0 - c * c).sqrt();
             for j in 0..np {
                 let phi = std::f32::consts::TAU * (j as f32 + 0.5) / np as f32;
-                m.eval(
-                    &ctx,
-                    wo,
-                    Vec3A::new(s * phi.cos(), s * phi.sin(), c),
-                    &mut f,
-                );
+                m.eval(&ctx, wo, Vec3A::new(s * phi.cos(), s * phi.sin(), c), &mut f);
                 q += f.get(0) as f64;
             }
         }
         q *= 2.0 * std::f64::consts::PI / (nt * np) as f64;
-        assert!(
-            (q - mean).abs() < 5.0 * se + 0.01,
-            "sampled {mean} ± {se} vs quadrature {q}"
-        );
+        assert!((q - mean).abs() < 5.0 * se + 0.01, "sampled {mean} ± {se} vs quadrature {q}");
     }
 }

@@ -25,10 +25,10 @@ pub use conductor::{Conductor, Glossy};
 pub use dielectric::{Dielectric, RoughDielectric};
 pub use diffuse::Diffuse;
 pub use dispersion::{IndexOfRefraction, IorDesc};
-pub use param::SpectralParam;
-pub use texture::{Texture, Wrap};
 pub use mix::MixBsdf;
+pub use param::SpectralParam;
 pub use principled::{Principled, PrincipledParams};
+pub use texture::{Texture, Wrap};
 pub use thinfilm::ThinFilm;
 
 /// What an integrator needs to know about a BSDF without evaluating it.

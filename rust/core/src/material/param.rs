@@ -12,7 +12,11 @@ pub enum SpectralParam {
     /// An RGB image texture converted to a reflectance at each hit (deferred conversion,
     /// SPEC §4): the bilinear RGB at the hit's uv goes through `uplift.reflectance_into`,
     /// then is multiplied by `scale`. The uplift is shared (one per scene), not copied.
-    Texture { texture: Arc<Texture>, uplift: Arc<Uplift>, scale: f32 },
+    Texture {
+        texture: Arc<Texture>,
+        uplift: Arc<Uplift>,
+        scale: f32,
+    },
 }
 
 impl SpectralParam {

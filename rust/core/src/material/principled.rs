@@ -227,11 +227,7 @@ impl Principled {
         let distribution = Ggx::from_roughness(p.roughness);
         let smooth = distribution.effectively_smooth();
         let metallic = p.metallic.clamp(0.0, 1.0);
-        let transmission = if p.glass.is_some() {
-            p.transmission.clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
+        let transmission = if p.glass.is_some() { p.transmission.clamp(0.0, 1.0) } else { 0.0 };
         let film = p.thin_film.filter(|f| f.active());
         let lanes = grid.len();
         let ior = specular_index(&p.ior, p.specular_ior_level);
@@ -246,14 +242,7 @@ impl Principled {
                 let lambda = lambdas[i] as f64;
                 match film {
                     Some(fl) => albedo_table(&distribution, smooth, &|c| {
-                        thin_film_reflectance(
-                            c,
-                            lambda,
-                            fl.thickness_nm as f64,
-                            fl.ior as f64,
-                            n,
-                            0.0,
-                        )
+                        thin_film_reflectance(c, lambda, fl.thickness_nm as f64, fl.ior as f64, n, 0.0)
                     }),
                     None => albedo_table(&distribution, smooth, &|c| fresnel_dielectric_f64(c, n)),
                 }
@@ -273,11 +262,7 @@ impl Principled {
         let (ms_table, ms_e_avg, ms_inv) = if metallic > 0.0 && !smooth {
             let t = albedo_table(&distribution, false, &|_| 1.0);
             let avg = albedo_average(&t);
-            let inv = if 1.0 - avg > 1e-4 {
-                1.0 / (1.0 - avg)
-            } else {
-                0.0
-            };
+            let inv = if 1.0 - avg > 1e-4 { 1.0 / (1.0 - avg) } else { 0.0 };
             (t, avg, inv)
         } else {
             (vec![1.0; ALBEDO_MU], 1.0, 0.0)
@@ -286,11 +271,7 @@ impl Principled {
             ms_table,
             ms_e_avg,
             ms_inv,
-            metal: MetalF82 {
-                f0: clone_param(&p.base_color),
-                tint: p.specular_tint,
-                film,
-            },
+            metal: MetalF82 { f0: clone_param(&p.base_color), tint: p.specular_tint, film },
             base_color: p.base_color,
             w_base: (1.0 - metallic) * (1.0 - transmission),
             w_metal: metallic,
@@ -367,11 +348,7 @@ impl Principled {
             } else {
                 0.0
             },
-            glass: if self.glass.is_some() {
-                self.w_glass
-            } else {
-                0.0
-            },
+            glass: if self.glass.is_some() { self.w_glass } else { 0.0 },
         };
         let total = l.spec + l.diffuse + l.metal + l.metal_ms + l.glass;
         if !(total > 0.0 && total.is_finite()) {
@@ -402,11 +379,8 @@ impl Principled {
         let reflect_side = wo.z * wi.z > 0.0;
         if reflect_side {
             // Work in the upper hemisphere (the base layer is two-sided).
-            let (o, i) = if wo.z < 0.0 {
-                (Vec3A::new(wo.x, wo.y, -wo.z), Vec3A::new(wi.x, wi.y, -wi.z))
-            } else {
-                (wo, wi)
-            };
+            let (o, i) =
+                if wo.z < 0.0 { (Vec3A::new(wo.x, wo.y, -wo.z), Vec3A::new(wi.x, wi.y, -wi.z)) } else { (wo, wi) };
             let (mu_o, mu_i) = (o.z, i.z);
             // Diffuse base.
             if self.w_base > 0.0 {
@@ -512,15 +486,9 @@ fn specular_index(ior: &IndexOfRefraction, level: f32) -> IndexOfRefraction {
 fn clone_param(p: &SpectralParam) -> SpectralParam {
     match p {
         SpectralParam::Constant(s) => SpectralParam::Constant(s.clone()),
-        SpectralParam::Texture {
-            texture,
-            uplift,
-            scale,
-        } => SpectralParam::Texture {
-            texture: texture.clone(),
-            uplift: uplift.clone(),
-            scale: *scale,
-        },
+        SpectralParam::Texture { texture, uplift, scale } => {
+            SpectralParam::Texture { texture: texture.clone(), uplift: uplift.clone(), scale: *scale }
+        }
     }
 }
 
@@ -643,10 +611,7 @@ impl Bsdf for Principled {
                     return None;
                 }
                 throughput.copy_from(&tp);
-                return Some(BsdfSample {
-                    pdf: bs.pdf * lobes.glass,
-                    ..bs
-                });
+                return Some(BsdfSample { pdf: bs.pdf * lobes.glass, ..bs });
             }
             bs.wi
         };
@@ -663,12 +628,7 @@ impl Bsdf for Principled {
             return None;
         }
         throughput.mul_assign(&f);
-        Some(BsdfSample {
-            wi,
-            pdf,
-            specular: false,
-            collapsed_to: None,
-        })
+        Some(BsdfSample { wi, pdf, specular: false, collapsed_to: None })
     }
 
     fn albedo(&self, ctx: &ShadingContext, out: &mut SampledSpectrum) {
@@ -677,11 +637,7 @@ impl Bsdf for Principled {
         let n = out.len();
         let h = self.hit_spectra(ctx, 1.0, n);
         let (rho, mf) = (&h.rho, &h.metal_f);
-        let ms = if self.ms_inv > 0.0 {
-            1.0 - lookup(&self.ms_table, 1.0)
-        } else {
-            0.0
-        };
+        let ms = if self.ms_inv > 0.0 { 1.0 - lookup(&self.ms_table, 1.0) } else { 0.0 };
         for k in 0..n {
             let e = lookup(&self.e_table[self.row(k)], 1.0);
             let v = self.w_base * (e + rho.get(k) * (1.0 - e))
@@ -714,10 +670,7 @@ mod tests {
             Some(if g.effectively_smooth() {
                 Box::new(Dielectric { ior: ior_v.clone() })
             } else {
-                Box::new(RoughDielectric {
-                    ior: ior_v.clone(),
-                    distribution: g,
-                })
+                Box::new(RoughDielectric { ior: ior_v.clone(), distribution: g })
             })
         } else {
             None
@@ -739,37 +692,20 @@ mod tests {
     }
 
     fn dir(theta: f32, phi: f32) -> Vec3A {
-        Vec3A::new(
-            theta.sin() * phi.cos(),
-            theta.sin() * phi.sin(),
-            theta.cos(),
-        )
+        Vec3A::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos())
     }
 
     /// Sampled albedo (mean of f·cos/pdf) and its standard error, lane 0.
-    pub(super) fn sampled_albedo(
-        m: &dyn Bsdf,
-        ctx: &ShadingContext,
-        wo: Vec3A,
-        n: usize,
-        seed: u64,
-    ) -> (f64, f64) {
+    pub(super) fn sampled_albedo(m: &dyn Bsdf, ctx: &ShadingContext, wo: Vec3A, n: usize, seed: u64) -> (f64, f64) {
         let mut rng = Rng::new(seed, 17);
         let (mut s1, mut s2) = (0.0f64, 0.0f64);
         for _ in 0..n {
             let mut tp = SampledSpectrum::splat(ctx.grid.len(), 1.0);
             if let Some(s) = m.sample(ctx, wo, rng.uniform2(), rng.uniform(), &mut tp) {
-                assert!(
-                    tp.is_finite() && s.pdf > 0.0 && s.pdf.is_finite(),
-                    "{tp:?} {s:?}"
-                );
+                assert!(tp.is_finite() && s.pdf > 0.0 && s.pdf.is_finite(), "{tp:?} {s:?}");
                 if !s.specular {
                     let p = m.pdf(ctx, wo, s.wi);
-                    assert!(
-                        (p - s.pdf).abs() <= 2e-3 * s.pdf.max(1.0),
-                        "sample pdf {} vs pdf() {p}",
-                        s.pdf
-                    );
+                    assert!((p - s.pdf).abs() <= 2e-3 * s.pdf.max(1.0), "sample pdf {} vs pdf() {p}", s.pdf);
                 }
                 let v = tp.get(0) as f64;
                 s1 += v;
@@ -777,10 +713,7 @@ mod tests {
             }
         }
         let mean = s1 / n as f64;
-        (
-            mean,
-            ((s2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt(),
-        )
+        (mean, ((s2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt())
     }
 
     /// Quadrature of eval over the sphere (lane 0).
@@ -809,13 +742,7 @@ mod tests {
         for &mode in &[TransportMode::Radiance, TransportMode::Importance] {
             let mut ctx = ShadingContext::new(&grid);
             ctx.mode = mode;
-            for &(metallic, transmission) in &[
-                (0.0f32, 0.0f32),
-                (1.0, 0.0),
-                (0.5, 0.0),
-                (0.0, 0.5),
-                (0.3, 0.3),
-            ] {
+            for &(metallic, transmission) in &[(0.0f32, 0.0f32), (1.0, 0.0), (0.5, 0.0), (0.0, 0.5), (0.3, 0.3)] {
                 for &roughness in &[0.0f32, 0.2, 0.5, 1.0] {
                     let m = principled(&grid, 1.0, metallic, transmission, roughness, 1.5, None);
                     for &theta in &[0.0f32, 0.6, 1.1, 1.45] {
@@ -828,7 +755,10 @@ mod tests {
                             (theta.to_bits() as u64) ^ (roughness.to_bits() as u64),
                         );
                         let tol = 4.0 * se + 4e-3;
-                        assert!(mean <= 1.0 + tol, "m {metallic} t {transmission} r {roughness} θ {theta}: albedo {mean} ± {se}");
+                        assert!(
+                            mean <= 1.0 + tol,
+                            "m {metallic} t {transmission} r {roughness} θ {theta}: albedo {mean} ± {se}"
+                        );
                         if transmission == 0.0 {
                             // The layer conserves energy exactly with a white base, and a
                             // white metal with its multiple scattering.
@@ -891,21 +821,11 @@ mod tests {
                     let mut acc = 0.0f64;
                     for a in 0..sub {
                         for b in 0..sub {
-                            let c =
-                                -1.0 + 2.0 * (i as f64 + (a as f64 + 0.5) / sub as f64) / nt as f64;
-                            let phi = std::f64::consts::TAU
-                                * (j as f64 + (b as f64 + 0.5) / sub as f64)
-                                / np as f64;
+                            let c = -1.0 + 2.0 * (i as f64 + (a as f64 + 0.5) / sub as f64) / nt as f64;
+                            let phi = std::f64::consts::TAU * (j as f64 + (b as f64 + 0.5) / sub as f64) / np as f64;
                             let s = (1.0 - c * c).max(0.0).sqrt();
-                            acc += m.pdf(
-                                &ctx,
-                                wo,
-                                Vec3A::new(
-                                    (s * phi.cos()) as f32,
-                                    (s * phi.sin()) as f32,
-                                    c as f32,
-                                ),
-                            ) as f64;
+                            acc += m.pdf(&ctx, wo, Vec3A::new((s * phi.cos()) as f32, (s * phi.sin()) as f32, c as f32))
+                                as f64;
                         }
                     }
                     let area = (2.0 / nt as f64) * (std::f64::consts::TAU / np as f64);
@@ -913,11 +833,7 @@ mod tests {
                 }
             }
             let total: f64 = expected.iter().sum();
-            assert!(
-                total <= samples as f64 * 1.01,
-                "pdf integrates to {}",
-                total / samples as f64
-            );
+            assert!(total <= samples as f64 * 1.01, "pdf integrates to {}", total / samples as f64);
             expected[nt * np] = (samples as f64 - total).max(0.0);
             let (mut chi2, mut dof, mut pool_e, mut pool_o) = (0.0f64, 0usize, 0.0f64, 0.0f64);
             for k in 0..expected.len() {
@@ -933,15 +849,15 @@ mod tests {
                 chi2 += (pool_o - pool_e).powi(2) / pool_e;
                 dof += 1;
             } else {
-                assert!(
-                    pool_o < 20.0,
-                    "{pool_o} samples where the pdf expects {pool_e}"
-                );
+                assert!(pool_o < 20.0, "{pool_o} samples where the pdf expects {pool_e}");
             }
             let dof = (dof - 1) as f64;
             let z = 3.719;
             let crit = dof * (1.0 - 2.0 / (9.0 * dof) + z * (2.0 / (9.0 * dof)).sqrt()).powi(3);
-            assert!(chi2 < crit, "ρ {rho} m {metallic} t {transmission} r {roughness} θ {theta_o}: χ² {chi2:.1} > {crit:.1} (dof {dof})");
+            assert!(
+                chi2 < crit,
+                "ρ {rho} m {metallic} t {transmission} r {roughness} θ {theta_o}: χ² {chi2:.1} > {crit:.1} (dof {dof})"
+            );
         }
     }
 
@@ -955,24 +871,14 @@ mod tests {
             // Smooth: a delta lobe whose weight is exactly F(0°).
             let m = principled(&grid, 0.0, 0.0, 0.0, 0.0, n, None);
             let (mean, se) = sampled_albedo(&m, &ctx, Vec3A::Z, 2000, 1);
-            assert!(
-                (mean - r0).abs() < 1e-5 && se < 1e-6,
-                "n {n}: {mean} vs {r0}"
-            );
+            assert!((mean - r0).abs() < 1e-5 && se < 1e-6, "n {n}: {mean} vs {r0}");
             // Nearly smooth GGX: the same within the lobe's spread.
             let m = principled(&grid, 0.0, 0.0, 0.0, 0.05, n, None);
             let (mean, se) = sampled_albedo(&m, &ctx, Vec3A::Z, 20_000, 2);
-            assert!(
-                (mean - r0).abs() < 4.0 * se + 1e-3,
-                "n {n}: rough {mean} ± {se} vs {r0}"
-            );
+            assert!((mean - r0).abs() < 4.0 * se + 1e-3, "n {n}: rough {mean} ± {se} vs {r0}");
             let mut a = SampledSpectrum::zeros(4);
             m.albedo(&ctx, &mut a);
-            assert!(
-                (a.get(0) as f64 - r0).abs() < 1e-3,
-                "albedo pass {}",
-                a.get(0)
-            );
+            assert!((a.get(0) as f64 - r0).abs() < 1e-3, "albedo pass {}", a.get(0));
         }
     }
 
@@ -983,64 +889,30 @@ mod tests {
         let grid = WavelengthGrid::uniform(9, 390.0, 710.0).unwrap();
         let ctx = ShadingContext::new(&grid);
         let n_sub = 1.5f32;
-        let film = ThinFilm {
-            thickness_nm: 550.0 / (4.0 * n_sub.sqrt()),
-            ior: n_sub.sqrt(),
-        };
+        let film = ThinFilm { thickness_nm: 550.0 / (4.0 * n_sub.sqrt()), ior: n_sub.sqrt() };
         let m = principled(&grid, 0.0, 0.0, 0.0, 0.0, n_sub, Some(film));
         let mut tp = SampledSpectrum::splat(9, 1.0);
-        let s = m
-            .sample(&ctx, Vec3A::Z, Vec2::new(0.5, 0.5), 0.01, &mut tp)
-            .unwrap();
+        let s = m.sample(&ctx, Vec3A::Z, Vec2::new(0.5, 0.5), 0.01, &mut tp).unwrap();
         assert!(s.specular);
         let i550 = grid.nearest(550.0);
         assert!((grid.lambdas()[i550] - 550.0).abs() < 1e-3);
         let mut expected = vec![0.0f64; 9];
         for k in 0..9 {
             let l = grid.lambdas()[k] as f64;
-            expected[k] = thin_film_reflectance(
-                1.0,
-                l,
-                film.thickness_nm as f64,
-                film.ior as f64,
-                n_sub as f64,
-                0.0,
-            );
+            expected[k] = thin_film_reflectance(1.0, l, film.thickness_nm as f64, film.ior as f64, n_sub as f64, 0.0);
         }
         let mean_r: f64 = expected.iter().sum::<f64>() / 9.0;
         for k in 0..9 {
             // Weight = F_λ / P(spec lobe) with the lobe chosen with the lane-mean.
             let got = tp.get(k) as f64 * s.pdf as f64;
-            assert!(
-                (got - expected[k]).abs() < 1e-5,
-                "lane {k}: {got} vs {}",
-                expected[k]
-            );
+            assert!((got - expected[k]).abs() < 1e-5, "lane {k}: {got} vs {}", expected[k]);
         }
-        assert!(
-            expected[i550] < 1e-6 && mean_r > 0.002,
-            "R(550) {} mean {mean_r}",
-            expected[i550]
-        );
+        assert!(expected[i550] < 1e-6 && mean_r > 0.002, "R(550) {} mean {mean_r}", expected[i550]);
         // The albedo stays ≤ 1 with a white base.
-        let m = principled(
-            &grid,
-            1.0,
-            0.0,
-            0.0,
-            0.4,
-            n_sub,
-            Some(ThinFilm {
-                thickness_nm: 400.0,
-                ior: 1.33,
-            }),
-        );
+        let m = principled(&grid, 1.0, 0.0, 0.0, 0.4, n_sub, Some(ThinFilm { thickness_nm: 400.0, ior: 1.33 }));
         for &theta in &[0.0f32, 0.8, 1.4] {
             let (mean, se) = sampled_albedo(&m, &ctx, dir(theta, 0.0), 20_000, 5);
-            assert!(
-                (mean - 1.0).abs() < 4.0 * se + 5e-3,
-                "θ {theta}: {mean} ± {se}"
-            );
+            assert!((mean - 1.0).abs() < 4.0 * se + 5e-3, "θ {theta}: {mean} ± {se}");
         }
     }
 
@@ -1053,17 +925,11 @@ mod tests {
         for &level in &[0.0f32, 0.25, 0.5, 1.0] {
             let mut m = principled(&grid, 0.0, 0.0, 0.0, 0.0, 1.5, None);
             m.ior = specular_index(&IndexOfRefraction::constant(4, 1.5), level);
-            m.e_table = vec![albedo_table(&m.distribution, true, &|c| {
-                fresnel_dielectric_f64(c, m.ior.at(0) as f64)
-            })];
+            m.e_table = vec![albedo_table(&m.distribution, true, &|c| fresnel_dielectric_f64(c, m.ior.at(0) as f64))];
             let mut tp = SampledSpectrum::splat(4, 1.0);
             let expected = 0.04 * 2.0 * level;
             match m.sample(&ctx, Vec3A::Z, Vec2::new(0.5, 0.5), 0.5, &mut tp) {
-                Some(s) => assert!(
-                    (tp.get(0) * s.pdf - expected).abs() < 1e-5,
-                    "level {level}: {}",
-                    tp.get(0) * s.pdf
-                ),
+                Some(s) => assert!((tp.get(0) * s.pdf - expected).abs() < 1e-5, "level {level}: {}", tp.get(0) * s.pdf),
                 None => assert_eq!(expected, 0.0),
             }
         }
@@ -1074,9 +940,7 @@ mod tests {
         for k in 0..=10 {
             let c = k as f32 / 10.0;
             for &f0 in &[0.0f32, 0.5, 0.95] {
-                assert!(
-                    (f82_tint(c, f0, 1.0) - crate::material::fresnel::schlick(c, f0)).abs() < 1e-6
-                );
+                assert!((f82_tint(c, f0, 1.0) - crate::material::fresnel::schlick(c, f0)).abs() < 1e-6);
             }
         }
         // The tint scales the value at cos θ = 1/7 (≈ 82°).

@@ -53,11 +53,7 @@ fn srgb_table() -> &'static [f32; 256] {
     T.get_or_init(|| {
         std::array::from_fn(|i| {
             let c = i as f64 / 255.0;
-            let l = if c <= 0.04045 {
-                c / 12.92
-            } else {
-                ((c + 0.055) / 1.055).powf(2.4)
-            };
+            let l = if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) };
             l as f32
         })
     })
@@ -70,23 +66,14 @@ pub fn srgb_decode(byte: u8) -> f32 {
 
 fn check_shape(name: &str, width: u32, height: u32, channels: u32, len: usize) -> Result<usize> {
     if width == 0 || height == 0 {
-        return Err(Error::object(
-            "texture",
-            name,
-            format!("size {width}×{height} must be at least 1×1"),
-        ));
+        return Err(Error::object("texture", name, format!("size {width}×{height} must be at least 1×1")));
     }
     if !(channels == 3 || channels == 4) {
-        return Err(Error::object(
-            "texture",
-            name,
-            format!("{channels} channels: expected 3 (RGB) or 4 (RGBA)"),
-        ));
+        return Err(Error::object("texture", name, format!("{channels} channels: expected 3 (RGB) or 4 (RGBA)")));
     }
     let texels = width as usize * height as usize;
-    let expected = texels
-        .checked_mul(channels as usize)
-        .ok_or_else(|| Error::object("texture", name, "size overflows"))?;
+    let expected =
+        texels.checked_mul(channels as usize).ok_or_else(|| Error::object("texture", name, "size overflows"))?;
     if len != expected {
         return Err(Error::object(
             "texture",
@@ -117,69 +104,35 @@ impl Texture {
             (TextureEncoding::Linear, Some(_)) => Err(Error::object(
                 "texture",
                 name,
-                format!(
-                    "encoding 'linear' needs float32 pixels but buffer {} holds another type",
-                    d.buffer
-                ),
+                format!("encoding 'linear' needs float32 pixels but buffer {} holds another type", d.buffer),
             )),
             (TextureEncoding::Srgb, Some(_)) => Err(Error::object(
                 "texture",
                 name,
-                format!(
-                    "encoding 'srgb' needs uint8 pixels but buffer {} holds another type",
-                    d.buffer
-                ),
+                format!("encoding 'srgb' needs uint8 pixels but buffer {} holds another type", d.buffer),
             )),
-            (_, None) => Err(Error::object(
-                "texture",
-                name,
-                format!("buffer {} does not exist", d.buffer),
-            )),
+            (_, None) => Err(Error::object("texture", name, format!("buffer {} does not exist", d.buffer))),
         }
     }
 
     /// A texture from linear float pixels (`channels` = 3 or 4, top row first).
     /// Non-finite texels are an error naming the texture and the texel.
-    pub fn from_linear(
-        name: &str,
-        width: u32,
-        height: u32,
-        channels: u32,
-        pixels: &[f32],
-        wrap: Wrap,
-    ) -> Result<Self> {
+    pub fn from_linear(name: &str, width: u32, height: u32, channels: u32, pixels: &[f32], wrap: Wrap) -> Result<Self> {
         let texels = check_shape(name, width, height, channels, pixels.len())?;
         let mut data = Vec::with_capacity(texels * 3);
         for (k, px) in pixels.chunks_exact(channels as usize).enumerate() {
             let rgb = &px[..3];
             if let Some(v) = rgb.iter().find(|v| !v.is_finite()) {
                 let (x, y) = (k % width as usize, k / width as usize);
-                return Err(Error::object(
-                    "texture",
-                    name,
-                    format!("texel ({x}, {y}) has the non-finite value {v}"),
-                ));
+                return Err(Error::object("texture", name, format!("texel ({x}, {y}) has the non-finite value {v}")));
             }
             data.extend_from_slice(rgb);
         }
-        Ok(Self {
-            name: name.into(),
-            width,
-            height,
-            wrap,
-            data: TexelData::Linear(data),
-        })
+        Ok(Self { name: name.into(), width, height, wrap, data: TexelData::Linear(data) })
     }
 
     /// A texture from 8-bit sRGB-encoded pixels (`channels` = 3 or 4, top row first).
-    pub fn from_srgb8(
-        name: &str,
-        width: u32,
-        height: u32,
-        channels: u32,
-        pixels: &[u8],
-        wrap: Wrap,
-    ) -> Result<Self> {
+    pub fn from_srgb8(name: &str, width: u32, height: u32, channels: u32, pixels: &[u8], wrap: Wrap) -> Result<Self> {
         let texels = check_shape(name, width, height, channels, pixels.len())?;
         let data = if channels == 3 {
             pixels.to_vec()
@@ -190,13 +143,7 @@ impl Texture {
             }
             d
         };
-        Ok(Self {
-            name: name.into(),
-            width,
-            height,
-            wrap,
-            data: TexelData::Srgb8(data),
-        })
+        Ok(Self { name: name.into(), width, height, wrap, data: TexelData::Srgb8(data) })
     }
 
     /// Bytes of texel storage held (the raw RGB size).
@@ -269,12 +216,7 @@ impl Texture {
             (Some(a), Some(b)) => self.texel(a, b),
             _ => [0.0; 3],
         };
-        let (c00, c10, c01, c11) = (
-            at(xs[0], ys[0]),
-            at(xs[1], ys[0]),
-            at(xs[0], ys[1]),
-            at(xs[1], ys[1]),
-        );
+        let (c00, c10, c01, c11) = (at(xs[0], ys[0]), at(xs[1], ys[0]), at(xs[0], ys[1]), at(xs[1], ys[1]));
         std::array::from_fn(|c| lerp(lerp(c00[c], c10[c], fx), lerp(c01[c], c11[c], fx), fy))
     }
 }
@@ -286,25 +228,18 @@ mod tests {
     #[test]
     fn bilinear_hits_texel_centres_and_midpoints() {
         // 2×1 image: left texel red 1, right texel red 3.
-        let t = Texture::from_linear("t", 2, 1, 3, &[1.0, 0.0, 0.0, 3.0, 0.0, 0.0], Wrap::Extend)
-            .unwrap();
+        let t = Texture::from_linear("t", 2, 1, 3, &[1.0, 0.0, 0.0, 3.0, 0.0, 0.0], Wrap::Extend).unwrap();
         assert_eq!(t.lookup(Vec2::new(0.25, 0.5))[0], 1.0);
         assert_eq!(t.lookup(Vec2::new(0.75, 0.5))[0], 3.0);
         assert!((t.lookup(Vec2::new(0.5, 0.5))[0] - 2.0).abs() < 1e-6);
         // Extend: beyond the edge stays at the edge texel.
         assert_eq!(t.lookup(Vec2::new(-3.0, 0.5))[0], 1.0);
         // Repeat: u = 0 is halfway between the last and the first texel.
-        let r = Texture {
-            wrap: Wrap::Repeat,
-            ..t.clone()
-        };
+        let r = Texture { wrap: Wrap::Repeat, ..t.clone() };
         assert!((r.lookup(Vec2::new(0.0, 0.5))[0] - 2.0).abs() < 1e-6);
         assert!((r.lookup(Vec2::new(1.25, 0.5))[0] - 1.0).abs() < 1e-6);
         // Clip: black outside, half-faded at the edge.
-        let c = Texture {
-            wrap: Wrap::Clip,
-            ..t
-        };
+        let c = Texture { wrap: Wrap::Clip, ..t };
         assert_eq!(c.lookup(Vec2::new(-1.0, 0.5)), [0.0; 3]);
         assert!((c.lookup(Vec2::new(0.0, 0.5))[0] - 0.5).abs() < 1e-6);
     }
@@ -312,8 +247,7 @@ mod tests {
     #[test]
     fn top_row_is_v_one() {
         // 1×2: top texel 1, bottom texel 0.
-        let t = Texture::from_linear("t", 1, 2, 3, &[1.0, 1.0, 1.0, 0.0, 0.0, 0.0], Wrap::Extend)
-            .unwrap();
+        let t = Texture::from_linear("t", 1, 2, 3, &[1.0, 1.0, 1.0, 0.0, 0.0, 0.0], Wrap::Extend).unwrap();
         assert_eq!(t.lookup(Vec2::new(0.5, 0.75))[1], 1.0);
         assert_eq!(t.lookup(Vec2::new(0.5, 0.25))[1], 0.0);
     }
@@ -330,13 +264,9 @@ mod tests {
 
     #[test]
     fn bad_textures_are_reported_by_name() {
-        let e = Texture::from_linear("wood", 2, 2, 3, &[0.0; 11], Wrap::Repeat)
-            .unwrap_err()
-            .to_string();
+        let e = Texture::from_linear("wood", 2, 2, 3, &[0.0; 11], Wrap::Repeat).unwrap_err().to_string();
         assert!(e.contains("wood") && e.contains("12"), "{e}");
-        let e = Texture::from_linear("sky", 1, 1, 3, &[0.0, f32::NAN, 0.0], Wrap::Repeat)
-            .unwrap_err()
-            .to_string();
+        let e = Texture::from_linear("sky", 1, 1, 3, &[0.0, f32::NAN, 0.0], Wrap::Repeat).unwrap_err().to_string();
         assert!(e.contains("sky") && e.contains("non-finite"), "{e}");
         assert!(Texture::from_srgb8("x", 1, 1, 2, &[0, 0], Wrap::Repeat).is_err());
     }

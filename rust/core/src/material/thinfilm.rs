@@ -34,10 +34,7 @@ impl C64 {
         Self::new(self.re - o.re, self.im - o.im)
     }
     pub fn mul(self, o: Self) -> Self {
-        Self::new(
-            self.re * o.re - self.im * o.im,
-            self.re * o.im + self.im * o.re,
-        )
+        Self::new(self.re * o.re - self.im * o.im, self.re * o.im + self.im * o.re)
     }
     pub fn scale(self, s: f64) -> Self {
         Self::new(self.re * s, self.im * s)
@@ -47,10 +44,7 @@ impl C64 {
     }
     pub fn div(self, o: Self) -> Self {
         let d = o.norm();
-        Self::new(
-            (self.re * o.re + self.im * o.im) / d,
-            (self.im * o.re - self.re * o.im) / d,
-        )
+        Self::new((self.re * o.re + self.im * o.im) / d, (self.im * o.re - self.re * o.im) / d)
     }
     /// Principal square root (non-negative real part).
     pub fn sqrt(self) -> Self {
@@ -99,14 +93,7 @@ fn amplitudes(ni: C64, ci: C64, nj: C64, cj: C64) -> (C64, C64) {
 /// Reflectance of a film (`n_film`, `thickness_nm`) on a substrate `n_sub + i k_sub`,
 /// seen from air at `cos0` (|cos θ|), at wavelength `lambda_nm`. Thickness 0 gives the
 /// bare substrate's Fresnel reflectance. Always in 0..=1 (1 at grazing incidence).
-pub fn thin_film_reflectance(
-    cos0: f64,
-    lambda_nm: f64,
-    thickness_nm: f64,
-    n_film: f64,
-    n_sub: f64,
-    k_sub: f64,
-) -> f64 {
+pub fn thin_film_reflectance(cos0: f64, lambda_nm: f64, thickness_nm: f64, n_film: f64, n_sub: f64, k_sub: f64) -> f64 {
     let cos0 = cos0.abs().min(1.0);
     if cos0 <= 0.0 {
         return 1.0;
@@ -120,9 +107,7 @@ pub fn thin_film_reflectance(
     let (r01s, r01p) = amplitudes(n0, c0, n1, c1);
     let (r12s, r12p) = amplitudes(n1, c1, n2, c2);
     // Phase: 2δ = 4π n1 d cos θ1 / λ (complex when the film wave is evanescent).
-    let two_delta = n1
-        .mul(c1)
-        .scale(4.0 * std::f64::consts::PI * thickness_nm / lambda_nm);
+    let two_delta = n1.mul(c1).scale(4.0 * std::f64::consts::PI * thickness_nm / lambda_nm);
     let e = two_delta.exp_i();
     let one = C64::real(1.0);
     let airy = |r01: C64, r12: C64| {
@@ -204,9 +189,7 @@ mod tests {
         let r = thin_film_reflectance(1.0, lambda0, d, n_film, n_sub, 0.0);
         assert!(r < 1e-10, "quarter-wave AR coating reflects {r}");
         // The bare substrate reflects 4 %.
-        assert!(
-            (thin_film_reflectance(1.0, lambda0, 0.0, n_film, n_sub, 0.0) - 0.04).abs() < 1e-12
-        );
+        assert!((thin_film_reflectance(1.0, lambda0, 0.0, n_film, n_sub, 0.0) - 0.04).abs() < 1e-12);
         // A half-wave film is absent at λ0: bare-substrate reflectance.
         let r_half = thin_film_reflectance(1.0, lambda0, 2.0 * d, n_film, n_sub, 0.0);
         assert!((r_half - 0.04).abs() < 1e-10, "{r_half}");
@@ -227,10 +210,7 @@ mod tests {
                     let theta = theta.min(1.55);
                     let r = thin_film_reflectance(theta.cos(), lambda, d, n1, n2, 0.0);
                     let t = transfer_matrix_reflectance(theta, lambda, d, n1, n2);
-                    assert!(
-                        (r - t).abs() < 1e-9,
-                        "n1 {n1} n2 {n2} d {d} λ {lambda} θ {theta}: Airy {r} vs matrix {t}"
-                    );
+                    assert!((r - t).abs() < 1e-9, "n1 {n1} n2 {n2} d {d} λ {lambda} θ {theta}: Airy {r} vs matrix {t}");
                     assert!((0.0..=1.0).contains(&r));
                 }
             }
@@ -242,11 +222,7 @@ mod tests {
         for k in 0..=10 {
             let c = k as f64 / 10.0;
             let r = thin_film_reflectance(c, 500.0, 0.0, 1.33, 1.5, 0.0);
-            let f = if c == 0.0 {
-                1.0
-            } else {
-                fresnel_dielectric_f64(c, 1.5)
-            };
+            let f = if c == 0.0 { 1.0 } else { fresnel_dielectric_f64(c, 1.5) };
             assert!((r - f).abs() < 1e-9, "{r} vs {f}");
             let rm = thin_film_reflectance(c, 500.0, 0.0, 1.4, 0.2, 3.0);
             let fm = fresnel_conductor(c as f32, 0.2, 3.0) as f64;

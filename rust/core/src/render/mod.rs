@@ -13,8 +13,8 @@ use crate::integrator::path::PathTracer;
 use crate::integrator::Integrator;
 use crate::sampling::Rng;
 use crate::scene::{Buffer, BuildOptions, Scene, SceneDesc};
-use crate::spectrum::{SampledSpectrum, SpectrumDesc, WavelengthGrid};
 use crate::spectrum::named::{RgbToSpectrum, SpectrumKind, SpectrumRole};
+use crate::spectrum::{SampledSpectrum, SpectrumDesc, WavelengthGrid};
 use crate::{Error, Result};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -127,7 +127,8 @@ impl RenderSettings {
     /// Parses settings JSON, recording its keys as the explicitly set fields (the
     /// quality preset fills the others).
     pub fn from_json(json: &str) -> Result<Self> {
-        let value: serde_json::Value = serde_json::from_str(json).map_err(|e| Error::setting("settings", e.to_string()))?;
+        let value: serde_json::Value =
+            serde_json::from_str(json).map_err(|e| Error::setting("settings", e.to_string()))?;
         let keys = value.as_object().map(|m| m.keys().cloned().collect()).unwrap_or_default();
         let mut s: Self = serde_json::from_value(value).map_err(|e| Error::setting("settings", e.to_string()))?;
         s.explicit = Some(keys);
@@ -151,7 +152,10 @@ impl RenderSettings {
 
     pub fn validate(&self) -> Result<()> {
         if self.width == 0 || self.height == 0 || self.width > 65536 || self.height > 65536 {
-            return Err(Error::setting("width", format!("image size {}×{} must be 1..65536 on each side", self.width, self.height)));
+            return Err(Error::setting(
+                "width",
+                format!("image size {}×{} must be 1..65536 on each side", self.width, self.height),
+            ));
         }
         if self.samples == 0 {
             return Err(Error::setting("samples", "must be at least 1"));
@@ -160,7 +164,10 @@ impl RenderSettings {
             return Err(Error::setting("time_limit", format!("{} s must be 0 (none) or positive", self.time_limit)));
         }
         if !(self.noise_threshold.is_finite() && self.noise_threshold >= 0.0) {
-            return Err(Error::setting("noise_threshold", format!("{} must be 0 (off) or a positive ΔE", self.noise_threshold)));
+            return Err(Error::setting(
+                "noise_threshold",
+                format!("{} must be 0 (off) or a positive ΔE", self.noise_threshold),
+            ));
         }
         if self.max_bounces > 1024 {
             return Err(Error::setting("max_bounces", format!("{} exceeds 1024", self.max_bounces)));
@@ -292,7 +299,12 @@ impl RgbToSpectrum for NoRgb {
 }
 
 /// Renders a scene description. Cancelling returns the samples finished so far.
-pub fn render(desc: &SceneDesc, buffers: &[Buffer], settings: &RenderSettings, control: &RenderControl) -> Result<RenderOutput> {
+pub fn render(
+    desc: &SceneDesc,
+    buffers: &[Buffer],
+    settings: &RenderSettings,
+    control: &RenderControl,
+) -> Result<RenderOutput> {
     settings.validate()?;
     // The plan as soon as it is known (the render refines it for other methods).
     let planned = if settings.is_explicit("samples") { settings.samples } else { settings.quality.preset().samples };
@@ -324,7 +336,13 @@ fn render_in_pool(
         Method::Rgb => WavelengthGrid::rgb_channels(&grid, &RgbSpace::rec709())?,
         _ => grid,
     };
-    let opts = BuildOptions { grid, space: RgbSpace::rec709(), uplift: settings.uplift, width: settings.width, height: settings.height };
+    let opts = BuildOptions {
+        grid,
+        space: RgbSpace::rec709(),
+        uplift: settings.uplift,
+        width: settings.width,
+        height: settings.height,
+    };
     let scene = Scene::build(desc, buffers, &opts)?;
     let build_seconds = start.elapsed().as_secs_f64();
     render_built(&scene, settings, control, threads, start, build_seconds)
@@ -338,10 +356,22 @@ pub fn render_scene(scene: &Scene, settings: &RenderSettings, control: &RenderCo
     let (resolved, reasons) = quality::resolve(settings, None)?;
     let settings = &resolved;
     if scene.camera.width() != settings.width || scene.camera.height() != settings.height {
-        return Err(Error::setting("width", format!("the scene was built for {}×{} pixels, settings ask for {}×{}", scene.camera.width(), scene.camera.height(), settings.width, settings.height)));
+        return Err(Error::setting(
+            "width",
+            format!(
+                "the scene was built for {}×{} pixels, settings ask for {}×{}",
+                scene.camera.width(),
+                scene.camera.height(),
+                settings.width,
+                settings.height
+            ),
+        ));
     }
     if (settings.method == Method::Rgb) != scene.grid.is_rgb() {
-        return Err(Error::setting("method", "RGB renders need a scene built on an RGB grid, spectral methods a spectral one"));
+        return Err(Error::setting(
+            "method",
+            "RGB renders need a scene built on an RGB grid, spectral methods a spectral one",
+        ));
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(settings.threads)
@@ -376,7 +406,10 @@ fn render_built(
         return Err(Error::setting("method", "RGB needs the three-channel grid"));
     }
     if settings.direction == Direction::Forward && !scene.camera.is_perspective() {
-        return Err(Error::setting("direction", "FORWARD (light tracing) needs a perspective camera: light paths cannot connect to an orthographic one"));
+        return Err(Error::setting(
+            "direction",
+            "FORWARD (light tracing) needs a perspective camera: light paths cannot connect to an orthographic one",
+        ));
     }
     // Outer rounds: one per wavelength for monochromatic scenes, else one.
     let rounds = if mono_scenes { n } else { 1 };
@@ -387,21 +420,36 @@ fn render_built(
     control.done.store(0, Ordering::Relaxed);
 
     // A reflectance of 1 under D65 of luminance 1 reads as albedo (1,1,1).
-    let d65 = SpectrumDesc::new(SpectrumKind::D65).evaluate(&scene.grid, SpectrumRole::Illuminant, &NoRgb).map_err(Error::Description)?;
+    let d65 = SpectrumDesc::new(SpectrumKind::D65)
+        .evaluate(&scene.grid, SpectrumRole::Illuminant, &NoRgb)
+        .map_err(Error::Description)?;
     let mut albedo_white = SampledSpectrum::from_slice(&d65);
     albedo_white.scale(1.0 / scene.observer.xyz(&d65)[1] as f32);
 
-    let integrator = PathTracer { max_bounces: settings.max_bounces, dispersion_splitting: settings.dispersion_splitting, ..Default::default() };
+    let integrator = PathTracer {
+        max_bounces: settings.max_bounces,
+        dispersion_splitting: settings.dispersion_splitting,
+        ..Default::default()
+    };
     let mono = MonochromaticTracer { max_bounces: settings.max_bounces, ..Default::default() };
     let light_tracer = LightTracer {
         max_bounces: settings.max_bounces,
         rr_depth: 3,
-        part: if settings.direction == Direction::Forward { ForwardPart::All } else { ForwardPart::BackwardUnreachable },
+        part: if settings.direction == Direction::Forward {
+            ForwardPart::All
+        } else {
+            ForwardPart::BackwardUnreachable
+        },
     };
     // BIDIRECTIONAL with MIS for the whole-spectrum methods (integrator/bidir.rs); the
     // monochromatic methods keep the 0/1 partition.
-    let mis = settings.direction == Direction::Bidirectional && matches!(settings.method, Method::Polychromatic | Method::Rgb);
-    let mis_camera = MisPathTracer { max_bounces: settings.max_bounces, rr_depth: 3, dispersion_splitting: settings.dispersion_splitting };
+    let mis = settings.direction == Direction::Bidirectional
+        && matches!(settings.method, Method::Polychromatic | Method::Rgb);
+    let mis_camera = MisPathTracer {
+        max_bounces: settings.max_bounces,
+        rr_depth: 3,
+        dispersion_splitting: settings.dispersion_splitting,
+    };
     let mis_light = MisLightTracer { max_bounces: settings.max_bounces, rr_depth: 3 };
     let lambda_dist = wavelength_distribution(scene);
     let samples = settings.samples;
@@ -431,7 +479,10 @@ fn render_built(
                 incomplete_spectrum = mono_scenes && (round > 0 || round_spp > 0);
                 break 'rounds;
             }
-            if settings.time_limit > 0.0 && (done_spp > 0 || round_spp > 0) && start.elapsed().as_secs_f64() >= settings.time_limit {
+            if settings.time_limit > 0.0
+                && (done_spp > 0 || round_spp > 0)
+                && start.elapsed().as_secs_f64() >= settings.time_limit
+            {
                 time_limited = true;
                 incomplete_spectrum = mono_scenes;
                 break 'rounds;
@@ -472,7 +523,18 @@ fn render_built(
                     let mid = range.start + pass / 2;
                     let first: Vec<Option<FilmBuffer>> = tiles
                         .par_iter()
-                        .map(|&t| render_tile_masked(scene, &sampler, t, range.start..mid, &albedo_white, settings.spectral_output, control, Some(&active)))
+                        .map(|&t| {
+                            render_tile_masked(
+                                scene,
+                                &sampler,
+                                t,
+                                range.start..mid,
+                                &albedo_white,
+                                settings.spectral_output,
+                                control,
+                                Some(&active),
+                            )
+                        })
                         .collect();
                     if first.iter().all(|r| r.is_some()) {
                         for (&(x0, y0, tw, _), r) in tiles.iter().zip(&first) {
@@ -490,16 +552,37 @@ fn render_built(
                         }
                         camera_tiles = tiles
                             .par_iter()
-                            .map(|&t| render_tile_masked(scene, &sampler, t, mid..range.end, &albedo_white, settings.spectral_output, control, Some(&active)))
+                            .map(|&t| {
+                                render_tile_masked(
+                                    scene,
+                                    &sampler,
+                                    t,
+                                    mid..range.end,
+                                    &albedo_white,
+                                    settings.spectral_output,
+                                    control,
+                                    Some(&active),
+                                )
+                            })
                             .collect();
                     } else {
                         camera_tiles = first;
                     }
                 } else {
-                camera_tiles = tiles
-                    .par_iter()
-                    .map(|&t| render_tile(scene, &sampler, t, range.clone(), &albedo_white, settings.spectral_output, control))
-                    .collect();
+                    camera_tiles = tiles
+                        .par_iter()
+                        .map(|&t| {
+                            render_tile(
+                                scene,
+                                &sampler,
+                                t,
+                                range.clone(),
+                                &albedo_white,
+                                settings.spectral_output,
+                                control,
+                            )
+                        })
+                        .collect();
                 }
                 if camera_tiles.iter().any(|r| r.is_none()) {
                     incomplete_spectrum = mono_scenes && (round > 0 || round_spp > 0);
@@ -562,7 +645,18 @@ fn render_built(
                 done_spp += pass;
             }
             if adaptive {
-                quality::update_active(&mut active, &mut pixel_err, &half_xyz, &half_count, &film.buffer.xyz, &film.buffer.count, w, h, settings.noise_threshold as f64, done_spp >= quality::ADAPTIVE_MIN_SAMPLES.min(samples));
+                quality::update_active(
+                    &mut active,
+                    &mut pixel_err,
+                    &half_xyz,
+                    &half_count,
+                    &film.buffer.xyz,
+                    &film.buffer.count,
+                    w,
+                    h,
+                    settings.noise_threshold as f64,
+                    done_spp >= quality::ADAPTIVE_MIN_SAMPLES.min(samples),
+                );
             }
             if control.previews_requested() && last_preview.is_none_or(|t| t.elapsed() >= PREVIEW_INTERVAL) {
                 control.publish_preview(film.rgba(&scene.space), w, h, done_spp, false);

@@ -66,30 +66,14 @@ impl Quality {
     }
     pub fn preset(self) -> Preset {
         match self {
-            Quality::Auto => Preset {
-                samples: 1024,
-                noise_threshold: 1.0,
-                max_bounces: 8,
-                wavelength_count: None,
-            },
-            Quality::Preview => Preset {
-                samples: 32,
-                noise_threshold: 3.0,
-                max_bounces: 4,
-                wavelength_count: Some(16),
-            },
-            Quality::Final => Preset {
-                samples: 256,
-                noise_threshold: 0.0,
-                max_bounces: 8,
-                wavelength_count: Some(41),
-            },
-            Quality::Reference => Preset {
-                samples: 2048,
-                noise_threshold: 0.0,
-                max_bounces: 16,
-                wavelength_count: Some(81),
-            },
+            Quality::Auto => Preset { samples: 1024, noise_threshold: 1.0, max_bounces: 8, wavelength_count: None },
+            Quality::Preview => {
+                Preset { samples: 32, noise_threshold: 3.0, max_bounces: 4, wavelength_count: Some(16) }
+            }
+            Quality::Final => Preset { samples: 256, noise_threshold: 0.0, max_bounces: 8, wavelength_count: Some(41) },
+            Quality::Reference => {
+                Preset { samples: 2048, noise_threshold: 0.0, max_bounces: 16, wavelength_count: Some(81) }
+            }
         }
     }
 }
@@ -139,10 +123,7 @@ pub fn resolve(settings: &RenderSettings, desc: Option<&SceneDesc>) -> Result<(R
         }
     }
     if s.noise_threshold > 0.0 && !adaptive_supported(&s) {
-        why.push(format!(
-            "adaptive sampling off: {:?} {:?} renders fixed sample counts",
-            s.method, s.direction
-        ));
+        why.push(format!("adaptive sampling off: {:?} {:?} renders fixed sample counts", s.method, s.direction));
     }
     if free("wavelengths") && free("wavelength_count") {
         match (p.wavelength_count, desc) {
@@ -312,11 +293,7 @@ fn on_grid(grid: &WavelengthGrid, found: &[Found], rgb_samples: &[[f32; 3]], upl
     let mut emitters = Vec::new();
     let mut reflectances = vec![vec![1.0; grid.len()]];
     for f in found {
-        let role = if f.emitter {
-            SpectrumRole::Illuminant
-        } else {
-            SpectrumRole::Unbounded
-        };
+        let role = if f.emitter { SpectrumRole::Illuminant } else { SpectrumRole::Unbounded };
         let v = f.spectrum.evaluate(grid, role, conv).ok()?;
         if f.emitter {
             emitters.push(v);
@@ -329,17 +306,9 @@ fn on_grid(grid: &WavelengthGrid, found: &[Found], rgb_samples: &[[f32; 3]], upl
     }
     if emitters.is_empty() {
         // No named emitter (e.g. only an HDRI): judge reflectances under D65.
-        emitters.push(
-            SpectrumDesc::new(SpectrumKind::D65)
-                .evaluate(grid, SpectrumRole::Illuminant, conv)
-                .ok()?,
-        );
+        emitters.push(SpectrumDesc::new(SpectrumKind::D65).evaluate(grid, SpectrumRole::Illuminant, conv).ok()?);
     }
-    Some(OnGrid {
-        observer: Observer::new(grid),
-        emitters,
-        reflectances,
-    })
+    Some(OnGrid { observer: Observer::new(grid), emitters, reflectances })
 }
 
 /// Largest ΔE00 between the colours of every emitter × reflectance pair on `a` and on
@@ -406,19 +375,18 @@ fn refined(n: usize, min: f32, max: f32, bands: &[(f32, f32)]) -> Vec<f32> {
 /// AUTO's grid for a scene: the coarsest candidate within [`GRID_TOLERANCE`], refined
 /// around narrow-band emitters, and the reasons.
 pub fn auto_grid(desc: &SceneDesc, min: f32, max: f32, uplift: UpliftMethod) -> Result<(Vec<f32>, Vec<String>)> {
-    let v = serde_json::to_value(desc).map_err(|e| crate::Error::setting("quality", format!("scene description: {e}")))?;
+    let v =
+        serde_json::to_value(desc).map_err(|e| crate::Error::setting("quality", format!("scene description: {e}")))?;
     let mut found = Vec::new();
     let mut holds = Holds::default();
     collect(&v, "", &mut found, &mut holds);
     // RGB data stands for arbitrary RGB: judge a few saturated colours.
-    let rgb_samples: Vec<[f32; 3]> = if holds.rgb {
-        vec![[0.8, 0.1, 0.1], [0.1, 0.8, 0.1], [0.1, 0.1, 0.8], [0.8, 0.8, 0.1]]
-    } else {
-        Vec::new()
-    };
+    let rgb_samples: Vec<[f32; 3]> =
+        if holds.rgb { vec![[0.8, 0.1, 0.1], [0.1, 0.8, 0.1], [0.1, 0.1, 0.8], [0.8, 0.8, 0.1]] } else { Vec::new() };
     let bands = narrow_bands(&found);
     let mut why = Vec::new();
-    let n_ref = (((max - min) as usize) + 1).clamp(crate::spectrum::grid::MIN_SAMPLES, crate::spectrum::grid::MAX_SAMPLES);
+    let n_ref =
+        (((max - min) as usize) + 1).clamp(crate::spectrum::grid::MIN_SAMPLES, crate::spectrum::grid::MAX_SAMPLES);
     let fallback = || WavelengthGrid::uniform(41, min, max).map(|g| g.lambdas().to_vec());
     let reference = WavelengthGrid::uniform(n_ref, min, max)?;
     let Some(r) = on_grid(&reference, &found, &rgb_samples, uplift) else {
@@ -455,17 +423,9 @@ pub fn auto_grid(desc: &SceneDesc, min: f32, max: f32, uplift: UpliftMethod) -> 
         "grid: {} wavelengths ({} uniform{}): largest emitter×reflectance colour error {:.2} ΔE00 vs 1 nm{}",
         lambdas.len(),
         n,
-        if bands.is_empty() {
-            String::new()
-        } else {
-            format!(" + 7 around each of {} narrow band(s)", bands.len())
-        },
+        if bands.is_empty() { String::new() } else { format!(" + 7 around each of {} narrow band(s)", bands.len()) },
         err,
-        if err > GRID_TOLERANCE {
-            format!(" (above the {GRID_TOLERANCE} target even at 81)")
-        } else {
-            String::new()
-        },
+        if err > GRID_TOLERANCE { format!(" (above the {GRID_TOLERANCE} target even at 81)") } else { String::new() },
     ));
     if holds.dispersive {
         why.push("dispersive glass: at least 41 wavelengths, and wavelength collapse (eq. 9) at it".into());

@@ -61,11 +61,8 @@ pub fn concentric_disk(u: Vec2) -> Vec2 {
     if o.x == 0.0 && o.y == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, theta) = if o.x.abs() > o.y.abs() {
-        (o.x, PI / 4.0 * (o.y / o.x))
-    } else {
-        (o.y, PI / 2.0 - PI / 4.0 * (o.x / o.y))
-    };
+    let (r, theta) =
+        if o.x.abs() > o.y.abs() { (o.x, PI / 4.0 * (o.y / o.x)) } else { (o.y, PI / 2.0 - PI / 4.0 * (o.x / o.y)) };
     Vec2::new(r * theta.cos(), r * theta.sin())
 }
 
@@ -148,10 +145,22 @@ mod tests {
 
     #[test]
     fn rng_streams_are_reproducible_and_distinct() {
-        let a: Vec<u32> = { let mut r = Rng::for_sample(7, 3, 0); (0..4).map(|_| r.next_u32()).collect() };
-        let b: Vec<u32> = { let mut r = Rng::for_sample(7, 3, 0); (0..4).map(|_| r.next_u32()).collect() };
-        let c: Vec<u32> = { let mut r = Rng::for_sample(7, 4, 0); (0..4).map(|_| r.next_u32()).collect() };
-        let d: Vec<u32> = { let mut r = Rng::for_sample(7, 3, 1); (0..4).map(|_| r.next_u32()).collect() };
+        let a: Vec<u32> = {
+            let mut r = Rng::for_sample(7, 3, 0);
+            (0..4).map(|_| r.next_u32()).collect()
+        };
+        let b: Vec<u32> = {
+            let mut r = Rng::for_sample(7, 3, 0);
+            (0..4).map(|_| r.next_u32()).collect()
+        };
+        let c: Vec<u32> = {
+            let mut r = Rng::for_sample(7, 4, 0);
+            (0..4).map(|_| r.next_u32()).collect()
+        };
+        let d: Vec<u32> = {
+            let mut r = Rng::for_sample(7, 3, 1);
+            (0..4).map(|_| r.next_u32()).collect()
+        };
         assert_eq!(a, b);
         assert_ne!(a, c);
         assert_ne!(a, d);

@@ -78,7 +78,9 @@ pub struct MaterialDesc {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum BsdfDesc {
-    Diffuse { reflectance: SpectrumDesc },
+    Diffuse {
+        reflectance: SpectrumDesc,
+    },
     /// Reflects nothing (an emission-only surface).
     None,
     /// Glass: smooth (roughness 0) or GGX-rough; dispersive when the index varies.
@@ -144,7 +146,10 @@ pub enum BsdfDesc {
         factor_from: Option<MixFactorDesc>,
     },
     /// Blender's Add Shader: a + b.
-    Add { a: Box<BsdfDesc>, b: Box<BsdfDesc> },
+    Add {
+        a: Box<BsdfDesc>,
+        b: Box<BsdfDesc>,
+    },
 }
 
 /// A view-dependent Mix Shader factor, as Blender's nodes compute it.

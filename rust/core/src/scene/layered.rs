@@ -6,9 +6,7 @@ use super::{BsdfDesc, BuildUplift, MixFactorDesc};
 use crate::color::uplift::Uplift;
 use crate::material::mix::MixFactor;
 use crate::material::principled::{Principled, PrincipledParams};
-use crate::material::{
-    Black, Bsdf, Diffuse, IndexOfRefraction, MixBsdf, SpectralParam, Texture, ThinFilm,
-};
+use crate::material::{Black, Bsdf, Diffuse, IndexOfRefraction, MixBsdf, SpectralParam, Texture, ThinFilm};
 use crate::spectrum::named::{SpectrumKind, SpectrumRole};
 use crate::spectrum::{SampledSpectrum, SpectrumDesc, WavelengthGrid};
 use crate::{Error, Result};
@@ -26,16 +24,8 @@ pub(super) struct BsdfBuild<'a> {
 }
 
 impl BsdfBuild<'_> {
-    fn spectrum(
-        &self,
-        d: &SpectrumDesc,
-        role: SpectrumRole,
-        material: &str,
-        what: &str,
-    ) -> Result<SampledSpectrum> {
-        Ok(SampledSpectrum::from_slice(&self.rgb.evaluate(
-            d, self.grid, role, "material", material, what,
-        )?))
+    fn spectrum(&self, d: &SpectrumDesc, role: SpectrumRole, material: &str, what: &str) -> Result<SampledSpectrum> {
+        Ok(SampledSpectrum::from_slice(&self.rgb.evaluate(d, self.grid, role, "material", material, what)?))
     }
 
     /// A reflectance in 0..1: a constant spectrum or an RGB texture converted per hit.
@@ -45,14 +35,18 @@ impl BsdfBuild<'_> {
                 Error::object(
                     "material",
                     material,
-                    format!(
-                        "{what}: texture {t} does not exist ({} textures)",
-                        self.textures.len()
-                    ),
+                    format!("{what}: texture {t} does not exist ({} textures)", self.textures.len()),
                 )
             })?;
             let Some(up) = self.uplift else {
-                return Err(Error::object("material", material, format!("{what}: texture '{}' cannot be used on this wavelength grid (no RGB → spectrum map)", texture.name)));
+                return Err(Error::object(
+                    "material",
+                    material,
+                    format!(
+                        "{what}: texture '{}' cannot be used on this wavelength grid (no RGB → spectrum map)",
+                        texture.name
+                    ),
+                ));
             };
             let scale = d.scale;
             if !(scale.is_finite() && (0.0..=1.0).contains(&scale)) {
@@ -62,11 +56,7 @@ impl BsdfBuild<'_> {
                     format!("{what}: texture scale {scale} must be in 0..1 (energy conserving)"),
                 ));
             }
-            return Ok(SpectralParam::Texture {
-                texture: texture.clone(),
-                uplift: up.clone(),
-                scale,
-            });
+            return Ok(SpectralParam::Texture { texture: texture.clone(), uplift: up.clone(), scale });
         }
         let r = self.spectrum(d, SpectrumRole::Reflectance, material, what)?;
         if r.max_value() > 1.0 {
@@ -77,11 +67,7 @@ impl BsdfBuild<'_> {
             ));
         }
         if !r.is_finite() || r.values().iter().any(|&v| v < 0.0) {
-            return Err(Error::object(
-                "material",
-                material,
-                format!("{what} must be finite and non-negative"),
-            ));
+            return Err(Error::object("material", material, format!("{what} must be finite and non-negative")));
         }
         Ok(SpectralParam::Constant(r))
     }
@@ -89,11 +75,7 @@ impl BsdfBuild<'_> {
 
 fn unit_weight(material: &str, what: &str, v: f32) -> Result<f32> {
     if !(v.is_finite() && (0.0..=1.0).contains(&v)) {
-        return Err(Error::object(
-            "material",
-            material,
-            format!("{what} {v} must be in 0..1"),
-        ));
+        return Err(Error::object("material", material, format!("{what} {v} must be in 0..1")));
     }
     Ok(v)
 }
@@ -106,47 +88,22 @@ pub(super) fn build_bsdf(b: &BsdfBuild, material: &str, d: &BsdfDesc) -> Result<
 
 fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result<Box<dyn Bsdf>> {
     if depth > MAX_DEPTH {
-        return Err(Error::object(
-            "material",
-            material,
-            format!("mix/add shaders nested deeper than {MAX_DEPTH}"),
-        ));
+        return Err(Error::object("material", material, format!("mix/add shaders nested deeper than {MAX_DEPTH}")));
     }
     Ok(match d {
-        BsdfDesc::Diffuse { reflectance } => Box::new(Diffuse {
-            reflectance: b.reflectance(reflectance, material, "reflectance")?,
-        }),
-        BsdfDesc::None => Box::new(Black),
-        BsdfDesc::Dielectric { ior, roughness } => {
-            super::optics::build_dielectric(material, ior, *roughness, b.grid)?
+        BsdfDesc::Diffuse { reflectance } => {
+            Box::new(Diffuse { reflectance: b.reflectance(reflectance, material, "reflectance")? })
         }
-        BsdfDesc::Conductor {
-            metal,
-            eta,
-            k,
-            roughness,
-        } => {
-            let eta = eta
-                .as_ref()
-                .map(|d| b.spectrum(d, SpectrumRole::Unbounded, material, "eta"))
-                .transpose()?;
-            let k = k
-                .as_ref()
-                .map(|d| b.spectrum(d, SpectrumRole::Unbounded, material, "k"))
-                .transpose()?;
+        BsdfDesc::None => Box::new(Black),
+        BsdfDesc::Dielectric { ior, roughness } => super::optics::build_dielectric(material, ior, *roughness, b.grid)?,
+        BsdfDesc::Conductor { metal, eta, k, roughness } => {
+            let eta = eta.as_ref().map(|d| b.spectrum(d, SpectrumRole::Unbounded, material, "eta")).transpose()?;
+            let k = k.as_ref().map(|d| b.spectrum(d, SpectrumRole::Unbounded, material, "k")).transpose()?;
             super::optics::build_conductor(material, metal.as_deref(), eta, k, *roughness, b.grid)?
         }
-        BsdfDesc::Glossy {
-            reflectance,
-            roughness,
-        } => super::optics::build_glossy(
+        BsdfDesc::Glossy { reflectance, roughness } => super::optics::build_glossy(
             material,
-            b.spectrum(
-                reflectance,
-                SpectrumRole::Reflectance,
-                material,
-                "reflectance",
-            )?,
+            b.spectrum(reflectance, SpectrumRole::Reflectance, material, "reflectance")?,
             *roughness,
         )?,
         BsdfDesc::Principled {
@@ -163,21 +120,15 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
             let base_color = b.reflectance(base_color, material, "base_color")?;
             let metallic = unit_weight(material, "metallic", *metallic)?;
             let transmission = unit_weight(material, "transmission", *transmission)?;
-            let specular_ior_level =
-                unit_weight(material, "specular_ior_level", *specular_ior_level)?;
+            let specular_ior_level = unit_weight(material, "specular_ior_level", *specular_ior_level)?;
             let roughness = unit_weight(material, "roughness", *roughness)?;
             let index = IndexOfRefraction::build(ior, b.grid, material)?;
             let n = b.grid.len();
             let specular_tint = match specular_tint {
                 Some(t) => {
                     let s = b.spectrum(t, SpectrumRole::Reflectance, material, "specular_tint")?;
-                    if !s.is_finite() || s.max_value() > 1.0 || s.values().iter().any(|&v| v < 0.0)
-                    {
-                        return Err(Error::object(
-                            "material",
-                            material,
-                            "specular_tint must lie in 0..1",
-                        ));
+                    if !s.is_finite() || s.max_value() > 1.0 || s.values().iter().any(|&v| v < 0.0) {
+                        return Err(Error::object("material", material, "specular_tint must lie in 0..1"));
                     }
                     s
                 }
@@ -192,21 +143,11 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
                 ));
             }
             if !(n_film.is_finite() && (1.0..=10.0).contains(&n_film)) {
-                return Err(Error::object(
-                    "material",
-                    material,
-                    format!("thin_film_ior {n_film} must be in 1..10"),
-                ));
+                return Err(Error::object("material", material, format!("thin_film_ior {n_film} must be in 1..10")));
             }
-            let thin_film = Some(ThinFilm {
-                thickness_nm: d_nm,
-                ior: n_film,
-            })
-            .filter(|f| f.active());
+            let thin_film = Some(ThinFilm { thickness_nm: d_nm, ior: n_film }).filter(|f| f.active());
             let glass = if transmission > 0.0 {
-                Some(super::optics::build_dielectric(
-                    material, ior, roughness, b.grid,
-                )?)
+                Some(super::optics::build_dielectric(material, ior, roughness, b.grid)?)
             } else {
                 None
             };
@@ -225,12 +166,7 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
                 b.grid,
             ))
         }
-        BsdfDesc::Mix {
-            a,
-            b: second,
-            factor,
-            factor_from,
-        } => {
+        BsdfDesc::Mix { a, b: second, factor, factor_from } => {
             let f = unit_weight(material, "mix factor", *factor)?;
             let factor = match factor_from {
                 None => MixFactor::Constant(f),
@@ -239,18 +175,14 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
                         return Err(Error::object(
                             "material",
                             material,
-                            format!(
-                                "mix factor: Fresnel ior {ior} must be finite and non-negative"
-                            ),
+                            format!("mix factor: Fresnel ior {ior} must be finite and non-negative"),
                         ));
                     }
                     MixFactor::Fresnel { ior: *ior }
                 }
-                Some(MixFactorDesc::LayerWeightFresnel { blend }) => {
-                    MixFactor::LayerWeightFresnel {
-                        blend: unit_weight(material, "mix factor: layer weight blend", *blend)?,
-                    }
-                }
+                Some(MixFactorDesc::LayerWeightFresnel { blend }) => MixFactor::LayerWeightFresnel {
+                    blend: unit_weight(material, "mix factor: layer weight blend", *blend)?,
+                },
                 Some(MixFactorDesc::LayerWeightFacing { blend }) => MixFactor::LayerWeightFacing {
                     blend: unit_weight(material, "mix factor: layer weight blend", *blend)?,
                 },
@@ -261,17 +193,10 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
                 factor,
             ))
         }
-        BsdfDesc::Add { a, b: second } => Box::new(MixBsdf::add(
-            build_at(b, material, a, depth + 1)?,
-            build_at(b, material, second, depth + 1)?,
-        )),
-        #[allow(unreachable_patterns)]
-        _ => {
-            return Err(Error::object(
-                "material",
-                material,
-                "this BSDF cannot be used inside a mix or add shader",
-            ))
+        BsdfDesc::Add { a, b: second } => {
+            Box::new(MixBsdf::add(build_at(b, material, a, depth + 1)?, build_at(b, material, second, depth + 1)?))
         }
+        #[allow(unreachable_patterns)]
+        _ => return Err(Error::object("material", material, "this BSDF cannot be used inside a mix or add shader")),
     })
 }

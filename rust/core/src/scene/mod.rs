@@ -15,11 +15,11 @@ use crate::light::{AreaTriangle, ImageEnvironment, Light, PointLight, UniformEnv
 use crate::material::{Black, Bsdf, Diffuse, Material, SpectralParam, Texture};
 use crate::sampling::Distribution1D;
 use crate::spectrum::named::{evaluate_for, RgbToSpectrum, SpectrumKind, SpectrumRole};
-use std::sync::Arc;
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 use crate::{Error, Result};
 pub use desc::*;
 use glam::{Vec2, Vec3A};
+use std::sync::Arc;
 
 /// What the scene is rendered with that does not belong to the scene itself.
 #[derive(Clone, Debug)]
@@ -120,11 +120,23 @@ impl<'a> BuildUplift<'a> {
         Self { uplift: uplift.map_err(|e| e.to_string()), n, used_missing: std::cell::Cell::new(false) }
     }
 
-    fn evaluate(&self, d: &crate::spectrum::SpectrumDesc, grid: &WavelengthGrid, role: SpectrumRole, kind: &'static str, name: &str, what: &str) -> Result<Vec<f32>> {
+    fn evaluate(
+        &self,
+        d: &crate::spectrum::SpectrumDesc,
+        grid: &WavelengthGrid,
+        role: SpectrumRole,
+        kind: &'static str,
+        name: &str,
+        what: &str,
+    ) -> Result<Vec<f32>> {
         let v = evaluate_for(d, grid, role, self, kind, name, what)?;
         if self.used_missing.replace(false) {
             let why = self.uplift.as_ref().err().cloned().unwrap_or_default();
-            return Err(Error::object(kind, name, format!("{what}: RGB colours cannot be used on this wavelength grid ({why})")));
+            return Err(Error::object(
+                kind,
+                name,
+                format!("{what}: RGB colours cannot be used on this wavelength grid ({why})"),
+            ));
         }
         Ok(v)
     }
@@ -145,8 +157,12 @@ impl RgbToSpectrum for BuildUplift<'_> {
 fn buffer_f32<'a>(buffers: &'a [Buffer], i: usize, mesh: &str, what: &str) -> Result<&'a [f32]> {
     match buffers.get(i) {
         Some(Buffer::F32(v)) => Ok(v),
-        Some(Buffer::U32(_)) => Err(Error::object("mesh", mesh, format!("{what} buffer {i} holds integers, expected floats"))),
-        Some(Buffer::U8(_)) => Err(Error::object("mesh", mesh, format!("{what} buffer {i} holds bytes, expected floats"))),
+        Some(Buffer::U32(_)) => {
+            Err(Error::object("mesh", mesh, format!("{what} buffer {i} holds integers, expected floats")))
+        }
+        Some(Buffer::U8(_)) => {
+            Err(Error::object("mesh", mesh, format!("{what} buffer {i} holds bytes, expected floats")))
+        }
         None => Err(Error::object("mesh", mesh, format!("{what} buffer {i} does not exist"))),
     }
 }
@@ -154,8 +170,12 @@ fn buffer_f32<'a>(buffers: &'a [Buffer], i: usize, mesh: &str, what: &str) -> Re
 fn buffer_u32<'a>(buffers: &'a [Buffer], i: usize, mesh: &str, what: &str) -> Result<&'a [u32]> {
     match buffers.get(i) {
         Some(Buffer::U32(v)) => Ok(v),
-        Some(Buffer::F32(_)) => Err(Error::object("mesh", mesh, format!("{what} buffer {i} holds floats, expected integers"))),
-        Some(Buffer::U8(_)) => Err(Error::object("mesh", mesh, format!("{what} buffer {i} holds bytes, expected 32-bit integers"))),
+        Some(Buffer::F32(_)) => {
+            Err(Error::object("mesh", mesh, format!("{what} buffer {i} holds floats, expected integers")))
+        }
+        Some(Buffer::U8(_)) => {
+            Err(Error::object("mesh", mesh, format!("{what} buffer {i} holds bytes, expected 32-bit integers")))
+        }
         None => Err(Error::object("mesh", mesh, format!("{what} buffer {i} does not exist"))),
     }
 }
@@ -170,7 +190,8 @@ impl Scene {
         let camera = Camera::new(&desc.camera, opts.width, opts.height)?;
 
         // Textures: kept RGB, converted at each hit (SPEC §4).
-        let textures: Vec<Arc<Texture>> = desc.textures.iter().map(|t| Texture::from_desc(t, buffers).map(Arc::new)).collect::<Result<_>>()?;
+        let textures: Vec<Arc<Texture>> =
+            desc.textures.iter().map(|t| Texture::from_desc(t, buffers).map(Arc::new)).collect::<Result<_>>()?;
 
         // Materials.
         let mut materials = Vec::with_capacity(desc.materials.len().max(1));
@@ -181,20 +202,36 @@ impl Scene {
             let bsdf: Box<dyn Bsdf> = match &m.bsdf {
                 BsdfDesc::Diffuse { reflectance } if matches!(reflectance.kind, SpectrumKind::Texture { .. }) => {
                     let SpectrumKind::Texture { texture: t } = reflectance.kind else { unreachable!() };
-                    let texture = textures.get(t).ok_or_else(|| Error::object("material", &m.name, format!("reflectance: texture {t} does not exist ({} textures)", textures.len())))?;
+                    let texture = textures.get(t).ok_or_else(|| {
+                        Error::object(
+                            "material",
+                            &m.name,
+                            format!("reflectance: texture {t} does not exist ({} textures)", textures.len()),
+                        )
+                    })?;
                     let Some(up) = &uplift else {
                         return Err(Error::object("material", &m.name, format!("reflectance: texture '{}' cannot be used on this wavelength grid (no RGB → spectrum map)", texture.name)));
                     };
                     let scale = reflectance.scale;
                     if !(scale.is_finite() && (0.0..=1.0).contains(&scale)) {
-                        return Err(Error::object("material", &m.name, format!("reflectance: texture scale {scale} must be in 0..1 (energy conserving)")));
+                        return Err(Error::object(
+                            "material",
+                            &m.name,
+                            format!("reflectance: texture scale {scale} must be in 0..1 (energy conserving)"),
+                        ));
                     }
-                    Box::new(Diffuse { reflectance: SpectralParam::Texture { texture: texture.clone(), uplift: up.clone(), scale } })
+                    Box::new(Diffuse {
+                        reflectance: SpectralParam::Texture { texture: texture.clone(), uplift: up.clone(), scale },
+                    })
                 }
                 BsdfDesc::Diffuse { reflectance } => {
                     let r = spectrum(reflectance, SpectrumRole::Reflectance, "reflectance")?;
                     if r.max_value() > 1.0 {
-                        return Err(Error::object("material", &m.name, format!("reflectance {} exceeds 1 (not energy conserving)", r.max_value())));
+                        return Err(Error::object(
+                            "material",
+                            &m.name,
+                            format!("reflectance {} exceeds 1 (not energy conserving)", r.max_value()),
+                        ));
                     }
                     Box::new(Diffuse { reflectance: SpectralParam::Constant(r) })
                 }
@@ -205,7 +242,11 @@ impl Scene {
                     let k = k.as_ref().map(|d| spectrum(d, SpectrumRole::Unbounded, "k")).transpose()?;
                     optics::build_conductor(&m.name, metal.as_deref(), eta, k, *roughness, &grid)?
                 }
-                BsdfDesc::Glossy { reflectance, roughness } => optics::build_glossy(&m.name, spectrum(reflectance, SpectrumRole::Reflectance, "reflectance")?, *roughness)?,
+                BsdfDesc::Glossy { reflectance, roughness } => optics::build_glossy(
+                    &m.name,
+                    spectrum(reflectance, SpectrumRole::Reflectance, "reflectance")?,
+                    *roughness,
+                )?,
                 BsdfDesc::Principled { .. } | BsdfDesc::Mix { .. } | BsdfDesc::Add { .. } => {
                     let b = layered::BsdfBuild { grid: &grid, rgb: &rgb, textures: &textures, uplift: uplift.as_ref() };
                     layered::build_bsdf(&b, &m.name, &m.bsdf)?
@@ -219,7 +260,11 @@ impl Scene {
         }
         if materials.is_empty() {
             let grey = SampledSpectrum::splat(n, 0.8);
-            materials.push(Material { name: "default".into(), bsdf: Box::new(Diffuse { reflectance: SpectralParam::Constant(grey) }), emission: None });
+            materials.push(Material {
+                name: "default".into(),
+                bsdf: Box::new(Diffuse { reflectance: SpectralParam::Constant(grey) }),
+                emission: None,
+            });
         }
 
         // Meshes.
@@ -236,19 +281,29 @@ impl Scene {
                 (None, m) => vec![m.unwrap_or(0); nt],
             };
             if let Some(&bad) = ids.iter().find(|&&k| k as usize >= materials.len()) {
-                return Err(Error::object("mesh", name, format!("uses material {bad} but the scene has {} materials", materials.len())));
+                return Err(Error::object(
+                    "mesh",
+                    name,
+                    format!("uses material {bad} but the scene has {} materials", materials.len()),
+                ));
             }
             meshes.push(Mesh::from_buffers(name, positions, indices, normals, uvs, &ids)?);
         }
 
         // Instances.
         let instances: Vec<Instance> = match &desc.instances {
-            None => (0..meshes.len()).map(|k| Instance::new(&meshes[k].name, k as u32, glam::Affine3A::IDENTITY)).collect::<Result<_>>()?,
+            None => (0..meshes.len())
+                .map(|k| Instance::new(&meshes[k].name, k as u32, glam::Affine3A::IDENTITY))
+                .collect::<Result<_>>()?,
             Some(list) => list
                 .iter()
                 .map(|i| {
                     if i.mesh as usize >= meshes.len() {
-                        return Err(Error::object("instance", &i.name, format!("refers to mesh {} but the scene has {}", i.mesh, meshes.len())));
+                        return Err(Error::object(
+                            "instance",
+                            &i.name,
+                            format!("refers to mesh {} but the scene has {}", i.mesh, meshes.len()),
+                        ));
                     }
                     Instance::new(&i.name, i.mesh, affine_from_rows(&i.transform))
                 })
@@ -258,8 +313,17 @@ impl Scene {
         // boxes (obvhs panics): reject it naming the instance (found by proptest).
         for inst in &instances {
             let limit = crate::geometry::mesh::MAX_COORDINATE;
-            if let Some(w) = meshes[inst.mesh as usize].positions.iter().map(|p| inst.to_world.transform_point3a(*p)).find(|w| !(w.is_finite() && w.abs().max_element() <= limit)) {
-                return Err(Error::object("instance", &inst.name, format!("places a vertex at {w} (beyond ±{limit:e})")));
+            if let Some(w) = meshes[inst.mesh as usize]
+                .positions
+                .iter()
+                .map(|p| inst.to_world.transform_point3a(*p))
+                .find(|w| !(w.is_finite() && w.abs().max_element() <= limit))
+            {
+                return Err(Error::object(
+                    "instance",
+                    &inst.name,
+                    format!("places a vertex at {w} (beyond ±{limit:e})"),
+                ));
             }
         }
         let accel = Accel::build(&meshes, &instances);
@@ -273,7 +337,8 @@ impl Scene {
                 hi = hi.max(w);
             }
         }
-        let (bounds_center, bounds_radius) = if lo.x <= hi.x { ((lo + hi) * 0.5, (hi - lo).length() * 0.5) } else { (Vec3A::ZERO, 1.0) };
+        let (bounds_center, bounds_radius) =
+            if lo.x <= hi.x { ((lo + hi) * 0.5, (hi - lo).length() * 0.5) } else { (Vec3A::ZERO, 1.0) };
 
         // Lights: emissive triangles, explicit lights, the world.
         let mut lights: Vec<Box<dyn Light>> = Vec::new();
@@ -301,16 +366,32 @@ impl Scene {
                     if !position.is_finite() {
                         return Err(Error::object("light", name, "position is not finite"));
                     }
-                    let intensity = rgb.evaluate(intensity, &grid, SpectrumRole::Illuminant, "light", name, "intensity")?;
+                    let intensity =
+                        rgb.evaluate(intensity, &grid, SpectrumRole::Illuminant, "light", name, "intensity")?;
                     lights.push(Box::new(PointLight { position, intensity: SampledSpectrum::from_slice(&intensity) }));
                 }
                 LightDesc::Spot { name, position, direction, intensity, spot_size, spot_blend } => {
-                    let intensity = rgb.evaluate(intensity, &grid, SpectrumRole::Illuminant, "light", name, "intensity")?;
-                    lights.push(optics::build_spot(name, *position, *direction, SampledSpectrum::from_slice(&intensity), *spot_size, *spot_blend)?);
+                    let intensity =
+                        rgb.evaluate(intensity, &grid, SpectrumRole::Illuminant, "light", name, "intensity")?;
+                    lights.push(optics::build_spot(
+                        name,
+                        *position,
+                        *direction,
+                        SampledSpectrum::from_slice(&intensity),
+                        *spot_size,
+                        *spot_blend,
+                    )?);
                 }
                 LightDesc::Distant { name, direction, irradiance } => {
-                    let irradiance = rgb.evaluate(irradiance, &grid, SpectrumRole::Illuminant, "light", name, "irradiance")?;
-                    lights.push(optics::build_distant(name, *direction, SampledSpectrum::from_slice(&irradiance), bounds_center, bounds_radius)?);
+                    let irradiance =
+                        rgb.evaluate(irradiance, &grid, SpectrumRole::Illuminant, "light", name, "irradiance")?;
+                    lights.push(optics::build_distant(
+                        name,
+                        *direction,
+                        SampledSpectrum::from_slice(&irradiance),
+                        bounds_center,
+                        bounds_radius,
+                    )?);
                 }
             }
         }
@@ -318,28 +399,62 @@ impl Scene {
             None => None,
             Some(w) => match w.texture {
                 Some(t) => {
-                    let texture = textures.get(t).ok_or_else(|| Error::object("world", "World", format!("texture {t} does not exist ({} textures)", textures.len())))?;
+                    let texture = textures.get(t).ok_or_else(|| {
+                        Error::object(
+                            "world",
+                            "World",
+                            format!("texture {t} does not exist ({} textures)", textures.len()),
+                        )
+                    })?;
                     let Some(up) = &uplift else {
                         return Err(Error::object("world", "World", format!("texture '{}': RGB images cannot be used on this wavelength grid (no RGB → spectrum map)", texture.name)));
                     };
                     if !(w.strength.is_finite() && w.strength >= 0.0) || !w.rotation.is_finite() {
-                        return Err(Error::object("world", "World", format!("strength {} must be finite and non-negative, rotation {} finite", w.strength, w.rotation)));
+                        return Err(Error::object(
+                            "world",
+                            "World",
+                            format!(
+                                "strength {} must be finite and non-negative, rotation {} finite",
+                                w.strength, w.rotation
+                            ),
+                        ));
                     }
-                    let img = Arc::new(ImageEnvironment::new(texture.clone(), up.clone(), w.strength, w.rotation, bounds_radius, w.importance_sampling));
+                    let img = Arc::new(ImageEnvironment::new(
+                        texture.clone(),
+                        up.clone(),
+                        w.strength,
+                        w.rotation,
+                        bounds_radius,
+                        w.importance_sampling,
+                    ));
                     if w.strength == 0.0 {
                         None
                     } else {
                         lights.push(Box::new(img.clone()));
-                        Some(EnvironmentRef { light: lights.len() - 1, radiance: SampledSpectrum::zeros(n), image: Some(img) })
+                        Some(EnvironmentRef {
+                            light: lights.len() - 1,
+                            radiance: SampledSpectrum::zeros(n),
+                            image: Some(img),
+                        })
                     }
                 }
                 None => {
                     let d = w.radiance.clone().unwrap_or_else(|| crate::spectrum::SpectrumDesc::constant(0.0));
-                    let radiance = SampledSpectrum::from_slice(&rgb.evaluate(&d, &grid, SpectrumRole::Illuminant, "world", "World", "radiance")?);
+                    let radiance = SampledSpectrum::from_slice(&rgb.evaluate(
+                        &d,
+                        &grid,
+                        SpectrumRole::Illuminant,
+                        "world",
+                        "World",
+                        "radiance",
+                    )?);
                     if radiance.is_black() {
                         None
                     } else {
-                        lights.push(Box::new(UniformEnvironment { radiance: radiance.clone(), scene_radius: bounds_radius }));
+                        lights.push(Box::new(UniformEnvironment {
+                            radiance: radiance.clone(),
+                            scene_radius: bounds_radius,
+                        }));
                         Some(EnvironmentRef { light: lights.len() - 1, radiance, image: None })
                     }
                 }
@@ -391,7 +506,13 @@ impl Scene {
         let ns = match &mesh.normals {
             Some(n) => {
                 let s = (inst.normal_to_world * (n[i0] * b0 + n[i1] * b1 + n[i2] * b2)).normalize_or_zero();
-                if s == Vec3A::ZERO { ng } else if s.dot(ng) < 0.0 { -s } else { s }
+                if s == Vec3A::ZERO {
+                    ng
+                } else if s.dot(ng) < 0.0 {
+                    -s
+                } else {
+                    s
+                }
             }
             None => ng,
         };

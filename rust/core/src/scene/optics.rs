@@ -4,7 +4,9 @@
 use crate::light::{DistantLight, Light, SpotLight};
 use crate::material::conductor::{ComplexFresnel, SchlickFresnel};
 use crate::material::microfacet::Ggx;
-use crate::material::{Bsdf, Conductor, Dielectric, Glossy, IndexOfRefraction, IorDesc, RoughDielectric, SpectralParam};
+use crate::material::{
+    Bsdf, Conductor, Dielectric, Glossy, IndexOfRefraction, IorDesc, RoughDielectric, SpectralParam,
+};
 use crate::spectrum::measured;
 use crate::spectrum::named::average_piecewise_linear;
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
@@ -44,7 +46,11 @@ pub fn build_dielectric(material: &str, ior: &IorDesc, roughness: f32, grid: &Wa
     let roughness = check_roughness(material, roughness)?;
     let ior = IndexOfRefraction::build(ior, grid, material)?;
     let distribution = Ggx::from_roughness(roughness);
-    Ok(if distribution.effectively_smooth() { Box::new(Dielectric { ior }) } else { Box::new(RoughDielectric { ior, distribution }) })
+    Ok(if distribution.effectively_smooth() {
+        Box::new(Dielectric { ior })
+    } else {
+        Box::new(RoughDielectric { ior, distribution })
+    })
 }
 
 /// A conductor from a named metal or user (η, k) spectra (already on the grid).
@@ -61,7 +67,11 @@ pub fn build_conductor(
         (Some(name), None, None) => {
             let key = name.trim().to_lowercase();
             let Some((_, e, k)) = METALS.iter().find(|(names, _, _)| names.contains(&key.as_str())) else {
-                return Err(Error::object("material", material, format!("unknown metal '{name}' (known: gold, silver, copper, aluminium)")));
+                return Err(Error::object(
+                    "material",
+                    material,
+                    format!("unknown metal '{name}' (known: gold, silver, copper, aluminium)"),
+                ));
             };
             (resample_table(e, grid), resample_table(k, grid))
         }
@@ -71,7 +81,11 @@ pub fn build_conductor(
     for i in 0..grid.len() {
         let (e, kk) = (eta.get(i), k.get(i));
         if !(e.is_finite() && kk.is_finite() && e >= 0.0 && kk >= 0.0 && (e > 0.0 || kk > 0.0)) {
-            return Err(Error::object("material", material, format!("complex index {e} + {kk}i at λ {} nm must have η, k ≥ 0, not both 0", grid.lambdas()[i])));
+            return Err(Error::object(
+                "material",
+                material,
+                format!("complex index {e} + {kk}i at λ {} nm must have η, k ≥ 0, not both 0", grid.lambdas()[i]),
+            ));
         }
     }
     Ok(Box::new(Conductor::new(ComplexFresnel { eta, k }, roughness)))
@@ -81,7 +95,11 @@ pub fn build_conductor(
 pub fn build_glossy(material: &str, r: SampledSpectrum, roughness: f32) -> Result<Box<dyn Bsdf>> {
     let roughness = check_roughness(material, roughness)?;
     if r.max_value() > 1.0 {
-        return Err(Error::object("material", material, format!("reflectance {} exceeds 1 (not energy conserving)", r.max_value())));
+        return Err(Error::object(
+            "material",
+            material,
+            format!("reflectance {} exceeds 1 (not energy conserving)", r.max_value()),
+        ));
     }
     Ok(Box::new(Glossy::new(SchlickFresnel { reflectance: SpectralParam::Constant(r) }, roughness)))
 }
@@ -96,7 +114,14 @@ fn unit_direction(light: &str, d: [f32; 3]) -> Result<Vec3A> {
 }
 
 /// A spot light; `intensity` already evaluated on the grid.
-pub fn build_spot(name: &str, position: [f32; 3], direction: [f32; 3], intensity: SampledSpectrum, spot_size: f32, spot_blend: f32) -> Result<Box<dyn Light>> {
+pub fn build_spot(
+    name: &str,
+    position: [f32; 3],
+    direction: [f32; 3],
+    intensity: SampledSpectrum,
+    spot_size: f32,
+    spot_blend: f32,
+) -> Result<Box<dyn Light>> {
     let p = Vec3A::from(position);
     if !p.is_finite() {
         return Err(Error::object("light", name, "position is not finite"));
@@ -112,7 +137,13 @@ pub fn build_spot(name: &str, position: [f32; 3], direction: [f32; 3], intensity
 }
 
 /// A distant (sun) light; `irradiance` already evaluated on the grid.
-pub fn build_distant(name: &str, direction: [f32; 3], irradiance: SampledSpectrum, scene_center: Vec3A, scene_radius: f32) -> Result<Box<dyn Light>> {
+pub fn build_distant(
+    name: &str,
+    direction: [f32; 3],
+    irradiance: SampledSpectrum,
+    scene_center: Vec3A,
+    scene_radius: f32,
+) -> Result<Box<dyn Light>> {
     let direction = unit_direction(name, direction)?;
     Ok(Box::new(DistantLight { direction, irradiance, scene_center, scene_radius }))
 }

@@ -33,16 +33,10 @@ impl WavelengthGrid {
     /// `count` samples from `min` to `max` inclusive.
     pub fn uniform(count: usize, min: f32, max: f32) -> Result<Self> {
         if !(MIN_SAMPLES..=MAX_SAMPLES).contains(&count) {
-            return Err(Error::setting(
-                "wavelength_count",
-                format!("{count} is outside {MIN_SAMPLES}..{MAX_SAMPLES}"),
-            ));
+            return Err(Error::setting("wavelength_count", format!("{count} is outside {MIN_SAMPLES}..{MAX_SAMPLES}")));
         }
         if !(min.is_finite() && max.is_finite() && min < max) {
-            return Err(Error::setting(
-                "wavelength_min",
-                format!("range {min}..{max} nm is empty or not finite"),
-            ));
+            return Err(Error::setting("wavelength_min", format!("range {min}..{max} nm is empty or not finite")));
         }
         let step = (max as f64 - min as f64) / (count - 1) as f64;
         let lambdas = (0..count).map(|i| (min as f64 + step * i as f64) as f32).collect();
@@ -68,10 +62,7 @@ impl WavelengthGrid {
             if i > 0 && l <= lambdas[i - 1] {
                 return Err(Error::setting(
                     "wavelengths",
-                    format!(
-                        "not strictly ascending: wavelength {i} = {l} nm follows {} nm",
-                        lambdas[i - 1]
-                    ),
+                    format!("not strictly ascending: wavelength {i} = {l} nm follows {} nm", lambdas[i - 1]),
                 ));
             }
         }

@@ -4,11 +4,7 @@
 // indices (n + ik) of metals. Regenerate with
 //     .venv/bin/python tools/gen_spectral_tables.py
 // Values are written as the shortest decimal that round-trips as f32.
-#![allow(
-    clippy::approx_constant,
-    clippy::excessive_precision,
-    clippy::unreadable_literal
-)]
+#![allow(clippy::approx_constant, clippy::excessive_precision, clippy::unreadable_literal)]
 
 // ---------------------------------------------------------------------------
 // X-Rite / Macbeth ColorChecker Classic, 24 patch spectral reflectance factors.
@@ -474,33 +470,19 @@ mod tests {
     type Table = &'static [(f32, f32)];
 
     fn all_metals() -> [(&'static str, Table, Table); 4] {
-        [
-            ("Au", AU_ETA, AU_K),
-            ("Ag", AG_ETA, AG_K),
-            ("Cu", CU_ETA, CU_K),
-            ("Al", AL_ETA, AL_K),
-        ]
+        [("Au", AU_ETA, AU_K), ("Ag", AG_ETA, AG_K), ("Cu", CU_ETA, CU_K), ("Al", AL_ETA, AL_K)]
     }
 
     #[test]
     fn metal_tables_ascending_and_cover_visible() {
         for (name, eta, k) in all_metals() {
             assert_eq!(eta.len(), k.len(), "{name}");
-            assert!(
-                eta.windows(2).all(|w| w[0].0 < w[1].0),
-                "{name} eta not ascending"
-            );
-            assert!(
-                eta.iter().zip(k.iter()).all(|(a, b)| a.0 == b.0),
-                "{name} grids differ"
-            );
+            assert!(eta.windows(2).all(|w| w[0].0 < w[1].0), "{name} eta not ascending");
+            assert!(eta.iter().zip(k.iter()).all(|(a, b)| a.0 == b.0), "{name} grids differ");
             assert!(eta.first().unwrap().0 <= 360.0, "{name} starts too late");
             assert!(eta.last().unwrap().0 >= 830.0, "{name} ends too early");
             assert!(eta.first().unwrap().0 >= 240.0 && eta.last().unwrap().0 <= 1000.0);
-            assert!(
-                eta.iter().all(|p| p.1 > 0.0) && k.iter().all(|p| p.1 > 0.0),
-                "{name}"
-            );
+            assert!(eta.iter().all(|p| p.1 > 0.0) && k.iter().all(|p| p.1 > 0.0), "{name}");
         }
     }
 
@@ -513,9 +495,7 @@ mod tests {
         assert_eq!(at(AG_K, 659.5), 4.483);
         assert_eq!(at(CU_K, 659.5), 3.747);
         // Rakic 1995 aluminium: interband absorption peak in n near 800 nm.
-        let (lmax, _) = AL_ETA
-            .iter()
-            .fold((0.0, 0.0), |m, p| if p.1 > m.1 { *p } else { m });
+        let (lmax, _) = AL_ETA.iter().fold((0.0, 0.0), |m, p| if p.1 > m.1 { *p } else { m });
         assert!((790.0..820.0).contains(&lmax), "{lmax}");
     }
 }

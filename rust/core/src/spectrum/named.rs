@@ -146,7 +146,9 @@ impl SpectrumDesc {
                 uplift.convert(*rgb, role)
             }
             SpectrumKind::Texture { texture } => {
-                return Err(format!("texture {texture} cannot be used here (only a diffuse reflectance or the world accepts a texture)"));
+                return Err(format!(
+                    "texture {texture} cannot be used here (only a diffuse reflectance or the world accepts a texture)"
+                ));
             }
         };
         for x in v.iter_mut() {
@@ -266,15 +268,16 @@ fn narrow_band(center: f64, fwhm: f64, grid: &WavelengthGrid) -> Vec<f32> {
 pub fn erf(x: f64) -> f64 {
     let z = x.abs();
     let t = 1.0 / (1.0 + 0.5 * z);
-    let r = t * (-z * z - 1.265_512_23
-        + t * (1.000_023_68
-            + t * (0.374_091_96
-                + t * (0.096_784_18
-                    + t * (-0.186_288_06
-                        + t * (0.278_868_07
-                            + t * (-1.135_203_98
-                                + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
-        .exp();
+    let r = t
+        * (-z * z - 1.265_512_23
+            + t * (1.000_023_68
+                + t * (0.374_091_96
+                    + t * (0.096_784_18
+                        + t * (-0.186_288_06
+                            + t * (0.278_868_07
+                                + t * (-1.135_203_98
+                                    + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
+            .exp();
     if x >= 0.0 {
         1.0 - r
     } else {

@@ -66,12 +66,7 @@ impl WavelengthGrid {
         let m = space.rgb_to_xyz;
         let luminance = [m[1][0] as f32, m[1][1] as f32, m[1][2] as f32];
         Ok(WavelengthGrid::from_rgb_channels(
-            RgbChannels {
-                reference,
-                reflectance_rows: refl,
-                illuminant_rows: illum,
-                rgb_to_xyz: m,
-            },
+            RgbChannels { reference, reflectance_rows: refl, illuminant_rows: illum, rgb_to_xyz: m },
             luminance,
         ))
     }
@@ -96,23 +91,17 @@ impl RgbChannels {
                 let s = desc.evaluate(&self.reference, role, uplift)?;
                 let fold = |rows: &[Vec<f64>; 3]| -> Vec<f32> {
                     rows.iter()
-                        .map(|row| {
-                            row.iter().zip(&s).map(|(a, &b)| a * b as f64).sum::<f64>() as f32
-                        })
+                        .map(|row| row.iter().zip(&s).map(|(a, &b)| a * b as f64).sum::<f64>() as f32)
                         // Out-of-gamut colours (narrow bands) have negative components: clip.
                         .map(|c| c.max(0.0))
                         .collect()
                 };
                 match role {
-                    SpectrumRole::Reflectance => fold(&self.reflectance_rows)
-                        .into_iter()
-                        .map(|c| c.min(1.0))
-                        .collect(),
+                    SpectrumRole::Reflectance => fold(&self.reflectance_rows).into_iter().map(|c| c.min(1.0)).collect(),
                     SpectrumRole::Illuminant => fold(&self.illuminant_rows),
-                    SpectrumRole::Unbounded => RGB_LAMBDAS
-                        .iter()
-                        .map(|&l| interpolate(self.reference.lambdas(), &s, l))
-                        .collect(),
+                    SpectrumRole::Unbounded => {
+                        RGB_LAMBDAS.iter().map(|&l| interpolate(self.reference.lambdas(), &s, l)).collect()
+                    }
                 }
             }
         };
@@ -128,11 +117,7 @@ impl RgbChannels {
     pub fn observer(&self) -> Observer {
         let m = &self.rgb_to_xyz;
         let row = |k: usize| (0..3).map(|c| m[k][c] as f32).collect::<Vec<f32>>();
-        Observer {
-            x: row(0),
-            y: row(1),
-            z: row(2),
-        }
+        Observer { x: row(0), y: row(1), z: row(2) }
     }
 }
 
@@ -145,21 +130,12 @@ mod tests {
         let space = RgbSpace::rec709();
         let g = WavelengthGrid::rgb_channels(&WavelengthGrid::default(), &space).unwrap();
         assert_eq!(g.len(), 3);
-        let d = SpectrumDesc::new(SpectrumKind::Rgb {
-            rgb: [0.2, 0.5, 0.9],
-        });
-        assert_eq!(
-            d.evaluate(&g, SpectrumRole::Reflectance, &NoRgb).unwrap(),
-            vec![0.2, 0.5, 0.9]
-        );
+        let d = SpectrumDesc::new(SpectrumKind::Rgb { rgb: [0.2, 0.5, 0.9] });
+        assert_eq!(d.evaluate(&g, SpectrumRole::Reflectance, &NoRgb).unwrap(), vec![0.2, 0.5, 0.9]);
         // A flat reflectance is grey; D65 of luminance 1 is white (1,1,1).
-        let grey = SpectrumDesc::constant(0.5)
-            .evaluate(&g, SpectrumRole::Reflectance, &NoRgb)
-            .unwrap();
+        let grey = SpectrumDesc::constant(0.5).evaluate(&g, SpectrumRole::Reflectance, &NoRgb).unwrap();
         assert!(grey.iter().all(|c| (c - 0.5).abs() < 1e-5), "{grey:?}");
-        let e = SpectrumDesc::new(SpectrumKind::D65)
-            .evaluate(&g, SpectrumRole::Illuminant, &NoRgb)
-            .unwrap();
+        let e = SpectrumDesc::new(SpectrumKind::D65).evaluate(&g, SpectrumRole::Illuminant, &NoRgb).unwrap();
         let obs = Observer::new(&g);
         let xyz = obs.xyz(&e);
         let rgb = space.xyz_to_rgb(xyz);

@@ -91,11 +91,8 @@ impl SampledSpectrum {
     pub fn add_product(&mut self, a: &Self, b: &Self, s: f32) {
         debug_assert_eq!(self.len, a.len);
         debug_assert_eq!(self.len, b.len);
-        for ((o, x), y) in self
-            .data
-            .chunks_exact_mut(LANES)
-            .zip(a.data.chunks_exact(LANES))
-            .zip(b.data.chunks_exact(LANES))
+        for ((o, x), y) in
+            self.data.chunks_exact_mut(LANES).zip(a.data.chunks_exact(LANES)).zip(b.data.chunks_exact(LANES))
         {
             for k in 0..LANES {
                 o[k] += x[k] * y[k] * s;

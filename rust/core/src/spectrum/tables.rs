@@ -9,11 +9,7 @@
 //
 // Illuminant A and blackbody emitters are intentionally not tabulated: the
 // core evaluates them from Planck's law.
-#![allow(
-    clippy::approx_constant,
-    clippy::excessive_precision,
-    clippy::unreadable_literal
-)]
+#![allow(clippy::approx_constant, clippy::excessive_precision, clippy::unreadable_literal)]
 
 // ---------------------------------------------------------------------------
 // CIE 1931 2 degree standard observer colour matching functions.
@@ -448,10 +444,7 @@ mod tests {
         assert_eq!(CIE_Y.len(), 471);
         assert_eq!(CIE_Z.len(), 471);
         assert_eq!(CIE_SAMPLES, CIE_Y.len());
-        assert_eq!(
-            CIE_LAMBDA_MIN + CIE_LAMBDA_STEP * (CIE_SAMPLES - 1) as f32,
-            CIE_LAMBDA_MAX
-        );
+        assert_eq!(CIE_LAMBDA_MIN + CIE_LAMBDA_STEP * (CIE_SAMPLES - 1) as f32, CIE_LAMBDA_MAX);
         for t in [&CIE_X, &CIE_Y, &CIE_Z] {
             assert!(t.iter().all(|v| v.is_finite() && *v >= 0.0));
         }
@@ -460,10 +453,7 @@ mod tests {
     #[test]
     fn cie_y_peaks_at_555nm() {
         let (imax, vmax) =
-            CIE_Y.iter().enumerate().fold(
-                (0, f32::MIN),
-                |acc, (i, &v)| if v > acc.1 { (i, v) } else { acc },
-            );
+            CIE_Y.iter().enumerate().fold((0, f32::MIN), |acc, (i, &v)| if v > acc.1 { (i, v) } else { acc });
         assert_eq!(CIE_LAMBDA_MIN + imax as f32 * CIE_LAMBDA_STEP, 555.0);
         assert_eq!(imax, 195);
         assert!((vmax - 1.0).abs() < 1e-6, "peak {vmax}");
@@ -472,10 +462,7 @@ mod tests {
     #[test]
     fn cie_y_integral() {
         let sum: f64 = CIE_Y.iter().map(|&v| v as f64).sum::<f64>() * CIE_LAMBDA_STEP as f64;
-        assert!(
-            (sum - CIE_Y_INTEGRAL as f64).abs() < 1e-4,
-            "{sum} vs {CIE_Y_INTEGRAL}"
-        );
+        assert!((sum - CIE_Y_INTEGRAL as f64).abs() < 1e-4, "{sum} vs {CIE_Y_INTEGRAL}");
         assert!((CIE_Y_INTEGRAL - 106.857).abs() < 1e-3, "{CIE_Y_INTEGRAL}");
     }
 
@@ -491,10 +478,7 @@ mod tests {
     #[test]
     fn d65_table() {
         assert_eq!(D65.len(), 97);
-        assert_eq!(
-            D65_LAMBDA_MIN + D65_LAMBDA_STEP * (D65.len() - 1) as f32,
-            D65_LAMBDA_MAX
-        );
+        assert_eq!(D65_LAMBDA_MIN + D65_LAMBDA_STEP * (D65.len() - 1) as f32, D65_LAMBDA_MAX);
         let i560 = ((560.0 - D65_LAMBDA_MIN) / D65_LAMBDA_STEP).round() as usize;
         assert_eq!(D65[i560], 100.0);
         assert!((lerp_table(&D65, D65_LAMBDA_MIN, D65_LAMBDA_STEP, 560.0) - 100.0).abs() < 1e-4);
@@ -524,18 +508,12 @@ mod tests {
         assert_eq!(FL2.len(), 81);
         assert_eq!(FL7.len(), 81);
         assert_eq!(FL11.len(), 81);
-        assert_eq!(
-            FL_LAMBDA_MIN + FL_LAMBDA_STEP * (FL2.len() - 1) as f32,
-            FL_LAMBDA_MAX
-        );
+        assert_eq!(FL_LAMBDA_MIN + FL_LAMBDA_STEP * (FL2.len() - 1) as f32, FL_LAMBDA_MAX);
         for t in [&FL2, &FL7, &FL11] {
             assert!(t.iter().all(|v| v.is_finite() && *v >= 0.0));
         }
         // F11 is a tri-band lamp: its strongest line is the 545 nm terbium peak.
-        let imax = FL11
-            .iter()
-            .enumerate()
-            .fold(0, |m, (i, &v)| if v > FL11[m] { i } else { m });
+        let imax = FL11.iter().enumerate().fold(0, |m, (i, &v)| if v > FL11[m] { i } else { m });
         assert_eq!(FL_LAMBDA_MIN + imax as f32 * FL_LAMBDA_STEP, 545.0);
     }
 }

@@ -30,7 +30,14 @@ pub fn uv_sphere(center: [f32; 3], radius: f32, rings: u32, segments: u32) -> (V
 }
 
 /// Adds a mesh to the description, returning its index.
-pub fn add_mesh(desc: &mut SceneDesc, buffers: &mut Vec<Buffer>, name: &str, v: Vec<f32>, t: Vec<u32>, material: u32) -> usize {
+pub fn add_mesh(
+    desc: &mut SceneDesc,
+    buffers: &mut Vec<Buffer>,
+    name: &str,
+    v: Vec<f32>,
+    t: Vec<u32>,
+    material: u32,
+) -> usize {
     buffers.push(Buffer::F32(v));
     buffers.push(Buffer::U32(t));
     desc.meshes.push(MeshDesc {
