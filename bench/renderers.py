@@ -217,7 +217,7 @@ def main(argv=None) -> int:
     size, px = args.size, args.size * args.size
     spps = [2**k for k in range(int(math.log2(args.max_spp)) + 1)]
     tmp = Path(tempfile.mkdtemp(prefix="pc-renderers-"))
-    s = export(scene, tmp, size, args.max_bounces)
+    export(scene, tmp, size, args.max_bounces)
     common = dict(width=size, height=size, max_bounces=args.max_bounces, noise_threshold=0.0, threads=2)
     t0 = time.perf_counter()
     ref = pc.render(scene, samples=args.ref_samples, wavelength_count=81, seed=12345, **common).rgba[..., :3]

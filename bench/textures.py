@@ -15,7 +15,6 @@ against its raw RGB size, and the cost of converting RGB to a spectrum at each l
 from __future__ import annotations
 
 import argparse
-import json
 import platform
 import resource
 import subprocess

@@ -4,7 +4,6 @@ random shapes, dtypes and values (NaN, ±inf, huge, negative indices) handed to
 ValueError/TypeError that names the mesh — never a crash or another exception."""
 
 import numpy as np
-import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp

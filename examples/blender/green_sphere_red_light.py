@@ -12,9 +12,6 @@ CIEDE2000 difference between the two (the paper's point: RGB gets this wrong).
 
 import argparse
 import atexit
-import math
-import os
-import sys
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent

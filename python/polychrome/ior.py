@@ -11,7 +11,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
-from typing import Any, Sequence
+from typing import Any
+from collections.abc import Sequence
 
 #: Fraunhofer lines of the Abbe number (nm): helium d, hydrogen F and C.
 LAMBDA_D = 587.56

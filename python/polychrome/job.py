@@ -19,7 +19,8 @@ from __future__ import annotations
 from dataclasses import replace
 import json
 import time
-from typing import Any, Callable, NamedTuple
+from typing import Any, NamedTuple
+from collections.abc import Callable
 
 import numpy as np
 
@@ -84,11 +85,11 @@ class RenderJob:
     @classmethod
     def from_description(
         cls, desc: dict[str, Any], buffers: list[np.ndarray], settings: RenderSettings | None = None, **kw: Any
-    ) -> "RenderJob":
+    ) -> RenderJob:
         """A job for an already built description (``Scene.description()``)."""
         return cls(None, settings, description=(desc, buffers), **kw)
 
-    def start(self) -> "RenderJob":
+    def start(self) -> RenderJob:
         self._started = time.perf_counter()
         self._job.start()
         return self
@@ -146,7 +147,7 @@ class RenderJob:
             )
         return self._result
 
-    def __enter__(self) -> "RenderJob":
+    def __enter__(self) -> RenderJob:
         if not self.started:
             self.start()
         return self

@@ -8,7 +8,8 @@ import json
 from pathlib import Path
 import sys
 import time
-from typing import Any, Callable
+from typing import Any
+from collections.abc import Callable
 
 import numpy as np
 

@@ -8,7 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
-from typing import Any, Sequence
+from typing import Any
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -72,7 +73,7 @@ class Camera:
     name: str = "Camera"
 
     @classmethod
-    def looking_at(cls, position, target, up=(0.0, 0.0, 1.0), **kwargs) -> "Camera":
+    def looking_at(cls, position, target, up=(0.0, 0.0, 1.0), **kwargs) -> Camera:
         return cls(to_world=look_at(position, target, up), **kwargs)
 
     def to_dict(self) -> dict[str, Any]:

@@ -8,7 +8,8 @@ evaluates on the render's wavelength grid; nothing here depends on the grid.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Any
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -21,7 +22,7 @@ class Spectrum:
     params: dict[str, Any] = field(default_factory=dict)
     scale: float = 1.0
 
-    def __mul__(self, factor: float) -> "Spectrum":
+    def __mul__(self, factor: float) -> Spectrum:
         return Spectrum(self.kind, self.params, self.scale * float(factor))
 
     __rmul__ = __mul__

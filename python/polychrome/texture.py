@@ -37,7 +37,7 @@ class Texture:
         return int(self.pixels.shape[0])
 
     @classmethod
-    def from_array(cls, rgb: Any, encoding: str = "linear", wrap: str = "REPEAT", name: str = "Texture") -> "Texture":
+    def from_array(cls, rgb: Any, encoding: str = "linear", wrap: str = "REPEAT", name: str = "Texture") -> Texture:
         """A texture from an (H, W, 3|4) array (alpha is ignored).
 
         ``encoding="linear"``: scene-linear values, stored as float32 (any finite value;
@@ -76,7 +76,7 @@ class Texture:
         return cls(pixels, enc, mode, name)
 
     @classmethod
-    def from_file(cls, path: Any, wrap: str = "REPEAT", name: str | None = None) -> "Texture":
+    def from_file(cls, path: Any, wrap: str = "REPEAT", name: str | None = None) -> Texture:
         """Reads .exr (linear float, via :func:`polychrome.imageio.read_image`), .hdr
         (Radiance RGBE, read by this module), or .png/.jpg/.jpeg (8-bit sRGB via Pillow,
         kept as bytes and decoded per lookup)."""

@@ -12,7 +12,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 
-PRELUDE = f"""
+PRELUDE = """
 import atexit, json, math, os, sys
 import numpy as np
 import bpy
@@ -50,7 +50,7 @@ def diffuse_material(name, rgb):
 
 def exr_channels(path):
     import OpenEXR
-    return {{k: np.asarray(v.pixels, np.float64) for k, v in OpenEXR.File(path, separate_channels=True).channels().items()}}
+    return {k: np.asarray(v.pixels, np.float64) for k, v in OpenEXR.File(path, separate_channels=True).channels().items()}
 """
 
 EPILOGUE = """

@@ -147,7 +147,7 @@ def test_area_light_radiance_follows_cycles_convention(tmp_path):
     r = check(proc, res)[0]
     assert r["warns"] == []
     exact = [4.0, 1.0, math.pi / 4, math.pi / 2, 4.0]
-    for i, (shape, sx, sy, norm) in enumerate(r["cases"]):
+    for i, (shape, _sx, _sy, norm) in enumerate(r["cases"]):
         area = r["areas"][f"L{i}"]
         assert area == pytest.approx(exact[i], rel=0.01 if shape in ("DISK", "ELLIPSE") else 1e-6)
         want = 100.0 / (math.pi * (area if norm else 1.0))

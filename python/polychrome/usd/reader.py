@@ -579,7 +579,7 @@ class _Reader:
 
     def gprim_arrays(self, prim) -> dict[str, Any] | None:
         """Triangles for the intrinsic UsdGeom shapes (Sphere, Cube, Cylinder, Cone, Plane)."""
-        UsdGeom, t = self.UsdGeom, str(prim.GetTypeName())
+        t = str(prim.GetTypeName())
         attr = lambda name, default: float(self.get(prim.GetAttribute(name), default))  # noqa: E731
         normals = None
         if t == "Sphere":

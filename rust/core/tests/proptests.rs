@@ -217,8 +217,8 @@ proptest! {
         kind in 0usize..2,
         roughness in 0.05f32..1.0,
         metal in 0usize..4,
-        a in (0.02f32..1.0, 0.0f32..6.28),
-        b in (0.02f32..1.0, 0.0f32..6.28),
+        a in (0.02f32..1.0, 0.0f32..std::f32::consts::TAU),
+        b in (0.02f32..1.0, 0.0f32..std::f32::consts::TAU),
     ) {
         let g = grid();
         let bsdf = make_bsdf(kind, roughness, 1.5, metal, &g);

@@ -30,10 +30,10 @@ impl Mesh {
         material_ids: &[u32],
     ) -> Result<Self> {
         let bad = |p: String| Error::object("mesh", name, p);
-        if positions.len() % 3 != 0 {
+        if !positions.len().is_multiple_of(3) {
             return Err(bad(format!("vertices have {} floats, not a multiple of 3", positions.len())));
         }
-        if indices.len() % 3 != 0 {
+        if !indices.len().is_multiple_of(3) {
             return Err(bad(format!("triangles have {} indices, not a multiple of 3", indices.len())));
         }
         let nv = positions.len() / 3;

@@ -453,10 +453,7 @@ impl MisLightTracer {
         let mut cam_verts: Vec<Vtx> = Vec::with_capacity(self.max_bounces as usize + 1);
         let mut legacy = false;
         let mut depth = 0u32;
-        loop {
-            let Some(hit) = scene.intersect(&ray) else {
-                break;
-            };
+        while let Some(hit) = scene.intersect(&ray) {
             let si = scene.interaction(&ray, &hit);
             // Surfaces are two-sided: shade on the side the ray arrived from.
             let Facing { wo, ng, ns, material } = facing(scene, &ray, &si, &mut ctx);

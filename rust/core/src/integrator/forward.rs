@@ -143,10 +143,7 @@ impl LightTracer {
         ctx.single_wavelength = wavelength.map(|(i, _)| i);
         let mut f = SampledSpectrum::zeros(n);
         let mut depth = 0u32; // scattering vertices so far
-        loop {
-            let Some(hit) = scene.intersect(&ray) else {
-                break;
-            };
+        while let Some(hit) = scene.intersect(&ray) {
             let si = scene.interaction(&ray, &hit);
             // Surfaces are two-sided: shade on the side the ray arrived from.
             let Facing { wo, ng, ns, material } = facing(scene, &ray, &si, &mut ctx);
@@ -221,10 +218,7 @@ impl LightTracer {
         ctx.single_wavelength = ctx0.single_wavelength;
         let mut f = SampledSpectrum::zeros(n);
         let mut depth = depth0;
-        loop {
-            let Some(hit) = scene.intersect(&ray) else {
-                break;
-            };
+        while let Some(hit) = scene.intersect(&ray) {
             let si = scene.interaction(&ray, &hit);
             // Surfaces are two-sided: shade on the side the ray arrived from.
             let Facing { wo, ng, ns, material } = facing(scene, &ray, &si, &mut ctx);

@@ -172,8 +172,8 @@ mod tests {
         let (mut a, mut b) = (SampledSpectrum::zeros(8), SampledSpectrum::zeros(8));
         let mut rng = Rng::new(5, 5);
         for _ in 0..200 {
-            let wo = dir(rng.uniform() * 1.5, rng.uniform() * 6.28);
-            let wi = dir(rng.uniform() * 1.5, rng.uniform() * 6.28);
+            let wo = dir(rng.uniform() * 1.5, rng.uniform() * std::f32::consts::TAU);
+            let wi = dir(rng.uniform() * 1.5, rng.uniform() * std::f32::consts::TAU);
             m.eval(&ctx, wo, wi, &mut a);
             m.eval(&ctx, wi, wo, &mut b);
             // f(wo, wi) = f(wi, wo): eval returns f·cos θi.

@@ -375,7 +375,7 @@ mod tests {
         let ctx = ShadingContext::new(&grid);
         let wo = Vec3A::new(0.8f32.sin(), 0.0, 0.8f32.cos());
         let beta: Vec<f32> = (0..9).map(|i| 0.2 + 0.1 * i as f32).collect();
-        let mut sum = vec![0.0f64; 9];
+        let mut sum = [0.0f64; 9];
         let mut rng = Rng::new(3, 4);
         let n = 200_000;
         let mut collapses = 0;

@@ -896,7 +896,7 @@ mod tests {
         assert!(s.specular);
         let i550 = grid.nearest(550.0);
         assert!((grid.lambdas()[i550] - 550.0).abs() < 1e-3);
-        let mut expected = vec![0.0f64; 9];
+        let mut expected = [0.0f64; 9];
         for k in 0..9 {
             let l = grid.lambdas()[k] as f64;
             expected[k] = thin_film_reflectance(1.0, l, film.thickness_nm as f64, film.ior as f64, n_sub as f64, 0.0);

@@ -409,7 +409,7 @@ impl Scene {
                     let Some(up) = &uplift else {
                         return Err(Error::object("world", "World", format!("texture '{}': RGB images cannot be used on this wavelength grid (no RGB → spectrum map)", texture.name)));
                     };
-                    if !(w.strength.is_finite() && w.strength >= 0.0) || !w.rotation.is_finite() {
+                    if !(w.strength.is_finite() && w.strength >= 0.0 && w.rotation.is_finite()) {
                         return Err(Error::object(
                             "world",
                             "World",
