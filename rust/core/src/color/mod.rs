@@ -1,6 +1,7 @@
 //! Colour: the CIE 1931 observer integrated on the render's grid, RGB working spaces,
 //! and the RGB → spectrum maps (eq. 10) in [`uplift`].
 
+pub mod delta_e;
 pub mod space;
 pub mod uplift;
 

@@ -86,6 +86,45 @@ impl FilmBuffer {
             }
         }
     }
+    /// Adds a light-path splat (radiance at pixel `i`) to the pixel's sums, without
+    /// counting a sample: light paths per pixel are counted per pass.
+    pub fn add_light(&mut self, i: usize, radiance: &SampledSpectrum, observer: &Observer) {
+        let xyz = observer.xyz(radiance.values());
+        if !(xyz.iter().all(|v| v.is_finite()) && radiance.is_finite()) {
+            self.nonfinite += 1;
+            return;
+        }
+        for k in 0..3 {
+            self.xyz[i][k] += xyz[k];
+        }
+        if let Some(sp) = &mut self.spectral {
+            let n = radiance.len();
+            for (d, &v) in sp[i * n..(i + 1) * n].iter_mut().zip(radiance.values()) {
+                *d += v as f64;
+            }
+        }
+    }
+
+    /// Adds another buffer of the same pixels (sums of other samples): buffers of
+    /// different sample passes merge exactly this way.
+    pub fn merge(&mut self, other: &FilmBuffer) {
+        assert_eq!(self.count.len(), other.count.len(), "film buffers of different sizes");
+        for i in 0..self.count.len() {
+            for k in 0..3 {
+                self.xyz[i][k] += other.xyz[i][k];
+                self.albedo_xyz[i][k] += other.albedo_xyz[i][k];
+                self.normal[i][k] += other.normal[i][k];
+            }
+            self.depth[i] += other.depth[i];
+            self.count[i] += other.count[i];
+        }
+        if let (Some(dst), Some(src)) = (&mut self.spectral, &other.spectral) {
+            for (d, s) in dst.iter_mut().zip(src) {
+                *d += s;
+            }
+        }
+        self.nonfinite += other.nonfinite;
+    }
 }
 
 /// The image being rendered.
