@@ -814,7 +814,7 @@ def test_blenders_own_usd_export_renders_like_the_addon_export(tmp_path):
             from polychrome_blender.export import export_scene
             from polychrome import usd
             from polychrome.colordiff import delta_e_stats, image_delta_e
-            direct, _ = export_scene(pc, bpy.context.evaluated_depsgraph_get())
+            direct, _ = export_scene(bpy.context.evaluated_depsgraph_get())
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
                 via_usd = usd.read_stage({str(stage)!r})

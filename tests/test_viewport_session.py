@@ -43,7 +43,7 @@ def run_to_end(session, timeout=120.0):
 
 
 def session_with(samples=64, size=(16, 12), camera=None):
-    s = viewport.ViewportSession(pc)
+    s = viewport.ViewportSession()
     s.set_scene(*furnace_desc())
     s.set_settings(pc.RenderSettings(samples=samples, max_bounces=100))
     s.set_view(camera or pc.Camera.looking_at((0, 0, 0), (1, 0, 0)), *size)
@@ -51,7 +51,7 @@ def session_with(samples=64, size=(16, 12), camera=None):
 
 
 def test_nothing_starts_before_scene_view_and_settings_are_known():
-    s = viewport.ViewportSession(pc)
+    s = viewport.ViewportSession()
     assert not s.sync() and s.job is None and s.poll() is None and not s.refining
     s.set_scene(*furnace_desc())
     s.set_settings(pc.RenderSettings(samples=4))
@@ -122,7 +122,7 @@ def test_free_cancels_promptly_and_free_all_stops_every_session():
 
 
 def test_render_errors_are_kept_not_raised():
-    s = viewport.ViewportSession(pc)
+    s = viewport.ViewportSession()
     desc, buffers = furnace_desc()
     s.set_scene(desc, buffers)
     s.set_settings(pc.RenderSettings(samples=4, method="RGB", direction="FORWARD"))
@@ -172,7 +172,7 @@ def test_view_camera_reproduces_a_projection_pixel_for_pixel(width, height):
     scene.add_material(pc.Diffuse(0.5))
     scene.add_mesh("square", np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], float), np.array([[0, 1, 2], [0, 2, 3]]))
     for P, persp in ((gl_perspective(l, r, b, t, n, f), True), (gl_ortho(l * 4, r * 4, b * 4, t * 4, -10, 10), False)):
-        scene.camera = viewport.view_camera(pc, view, P, width, height)
+        scene.camera = viewport.view_camera(view, P, width, height)
         res = pc.render(scene, width=width, height=height, samples=1, max_bounces=0)
         hit = res.depth > 0
         ys, xs = np.mgrid[0:height, 0:width] + 0.5

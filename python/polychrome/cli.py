@@ -21,7 +21,7 @@ def _version() -> str:
     """The package version, read lazily so that building the parser never imports the compiled core."""
     import polychrome
 
-    return getattr(polychrome, "__version__", "unknown")
+    return polychrome.__version__
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -149,8 +149,8 @@ def _render_overrides(args: argparse.Namespace) -> dict:
         "time_limit": args.time_limit,
         "width": args.width,
         "height": args.height,
-        "quality": None if getattr(args, "quality", None) is None else args.quality.upper(),
-        "noise_threshold": getattr(args, "noise_threshold", None),
+        "quality": None if args.quality is None else args.quality.upper(),
+        "noise_threshold": args.noise_threshold,
     }
     for key in ("samples", "wavelength_count", "width", "height"):
         if pairs[key] is not None and pairs[key] <= 0:
@@ -261,6 +261,7 @@ def _load_usd(path: str, overrides: dict):
 
 def _load_blend(path: str, overrides: dict):
     """Opens a .blend with bpy and exports it with the add-on's exporter."""
+    import dataclasses
     import os
 
     try:
@@ -269,13 +270,10 @@ def _load_blend(path: str, overrides: dict):
         raise ValueError(f"{path}: rendering a .blend needs the bpy module (pip install 'polychrome[blender]')") from None
     if not os.path.isfile(path):
         raise ValueError(f"{path}: no such file")
-    try:
-        import polychrome_blender
-        from polychrome_blender.export import export_scene
-        from polychrome_blender.export.camera import render_size
-    except ImportError as e:
-        raise ValueError(f"{path}: the polychrome_blender add-on (with its exporter) is not installed ({e})") from None
-    import polychrome as pc
+    import polychrome_blender
+    from polychrome_blender.engine import settings_from_scene
+    from polychrome_blender.export import export_scene
+    from polychrome_blender.export.camera import render_size
 
     polychrome_blender.register()  # before opening, so scene.polychrome is read back
     try:
@@ -283,16 +281,8 @@ def _load_blend(path: str, overrides: dict):
         depsgraph = bpy.context.evaluated_depsgraph_get()
         bscene = depsgraph.scene
         width, height = render_size(bscene)
-        stored = {"width": width, "height": height}
-        props = getattr(bscene, "polychrome", None)
-        if props is not None:
-            from polychrome_blender.engine import settings_from_scene
-
-            base = settings_from_scene(pc, props, width, height)
-            import dataclasses
-
-            stored = dataclasses.asdict(base)
-        scene, messages = export_scene(pc, depsgraph)
+        stored = dataclasses.asdict(settings_from_scene(bscene.polychrome, width, height))
+        scene, messages = export_scene(depsgraph)
         for message in messages:
             print(f"polychrome render: warning: {message}", file=sys.stderr)
         return scene, _settings_from(_merge_size(stored, overrides))

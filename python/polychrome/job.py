@@ -25,7 +25,7 @@ from collections.abc import Callable
 import numpy as np
 
 from . import _core
-from .render import DIRECTIONS, METHODS, UPLIFTS, RenderResult, RenderSettings
+from .render import RenderResult, RenderSettings, check_settings, description_json
 from .scene import Scene
 
 
@@ -38,23 +38,6 @@ class Preview(NamedTuple):
     samples: int
     serial: int
     last: bool
-
-
-def check_settings(settings: RenderSettings) -> None:
-    """The enum checks of :func:`polychrome.render`, with the same messages."""
-    for name, allowed in (("method", METHODS), ("direction", DIRECTIONS), ("uplift", UPLIFTS)):
-        value = getattr(settings, name)
-        if str(value).upper() not in allowed:
-            raise ValueError(f"setting '{name}': '{value}' is not one of {', '.join(allowed)}")
-
-
-def description_json(desc: dict[str, Any]) -> str:
-    """JSON of a scene description (through the render module's checked encoder when it
-    has one, which names a non-finite value's place)."""
-    from . import render as _render
-
-    encode = getattr(_render, "_description_json", None)
-    return encode(desc) if encode is not None else json.dumps(desc)
 
 
 class RenderJob:

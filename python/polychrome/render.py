@@ -142,7 +142,15 @@ def _nonfinite_path(value: Any, path: str = "") -> str | None:
     return None
 
 
-def _description_json(desc: dict[str, Any]) -> str:
+def check_settings(settings: RenderSettings) -> None:
+    """The enum checks, with a message naming the setting."""
+    for name, allowed in (("method", METHODS), ("direction", DIRECTIONS), ("uplift", UPLIFTS)):
+        value = getattr(settings, name)
+        if str(value).upper() not in allowed:
+            raise ValueError(f"setting '{name}': '{value}' is not one of {', '.join(allowed)}")
+
+
+def description_json(desc: dict[str, Any]) -> str:
     """JSON of a scene description; JSON has no NaN or infinity, so a non-finite number is
     reported here with where it is instead of as a parse error in the core."""
     try:
@@ -187,12 +195,7 @@ def render(
     the object and the problem.
     """
     settings = replace(settings or RenderSettings(), **overrides)
-    if settings.method.upper() not in METHODS:
-        raise ValueError(f"setting 'method': '{settings.method}' is not one of {', '.join(METHODS)}")
-    if settings.direction.upper() not in DIRECTIONS:
-        raise ValueError(f"setting 'direction': '{settings.direction}' is not one of {', '.join(DIRECTIONS)}")
-    if settings.uplift.upper() not in UPLIFTS:
-        raise ValueError(f"setting 'uplift': '{settings.uplift}' is not one of {', '.join(UPLIFTS)}")
+    check_settings(settings)
     desc, buffers = scene.description()
     close = None
     if progress is True:
@@ -203,7 +206,7 @@ def render(
         callback = None
     try:
         start = time.perf_counter()
-        out = _core.render(_description_json(desc), buffers, settings.to_json(), callback)
+        out = _core.render(description_json(desc), buffers, settings.to_json(), callback)
     finally:
         if close:
             close()

@@ -623,9 +623,8 @@ class Scene:
             return value
 
         desc = walk(desc)
-        world_texture = getattr(self, "world_texture", None)
-        if world_texture is not None:
-            desc["world"] = {**world_texture, "texture": index(world_texture["texture"])}
+        if self.world_texture is not None:
+            desc["world"] = {**self.world_texture, "texture": index(self.world_texture["texture"])}
         if textures:
             desc["textures"] = entries
         return desc, buffers

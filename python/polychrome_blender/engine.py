@@ -11,86 +11,76 @@ import traceback
 
 import bpy
 import numpy as np
+import polychrome as pc
 
 from . import passes, viewport
+from .export import Exporter, export_scene
+from .export.camera import render_size
+
+#: Settings the quality preset fills when they were never set in the panel (samples is
+#: always passed: it is the maximum per pixel the progress display counts against).
+PRESET_FILLED = ("wavelength_count", "max_bounces", "noise_threshold")
 
 
-def settings_from_scene(pc, props, width, height):
+def settings_from_scene(props, width, height):
     """``scene.polychrome`` → ``polychrome.RenderSettings`` (same names)."""
-    fields = {f.name for f in dataclasses.fields(pc.RenderSettings)}
     values = dict(
         width=width,
         height=height,
         samples=props.samples,
         method=props.method,
+        direction=props.direction,
+        dispersion_splitting=bool(props.dispersion_splitting),
         wavelength_count=props.wavelength_count,
         max_bounces=props.max_bounces,
         seed=props.seed,
         threads=props.threads,
         time_limit=props.time_limit,
         uplift=props.uplift,
+        spectral_output=bool(props.spectral_output),
+        quality=props.quality,
+        noise_threshold=float(props.noise_threshold),
     )
-    if "spectral_output" in fields:
-        values["spectral_output"] = bool(getattr(props, "spectral_output", False))
-    if "dispersion_splitting" in fields:
-        values["dispersion_splitting"] = bool(props.dispersion_splitting)
-    if "quality" in fields and hasattr(props, "quality"):
-        values["quality"] = props.quality
-        values["noise_threshold"] = float(props.noise_threshold)
-        # Settings never set in the panel are left to the quality preset (samples stays:
-        # it is the maximum per pixel the progress display counts against).
-        for key in ("wavelength_count", "max_bounces", "noise_threshold"):
-            if not props.is_property_set(key):
-                values.pop(key)
-    if "direction" in fields:
-        values["direction"] = props.direction
-    elif props.direction != "BACKWARD":
-        raise ValueError(f"setting 'direction': '{props.direction}' is not supported by this polychrome version (only BACKWARD)")
+    for key in PRESET_FILLED:
+        if not props.is_property_set(key):
+            values.pop(key)
     return pc.RenderSettings(**values)
 
 
-def viewport_settings(pc, props, width=1, height=1):
+def viewport_settings(props, width=1, height=1):
     """Settings of the interactive viewport render: the scene's, with the viewport's
     sample count, no time limit and no spectral passes."""
-    settings = settings_from_scene(pc, props, width, height)
-    values = dict(samples=int(props.viewport_samples), time_limit=0.0)
-    if "spectral_output" in {f.name for f in dataclasses.fields(pc.RenderSettings)}:
-        values["spectral_output"] = False
-    return dataclasses.replace(settings, **values)
+    settings = settings_from_scene(props, width, height)
+    return dataclasses.replace(settings, samples=int(props.viewport_samples), time_limit=0.0, spectral_output=False)
 
 
-def material_preview_settings(pc, props, width, height):
+def material_preview_settings(props, width, height):
     """Settings of material / world / light preview renders (small, few samples)."""
-    settings = settings_from_scene(pc, props, width, height)
-    values = dict(samples=viewport.MATERIAL_PREVIEW_SAMPLES, time_limit=viewport.MATERIAL_PREVIEW_TIME_LIMIT)
-    if "spectral_output" in {f.name for f in dataclasses.fields(pc.RenderSettings)}:
-        values["spectral_output"] = False
-    return dataclasses.replace(settings, **values)
+    settings = settings_from_scene(props, width, height)
+    return dataclasses.replace(
+        settings, samples=viewport.MATERIAL_PREVIEW_SAMPLES, time_limit=viewport.MATERIAL_PREVIEW_TIME_LIMIT, spectral_output=False
+    )
 
 
-def sync_viewport_scene(session, pc, depsgraph):
-    """``view_update``'s work: re-exports the evaluated depsgraph and the viewport
-    settings into ``session``; the render restarts (in ``sync``) only if the exported scene
-    or the settings differ from what is rendering. Returns the export warnings."""
-    scene, warnings = export_scene_for_view(pc, depsgraph)
+def sync_viewport_scene(session, exporter, depsgraph):
+    """``view_update``'s work: re-exports what changed in the evaluated depsgraph (through
+    ``exporter``, which keeps the rest) and the viewport settings into ``session``; the
+    render restarts (in ``sync``) only if the exported scene or the settings differ from
+    what is rendering. Returns the export warnings."""
+    exporter.update(depsgraph)
+    scene, warnings = exporter.export(depsgraph, camera=pc.Camera(name="Viewport"))
     desc, buffers = scene.description()
     session.set_scene(desc, buffers)
-    session.set_settings(viewport_settings(pc, depsgraph.scene.polychrome))
+    session.set_settings(viewport_settings(depsgraph.scene.polychrome))
     session.sync()
     return warnings
 
 
-def export_scene_for_view(pc, depsgraph):
-    from .export import export_scene
-
-    return export_scene(pc, depsgraph, camera=pc.Camera(name="Viewport"))
-
-
-def sync_viewport_view(session, pc, region_data, region_width, region_height, pixel_size):
+def sync_viewport_view(session, region_data, region_width, region_height, pixel_size):
     """``view_draw``'s work before drawing: the view's camera and size into ``session``
     (restarting the render if they changed); returns the render size."""
     width, height = viewport.viewport_size(region_width, region_height, pixel_size)
-    camera = viewport.view_camera(pc, region_data.view_matrix, region_data.window_matrix, width, height)
+    camera = viewport.view_camera(region_data.view_matrix, region_data.window_matrix, width, height)
     session.set_view(camera, width, height)
     session.sync()
     return width, height
@@ -135,6 +125,7 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         self.session = None  # ViewportSession of an interactive viewport render
+        self.exporter = None  # its Exporter, which keeps what did not change between updates
         self._texture = None
         self._texture_serial = None
         self._reported = set()
@@ -160,13 +151,13 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
 
     def view_update(self, context, depsgraph):
         """Called on every depsgraph change while the viewport shows Rendered shading:
-        re-export and restart the render when the scene or settings changed."""
-        import polychrome as pc
-
+        re-export what changed and restart the render when the scene or settings changed."""
         try:
             if getattr(self, "session", None) is None:
-                self.session = viewport.ViewportSession(pc)
-            for w in sync_viewport_scene(self.session, pc, depsgraph):
+                self.session = viewport.ViewportSession()
+            if getattr(self, "exporter", None) is None:
+                self.exporter = Exporter()
+            for w in sync_viewport_scene(self.session, self.exporter, depsgraph):
                 self._report_once("WARNING", w)
         except BaseException as e:  # noqa: BLE001 - nothing may escape into Blender
             self._report_once("ERROR", str(e) or type(e).__name__)
@@ -177,8 +168,6 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
     def view_draw(self, context, depsgraph):
         """Draws the newest preview; restarts the render when the view changed, and asks
         for another redraw while it refines."""
-        import polychrome as pc
-
         session = getattr(self, "session", None)
         if session is None:
             return
@@ -187,8 +176,8 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
             region = context.region
             # settings edits do not always reach view_update (Python property sets); the
             # redraw that follows them does
-            session.set_settings(viewport_settings(pc, props))
-            sync_viewport_view(session, pc, context.region_data, region.width, region.height, props.viewport_pixel_size)
+            session.set_settings(viewport_settings(props))
+            sync_viewport_view(session, context.region_data, region.width, region.height, props.viewport_pixel_size)
             session.poll()
             if session.error:
                 self._report_once("ERROR", session.error)
@@ -224,7 +213,7 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
         mode = type(self).progressive_final
         return (not bpy.app.background) if mode is None else bool(mode)
 
-    def _run_render(self, pc, scene, settings, progress, depsgraph, width, height):
+    def _run_render(self, scene, settings, progress, depsgraph, width, height):
         """The render itself; with a UI (``progressive_final``), on a background job whose
         previews are shown in the Image Editor about every ``PROGRESSIVE_INTERVAL`` s."""
         if self.is_preview or not self._progressive_final():
@@ -278,8 +267,6 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
         cls = type(self)
         cls.last_error, cls.last_warnings, cls.last_stats = None, [], None
         scene = depsgraph.scene
-        from .export.camera import render_size
-
         width, height = render_size(scene)
         result = None
         arrays = None
@@ -311,19 +298,15 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
                     self.end_result(result)
 
     def _render(self, depsgraph, width, height):
-        import polychrome as pc
-
-        from .export import export_scene
-
         cls = type(self)
         props = depsgraph.scene.polychrome
         if self.is_preview:
-            settings = material_preview_settings(pc, props, width, height)
+            settings = material_preview_settings(props, width, height)
         else:
-            settings = settings_from_scene(pc, props, width, height)
+            settings = settings_from_scene(props, width, height)
         self.update_stats("", "Polychrome | exporting scene")
         t0 = time.perf_counter()
-        scene, warnings = export_scene(pc, depsgraph)
+        scene, warnings = export_scene(depsgraph)
         cls.last_warnings = list(warnings)
         if not self.is_preview:  # the preview scene's checker floor etc. would warn every time
             for w in warnings:
@@ -354,7 +337,7 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
                 traceback.print_exc()
                 return False
 
-        out = self._run_render(pc, scene, settings, progress, depsgraph, width, height)
+        out = self._run_render(scene, settings, progress, depsgraph, width, height)
         stats = dict(out.stats)
         stats["export_seconds"] = export_time
         cls.last_stats = stats

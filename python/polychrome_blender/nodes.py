@@ -8,12 +8,13 @@ nodes, BLENDER_NOTES §5; their properties are saved in the .blend):
   656.27 nm (F, d, C lines).
 * **Spectral Emission** (Emission): blackbody, D65, A, E or a narrow band, times strength.
 
-Cycles and EEVEE ignore these nodes. Export: ``node.polychrome_export(pc, mat, warnings)``.
+Cycles and EEVEE ignore these nodes. Export: ``node.polychrome_export(mat, warnings)``.
 """
 
 import math
 
 import bpy
+import polychrome as pc
 from bpy.props import EnumProperty, FloatProperty, FloatVectorProperty
 
 from .colorchecker import PATCHES
@@ -86,14 +87,14 @@ class PolychromeSpectralReflectanceNode(bpy.types.Node):
                 for k in range(i, min(i + 4, CURVE_SAMPLES)):
                     row.prop(self, "curve", index=k, text=f"{CURVE_WAVELENGTHS[k]:.0f}")
 
-    def spectrum(self, pc):
+    def spectrum(self):
         if self.mode == "COLORCHECKER":
             index = [p[0] for p in PATCH_ITEMS].index(self.patch)
             return pc.spectra.tabulated(CC_WAVELENGTHS, PATCHES[PATCH_NAMES[index]])
         return pc.spectra.tabulated(CURVE_WAVELENGTHS, list(self.curve))
 
-    def polychrome_export(self, pc, mat, warnings):
-        return pc.Diffuse(self.spectrum(pc), name=mat.name)
+    def polychrome_export(self, mat, warnings):
+        return pc.Diffuse(self.spectrum(), name=mat.name)
 
 
 def sellmeier_n(b, c, lam_nm):
@@ -178,7 +179,7 @@ class PolychromeDispersionNode(bpy.types.Node):
         for label, lam in (("F 486", LINE_F), ("d 588", LINE_D), ("C 656", LINE_C)):
             box.label(text=f"n({label} nm) = {self.ior(lam):.5f}")
 
-    def polychrome_ior(self, pc):
+    def polychrome_ior(self):
         if self.model == "CAUCHY":
             return pc.ior.cauchy(self.cauchy_a, self.cauchy_b, self.cauchy_c)
         if self.model == "SELLMEIER":
@@ -196,7 +197,7 @@ class PolychromeDispersionNode(bpy.types.Node):
             return {"type": "named", "name": self.named_material()}
         return {"type": "abbe", "nd": self.abbe_nd, "vd": self.abbe_vd}
 
-    def polychrome_export(self, pc, mat, warnings):
+    def polychrome_export(self, mat, warnings):
         for lam in range(380, 781, 5):
             n = self.ior(float(lam))
             if not (math.isfinite(n) and n >= 1.0):
@@ -204,14 +205,7 @@ class PolychromeDispersionNode(bpy.types.Node):
                     f"material '{mat.name}': Dispersion node '{self.name}' gives index {n:.4g} at {lam} nm "
                     "(below 1, near a Sellmeier pole or undefined)"
                 )
-        if hasattr(pc, "Dielectric") and hasattr(pc, "ior"):
-            return pc.Dielectric(self.polychrome_ior(pc), roughness=self.roughness, name=mat.name)
-        warnings.add(
-            ("disp", mat.name),
-            f"material '{mat.name}': Dispersion node '{self.name}' needs polychrome.Dielectric, "
-            "which this polychrome lacks; rendered as grey diffuse",
-        )
-        return pc.Diffuse((0.8, 0.8, 0.8), name=mat.name)
+        return pc.Dielectric(self.polychrome_ior(), roughness=self.roughness, name=mat.name)
 
 
 class PolychromeSpectralEmissionNode(bpy.types.Node):
@@ -253,7 +247,7 @@ class PolychromeSpectralEmissionNode(bpy.types.Node):
             layout.prop(self, "width")  # noqa: E702
         layout.prop(self, "strength")
 
-    def spectrum(self, pc):
+    def spectrum(self):
         s = pc.spectra
         if self.kind == "BLACKBODY":
             return s.blackbody(self.temperature)
@@ -265,8 +259,8 @@ class PolychromeSpectralEmissionNode(bpy.types.Node):
             return s.equal_energy()
         return s.narrow_band(self.center, self.width)
 
-    def polychrome_export(self, pc, mat, warnings):
-        return pc.Emitter(self.spectrum(pc), strength=self.strength, name=mat.name)
+    def polychrome_export(self, mat, warnings):
+        return pc.Emitter(self.spectrum(), strength=self.strength, name=mat.name)
 
 
 classes = (PolychromeSpectralReflectanceNode, PolychromeDispersionNode, PolychromeSpectralEmissionNode)

@@ -24,9 +24,8 @@ def register_passes(engine, scene, renderlayer):
     if renderlayer.use_pass_normal:
         engine.register_pass(scene, renderlayer, "Normal", 3, "XYZ", "VECTOR")
     engine.register_pass(scene, renderlayer, "Albedo", 3, "RGB", "COLOR")
-    props = getattr(scene, "polychrome", None)
-    if props is not None and props.spectral_output:
-        for name in spectral_pass_names(props.wavelength_count):
+    if scene.polychrome.spectral_output:
+        for name in spectral_pass_names(scene.polychrome.wavelength_count):
             engine.register_pass(scene, renderlayer, name, 1, "V", "VALUE")
 
 
@@ -50,7 +49,7 @@ def pass_arrays(result, width, height):
         "Normal": np.asarray(result.normal, np.float32).reshape(height, width, 3),
         "Albedo": np.asarray(result.albedo, np.float32).reshape(height, width, 3),
     }
-    spectral = getattr(result, "spectral", None)
+    spectral = result.spectral
     if spectral is not None:
         spectral = np.asarray(spectral, np.float32).reshape(height, width, -1)
         for i, name in enumerate(spectral_pass_names(spectral.shape[2])):

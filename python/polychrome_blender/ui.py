@@ -49,13 +49,6 @@ class RENDER_PT_polychrome(bpy.types.Panel):
         col.prop(props, "quality")
         col.prop(props, "method")
         col.prop(props, "direction")
-        try:
-            from polychrome.render import METHODS
-
-            if props.method not in METHODS:
-                col.label(text=f"{props.method} is not available in this build", icon="ERROR")
-        except ImportError:
-            col.label(text="the polychrome package is not installed", icon="ERROR")
         if props.method == "POLYCHROMATIC":
             col.prop(props, "dispersion_splitting")
         col.prop(props, "wavelength_count")

@@ -9,6 +9,10 @@ import bpy
 from bpy.props import StringProperty
 from bpy_extras.io_utils import ExportHelper
 
+from .engine import settings_from_scene
+from .export import export_scene
+from .export.camera import render_size
+
 
 class POLYCHROME_OT_export_usd(bpy.types.Operator, ExportHelper):
     """Export the scene as a USD stage that keeps Polychrome's spectral data"""
@@ -21,19 +25,13 @@ class POLYCHROME_OT_export_usd(bpy.types.Operator, ExportHelper):
     filter_glob: StringProperty(default="*.usd;*.usda;*.usdc", options={"HIDDEN"})
 
     def execute(self, context):
-        import polychrome as pc
-
-        from .engine import settings_from_scene
-        from .export import export_scene
-        from .export.camera import render_size
-
         try:
-            from polychrome import usd
+            from polychrome import usd  # needs usd-core (polychrome[usd])
 
             depsgraph = context.evaluated_depsgraph_get()
-            scene, messages = export_scene(pc, depsgraph)
+            scene, messages = export_scene(depsgraph)
             width, height = render_size(depsgraph.scene)
-            settings = settings_from_scene(pc, depsgraph.scene.polychrome, width, height)
+            settings = settings_from_scene(depsgraph.scene.polychrome, width, height)
             path = usd.write_stage(scene, self.filepath, settings)
         except (ImportError, OSError, ValueError) as e:
             self.report({"ERROR"}, f"Polychrome USD export failed: {e}")

@@ -14,6 +14,7 @@ import hashlib
 import json
 
 import numpy as np
+import polychrome as pc
 
 #: Samples per pixel of material previews (Blender's preview scene, small images).
 MATERIAL_PREVIEW_SAMPLES = 16
@@ -23,7 +24,7 @@ MATERIAL_PREVIEW_TIME_LIMIT = 10.0
 _live_sessions = []  # every session not yet freed, so unregister() / exit can stop them
 
 
-def view_camera(pc, view_matrix, window_matrix, width, height, name="Viewport"):
+def view_camera(view_matrix, window_matrix, width, height, name="Viewport"):
     """The ``polychrome.Camera`` that sees what a 3D view of ``width`` × ``height`` pixels
     shows: ``view_matrix`` (world → view) and ``window_matrix`` (the OpenGL-style
     projection) of ``region_data``. This covers perspective and orthographic user views
@@ -114,8 +115,7 @@ class ViewportSession:
     ``free()`` cancels everything and waits (bounded) for the threads to stop.
     """
 
-    def __init__(self, pc):
-        self.pc = pc
+    def __init__(self):
         self.job = None
         self.restarts = 0
         self.error = None
@@ -138,7 +138,7 @@ class ViewportSession:
 
     def set_view(self, camera, width, height):
         """The view camera (a ``polychrome.Camera`` or its dict) and the render size."""
-        self._camera = camera.to_dict() if hasattr(camera, "to_dict") else dict(camera)
+        self._camera = camera.to_dict() if isinstance(camera, pc.Camera) else dict(camera)
         self._size = (max(1, int(width)), max(1, int(height)))
 
     def set_settings(self, settings):
@@ -177,7 +177,7 @@ class ViewportSession:
         desc = dict(self._desc)
         desc["camera"] = self._camera
         try:
-            self.job = self.pc.RenderJob.from_description(desc, self._buffers, settings).start()
+            self.job = pc.RenderJob.from_description(desc, self._buffers, settings).start()
         except Exception as e:  # noqa: BLE001 - reported by the engine, never raised into Blender
             self.job = None
             self.error = str(e) or type(e).__name__

@@ -285,7 +285,7 @@ def test_mesh_export_matches_blender_triangles_and_instances_share_data(tmp_path
     ref_uv = np.array([[tuple(me.uv_layers.active.uv[l].vector) for l in lt.loops] for lt in me.loop_triangles])
     nv = len(me.vertices)
     ev.to_mesh_clear()
-    scene, warns = export_scene(pc, dg)
+    scene, warns = export_scene(dg)
     desc, bufs = scene.description()
     emit(dp=float(np.abs(v[t.astype(int)] - ref_p).max()), dn=float(np.abs(n[t.astype(int)] - ref_n).max()),
          duv=float(np.abs(uv[t.astype(int)] - ref_uv).max()), nv=nv, split=int(len(v)),
@@ -329,7 +329,7 @@ def test_geometry_node_instances_keep_their_own_mesh(tmp_path):
     for inst in dg.object_instances:
         if inst.object.type == 'MESH':
             ref.setdefault(inst.is_instance, set()).add(len(inst.object.data.vertices))
-    scene, warns = export_scene(pc, dg)
+    scene, warns = export_scene(dg)
     desc, bufs = scene.description()
     nverts = [len(np.unique(bufs[m['triangles']])) for m in desc['meshes']]
     emit(inst=[i['mesh'] for i in desc['instances']], nverts=nverts, ref_inst=sorted(ref[True]), ref_base=sorted(ref[False]))
@@ -514,7 +514,7 @@ def test_material_slots_loose_vertices_and_empty_meshes(tmp_path):
     e = bpy.data.objects.new('Empty', bpy.data.meshes.new('Empty')); sc.collection.objects.link(e)
     n = bpy.data.objects.new('NoMat', bpy.data.meshes.new('NoMat')); sc.collection.objects.link(n)
     n.data.from_pydata([(0, 0, 1), (1, 0, 1), (0, 1, 1)], [], [(0, 1, 2)])
-    scene, warns = export_scene(pc, bpy.context.evaluated_depsgraph_get())
+    scene, warns = export_scene(bpy.context.evaluated_depsgraph_get())
     desc, bufs = scene.description()
     mats = [m['name'] for m in desc['materials']]
     meshes = {m['name']: m for m in desc['meshes']}

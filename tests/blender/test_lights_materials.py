@@ -82,7 +82,7 @@ def test_standard_nodes_map_to_polychrome_bsdfs(tmp_path):
         bpy.ops.mesh.primitive_cube_add(size=0.5, location=(i - 3, 0, 0))
         bpy.context.object.data.materials.append(mat)
     dg = bpy.context.evaluated_depsgraph_get()
-    scene, warns = export_scene(pc, dg)
+    scene, warns = export_scene(dg)
     desc, _ = scene.description()
     emit(m={x['name']: x for x in desc['materials']}, warns=warns)
     """,
@@ -130,7 +130,7 @@ def test_area_light_radiance_follows_cycles_convention(tmp_path):
         ld = bpy.data.lights.new(f'L{i}', 'AREA'); ld.shape = shape; ld.size = sx; ld.size_y = sy
         ld.energy = 100.0; ld.normalize = norm
         o = bpy.data.objects.new(f'L{i}', ld); sc.collection.objects.link(o); o.location = (3 * i, 0, 3)
-    scene, warns = export_scene(pc, bpy.context.evaluated_depsgraph_get())
+    scene, warns = export_scene(bpy.context.evaluated_depsgraph_get())
     desc, bufs = scene.description()
     out = {}
     for m in desc['materials']:
@@ -164,7 +164,7 @@ def test_light_exposure_and_temperature(tmp_path):
     ld = bpy.data.lights.new('P', 'POINT'); ld.energy = 100.0; ld.exposure = 1.5
     ld.use_temperature = True; ld.temperature = 2700.0
     o = bpy.data.objects.new('P', ld); sc.collection.objects.link(o)
-    scene, warns = export_scene(pc, bpy.context.evaluated_depsgraph_get())
+    scene, warns = export_scene(bpy.context.evaluated_depsgraph_get())
     desc, _ = scene.description()
     emit(light=desc['lights'][0], warns=warns)
     """,

@@ -68,7 +68,7 @@ def test_principled_mix_add_map_to_polychrome(tmp_path):
         bpy.ops.mesh.primitive_cube_add(size=0.5, location=(i - 2, 0, 0))
         bpy.context.object.data.materials.append(mat)
     dg = bpy.context.evaluated_depsgraph_get()
-    scene, warns = export_scene(pc, dg)
+    scene, warns = export_scene(dg)
     desc, _ = scene.description()
     emit(m={x['name']: x for x in desc['materials']}, warns=warns)
     """,

@@ -25,7 +25,14 @@ class FakeEngine:
     _report = Engine._report
     __del__ = Engine.__del__
     def __init__(self):
-        self.session = None; self.redraws = 0; self.drawn = []; self.reports = []; self.stats = ''
+        self.session = None; self.exporter = None; self.redraws = 0; self.drawn = []; self.reports = []; self.stats = ''
+    def follow_updates(self):
+        '''Calls view_update from the depsgraph update, as Blender does (depsgraph.updates is
+        empty once the update is over).'''
+        self._follow = lambda scene, dg: self.view_update(bpy.context, dg)
+        bpy.app.handlers.depsgraph_update_post.append(self._follow)
+    def stop_following(self):
+        bpy.app.handlers.depsgraph_update_post.remove(self._follow)
     def tag_redraw(self): self.redraws += 1
     def report(self, level, msg): self.reports.append((sorted(level), msg))
     def update_stats(self, a, b): self.stats = b
@@ -70,9 +77,9 @@ def test_view_camera_matches_the_exported_scene_camera(tmp_path):
         cam.data.shift_x, cam.data.shift_y = 0.1, -0.07
         dg = bpy.context.evaluated_depsgraph_get()
         from polychrome_blender.export import export_scene
-        scene, _ = export_scene(pc, dg)
+        scene, _ = export_scene(dg)
         ref = pc.render(scene, width=w, height=h, samples=1, max_bounces=0)
-        scene.camera = viewport.view_camera(pc, cam.matrix_world.inverted(), cam.calc_matrix_camera(dg, x=w, y=h), w, h)
+        scene.camera = viewport.view_camera(cam.matrix_world.inverted(), cam.calc_matrix_camera(dg, x=w, y=h), w, h)
         got = pc.render(scene, width=w, height=h, samples=1, max_bounces=0)
         close = np.isclose(got.depth, ref.depth, rtol=1e-3, atol=1e-4)
         out.append(dict(kind=kind, fit=fit, frac=float(close.mean()), hit=float((ref.depth > 0).mean())))
@@ -103,13 +110,15 @@ def test_view_update_and_view_draw_restart_on_edits_and_refine(tmp_path):
     dg = bpy.context.evaluated_depsgraph_get()
     ctx = region_ctx(cam, dg, 64, 48)
     steps = {}
+    fake.view_update(bpy.context, dg)
+    fake.follow_updates()
 
     def step(name, edit=None, view=None):
         global ctx
         if edit: edit(); bpy.context.view_layer.update()
         if view is not None: ctx = view
         dg = bpy.context.evaluated_depsgraph_get()
-        fake.view_update(bpy.context, dg)
+        fake.view_update(bpy.context, dg)                    # a later call without updates changes nothing
         fake.drawn.clear()
         refine(fake, ctx)
         s = fake.session
@@ -133,6 +142,7 @@ def test_view_update_and_view_draw_restart_on_edits_and_refine(tmp_path):
     refine(fake, ctx)
     draw_only = fake.session.restarts - before
     job = fake.session.job
+    fake.stop_following()
     fake.__del__()                                           # the engine is freed
     emit(steps=steps, freed=fake.session is None and job.done(), reports=fake.reports,
          redraws=fake.redraws, draw_only=draw_only)
@@ -155,6 +165,71 @@ def test_view_update_and_view_draw_restart_on_edits_and_refine(tmp_path):
     assert st["settings"]["samples"] == 8
     assert r["draw_only"] == 1
     assert r["freed"]
+
+
+def test_exporter_re_exports_only_what_changed_and_equals_a_fresh_export(tmp_path):
+    proc, res = run_bpy(
+        tmp_path,
+        VIEWPORT_HELPERS
+        + textwrap.dedent("""
+    from polychrome_blender.export import Exporter, export_scene
+    sc = empty_scene(32, 24)
+    bpy.ops.mesh.primitive_cube_add(location=(-1, 0, 0)); a = bpy.context.active_object
+    bpy.ops.mesh.primitive_uv_sphere_add(location=(1, 0, 0)); b = bpy.context.active_object
+    ma = diffuse_material('MA', (0.8, 0.1, 0.1)); a.data.materials.append(ma)
+    mb = diffuse_material('MB', (0.1, 0.1, 0.8)); b.data.materials.append(mb)
+    img = bpy.data.images.new('Checker', 4, 4); img.pixels.foreach_set(np.linspace(0, 1, 64, dtype=np.float32))
+    tex = mb.node_tree.nodes.new('ShaderNodeTexImage'); tex.image = img
+    mb.node_tree.links.new(tex.outputs['Color'], mb.node_tree.nodes['Diffuse BSDF'].inputs['Color'])
+    ld = bpy.data.lights.new('Lamp', 'POINT'); lamp = bpy.data.objects.new('Lamp', ld); sc.collection.objects.link(lamp)
+    add_camera(sc, (0, -6, 3))
+    exporter = Exporter()
+    def follow(scene, dg):
+        exporter.update(dg)
+    bpy.app.handlers.depsgraph_update_post.append(follow)
+    out = {}
+
+    def step(name, edit=None):
+        if edit:
+            edit(); bpy.context.view_layer.update()
+        dg = bpy.context.evaluated_depsgraph_get()
+        scene, warns = exporter.export(dg)
+        fresh, fresh_warns = export_scene(dg)
+        out[name] = dict(counts=dict(exporter.counts), same=viewport.description_digest(*scene.description())
+                         == viewport.description_digest(*fresh.description()), warns=warns == fresh_warns,
+                         cached=len(exporter._meshes), lamp=ld.energy)
+
+    step('first')
+    step('again')
+    step('move', lambda: setattr(a, 'location', (-1, 0, 0.5)))
+    def reshape():
+        a.data.vertices[0].co.z += 0.5; a.data.update()
+    step('geometry', reshape)
+    step('material', lambda: ma.node_tree.nodes['Diffuse BSDF'].inputs['Color'].default_value.__setitem__(slice(0, 3), (0.1, 0.8, 0.1)))
+    def repaint():
+        img.pixels.foreach_set(np.linspace(1, 0, 64, dtype=np.float32)); img.update(); img.update_tag()  # as painting tags it
+    step('image', repaint)
+    step('light', lambda: setattr(ld, 'energy', 50.0))
+    def duplicate():
+        c = a.copy(); c.location = (0, 2, 0); sc.collection.objects.link(c)
+    step('duplicate', duplicate)
+    step('delete', lambda: bpy.data.objects.remove(b))
+    bpy.app.handlers.depsgraph_update_post.remove(follow)    # a handler left behind hangs the exit
+    emit(**out)
+    """),
+    )
+    r = check(proc, res)[0]
+    for name, step in r.items():
+        assert step["same"] and step["warns"], (name, step)  # cached parts give the fresh export's scene
+    counts = {name: step["counts"] for name, step in r.items()}
+    assert counts["first"] == {"meshes": 2, "materials": 2, "images": 1}
+    for name in ("again", "move", "light"):
+        assert counts[name] == {"meshes": 0, "materials": 0, "images": 0}, name
+    assert counts["geometry"] == {"meshes": 1, "materials": 0, "images": 0}
+    assert counts["material"] == {"meshes": 0, "materials": 1, "images": 0}
+    assert counts["image"] == {"meshes": 0, "materials": 1, "images": 1}
+    assert counts["duplicate"]["meshes"] <= 1 and counts["duplicate"]["materials"] == 0
+    assert r["delete"]["cached"] == 1  # the sphere's mesh is dropped with it
 
 
 def test_viewport_image_equals_the_final_render_of_the_same_view(tmp_path):

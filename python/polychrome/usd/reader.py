@@ -21,7 +21,8 @@ import warnings
 
 import numpy as np
 
-from ..scene import Material
+from ..ior import Ior
+from ..scene import Conductor, Dielectric, Diffuse, Emitter, Glossy, Material, PointLight, SpotLight, SunLight
 from . import attributes as A
 
 #: Tessellation of the intrinsic shapes (Sphere, Cylinder, Cone).
@@ -89,8 +90,6 @@ class DescribedMaterial(Material):
 def material_from_description(d: dict[str, Any]):
     """The polychrome material class for a core description when one reproduces it
     exactly (Diffuse, Emitter, Dielectric, Conductor, Glossy), else a DescribedMaterial."""
-    import polychrome as pc
-    from ..ior import Ior
 
     name = d.get("name", "Material")
     bsdf = dict(d.get("bsdf") or {})
@@ -105,19 +104,19 @@ def material_from_description(d: dict[str, Any]):
 
     try:
         if kind == "diffuse":
-            m = pc.Diffuse(spec("reflectance"), emission=emission, name=name)
+            m = Diffuse(spec("reflectance"), emission=emission, name=name)
         elif kind == "none" and emission is not None:
-            m = pc.Emitter(emission, name=name)
-        elif kind == "dielectric" and hasattr(pc, "Dielectric"):
+            m = Emitter(emission, name=name)
+        elif kind == "dielectric":
             ior = dict(bsdf["ior"])
-            m = pc.Dielectric(Ior(str(ior.pop("type")), ior), roughness=bsdf.get("roughness", 0.0), name=name)
-        elif kind == "conductor" and hasattr(pc, "Conductor"):
+            m = Dielectric(Ior(str(ior.pop("type")), ior), roughness=bsdf.get("roughness", 0.0), name=name)
+        elif kind == "conductor":
             if "metal" in bsdf:
-                m = pc.Conductor(bsdf["metal"], roughness=bsdf.get("roughness", 0.0), name=name)
+                m = Conductor(bsdf["metal"], roughness=bsdf.get("roughness", 0.0), name=name)
             else:
-                m = pc.Conductor(eta=spec("eta"), k=spec("k"), roughness=bsdf.get("roughness", 0.0), name=name)
-        elif kind == "glossy" and hasattr(pc, "Glossy"):
-            m = pc.Glossy(spec("reflectance"), roughness=bsdf.get("roughness", 0.5), name=name)
+                m = Conductor(eta=spec("eta"), k=spec("k"), roughness=bsdf.get("roughness", 0.0), name=name)
+        elif kind == "glossy":
+            m = Glossy(spec("reflectance"), roughness=bsdf.get("roughness", 0.5), name=name)
         else:
             m = None
         if m is not None and kind != "diffuse" and kind != "none" and emission is not None:
@@ -143,7 +142,6 @@ def _same(a: Any, b: Any) -> bool:
 def light_from_description(d: dict[str, Any], power=None, colour=None):
     """The polychrome light class for a core description when one reproduces it exactly
     (PointLight, SpotLight, SunLight), else a DescribedLight."""
-    import polychrome as pc
 
     kind = d.get("type")
     name = d.get("name", "Light")
@@ -154,9 +152,9 @@ def light_from_description(d: dict[str, Any], power=None, colour=None):
             else:
                 p, c = 4.0 * math.pi, _spectrum_from_dict(d["intensity"])
             if kind == "point":
-                light = pc.PointLight(list(d["position"]), power=p, color=c, name=name)
+                light = PointLight(list(d["position"]), power=p, color=c, name=name)
             else:
-                light = pc.SpotLight(
+                light = SpotLight(
                     list(d["position"]),
                     list(d["direction"]),
                     power=p,
@@ -165,8 +163,8 @@ def light_from_description(d: dict[str, Any], power=None, colour=None):
                     spot_blend=d["spot_blend"],
                     name=name,
                 )
-        elif kind == "distant" and hasattr(pc, "SunLight"):
-            light = pc.SunLight(list(d["direction"]), strength=1.0, color=_spectrum_from_dict(d["irradiance"]), name=name)
+        elif kind == "distant":
+            light = SunLight(list(d["direction"]), strength=1.0, color=_spectrum_from_dict(d["irradiance"]), name=name)
         else:
             light = None
         if light is not None and light.to_dict() == d:
@@ -317,7 +315,6 @@ class _Reader:
         return self.material_index[key]
 
     def default_material(self, prim) -> int:
-        from .. import Diffuse
         from ..spectra import rgb
 
         colour = FALLBACK_GREY
@@ -424,7 +421,6 @@ class _Reader:
         return texture
 
     def read_material(self, prim):
-        import polychrome as pc
         from ..spectra import rgb
 
         name = str(self.custom(prim, A.NAME, str(prim.GetPath())))
@@ -513,7 +509,7 @@ class _Reader:
             return material_from_description(desc)
         if metallic > 0.0:
             self.warn(f"metal:{self.key_of(prim)}", f"prim {prim.GetPath()}: metallic {metallic:g} is rendered as diffuse (below 0.5)")
-        return pc.Diffuse(reflectance, emission=emission, name=name)
+        return Diffuse(reflectance, emission=emission, name=name)
 
     def read_ior(self, prim) -> dict[str, Any] | None:
         model = self.custom(prim, A.IOR_MODEL)
@@ -884,8 +880,6 @@ class _Reader:
         return True
 
     def read_sphere_light(self, prim) -> None:
-        import polychrome as pc
-        from ..scene import PointLight
 
         m = self.world_matrix(prim)
         if self.described_light(prim, m):
@@ -929,10 +923,10 @@ class _Reader:
                 self.warn(f"ies:{prim.GetPath()}", f"prim {prim.GetPath()}: IES profiles are not supported and are ignored")
             if not (math.isfinite(cone) and math.isfinite(softness)):
                 raise self.error(prim, "its shaping cone angle or softness is not finite")
-            if cone < 90.0 and hasattr(pc, "SpotLight"):
+            if cone < 90.0:
                 axis = -m[:3, 2] / np.linalg.norm(m[:3, 2])
                 self.lights.append(
-                    pc.SpotLight(
+                    SpotLight(
                         pos,
                         axis.tolist(),
                         power=4.0 * math.pi,
@@ -948,8 +942,6 @@ class _Reader:
     def add_emitter_polygon(self, prim, pts2d: np.ndarray, size: float, normalize: bool, scalar, colour, blackbody) -> None:
         """An emissive polygon in the light's local XY plane shining along −Z, with a black
         backing behind it (polychrome's emitters shine from both faces)."""
-        from .. import Diffuse, Emitter
-
         m = self.world_matrix(prim)
         n = len(pts2d)
         verts = np.concatenate([pts2d, np.zeros((n, 1))], axis=1).astype(np.float32)
@@ -1012,17 +1004,11 @@ class _Reader:
         self.add_emitter_polygon(prim, pts, 2 * r, bool(self.get(light.GetNormalizeAttr(), False)), scalar, colour, blackbody)
 
     def read_distant_light(self, prim) -> None:
-        import polychrome as pc
 
         m = self.world_matrix(prim)
         if self.described_light(prim, m):
             return
         light = self.UsdLux.DistantLight(prim)
-        if not hasattr(pc, "SunLight"):
-            self.warn(
-                f"distant:{prim.GetPath()}", f"prim {prim.GetPath()}: DistantLight is not supported by this polychrome and is skipped"
-            )
-            return
         scalar, colour, blackbody = self.light_rgb(prim, light)
         axis = -m[:3, 2] / np.linalg.norm(m[:3, 2])
         angle = math.radians(float(self.get(light.GetAngleAttr(), 0.53)))
@@ -1038,7 +1024,7 @@ class _Reader:
                 f"prim {prim.GetPath()}: the sun's angular size is not supported; it is rendered as a parallel light",
             )
         self.lights.append(
-            pc.SunLight(
+            SunLight(
                 axis.tolist(),
                 strength=1.0,
                 color=self.emitted(scalar, colour, blackbody),

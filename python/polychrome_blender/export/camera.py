@@ -1,6 +1,7 @@
 """Blender camera → polychrome.Camera (perspective/orthographic, lens, sensor, shift, clip)."""
 
 import numpy as np
+import polychrome as pc
 
 
 def render_size(scene):
@@ -21,7 +22,8 @@ def camera_matrix(matrix_world):
     return m
 
 
-def export_camera(pc, depsgraph, warnings):
+def export_camera(depsgraph, warnings):
+    """The scene camera as a ``polychrome.Camera``."""
     scene = depsgraph.scene
     cam_ob = scene.camera
     if cam_ob is None:

@@ -19,6 +19,7 @@
 import math
 
 import numpy as np
+import polychrome as pc
 
 DISK_SEGMENTS = 32
 
@@ -30,7 +31,7 @@ def _ybar(lam):
     return 0.821 * np.exp(-0.5 * t1 * t1) + 0.286 * np.exp(-0.5 * t2 * t2)
 
 
-def blackbody_white(pc, temperature):
+def blackbody_white(temperature):
     """Planck's law at ``temperature`` K (the core's ``blackbody``: 1 at Wien's peak) scaled
     to luminance 1, as Cycles normalises its Blackbody colour."""
     lam = np.linspace(380.0, 780.0, 401)
@@ -43,13 +44,13 @@ def blackbody_white(pc, temperature):
     return pc.spectra.blackbody(float(temperature), 1.0 / lum)
 
 
-def light_colour(pc, ld, name, warnings):
+def light_colour(ld, name, warnings):
     """The light's colour as a spectrum: RGB, or a blackbody when ``use_temperature``."""
     col = tuple(float(c) for c in ld.color[:3])
-    if getattr(ld, "use_temperature", False):
+    if getattr(ld, "use_temperature", False):  # Blender 4.5+
         if col != (1.0, 1.0, 1.0):
             warnings.add(("tint", name), f"light '{name}': its colour tint on top of the temperature is ignored")
-        return blackbody_white(pc, float(ld.temperature))
+        return blackbody_white(float(ld.temperature))
     return pc.spectra.rgb(*col)
 
 
@@ -71,22 +72,22 @@ def _area_polygon(ld):
 
 def _power(ld, name):
     """Blender's power (or sun strength) times 2^exposure (Blender 4.4+), as Cycles uses it."""
-    p = float(ld.energy) * 2.0 ** float(getattr(ld, "exposure", 0.0))
+    p = float(ld.energy) * 2.0 ** float(getattr(ld, "exposure", 0.0))  # exposure: Blender 4.4+
     if not math.isfinite(p) or p < 0.0:
         raise ValueError(f"light '{name}': power {p} W must be finite and non-negative")
     return p
 
 
-def export_area(pc, scene, ob, ld, name, matrix, warnings):
+def export_area(scene, ld, name, matrix, warnings):
     power = _power(ld, name)
     pts, tris, area, size = _area_polygon(ld)
     if not area > 0.0 or power == 0.0:
         return
-    if getattr(ld, "spread", math.pi) < math.pi - 1e-4:
+    if ld.spread < math.pi - 1e-4:
         warnings.add(("spread", name), f"light '{name}': area light spread is not supported; rendered as 180°")
-    spec = light_colour(pc, ld, name, warnings)
+    spec = light_colour(ld, name, warnings)
     # Normalize on (default): P is the power of the whole light; off: P is per unit area
-    per_area = area if getattr(ld, "normalize", True) else 1.0
+    per_area = area if getattr(ld, "normalize", True) else 1.0  # absent before Blender 4.x: normalised
     radiance = spec * (power / (math.pi * per_area))
     emitter = pc.Emitter(radiance, name=f"{name} (area light)")
     verts = np.concatenate([pts, np.zeros((len(pts), 1))], axis=1).astype(np.float32)
@@ -107,7 +108,8 @@ def _axis(m, name):
     return (d / n).tolist()
 
 
-def export_lights(pc, depsgraph, scene, warnings):
+def export_lights(depsgraph, scene, warnings):
+    """Adds every visible light to ``scene``; returns how many."""
     count = 0
     for inst in depsgraph.object_instances:
         ob = inst.object
@@ -120,12 +122,12 @@ def export_lights(pc, depsgraph, scene, warnings):
             raise ValueError(f"light '{name}': its transform is not finite")
         pos = m[:3, 3]
         if ld.type == "POINT":
-            spec = light_colour(pc, ld, name, warnings)
+            spec = light_colour(ld, name, warnings)
             scene.add_light(pc.PointLight(pos.tolist(), _power(ld, name), spec, name=name))
         elif ld.type == "AREA":
-            export_area(pc, scene, ob, ld, name, m, warnings)
-        elif ld.type == "SPOT" and hasattr(pc, "SpotLight"):
-            spec = light_colour(pc, ld, name, warnings)
+            export_area(scene, ld, name, m, warnings)
+        elif ld.type == "SPOT":
+            spec = light_colour(ld, name, warnings)
             scene.add_light(
                 pc.SpotLight(
                     pos.tolist(),
@@ -137,9 +139,9 @@ def export_lights(pc, depsgraph, scene, warnings):
                     name=name,
                 )
             )
-        elif ld.type == "SUN" and hasattr(pc, "SunLight"):
-            spec = light_colour(pc, ld, name, warnings)
-            if float(getattr(ld, "angle", 0.0)) > 1e-3:
+        elif ld.type == "SUN":
+            spec = light_colour(ld, name, warnings)
+            if float(ld.angle) > 1e-3:
                 warnings.add(("sun", name), f"light '{name}': the sun's angular diameter is ignored (sharp shadows)")
             scene.add_light(pc.SunLight(_axis(m, name), strength=_power(ld, name), color=spec, name=name))
         else:

@@ -1,8 +1,21 @@
-"""Evaluated meshes → polychrome meshes, with numpy ``foreach_get`` only (no per-triangle
-Python loops). The core takes per-vertex normals and uvs, so vertices are split where
-their corners disagree (sharp edges, UV seams)."""
+"""Evaluated meshes → arrays for ``polychrome.Scene.add_mesh``, with numpy ``foreach_get``
+only (no per-triangle Python loops). The core takes per-vertex normals and uvs, so
+vertices are split where their corners disagree (sharp edges, UV seams)."""
+
+from typing import NamedTuple
 
 import numpy as np
+
+#: Object types whose evaluated geometry is exported as a triangle mesh.
+GEOMETRY_TYPES = ("MESH", "CURVE", "SURFACE", "META", "FONT")
+
+
+class MeshArrays(NamedTuple):
+    vertices: np.ndarray  # (V, 3) float32
+    triangles: np.ndarray  # (T, 3) uint32
+    normals: np.ndarray  # (V, 3) float32
+    uvs: np.ndarray | None  # (V, 2) float32, from the active UV map
+    tri_slot: np.ndarray  # (T,) material slot of each triangle
 
 
 def _unique_rows(keys):
@@ -43,7 +56,7 @@ def _corner_keys(cv, cn, uv, nv):
 
 
 def mesh_arrays(ob, name):
-    """Arrays of an evaluated mesh object: vertices, triangles, normals, uvs, slot per triangle."""
+    """The :class:`MeshArrays` of an evaluated object, or None if it has no triangles."""
     me = ob.to_mesh()
     try:
         me.calc_loop_triangles()
@@ -81,49 +94,18 @@ def mesh_arrays(ob, name):
         normals = cn[first]
         uvs = None if uv is None else uv[first]
         triangles = inverse[tl].reshape(-1, 3).astype(np.uint32)
-        return vertices, triangles, normals, uvs, tri_slot
+        return MeshArrays(vertices, triangles, normals, uvs, tri_slot)
     finally:
         ob.to_mesh_clear()
 
 
-def export_meshes(pc, depsgraph, scene, material_for_slot, warnings):
-    """Adds every visible mesh object (instances share one mesh) to ``scene``."""
-    placed = {}
-    count = 0
-    for inst in depsgraph.object_instances:
-        ob = inst.object
-        if ob.type not in ("MESH", "CURVE", "SURFACE", "META", "FONT"):
-            continue
-        name = ob.original.name
-        # Instances of one geometry share the evaluated data block; geometry-node instances
-        # of different meshes share the instancer's name, so the data pointer is the key.
-        data = getattr(ob, "data", None)
-        key = (
-            data.as_pointer() if data is not None else name,
-            tuple(s.material.original.name if s.material else "" for s in ob.material_slots),
-        )
-        if key not in placed:
-            try:
-                arrays = mesh_arrays(ob, name)
-            except RuntimeError as e:  # e.g. a curve with no geometry
-                if ob.type == "MESH":
-                    raise ValueError(f"object '{name}': cannot read its mesh ({e})") from e
-                warnings.add(("mesh", name), f"object '{name}': skipped, its {ob.type.lower()} has no mesh ({e})")
-                arrays = None
-            if arrays is None:
-                placed[key] = None
-                continue
-            vertices, triangles, normals, uvs, tri_slot = arrays
-            slots = [material_for_slot(ob, s) for s in range(len(ob.material_slots))] or [material_for_slot(ob, None)]
-            slot_map = np.asarray(slots, dtype=np.int64)
-            ids = slot_map[np.clip(tri_slot, 0, len(slot_map) - 1)]
-            placed[key] = scene.add_mesh(name, vertices, triangles, normals=normals, uvs=uvs, material_ids=ids, place=False)
-        mesh = placed[key]
-        if mesh is None:
-            continue
-        m = np.array(inst.matrix_world, dtype=np.float64)
-        if not np.all(np.isfinite(m)):
-            raise ValueError(f"object '{name}': its transform is not finite")
-        scene.add_instance(mesh, m, name)
-        count += 1
-    return count
+def read_mesh(ob, name, warnings):
+    """:func:`mesh_arrays`, where an object that has no mesh to give (e.g. a curve without
+    geometry) is skipped with a warning; a mesh object that cannot be read is an error."""
+    try:
+        return mesh_arrays(ob, name)
+    except RuntimeError as e:
+        if ob.type == "MESH":
+            raise ValueError(f"object '{name}': cannot read its mesh ({e})") from e
+        warnings.add(("mesh", name), f"object '{name}': skipped, its {ob.type.lower()} has no mesh ({e})")
+        return None

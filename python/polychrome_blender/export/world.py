@@ -1,21 +1,13 @@
-"""Blender world → uniform world radiance (``scene.set_world``).
-
-Background colour × strength, or an Environment Texture (equirectangular HDRI, Z rotation
-of a Mapping node) when polychrome has HDRI worlds; otherwise its mean colour, with a
-warning."""
+"""Blender world → the scene's world: Background colour × strength (uniform radiance),
+or an Environment Texture (equirectangular HDRI, Z rotation of a Mapping node)."""
 
 import numpy as np
+import polychrome as pc
 
 
-def _hdri(pc, scene, world, bg, env, strength, warnings):
-    """Environment Texture → ``scene.set_world(texture=...)`` when polychrome has HDRIs."""
-    import inspect
-
-    if not hasattr(pc, "Texture") or "texture" not in inspect.signature(scene.set_world).parameters:
-        return False
-    from .textures import blender_texture
-
-    tex = blender_texture(pc, env, f"world '{world.name}'", warnings, {})
+def _hdri(scene, world, env, strength, warnings, textures):
+    """Environment Texture → ``scene.set_world(texture=...)``; False if its image has no pixels."""
+    tex = textures.texture(env, f"world '{world.name}'", warnings, user=("WORLD", world.original.name))
     if tex is None:
         return False
     rotation = 0.0
@@ -35,7 +27,9 @@ def _hdri(pc, scene, world, bg, env, strength, warnings):
     return True
 
 
-def export_world(pc, depsgraph, scene, warnings):
+def export_world(depsgraph, scene, warnings, textures):
+    """Sets ``scene``'s world from the depsgraph's; images come from ``textures`` (a
+    :class:`~.textures.TextureCache`)."""
     world = depsgraph.scene.world
     if world is None:
         return
@@ -55,17 +49,9 @@ def export_world(pc, depsgraph, scene, warnings):
         colour = tuple(float(c) for c in csock.default_value[:3])
         if csock.is_linked:
             src = csock.links[0].from_node
-            if src.type == "TEX_ENVIRONMENT" and src.image is not None and _hdri(pc, scene, world, bg, src, strength, warnings):
+            if src.type == "TEX_ENVIRONMENT" and src.image is not None and _hdri(scene, world, src, strength, warnings, textures):
                 return
-            if src.type == "TEX_ENVIRONMENT" and src.image is not None and src.image.size[0] > 0:
-                img = src.image
-                buf = np.empty(img.size[0] * img.size[1] * img.channels, np.float32)
-                img.pixels.foreach_get(buf)
-                colour = tuple(float(c) for c in np.nan_to_num(buf.reshape(-1, img.channels)[:, :3].mean(axis=0)))
-                warnings.add(
-                    ("world", "env"), f"world '{world.name}': environment texture rendered as its mean colour (HDRI not supported yet)"
-                )
-            else:
+            if src.type != "TEX_ENVIRONMENT" or src.image is None:
                 warnings.add(("world", src.name), f"world '{world.name}': node '{src.name}' is not supported; its default colour is used")
     if strength > 0.0 and max(colour) > 0.0:
         if not all(np.isfinite(colour)) or not np.isfinite(strength):

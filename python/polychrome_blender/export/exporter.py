@@ -1,0 +1,183 @@
+"""The whole export — camera, meshes with their materials, lights, world — from Blender's
+evaluated depsgraph to a :class:`polychrome.Scene`, by an :class:`Exporter` that keeps
+what it exported.
+
+The expensive parts (reading a mesh, converting an image, exporting a material) are kept
+between exports; :meth:`Exporter.update` forgets those that ``depsgraph.updates`` says
+changed, so the viewport re-exports after an edit only what the edit touched. Instance
+transforms, lights, the world and the camera are cheap and read on every export. A
+change Blender does not tag in the depsgraph (image pixels set from Python without
+``Image.update_tag()``) is not seen until the viewport render starts again.
+
+The scene is built in the same order whether parts come from the cache or not, so a
+cached export and a fresh one give the same description (and the same pixels).
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import polychrome as pc
+
+from .camera import export_camera
+from .lights import export_lights
+from .materials import MaterialExport
+from .meshes import GEOMETRY_TYPES, MeshArrays, read_mesh
+from .textures import TextureCache
+from .warnings import Warnings
+from .world import export_world
+
+
+@dataclass
+class _Cached:
+    """An exported part and the warnings its export gave."""
+
+    value: object
+    warnings: list = field(default_factory=list)
+
+
+@dataclass
+class _CachedMesh:
+    arrays: MeshArrays | None  # None: the object has no triangles
+    warnings: list
+    owners: set  # names of the objects whose instances used it
+    data_names: set  # names of their original geometry data blocks
+
+
+def _material_key(mat):
+    return None if mat is None else mat.original.name
+
+
+class Exporter:
+    """Depsgraph → ``polychrome.Scene``, keeping the exported meshes (by evaluated
+    geometry and material slots), materials (by material) and textures (by image).
+
+    ``export(depsgraph)`` returns ``(scene, warning messages)``; every problem with user
+    data raises ``ValueError`` naming the object. ``update(depsgraph)``, called where
+    ``depsgraph.updates`` is valid (``RenderEngine.view_update``, depsgraph handlers),
+    forgets what changed. ``counts`` says what the last export read afresh.
+    """
+
+    def __init__(self):
+        self.textures = TextureCache()
+        self._meshes = {}  # (evaluated data pointer, material slot names) -> _CachedMesh
+        self._materials = {}  # material name (None: no material) -> _Cached
+        self.counts = {"meshes": 0, "materials": 0, "images": 0}
+
+    # -- invalidation --------------------------------------------------------------
+    def update(self, depsgraph):
+        """Forgets the parts that ``depsgraph.updates`` reports changed."""
+        for u in depsgraph.updates:
+            kind, name = u.id.id_type, u.id.original.name
+            if kind == "OBJECT" and u.is_updated_geometry:
+                self._forget_meshes(lambda m, name=name: name in m.owners)
+            elif kind in ("MESH", "CURVE", "CURVES", "META", "FONT") and u.is_updated_geometry:
+                self._forget_meshes(lambda m, name=name: name in m.data_names)
+            elif kind == "MATERIAL":
+                self._materials.pop(name, None)
+                self.textures.forget_used_by(("MATERIAL", name))  # it may be a reload of its image
+            elif kind == "WORLD":
+                self.textures.forget_used_by(("WORLD", name))
+            elif kind == "IMAGE":
+                for user_kind, user in self.textures.users_of(name):
+                    if user_kind == "MATERIAL":
+                        self._materials.pop(user, None)  # it holds the image's old texture
+                self.textures.forget(name)
+            elif kind == "NODETREE" and not u.id.is_embedded_data:
+                self._materials.clear()  # a node group: any material may use it
+
+    def _forget_meshes(self, matches):
+        for key in [k for k, m in self._meshes.items() if matches(m)]:
+            del self._meshes[key]
+
+    def clear(self):
+        self._meshes.clear()
+        self._materials.clear()
+        self.textures.clear()
+
+    # -- export ------------------------------------------------------------------
+    def export(self, depsgraph, camera=None):
+        """Returns ``(polychrome.Scene, [warning messages])``. ``camera`` (a
+        ``polychrome.Camera``, e.g. the viewport's) replaces the scene camera."""
+        self.counts = {"meshes": 0, "materials": 0, "images": 0}
+        self.textures.converted = 0
+        warnings = Warnings()
+        scene = pc.Scene()
+        scene.camera = export_camera(depsgraph, warnings) if camera is None else camera
+        self._export_meshes(depsgraph, scene, warnings)
+        export_lights(depsgraph, scene, warnings)
+        export_world(depsgraph, scene, warnings, self.textures)
+        self.counts["images"] = self.textures.converted
+        return scene, warnings.messages
+
+    def _material(self, ob, slot, scene, indices, warnings):
+        """Scene index of the material in ``ob``'s ``slot`` (None: no slot), exported
+        once per Blender material."""
+        mat = None
+        if slot is not None and slot < len(ob.material_slots):
+            mat = ob.material_slots[slot].material
+        key = _material_key(mat)
+        if key not in indices:
+            cached = self._materials.get(key)
+            if cached is None:
+                own = Warnings()
+                cached = self._materials[key] = _Cached(MaterialExport(mat, own, self.textures).material(), own.items)
+                self.counts["materials"] += 1
+            warnings.extend(cached.warnings)
+            indices[key] = scene.add_material(cached.value)
+        return indices[key]
+
+    def _mesh(self, ob, key, name, warnings):
+        """The cached mesh of ``key`` if ``ob`` used it in an earlier export, else read."""
+        data_name = ob.original.data.name if ob.original.data is not None else None
+        cached = self._meshes.get(key)
+        if cached is None or name not in cached.owners:
+            own = Warnings()
+            cached = self._meshes[key] = _CachedMesh(read_mesh(ob, name, own), own.items, {name}, {data_name})
+            self.counts["meshes"] += 1
+        warnings.extend(cached.warnings)
+        return cached
+
+    def _export_meshes(self, depsgraph, scene, warnings):
+        """Adds every visible geometry object to ``scene``; instances of one evaluated
+        geometry share one mesh."""
+        placed = {}  # key -> mesh index in this scene (None: no triangles)
+        materials = {}  # material key -> index in this scene
+        used = set()
+        for inst in depsgraph.object_instances:
+            ob = inst.object
+            if ob.type not in GEOMETRY_TYPES:
+                continue
+            name = ob.original.name
+            # Geometry-node instances of different meshes share the instancer's name, so
+            # the evaluated data block is the key (with the materials it is shown with).
+            key = (ob.data.as_pointer(), tuple(s.material.original.name if s.material else "" for s in ob.material_slots))
+            if key not in placed:
+                cached = self._mesh(ob, key, name, warnings)
+                used.add(key)
+                placed[key] = None
+                if cached.arrays is not None:
+                    a = cached.arrays
+                    slots = [self._material(ob, s, scene, materials, warnings) for s in range(len(ob.material_slots))]
+                    slot_map = np.asarray(slots or [self._material(ob, None, scene, materials, warnings)], dtype=np.int64)
+                    ids = slot_map[np.clip(a.tri_slot, 0, len(slot_map) - 1)]
+                    placed[key] = scene.add_mesh(name, a.vertices, a.triangles, normals=a.normals, uvs=a.uvs, material_ids=ids, place=False)
+            else:
+                cached = self._meshes[key]
+                cached.owners.add(name)  # another object showing the same evaluated geometry
+                if ob.original.data is not None:
+                    cached.data_names.add(ob.original.data.name)
+            mesh = placed[key]
+            if mesh is None:
+                continue
+            m = np.array(inst.matrix_world, dtype=np.float64)
+            if not np.all(np.isfinite(m)):
+                raise ValueError(f"object '{name}': its transform is not finite")
+            scene.add_instance(mesh, m, name)
+        # what no object shows any more (deleted, hidden, re-evaluated) is dropped
+        self._meshes = {k: v for k, v in self._meshes.items() if k in used}
+        self._materials = {k: v for k, v in self._materials.items() if k in materials}
+
+
+def export_scene(depsgraph, camera=None):
+    """A one-off export (final renders, scripts): ``Exporter().export(depsgraph, camera)``."""
+    return Exporter().export(depsgraph, camera)
