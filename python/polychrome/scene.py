@@ -55,41 +55,138 @@ def look_at(position: Sequence[float], target: Sequence[float], up: Sequence[flo
     return m
 
 
+#: Blender's panoramic projections (``Camera.panorama_type``).
+PANORAMA_TYPES = (
+    "EQUIRECTANGULAR",
+    "EQUIANGULAR_CUBEMAP_FACE",
+    "MIRRORBALL",
+    "FISHEYE_EQUIDISTANT",
+    "FISHEYE_EQUISOLID",
+    "FISHEYE_LENS_POLYNOMIAL",
+    "CENTRAL_CYLINDRICAL",
+)
+
+#: Blender's default polynomial fisheye coefficients k0…k4.
+FISHEYE_POLYNOMIAL_DEFAULT = (-1.1735144e-05, -0.019988736, -3.3525323e-06, 3.0992753e-06, -2.6064647e-08)
+
+
 @dataclass
 class Camera:
-    """A camera described as Blender describes one (mm lenses, sensor fit, shift, clip)."""
+    """A camera described as Blender describes one (mm lenses, sensor fit, shift, clip,
+    pixel aspect, depth of field, panoramic projections); see docs/camera.md.
+
+    Depth of field: set ``fstop`` (the aperture radius is then ``focal_length / (2·fstop)``
+    with the focal length in metres, as Cycles computes it — scene units are metres; for
+    orthographic cameras ``1 / (2·fstop)``) or ``aperture_radius`` in scene units, and
+    ``focus_distance``. Both zero (the default): a pinhole, everything sharp.
+    """
 
     to_world: Any = field(default_factory=lambda: np.eye(4))
+    #: PERSPECTIVE, ORTHOGRAPHIC or PANORAMIC.
     projection: str = "PERSPECTIVE"
     focal_length: float = 50.0
     sensor_width: float = 36.0
     sensor_height: float = 24.0
     sensor_fit: str = "AUTO"
     ortho_scale: float = 7.314
+    #: Lens shift in units of the fitted image side (Blender's shift_x/shift_y).
     shift_x: float = 0.0
     shift_y: float = 0.0
     clip_start: float = 0.1
     clip_end: float = 1000.0
+    #: Width / height of one pixel (Blender's pixel_aspect_x / pixel_aspect_y).
+    pixel_aspect: float = 1.0
+    fstop: float = 0.0
+    aperture_radius: float = 0.0
+    focus_distance: float = 10.0
+    #: Diaphragm blades (polygonal bokeh); fewer than 3 is round.
+    aperture_blades: int = 0
+    #: Rotation of the blades, radians.
+    aperture_rotation: float = 0.0
+    #: Anamorphic bokeh: the aperture's width is divided by this.
+    aperture_ratio: float = 1.0
+    #: One of PANORAMA_TYPES, for ``projection="PANORAMIC"``.
+    panorama_type: str = "EQUIRECTANGULAR"
+    fisheye_fov: float = math.pi
+    fisheye_lens: float = 10.5
+    latitude_min: float = -math.pi / 2
+    latitude_max: float = math.pi / 2
+    longitude_min: float = -math.pi
+    longitude_max: float = math.pi
+    fisheye_polynomial: Sequence[float] = FISHEYE_POLYNOMIAL_DEFAULT
+    central_cylindrical_range_u_min: float = -math.pi
+    central_cylindrical_range_u_max: float = math.pi
+    central_cylindrical_range_v_min: float = -1.0
+    central_cylindrical_range_v_max: float = 1.0
+    central_cylindrical_radius: float = 1.0
     name: str = "Camera"
 
     @classmethod
     def looking_at(cls, position, target, up=(0.0, 0.0, 1.0), **kwargs) -> Camera:
         return cls(to_world=look_at(position, target, up), **kwargs)
 
+    def resolved_aperture_radius(self) -> float:
+        """The thin lens's radius in scene units (0: a pinhole)."""
+        what = f"camera '{self.name}'"
+        fstop, radius = float(self.fstop), float(self.aperture_radius)
+        if not (math.isfinite(fstop) and fstop >= 0 and math.isfinite(radius) and radius >= 0):
+            raise ValueError(f"{what}: fstop {fstop} and aperture_radius {radius} must be zero or positive")
+        if fstop > 0 and radius > 0:
+            raise ValueError(f"{what}: give fstop or aperture_radius, not both")
+        if fstop == 0:
+            return radius
+        # Cycles (blender/camera.cpp): lens in mm → metres, halved, over the f-number.
+        if self.projection.upper() == "ORTHOGRAPHIC":
+            return 1.0 / (2.0 * fstop)
+        return float(self.focal_length) * 1e-3 / (2.0 * fstop)
+
     def to_dict(self) -> dict[str, Any]:
+        what = f"camera '{self.name}'"
+        panorama = str(self.panorama_type).upper()
+        if panorama not in PANORAMA_TYPES:
+            raise ValueError(f"{what}: panorama_type {self.panorama_type!r} is not one of {', '.join(PANORAMA_TYPES)}")
+        polynomial = _finite_floats(self.fisheye_polynomial, f"{what}: fisheye_polynomial")
+        if len(polynomial) != 5:
+            raise ValueError(f"{what}: fisheye_polynomial needs 5 coefficients k0…k4, got {len(polynomial)}")
+        blades = int(self.aperture_blades)
+        if blades < 0:
+            raise ValueError(f"{what}: aperture_blades {blades} must not be negative")
+        floats = (
+            "focal_length",
+            "sensor_width",
+            "sensor_height",
+            "ortho_scale",
+            "shift_x",
+            "shift_y",
+            "clip_start",
+            "clip_end",
+            "pixel_aspect",
+            "focus_distance",
+            "aperture_rotation",
+            "aperture_ratio",
+            "fisheye_fov",
+            "fisheye_lens",
+            "latitude_min",
+            "latitude_max",
+            "longitude_min",
+            "longitude_max",
+            "central_cylindrical_range_u_min",
+            "central_cylindrical_range_u_max",
+            "central_cylindrical_range_v_min",
+            "central_cylindrical_range_v_max",
+            "central_cylindrical_radius",
+        )
+        values = dict(zip(floats, _finite_floats([getattr(self, k) for k in floats], what)))
         return {
             "name": self.name,
-            "to_world": _matrix(self.to_world, f"camera '{self.name}'"),
+            "to_world": _matrix(self.to_world, what),
             "projection": self.projection.upper(),
-            "focal_length": float(self.focal_length),
-            "sensor_width": float(self.sensor_width),
-            "sensor_height": float(self.sensor_height),
             "sensor_fit": self.sensor_fit.upper(),
-            "ortho_scale": float(self.ortho_scale),
-            "shift_x": float(self.shift_x),
-            "shift_y": float(self.shift_y),
-            "clip_start": float(self.clip_start),
-            "clip_end": float(self.clip_end),
+            **values,
+            "aperture_radius": self.resolved_aperture_radius(),
+            "aperture_blades": blades,
+            "panorama_type": panorama,
+            "fisheye_polynomial": polynomial,
         }
 
 

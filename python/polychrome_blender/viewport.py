@@ -51,10 +51,10 @@ def view_camera(view_matrix, window_matrix, width, height, name="Viewport"):
     else:
         cx, cy = -P[0, 3] / P[0, 0], -P[1, 3] / P[1, 1]
         near, far = (P[2, 3] + 1.0) / P[2, 2], (P[2, 3] - 1.0) / P[2, 2]
-    # The core's lens shift is in units of the larger image side; with a horizontal fit
-    # the core takes the image height from the aspect ratio.
-    largest = max(2.0 * half_w, 2.0 * half_w * height / max(width, 1))
-    common = dict(sensor_fit="HORIZONTAL", shift_x=float(cx / largest), shift_y=float(cy / largest), name=name)
+    # The core's lens shift is in units of the fitted image side: with a horizontal fit,
+    # the width (the core takes the image height from the aspect ratio).
+    fitted = 2.0 * half_w
+    common = dict(sensor_fit="HORIZONTAL", shift_x=float(cx / fitted), shift_y=float(cy / fitted), name=name)
     if perspective:
         near = max(float(near), 1e-6)
         far = max(float(far), near * 2.0)

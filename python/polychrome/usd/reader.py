@@ -1084,7 +1084,7 @@ class _Reader:
         }
 
     # -- camera --------------------------------------------------------------------------
-    def read_camera(self, prim, resolution):
+    def read_camera(self, prim, resolution, pixel_aspect=1.0):
         from ..scene import Camera
 
         m = self.world_matrix(prim)
@@ -1111,17 +1111,33 @@ class _Reader:
         ox = float(self.get(cam.GetHorizontalApertureOffsetAttr(), 0.0))
         oy = float(self.get(cam.GetVerticalApertureOffsetAttr(), 0.0))
         clip = tuple(float(x) for x in self.get(cam.GetClippingRangeAttr(), (1.0, 1000000.0)))
-        values = [focal, ax, ay, ox, oy, *clip]
+        fstop = float(self.get(cam.GetFStopAttr(), 0.0))
+        focus = float(self.get(cam.GetFocusDistanceAttr(), 0.0))
+        values = [focal, ax, ay, ox, oy, *clip, fstop, focus]
         if not all(math.isfinite(v) for v in values):
-            raise self.error(prim, "its lens, aperture or clipping range is not finite")
+            raise self.error(prim, "its lens, aperture, clipping range, fStop or focusDistance is not finite")
         if not (ax > 0 and ay > 0 and (ortho or focal > 0)):
             raise self.error(prim, f"focal length {focal} and apertures {ax} × {ay} must be positive")
+        if fstop < 0 or focus < 0:
+            raise self.error(prim, f"fStop {fstop} and focusDistance {focus} must not be negative")
         w, h = resolution if resolution else (ax, ay)
+        w = w * pixel_aspect
         # UsdRender's default conform policy, expandAperture: the whole aperture stays visible.
         horizontal = ax / ay >= w / h
         film_w, film_h = (ax, ax * h / w) if horizontal else (ay * w / h, ay)
-        largest = max(film_w, film_h)
+        # The core's shift counts in units of the fitted side.
+        fitted = film_w if horizontal else film_h
         mm = 100.0 * self.mpu  # tenths of a scene unit → mm
+        dof = {}
+        if fstop > 0 and not ortho:
+            # UsdGeomCamera: the aperture's diameter is focalLength / fStop (both in
+            # tenths of a scene unit); the core wants the radius in metres.
+            if not focus > 0:
+                self.warn(f"focus:{prim.GetPath()}", f"prim {prim.GetPath()}: fStop {fstop} with no focusDistance; depth of field is off")
+            else:
+                dof = dict(aperture_radius=focal * 0.1 * self.mpu / (2.0 * fstop), focus_distance=focus * self.mpu)
+        elif fstop > 0:
+            self.warn(f"fstop:{prim.GetPath()}", f"prim {prim.GetPath()}: depth of field on an orthographic camera is not read")
         return Camera(
             to_world=m,
             projection="ORTHOGRAPHIC" if ortho else "PERSPECTIVE",
@@ -1130,11 +1146,13 @@ class _Reader:
             sensor_height=ay * mm,
             sensor_fit="HORIZONTAL" if horizontal else "VERTICAL",
             ortho_scale=(ax if horizontal else ay) * 0.1 * self.mpu,
-            shift_x=ox / largest,
-            shift_y=oy / largest,
+            shift_x=ox / fitted,
+            shift_y=oy / fitted,
             clip_start=clip[0] * self.mpu,
             clip_end=clip[1] * self.mpu,
+            pixel_aspect=pixel_aspect,
             name=str(prim.GetPath()),
+            **dof,
         )
 
     # -- the whole stage ------------------------------------------------------------------
@@ -1199,7 +1217,7 @@ class _Reader:
         elif self.cameras:
             cam_prim = self.cameras[0]
         if cam_prim is not None:
-            scene.camera = self.read_camera(cam_prim, resolution)
+            scene.camera = self.read_camera(cam_prim, resolution, settings.get("_pixel_aspect", 1.0))
         else:
             self.warn("camera", "the stage has no UsdGeom.Camera; the default camera at the origin looking down −Z is used")
             scene.camera = Camera()
@@ -1312,6 +1330,12 @@ def read_settings_from_stage(stage, path) -> dict[str, Any]:
         if res is None or res[0] <= 0 or res[1] <= 0:
             raise ValueError(f"{path}: prim {prim.GetPath()}: resolution {res} must be positive")
         out["width"], out["height"] = int(res[0]), int(res[1])
+    aspect_attr = rs.GetPixelAspectRatioAttr()
+    if aspect_attr and aspect_attr.HasAuthoredValue():
+        aspect = float(aspect_attr.Get())
+        if not (math.isfinite(aspect) and aspect > 0):
+            raise ValueError(f"{path}: prim {prim.GetPath()}: pixelAspectRatio {aspect} must be positive")
+        out["_pixel_aspect"] = aspect
     targets = rs.GetCameraRel().GetForwardedTargets()
     if targets:
         out["_camera"] = str(targets[0])

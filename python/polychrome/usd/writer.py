@@ -324,10 +324,12 @@ def _aim(direction, position) -> np.ndarray:
 
 
 def _sensor_apertures(cam: dict[str, Any], width: int, height: int) -> tuple[float, float, float]:
-    """(horizontal, vertical, largest) film extent in mm (perspective) or scene units
-    (orthographic) that polychrome's camera shows for a ``width`` × ``height`` image."""
+    """(horizontal, vertical, fitted) film extent in mm (perspective) or scene units
+    (orthographic) that polychrome's camera shows for a ``width`` × ``height`` image
+    (``fitted``: the side the sensor spans, the unit of the lens shift)."""
     fit = cam["sensor_fit"]
-    horizontal = width >= height if fit == "AUTO" else fit == "HORIZONTAL"
+    width = width * cam.get("pixel_aspect", 1.0)
+    horizontal = width > height if fit == "AUTO" else fit == "HORIZONTAL"
     if cam["projection"] == "ORTHOGRAPHIC":
         fitted = cam["ortho_scale"]
     else:
@@ -336,7 +338,7 @@ def _sensor_apertures(cam: dict[str, Any], width: int, height: int) -> tuple[flo
         w, h = fitted, fitted * height / width
     else:
         w, h = fitted * width / height, fitted
-    return w, h, max(w, h)
+    return w, h, fitted
 
 
 def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path:
@@ -573,14 +575,18 @@ def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path
     camera.CreateProjectionAttr(UsdGeom.Tokens.orthographic if ortho else UsdGeom.Tokens.perspective)
     # Lens and filmback are in tenths of a scene unit (UsdGeomCamera, "Units of Measure
     # for Camera Properties"): with metersPerUnit = 1 that is 100 mm per unit.
-    w, h, largest = _sensor_apertures(cam, settings.width, settings.height)
+    w, h, fitted = _sensor_apertures(cam, settings.width, settings.height)
     # Orthographic extents are scene units (×10 tenths); perspective ones are mm (÷100).
     to_tenths = (lambda x: x * 10.0) if ortho else (lambda x: x / 100.0)
     camera.CreateFocalLengthAttr(float(cam["focal_length"]) / 100.0)
     camera.CreateHorizontalApertureAttr(float(to_tenths(w)))
     camera.CreateVerticalApertureAttr(float(to_tenths(h)))
-    camera.CreateHorizontalApertureOffsetAttr(float(to_tenths(cam["shift_x"] * largest)))
-    camera.CreateVerticalApertureOffsetAttr(float(to_tenths(cam["shift_y"] * largest)))
+    camera.CreateHorizontalApertureOffsetAttr(float(to_tenths(cam["shift_x"] * fitted)))
+    camera.CreateVerticalApertureOffsetAttr(float(to_tenths(cam["shift_y"] * fitted)))
+    if cam.get("aperture_radius", 0.0) > 0 and not ortho:
+        # UsdGeomCamera: aperture diameter = focalLength / fStop (metres per unit = 1).
+        camera.CreateFStopAttr(float(cam["focal_length"] * 1e-3 / (2.0 * cam["aperture_radius"])))
+        camera.CreateFocusDistanceAttr(float(cam["focus_distance"]))
     camera.CreateClippingRangeAttr(Gf.Vec2f(float(cam["clip_start"]), float(cam["clip_end"])))
     camera_fields = {k: v for k, v in cam.items() if k != "to_world"}
     camera.GetPrim().CreateAttribute(A.CAMERA, Sdf.ValueTypeNames.String).Set(json.dumps(camera_fields))
@@ -687,6 +693,8 @@ def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path
     UsdGeom.Scope.Define(stage, "/Render")
     rs = UsdRender.Settings.Define(stage, A.RENDER_SETTINGS_PATH)
     rs.CreateResolutionAttr(Gf.Vec2i(int(settings.width), int(settings.height)))
+    if cam.get("pixel_aspect", 1.0) != 1.0:
+        rs.CreatePixelAspectRatioAttr(float(cam["pixel_aspect"]))
     rs.CreateCameraRel().SetTargets([camera.GetPath()])
     for field, value in A.settings_items(settings):
         if isinstance(value, bool):

@@ -103,6 +103,8 @@ class Exporter:
         warnings = Warnings()
         scene = pc.Scene()
         scene.camera = export_camera(depsgraph, warnings) if camera is None else camera
+        if depsgraph.scene.render.use_motion_blur:
+            warnings.add(("motion blur",), "motion blur is not supported yet: objects and the camera render at the current frame")
         self._export_meshes(depsgraph, scene, warnings)
         export_lights(depsgraph, scene, warnings)
         export_world(depsgraph, scene, warnings, self.textures)
@@ -145,9 +147,16 @@ class Exporter:
         used = set()
         for inst in depsgraph.object_instances:
             ob = inst.object
+            if ob.type in ("CURVES", "POINTCLOUD"):
+                kind = "hair curves" if ob.type == "CURVES" else "point cloud"
+                warnings.add((ob.type, ob.original.name), f"object '{ob.original.name}': {kind} are not supported yet and are not rendered")
+                continue
             if ob.type not in GEOMETRY_TYPES:
                 continue
             name = ob.original.name
+            for ps in getattr(ob, "particle_systems", ()):
+                if ps.settings.type == "HAIR" and ps.settings.render_type == "PATH":
+                    warnings.add(("hair", name), f"object '{name}': particle hair '{ps.name}' is not supported yet and is not rendered")
             # Geometry-node instances of different meshes share the instancer's name, so
             # the evaluated data block is the key (with the materials it is shown with).
             key = (ob.data.as_pointer(), tuple(s.material.original.name if s.material else "" for s in ob.material_slots))

@@ -205,6 +205,71 @@ fn every_method_and_direction_agrees_with_polychromatic_backward_on_a_lit_box() 
 }
 
 #[test]
+fn bidirectional_with_a_panorama_uses_the_camera_strategies_alone() {
+    // Light paths cannot reach a panoramic camera: BIDIRECTIONAL must still converge to
+    // BACKWARD (its MIS weights give the camera strategies the whole path).
+    let (mut desc, buffers) = box_scene();
+    desc.camera.projection = polychrome_core::camera::Projection::Panoramic;
+    desc.camera.to_world[1][3] = 0.0; // the middle of the box
+    let (w, h) = (16usize, 8usize);
+    let base =
+        RenderSettings { width: w as u32, height: h as u32, max_bounces: 4, wavelength_count: 8, ..Default::default() };
+    let reference =
+        render(&desc, &buffers, &RenderSettings { samples: 256, ..base.clone() }, &RenderControl::new()).unwrap();
+    let out = render(
+        &desc,
+        &buffers,
+        &RenderSettings { direction: Direction::Bidirectional, samples: 128, ..base.clone() },
+        &RenderControl::new(),
+    )
+    .unwrap();
+    assert_close(&block_means(&out.images.rgba, w, h, 4), &block_means(&reference.images.rgba, w, h, 4), "panorama");
+}
+
+/// Means of each channel over `b`×`b` pixel blocks, with standard errors.
+fn block_means(rgba: &[f32], w: usize, h: usize, b: usize) -> Vec<(f64, f64)> {
+    let mut out = Vec::new();
+    for by in (0..h).step_by(b) {
+        for bx in (0..w).step_by(b) {
+            let mut px = Vec::new();
+            for y in by..(by + b).min(h) {
+                for x in bx..(bx + b).min(w) {
+                    let i = (y * w + x) * 4;
+                    px.extend_from_slice(&rgba[i..i + 4]);
+                }
+            }
+            out.extend(channel_means(&px));
+        }
+    }
+    out
+}
+
+#[test]
+fn light_tracing_through_a_thin_lens_agrees_with_camera_paths() {
+    // The lit box far out of focus (focus 0.3 in front of a back wall at 1.95; the lamp
+    // blurred over about six pixels): light paths connect through a sampled lens point with
+    // the thin lens's importance; 4×4-pixel blocks must match the camera-path image.
+    let (mut desc, buffers) = box_scene();
+    desc.camera.aperture_radius = 0.3;
+    desc.camera.focus_distance = 0.3;
+    desc.camera.aperture_blades = 6;
+    desc.camera.aperture_ratio = 1.5;
+    let (w, h) = (16usize, 16usize);
+    let base =
+        RenderSettings { width: w as u32, height: h as u32, max_bounces: 4, wavelength_count: 8, ..Default::default() };
+    let reference =
+        render(&desc, &buffers, &RenderSettings { samples: 512, ..base.clone() }, &RenderControl::new()).unwrap();
+    let reference = block_means(&reference.images.rgba, w, h, 4);
+    for (direction, samples) in [(Direction::Forward, 256), (Direction::Bidirectional, 128)] {
+        let out =
+            render(&desc, &buffers, &RenderSettings { direction, samples, ..base.clone() }, &RenderControl::new())
+                .unwrap();
+        assert_eq!(out.stats.nonfinite_samples, 0);
+        assert_close(&block_means(&out.images.rgba, w, h, 4), &reference, &format!("thin lens {direction:?}"));
+    }
+}
+
+#[test]
 fn same_seed_gives_identical_images_on_one_and_two_threads_for_every_method() {
     let (desc, buffers) = box_scene();
     for (method, direction) in [
@@ -611,6 +676,9 @@ fn forward_needs_a_perspective_camera_and_time_limited_mono_scenes_say_so() {
     let s = RenderSettings { width: 4, height: 4, samples: 1, direction: Direction::Forward, ..Default::default() };
     let err = render(&desc, &buffers, &s, &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("direction") && err.contains("perspective"), "{err}");
+    desc.camera.projection = polychrome_core::camera::Projection::Panoramic;
+    let err = render(&desc, &buffers, &s, &RenderControl::new()).err().unwrap().to_string();
+    assert!(err.contains("direction") && err.contains("panoramic"), "{err}");
     let (desc, buffers) = furnace_scene(0.5, 0.5);
     let s = RenderSettings {
         width: 8,

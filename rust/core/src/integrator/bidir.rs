@@ -197,7 +197,9 @@ impl MisPathTracer {
 impl Integrator for MisPathTracer {
     fn sample(&self, scene: &Scene, x: f32, y: f32, rng: &mut Rng, out: &mut PixelSample) {
         let n = scene.grid.len();
-        let mut ray = scene.camera.generate_ray(x, y);
+        let Some(mut ray) = scene.camera.generate_ray(x, y, rng) else {
+            return; // outside the lens (fisheye, mirror ball): black
+        };
         let mut cam = CamEnd { p: ray.origin, pdf_dir: 0.0, connectable: false };
         let mut verts: Vec<Vtx> = Vec::with_capacity(self.max_bounces as usize + 1);
         let mut legacy = false;
@@ -230,10 +232,10 @@ impl Integrator for MisPathTracer {
             // Surfaces are two-sided: shade on the side the ray arrived from.
             let Facing { wo, ng, ns, material } = facing(scene, &ray, &si, &mut ctx);
             if depth == 0 {
-                out.depth = si.t * ray.direction.dot(scene.camera.forward());
+                out.depth = scene.camera.depth(si.p);
                 out.normal = si.ns;
                 material.bsdf.albedo(&ctx, &mut out.albedo);
-                if let Some(c) = scene.camera.connect(si.p) {
+                if let Some(c) = scene.camera.connect_through(ray.origin, si.p) {
                     // The pinhole as light paths see it (the same numbers on both sides).
                     cam.p = si.p + c.wi * c.distance;
                     cam.pdf_dir = c.importance * c.distance * c.distance;
@@ -410,7 +412,7 @@ impl MisLightTracer {
 
         // The light vertex itself seen by the camera (area lights): k = 1.
         if !es.delta_position {
-            if let (Some(nl), Some(c)) = (es.normal, scene.camera.connect(es.origin)) {
+            if let (Some(nl), Some(c)) = (es.normal, scene.camera.connect(es.origin, rng)) {
                 let cos = nl.dot(c.wi).abs();
                 let origin = offset_ray_origin(es.origin, if nl.dot(c.wi) > 0.0 { nl } else { -nl });
                 if cos > 0.0
@@ -467,7 +469,7 @@ impl MisLightTracer {
             // Connect to the camera: a path with depth + 1 scattering events (strategy C).
             if flags.smooth && depth < self.max_bounces {
                 if let Some(c) =
-                    connect_to_camera(scene, material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, &mut f)
+                    connect_to_camera(scene, material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, &mut f, rng)
                 {
                     let wc_local = frame.to_local(c.wi);
                     // Camera order: x1 = here, x2 … = the light path reversed.

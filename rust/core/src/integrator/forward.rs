@@ -49,7 +49,8 @@ impl Splat {
     }
 }
 
-/// Connects a light-path surface vertex at `p` to the pinhole camera. On success `f`
+/// Connects a light-path surface vertex at `p` to the camera (a point on its lens drawn
+/// from `rng` when it has one). On success `f`
 /// holds f·|cos θ| towards the camera; None when the camera is on the other side of the
 /// surface than the path, the BSDF sends nothing that way, or something blocks the view.
 #[allow(clippy::too_many_arguments)]
@@ -62,8 +63,9 @@ pub fn connect_to_camera(
     p: glam::Vec3A,
     ng: glam::Vec3A,
     f: &mut SampledSpectrum,
+    rng: &mut Rng,
 ) -> Option<crate::camera::CameraConnection> {
-    let c = scene.camera.connect(p)?;
+    let c = scene.camera.connect(p, rng)?;
     if c.wi.dot(ng) <= 0.0 {
         return None;
     }
@@ -115,7 +117,7 @@ impl LightTracer {
 
         // The light vertex itself, seen by the camera (area lights only).
         if all && !es.delta_position {
-            if let (Some(nl), Some(c)) = (es.normal, scene.camera.connect(es.origin)) {
+            if let (Some(nl), Some(c)) = (es.normal, scene.camera.connect(es.origin, rng)) {
                 let cos = nl.dot(c.wi).abs();
                 let origin = offset_ray_origin(es.origin, if nl.dot(c.wi) > 0.0 { nl } else { -nl });
                 if cos > 0.0
@@ -156,7 +158,7 @@ impl LightTracer {
             // Connect this vertex to the camera: a path with depth + 1 scattering events.
             if all && flags.smooth && depth < self.max_bounces {
                 if let Some(c) =
-                    connect_to_camera(scene, material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, &mut f)
+                    connect_to_camera(scene, material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, &mut f, rng)
                 {
                     splats.push(Splat::new(pixel_of(&c), &f, &beta, c.importance));
                 }
@@ -229,7 +231,7 @@ impl LightTracer {
             }
             if material.bsdf.flags().smooth && depth < self.max_bounces {
                 if let Some(c) =
-                    connect_to_camera(scene, material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, &mut f)
+                    connect_to_camera(scene, material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, &mut f, rng)
                 {
                     splats.push(Splat::new(pixel_of(&c), &f, &beta, c.importance));
                 }

@@ -128,7 +128,7 @@ pub fn from_settings(scene: &Scene, settings: &crate::render::RenderSettings) ->
     if settings.direction == Direction::Forward && !scene.camera.is_perspective() {
         return Err(Error::setting(
             "direction",
-            "FORWARD (light tracing) needs a perspective camera: light paths cannot connect to an orthographic one",
+            "FORWARD (light tracing) needs a perspective camera: light paths cannot connect to an orthographic or panoramic one",
         ));
     }
     Ok(Box::new(Tracers::new(scene, settings)))

@@ -69,7 +69,9 @@ impl MonochromaticTracer {
         aux: &mut PixelSample,
         s: &mut Scratch,
     ) -> f32 {
-        let ray = scene.camera.generate_ray(x, y);
+        let Some(ray) = scene.camera.generate_ray(x, y, rng) else {
+            return 0.0; // outside the lens (fisheye, mirror ball): black
+        };
         let st = PathState { ray, specular: true, prev_pdf: 0.0, prev_p: ray.origin, depth: 0 };
         self.trace(scene, lambda, 1.0, st, rng, Some(aux), s)
     }
@@ -156,7 +158,7 @@ impl MonochromaticTracer {
             let Facing { wo, ng, ns, material } = facing(scene, &ray, &si, &mut ctx);
             if let Some(out) = aux.take() {
                 if depth == 0 {
-                    out.depth = si.t * ray.direction.dot(scene.camera.forward());
+                    out.depth = scene.camera.depth(si.p);
                     out.normal = si.ns;
                     ctx.single_wavelength = None;
                     material.bsdf.albedo(&ctx, &mut out.albedo);

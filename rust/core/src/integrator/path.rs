@@ -40,7 +40,9 @@ impl PathTracer {
 impl Integrator for PathTracer {
     fn sample(&self, scene: &Scene, x: f32, y: f32, rng: &mut Rng, out: &mut PixelSample) {
         let n = scene.grid.len();
-        let mut ray = scene.camera.generate_ray(x, y);
+        let Some(mut ray) = scene.camera.generate_ray(x, y, rng) else {
+            return; // outside the lens (fisheye, mirror ball): black
+        };
         let mut beta = SampledSpectrum::splat(n, 1.0);
         let mut f = SampledSpectrum::zeros(n);
         let mut le = SampledSpectrum::zeros(n);
@@ -69,7 +71,7 @@ impl Integrator for PathTracer {
             // Surfaces are two-sided: shade on the side the ray arrived from.
             let Facing { wo, ng, ns, material } = facing(scene, &ray, &si, &mut ctx);
             if depth == 0 {
-                out.depth = si.t * ray.direction.dot(scene.camera.forward());
+                out.depth = scene.camera.depth(si.p);
                 out.normal = si.ns;
                 material.bsdf.albedo(&ctx, &mut out.albedo);
             }
