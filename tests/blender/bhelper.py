@@ -58,8 +58,9 @@ polychrome_blender.unregister()
 """
 
 
-def run_bpy(tmp_path, body, timeout=180):
-    """Runs PRELUDE + body + EPILOGUE with the venv's Python; returns (proc, [RESULT dicts])."""
+def run_bpy(tmp_path, body, timeout=180, env=None):
+    """Runs PRELUDE + body + EPILOGUE with the venv's Python (in `env`, default: this
+    process's environment); returns (proc, [RESULT dicts])."""
     try:
         import importlib.util
 
@@ -69,7 +70,7 @@ def run_bpy(tmp_path, body, timeout=180):
         pytest.skip("bpy is not importable")
     script = tmp_path / "script.py"
     script.write_text(PRELUDE + textwrap.dedent(body) + EPILOGUE)
-    env = dict(os.environ)
+    env = dict(os.environ if env is None else env)
     res = tmp_path / "blender_user"
     res.mkdir(exist_ok=True)
     env["BLENDER_USER_RESOURCES"] = str(res)

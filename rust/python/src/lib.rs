@@ -397,6 +397,59 @@ fn _panic_for_tests(message: &str) -> PyResult<()> {
     guarded("_panic_for_tests", || -> Result<(), Error> { panic!("{message}") })
 }
 
+/// _evaluate_procedural(idname, params_json, points, w) -> {socket name: array}
+///
+/// Testing hook, not API: evaluates one procedural texture node (Blender idname, e.g.
+/// "ShaderNodeTexNoise"; params as in `polychrome_core::procedural`) at the (N, 3)
+/// float32 `points` and (N,) float32 `w`, returning each output socket by Blender's
+/// name as (N,) or (N, 3) float32. The tests compare it with Cycles.
+#[pyfunction]
+fn _evaluate_procedural<'py>(
+    py: Python<'py>,
+    idname: &str,
+    params_json: &str,
+    points: PyReadonlyArrayDyn<'py, f32>,
+    w: PyReadonlyArrayDyn<'py, f32>,
+) -> PyResult<Bound<'py, PyDict>> {
+    use polychrome_core::procedural::{Procedural, SocketValue};
+    let node = Procedural::from_json(idname, params_json).map_err(PyValueError::new_err)?;
+    let shape = points.as_array().shape().to_vec();
+    if shape.len() != 2 || shape[1] != 3 {
+        return Err(PyValueError::new_err(format!("points must have shape (N, 3), got {shape:?}")));
+    }
+    let n = shape[0];
+    if w.as_array().len() != n {
+        return Err(PyValueError::new_err(format!("w must have {n} values, got {}", w.as_array().len())));
+    }
+    let pts: Vec<f32> = points.as_array().iter().copied().collect();
+    let ws: Vec<f32> = w.as_array().iter().copied().collect();
+    let names = node.output_names();
+    let vectors: Vec<bool> =
+        node.evaluate(glam::Vec3::ZERO, 0.0).iter().map(|v| matches!(v, SocketValue::Vector(_))).collect();
+    let columns = guarded("_evaluate_procedural", || {
+        let mut columns: Vec<Vec<f32>> = vec![Vec::with_capacity(3 * n); names.len()];
+        for (p, &w) in pts.chunks_exact(3).zip(&ws) {
+            for (column, value) in columns.iter_mut().zip(node.evaluate(glam::Vec3::new(p[0], p[1], p[2]), w)) {
+                match value {
+                    SocketValue::Float(v) => column.push(v),
+                    SocketValue::Vector(v) => column.extend_from_slice(&v.to_array()),
+                }
+            }
+        }
+        Ok(columns)
+    })?;
+    let out = PyDict::new(py);
+    for ((name, column), vector) in names.iter().zip(columns).zip(vectors) {
+        let array = PyArray1::from_vec(py, column);
+        if vector {
+            out.set_item(*name, array.reshape([n, 3])?)?;
+        } else {
+            out.set_item(*name, array)?;
+        }
+    }
+    Ok(out)
+}
+
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render, m)?)?;
@@ -405,6 +458,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(spectrum_xyz, m)?)?;
     m.add_function(wrap_pyfunction!(uplift, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
+    m.add_function(wrap_pyfunction!(_evaluate_procedural, m)?)?;
     m.add_class::<RenderJob>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
