@@ -425,12 +425,14 @@ fn _evaluate_procedural<'py>(
     let ws: Vec<f32> = w.as_array().iter().copied().collect();
     let names = node.output_names();
     let vectors: Vec<bool> =
-        node.evaluate(glam::Vec3::ZERO, 0.0).iter().map(|v| matches!(v, SocketValue::Vector(_))).collect();
+        node.evaluate(glam::Vec3::ZERO, 0.0).as_slice().iter().map(|v| matches!(v, SocketValue::Vector(_))).collect();
     let columns = guarded("_evaluate_procedural", || {
         let mut columns: Vec<Vec<f32>> = vec![Vec::with_capacity(3 * n); names.len()];
         for (p, &w) in pts.chunks_exact(3).zip(&ws) {
-            for (column, value) in columns.iter_mut().zip(node.evaluate(glam::Vec3::new(p[0], p[1], p[2]), w)) {
-                match value {
+            for (column, value) in
+                columns.iter_mut().zip(node.evaluate(glam::Vec3::new(p[0], p[1], p[2]), w).as_slice())
+            {
+                match *value {
                     SocketValue::Float(v) => column.push(v),
                     SocketValue::Vector(v) => column.extend_from_slice(&v.to_array()),
                 }

@@ -104,42 +104,62 @@ impl Procedural {
     }
 
     /// Every output at `vector` and `w`, in the order of [`Self::output_names`].
-    pub fn evaluate(&self, vector: Vec3, w: f32) -> Vec<SocketValue> {
+    pub fn evaluate(&self, vector: Vec3, w: f32) -> Outputs {
         use SocketValue::{Float, Vector};
-        match self {
+        let (values, len) = match self {
             Procedural::Noise(t) => {
                 let o = t.evaluate(vector, w);
-                vec![Float(o.fac), Vector(o.color)]
+                ([Float(o.fac), Vector(o.color), Float(0.0), Float(0.0), Float(0.0)], 2)
             }
             Procedural::Voronoi(t) => {
                 let o = t.evaluate(vector, w);
-                vec![Float(o.distance), Vector(o.color), Vector(o.position), Float(o.w), Float(o.radius)]
+                ([Float(o.distance), Vector(o.color), Vector(o.position), Float(o.w), Float(o.radius)], 5)
             }
             Procedural::WhiteNoise(t) => {
                 let o = t.evaluate(vector, w);
-                vec![Float(o.value), Vector(o.color)]
+                ([Float(o.value), Vector(o.color), Float(0.0), Float(0.0), Float(0.0)], 2)
             }
             Procedural::Checker(t) => {
                 let o = t.evaluate(vector);
-                vec![Vector(o.color), Float(o.fac)]
+                colour_fac(o.color, o.fac)
             }
             Procedural::Gradient(t) => {
                 let o = t.evaluate(vector);
-                vec![Vector(o.color), Float(o.fac)]
+                colour_fac(o.color, o.fac)
             }
             Procedural::Wave(t) => {
                 let o = t.evaluate(vector);
-                vec![Vector(o.color), Float(o.fac)]
+                colour_fac(o.color, o.fac)
             }
             Procedural::Magic(t) => {
                 let o = t.evaluate(vector);
-                vec![Vector(o.color), Float(o.fac)]
+                colour_fac(o.color, o.fac)
             }
             Procedural::Brick(t) => {
                 let o = t.evaluate(vector);
-                vec![Vector(o.color), Float(o.fac)]
+                colour_fac(o.color, o.fac)
             }
-        }
+        };
+        Outputs { values, len }
+    }
+}
+
+fn colour_fac(color: Vec3, fac: f32) -> ([SocketValue; 5], usize) {
+    use SocketValue::{Float, Vector};
+    ([Vector(color), Float(fac), Float(0.0), Float(0.0), Float(0.0)], 2)
+}
+
+/// The outputs of one evaluation, without allocating: `as_slice()` follows
+/// [`Procedural::output_names`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Outputs {
+    values: [SocketValue; 5],
+    len: usize,
+}
+
+impl Outputs {
+    pub fn as_slice(&self) -> &[SocketValue] {
+        &self.values[..self.len]
     }
 }
 
@@ -157,7 +177,7 @@ mod tests {
         assert!(e.contains("detial"), "{e}");
         assert!(Procedural::from_json("ShaderNodeTexSky", "{}").is_err());
         let v = Procedural::from_json("ShaderNodeTexVoronoi", "{}").unwrap();
-        assert_eq!(v.evaluate(Vec3::ONE, 0.0).len(), v.output_names().len());
+        assert_eq!(v.evaluate(Vec3::ONE, 0.0).as_slice().len(), v.output_names().len());
     }
 
     /// Every node with every float input set to `bad`, in every mode.
@@ -264,7 +284,7 @@ mod tests {
         for bad in [f32::NAN, f32::INFINITY, -f32::INFINITY, 1e38, -1e38, 0.0, 1e-38] {
             for node in all_nodes(bad) {
                 for &(p, w) in &points {
-                    for v in node.evaluate(p, w) {
+                    for &v in node.evaluate(p, w).as_slice() {
                         let ok = match v {
                             SocketValue::Float(f) => f.is_finite(),
                             SocketValue::Vector(c) => c.is_finite(),
