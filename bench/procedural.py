@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -62,7 +63,9 @@ def main() -> None:
         rows.append((label, best / args.points * 1e9))
         print(f"{label:45s} {rows[-1][1]:9.1f} ns")
     base = rows[0][1]
-    body = f"{args.points} random points in [-10, 10]³, one thread, best of 3, all outputs of the node.\n\n"
+    load = os.getloadavg()[0]
+    body = f"{args.points} random points in [-10, 10]³, one thread, best of 3, all outputs of the node. "
+    body += f"Load average {load:.1f} on {os.cpu_count()} cores during the run: compare the ratios, not the nanoseconds.\n\n"
     body += "| node | ns per point | × Checker |\n| --- | ---: | ---: |\n"
     body += "".join(f"| {label} | {ns:.0f} | {ns / base:.1f} |\n" for label, ns in rows)
     if args.write:

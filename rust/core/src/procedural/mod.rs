@@ -103,6 +103,167 @@ impl Procedural {
         }
     }
 
+    /// Whether each output (in [`Self::output_names`] order) is a colour/vector.
+    pub fn output_is_vector(&self) -> &'static [bool] {
+        match self {
+            Procedural::Noise(_) | Procedural::WhiteNoise(_) => &[false, true],
+            Procedural::Voronoi(_) => &[false, true, true, false, false],
+            _ => &[true, false],
+        }
+    }
+
+    /// Blender's identifiers of the node's input sockets other than Vector and W, and
+    /// whether each is a colour. A shading graph sets the linked ones per hit with
+    /// [`Self::set_input`] (by index in this list) on a copy of the node.
+    pub fn input_names(&self) -> &'static [(&'static str, bool)] {
+        const NOISE: &[(&str, bool)] = &[
+            ("Scale", false),
+            ("Detail", false),
+            ("Roughness", false),
+            ("Lacunarity", false),
+            ("Offset", false),
+            ("Gain", false),
+            ("Distortion", false),
+        ];
+        const VORONOI: &[(&str, bool)] = &[
+            ("Scale", false),
+            ("Detail", false),
+            ("Roughness", false),
+            ("Lacunarity", false),
+            ("Smoothness", false),
+            ("Exponent", false),
+            ("Randomness", false),
+        ];
+        const WAVE: &[(&str, bool)] = &[
+            ("Scale", false),
+            ("Distortion", false),
+            ("Detail", false),
+            ("Detail Scale", false),
+            ("Detail Roughness", false),
+            ("Phase Offset", false),
+        ];
+        const BRICK: &[(&str, bool)] = &[
+            ("Color1", true),
+            ("Color2", true),
+            ("Mortar", true),
+            ("Scale", false),
+            ("Mortar Size", false),
+            ("Mortar Smooth", false),
+            ("Bias", false),
+            ("Brick Width", false),
+            ("Row Height", false),
+        ];
+        match self {
+            Procedural::Noise(_) => NOISE,
+            Procedural::Voronoi(_) => VORONOI,
+            Procedural::Checker(_) => &[("Color1", true), ("Color2", true), ("Scale", false)],
+            Procedural::Gradient(_) | Procedural::WhiteNoise(_) => &[],
+            Procedural::Wave(_) => WAVE,
+            Procedural::Magic(_) => &[("Scale", false), ("Distortion", false)],
+            Procedural::Brick(_) => BRICK,
+        }
+    }
+
+    /// Sets input `index` of [`Self::input_names`]. A float given to a colour input
+    /// becomes grey, a colour given to a float input its mean; an index out of range
+    /// is ignored.
+    pub fn set_input(&mut self, index: usize, value: SocketValue) {
+        let f = match value {
+            SocketValue::Float(f) => f,
+            SocketValue::Vector(v) => (v.x + v.y + v.z) / 3.0,
+        };
+        let c = match value {
+            SocketValue::Float(f) => Vec3::splat(f),
+            SocketValue::Vector(v) => v,
+        };
+        match self {
+            Procedural::Noise(t) => {
+                let fields = [
+                    &mut t.scale,
+                    &mut t.detail,
+                    &mut t.roughness,
+                    &mut t.lacunarity,
+                    &mut t.offset,
+                    &mut t.gain,
+                    &mut t.distortion,
+                ];
+                if let Some(x) = fields.into_iter().nth(index) {
+                    *x = f;
+                }
+            }
+            Procedural::Voronoi(t) => {
+                let fields = [
+                    &mut t.scale,
+                    &mut t.detail,
+                    &mut t.roughness,
+                    &mut t.lacunarity,
+                    &mut t.smoothness,
+                    &mut t.exponent,
+                    &mut t.randomness,
+                ];
+                if let Some(x) = fields.into_iter().nth(index) {
+                    *x = f;
+                }
+            }
+            Procedural::Checker(t) => match index {
+                0 => t.color1 = c,
+                1 => t.color2 = c,
+                2 => t.scale = f,
+                _ => {}
+            },
+            Procedural::Gradient(_) | Procedural::WhiteNoise(_) => {}
+            Procedural::Wave(t) => {
+                let fields = [
+                    &mut t.scale,
+                    &mut t.distortion,
+                    &mut t.detail,
+                    &mut t.detail_scale,
+                    &mut t.detail_roughness,
+                    &mut t.phase_offset,
+                ];
+                if let Some(x) = fields.into_iter().nth(index) {
+                    *x = f;
+                }
+            }
+            Procedural::Magic(t) => match index {
+                0 => t.scale = f,
+                1 => t.distortion = f,
+                _ => {}
+            },
+            Procedural::Brick(t) => match index {
+                0 => t.color1 = c,
+                1 => t.color2 = c,
+                2 => t.mortar = c,
+                3 => t.scale = f,
+                4 => t.mortar_size = f,
+                5 => t.mortar_smooth = f,
+                6 => t.bias = f,
+                7 => t.brick_width = f,
+                8 => t.row_height = f,
+                _ => {}
+            },
+        }
+    }
+
+    fn dimensions(&self) -> Dimensions {
+        match self {
+            Procedural::Noise(t) => t.dimensions,
+            Procedural::Voronoi(t) => t.dimensions,
+            Procedural::WhiteNoise(t) => t.dimensions,
+            _ => Dimensions::D3,
+        }
+    }
+
+    /// Whether the node reads its Vector input (all but the 1D modes).
+    pub fn reads_vector(&self) -> bool {
+        self.dimensions() != Dimensions::D1
+    }
+
+    /// Whether the node reads its W input (1D and 4D Noise, Voronoi and White Noise).
+    pub fn reads_w(&self) -> bool {
+        matches!(self.dimensions(), Dimensions::D1 | Dimensions::D4)
+    }
+
     /// Every output at `vector` and `w`, in the order of [`Self::output_names`].
     pub fn evaluate(&self, vector: Vec3, w: f32) -> Outputs {
         use SocketValue::{Float, Vector};
@@ -178,6 +339,24 @@ mod tests {
         assert!(Procedural::from_json("ShaderNodeTexSky", "{}").is_err());
         let v = Procedural::from_json("ShaderNodeTexVoronoi", "{}").unwrap();
         assert_eq!(v.evaluate(Vec3::ONE, 0.0).as_slice().len(), v.output_names().len());
+    }
+
+    #[test]
+    fn set_input_reaches_every_listed_socket() {
+        // Setting each listed input to an odd value must change the node's parameters,
+        // and the lists match the sockets of the Blender node (their names, in order).
+        for mut node in all_nodes(0.0).into_iter().step_by(3) {
+            let before = node;
+            for (i, &(name, colour)) in node.input_names().iter().enumerate() {
+                let v = if colour { SocketValue::Vector(Vec3::new(0.1, 0.2, 0.3)) } else { SocketValue::Float(0.123) };
+                let mut n = node;
+                n.set_input(i, v);
+                assert_ne!(n, before, "{name} of {node:?}");
+            }
+            node.set_input(99, SocketValue::Float(1.0));
+            assert_eq!(node, before);
+            assert_eq!(node.output_names().len(), node.output_is_vector().len());
+        }
     }
 
     /// Every node with every float input set to `bad`, in every mode.
