@@ -637,6 +637,64 @@ class Scene:
             self.add_instance(index, np.eye(4) if transform is None else transform, name)
         return index
 
+    def add_curves(
+        self,
+        name: str,
+        keys: Any,
+        counts: Any,
+        *,
+        radius: Any = 0.005,
+        material: Material | int | None = None,
+        material_ids: Any = None,
+        linear: bool = False,
+        subdivisions: int = 4,
+        sides: int = 8,
+        transform: Any = None,
+        place: bool = True,
+    ) -> int:
+        """Adds curves (hair, fur): ``keys`` (K, 3) in order, ``counts`` keys per curve,
+        ``radius`` per key (K,) or one value, one material or per-curve ``material_ids``.
+        They are interpolated like Cycles' (Catmull-Rom; ``linear``: straight segments)
+        and tessellated into tubes of ``sides`` sides with ``subdivisions`` rings per key
+        segment (``polychrome.curves``; docs/camera.md). Returns the mesh index; placed
+        like :meth:`add_mesh`."""
+        from . import curves
+
+        v, n, uv, t, tri_curve = curves.curves_mesh(keys, radius, counts, subdivisions=subdivisions, sides=sides, linear=linear, name=name)
+        ids = None
+        if material_ids is not None:
+            per_curve = np.asarray(material_ids)
+            if per_curve.shape != (len(np.asarray(counts)),):
+                raise ValueError(f"curves '{name}': material_ids must have one entry per curve")
+            ids = per_curve[tri_curve]
+        return self.add_mesh(name, v, t, normals=n, uvs=uv, material=material, material_ids=ids, transform=transform, place=place)
+
+    def add_points(
+        self,
+        name: str,
+        positions: Any,
+        *,
+        radius: Any = 0.01,
+        material: Material | int | None = None,
+        material_ids: Any = None,
+        level: int = 1,
+        transform: Any = None,
+        place: bool = True,
+    ) -> int:
+        """Adds a point cloud as spheres (``radius`` per point or one value), each a
+        subdivided icosahedron of ``level`` (1: 80 triangles; ``polychrome.curves``).
+        Returns the mesh index; placed like :meth:`add_mesh`."""
+        from . import curves
+
+        v, n, uv, t, tri_point = curves.points_mesh(positions, radius, level=level, name=name)
+        ids = None
+        if material_ids is not None:
+            per_point = np.asarray(material_ids)
+            if per_point.shape != (len(np.asarray(positions)),):
+                raise ValueError(f"point cloud '{name}': material_ids must have one entry per point")
+            ids = per_point[tri_point]
+        return self.add_mesh(name, v, t, normals=n, uvs=uv, material=material, material_ids=ids, transform=transform, place=place)
+
     def add_instance(self, mesh: int, transform: Any, name: str = "") -> None:
         """Places mesh ``mesh`` again with ``transform``; instances share the mesh's data."""
         if not 0 <= mesh < len(self._meshes):

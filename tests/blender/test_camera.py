@@ -241,8 +241,8 @@ def test_panoramic_cameras_match_cycles(tmp_path):
 
 
 def test_unsupported_camera_and_scene_features_warn(tmp_path):
-    """An OSL (custom) camera, motion blur and a hair curves object each give one warning
-    naming the object and the feature."""
+    """An OSL (custom) camera and motion blur each give one warning naming the object and
+    the feature."""
     proc, res = run_bpy(
         tmp_path,
         """
@@ -251,8 +251,6 @@ def test_unsupported_camera_and_scene_features_warn(tmp_path):
     sc = empty_scene(8, 8)
     co = add_camera(sc, (0, -5, 0)); co.data.type = 'CUSTOM'
     sc.render.use_motion_blur = True
-    curves = bpy.data.hair_curves.new('Hair'); ob = bpy.data.objects.new('Hair', curves); sc.collection.objects.link(ob)
-    curves.add_curves([4])
     dg = bpy.context.evaluated_depsgraph_get()
     scene, warnings = export_scene(dg)
     emit(warnings=warnings, projection=scene.camera.projection)
@@ -263,4 +261,3 @@ def test_unsupported_camera_and_scene_features_warn(tmp_path):
     assert r["projection"] == "PERSPECTIVE"
     assert any("camera 'Camera'" in m and "CUSTOM" in m for m in w), w
     assert any("motion blur" in m for m in w), w
-    assert any("'Hair'" in m and "curves" in m for m in w), w

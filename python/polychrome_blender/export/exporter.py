@@ -21,6 +21,7 @@ import polychrome as pc
 from .camera import export_camera
 from .lights import export_lights
 from .materials import MaterialExport
+from .curves import hair_systems, particle_hair_arrays
 from .meshes import GEOMETRY_TYPES, MeshArrays, read_mesh
 from .textures import TextureCache
 from .warnings import Warnings
@@ -41,6 +42,7 @@ class _CachedMesh:
     warnings: list
     owners: set  # names of the objects whose instances used it
     data_names: set  # names of their original geometry data blocks
+    hair: bool = False  # particle hair (forgotten when any particle settings change)
 
 
 def _material_key(mat):
@@ -70,8 +72,10 @@ class Exporter:
             kind, name = u.id.id_type, u.id.original.name
             if kind == "OBJECT" and u.is_updated_geometry:
                 self._forget_meshes(lambda m, name=name: name in m.owners)
-            elif kind in ("MESH", "CURVE", "CURVES", "META", "FONT") and u.is_updated_geometry:
+            elif kind in ("MESH", "CURVE", "CURVES", "POINTCLOUD", "META", "FONT") and u.is_updated_geometry:
                 self._forget_meshes(lambda m, name=name: name in m.data_names)
+            elif kind == "PARTICLE":
+                self._forget_meshes(lambda m: m.hair)
             elif kind == "MATERIAL":
                 self._materials.pop(name, None)
                 self.textures.forget_used_by(("MATERIAL", name))  # it may be a reload of its image
@@ -147,16 +151,13 @@ class Exporter:
         used = set()
         for inst in depsgraph.object_instances:
             ob = inst.object
-            if ob.type in ("CURVES", "POINTCLOUD"):
-                kind = "hair curves" if ob.type == "CURVES" else "point cloud"
-                warnings.add((ob.type, ob.original.name), f"object '{ob.original.name}': {kind} are not supported yet and are not rendered")
-                continue
             if ob.type not in GEOMETRY_TYPES:
                 continue
             name = ob.original.name
-            for ps in getattr(ob, "particle_systems", ()):
-                if ps.settings.type == "HAIR" and ps.settings.render_type == "PATH":
-                    warnings.add(("hair", name), f"object '{name}': particle hair '{ps.name}' is not supported yet and is not rendered")
+            if inst.show_particles and ob.type == "MESH":
+                self._export_hair(depsgraph, inst, ob, name, scene, placed, materials, used, warnings)
+            if not inst.show_self:  # an emitter whose particle settings hide it
+                continue
             # Geometry-node instances of different meshes share the instancer's name, so
             # the evaluated data block is the key (with the materials it is shown with).
             key = (ob.data.as_pointer(), tuple(s.material.original.name if s.material else "" for s in ob.material_slots))
@@ -185,6 +186,31 @@ class Exporter:
         # what no object shows any more (deleted, hidden, re-evaluated) is dropped
         self._meshes = {k: v for k, v in self._meshes.items() if k in used}
         self._materials = {k: v for k, v in self._materials.items() if k in materials}
+
+    def _export_hair(self, depsgraph, inst, ob, name, scene, placed, materials, used, warnings):
+        """The hair particle systems of a mesh object: one mesh of tubes each (in object
+        space, shared by the object's instances), placed with the instance's transform."""
+        for ps in hair_systems(ob):
+            key = ("hair", name, ps.name)
+            if key not in placed:
+                cached = self._meshes.get(key)
+                if cached is None:
+                    own = Warnings()
+                    arrays = particle_hair_arrays(ob, ps, name, depsgraph.mode == "RENDER", own)
+                    cached = self._meshes[key] = _CachedMesh(arrays, own.items, {name}, set(), hair=True)
+                    self.counts["meshes"] += 1
+                warnings.extend(cached.warnings)
+                used.add(key)
+                placed[key] = None
+                a = cached.arrays
+                if a is not None:
+                    slot = int(a.tri_slot[0]) if ob.material_slots and len(a.tri_slot) else None
+                    ids = np.full(len(a.triangles), self._material(ob, slot, scene, materials, warnings), np.int64)
+                    placed[key] = scene.add_mesh(
+                        f"{name}/{ps.name}", a.vertices, a.triangles, normals=a.normals, uvs=a.uvs, material_ids=ids, place=False
+                    )
+            if placed[key] is not None:
+                scene.add_instance(placed[key], np.array(inst.matrix_world, dtype=np.float64), f"{name}/{ps.name}")
 
 
 def export_scene(depsgraph, camera=None):

@@ -54,6 +54,28 @@ def surface_node(mat):
     return _linked_node(out.inputs.get("Surface"))
 
 
+def hair_colour(node):
+    """The RGB colour a Principled Hair BSDF (or Hair BSDF) node stands for (see
+    :meth:`MaterialExport.hair`)."""
+    if node.type == "BSDF_HAIR":
+        return _rgb(node.inputs["Color"].default_value)
+    radial = node.inputs.get("Radial Roughness")  # the Chiang model's; Huang's has none
+    beta_n = float(radial.default_value) if radial is not None else 0.3
+    scale = (((((0.245 * beta_n) + 5.574) * beta_n - 10.73) * beta_n + 2.532) * beta_n - 0.215) * beta_n + 5.969
+    mode = node.parametrization
+    if mode == "COLOR":
+        return _rgb(node.inputs["Color"].default_value)
+    if mode == "MELANIN":
+        melanin = -np.log(max(1.0 - float(node.inputs["Melanin"].default_value), 1e-4))
+        redness = float(node.inputs["Melanin Redness"].default_value)
+        sigma = melanin * (1.0 - redness) * np.array([0.506, 0.841, 1.653]) + melanin * redness * np.array([0.343, 0.733, 1.924])
+        tint = np.clip(np.array(_rgb(node.inputs["Tint"].default_value)), 1e-6, 1.0)
+        sigma = sigma + (np.log(tint) / scale) ** 2
+    else:  # ABSORPTION
+        sigma = np.maximum(np.array(node.inputs["Absorption Coefficient"].default_value[:3], dtype=float), 0.0)
+    return tuple(float(c) for c in np.exp(-np.sqrt(sigma) * scale))
+
+
 class MaterialExport:
     """The export of one Blender material (or None: the default grey): ``material()``
     returns the polychrome material; problems go to ``warnings``; image textures come
@@ -144,6 +166,8 @@ class MaterialExport:
             if self.colour(node, "Color") != (1.0, 1.0, 1.0):
                 self.warnings.add(("glass-tint", name), f"{self.owner}: the colour of '{node.name}' is ignored (clear glass)")
             return pc.Dielectric(self.ior(node), roughness=_clamp01(_input_value(node, "Roughness")), name=name)
+        if t in ("BSDF_HAIR_PRINCIPLED", "BSDF_HAIR"):
+            return self.hair(node)
         if t == "EMISSION":
             return pc.Emitter(self.emission_spectrum(node, "Color"), strength=_input_value(node, "Strength"), name=name)
         export_custom = getattr(node, "polychrome_export", None)  # Polychrome's own nodes (nodes.py)
@@ -225,6 +249,23 @@ class MaterialExport:
             name=name,
             **extra,
         )
+
+    def hair(self, node):
+        """Principled Hair BSDF (and the older Hair BSDF) → a Principled BSDF of the hair's
+        colour, with a warning: hair scattering (Chiang 2016 / Huang 2022 lobes along the
+        fibre) is not modelled. The colour is what Cycles' absorption σ stands for,
+        inverting its ``bsdf_principled_hair_sigma_from_reflectance``:
+        c = exp(−√σ · s(βn)), s the albedo/roughness polynomial of Chiang et al. 2016
+        (intern/cycles/kernel/closure/bsdf_util.h)."""
+        rgb = hair_colour(node)
+        roughness = _clamp01(_input_value(node, "Roughness")) if "Roughness" in node.inputs else _clamp01(_input_value(node, "RoughnessU"))
+        ior = _input_value(node, "IOR") if "IOR" in node.inputs else 1.55
+        self.warnings.add(
+            ("hair", self.name, node.name),
+            f"{self.owner}: '{node.name}' ({node.bl_idname}) is approximated by a Principled BSDF of colour "
+            f"({rgb[0]:.3g}, {rgb[1]:.3g}, {rgb[2]:.3g}); hair scattering is not modelled",
+        )
+        return pc.Principled(rgb, roughness=roughness, ior=max(float(ior), 1.0), name=self.name)
 
     def no_closure(self):
         """An unconnected shader input: no scattering, no emission (as Cycles)."""

@@ -6,8 +6,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-#: Object types whose evaluated geometry is exported as a triangle mesh.
-GEOMETRY_TYPES = ("MESH", "CURVE", "SURFACE", "META", "FONT")
+#: Object types whose evaluated geometry is exported as a triangle mesh (hair curves as
+#: tubes and point clouds as spheres: export/curves.py).
+GEOMETRY_TYPES = ("MESH", "CURVE", "SURFACE", "META", "FONT", "CURVES", "POINTCLOUD")
 
 
 class MeshArrays(NamedTuple):
@@ -102,6 +103,12 @@ def mesh_arrays(ob, name):
 def read_mesh(ob, name, warnings):
     """:func:`mesh_arrays`, where an object that has no mesh to give (e.g. a curve without
     geometry) is skipped with a warning; a mesh object that cannot be read is an error."""
+    from . import curves
+
+    if ob.type == "CURVES":
+        return curves.curves_arrays(ob, name, warnings)
+    if ob.type == "POINTCLOUD":
+        return curves.pointcloud_arrays(ob, name)
     try:
         return mesh_arrays(ob, name)
     except RuntimeError as e:

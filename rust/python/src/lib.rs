@@ -6,6 +6,7 @@
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn};
 use polychrome_core::color::uplift::Uplift;
 use polychrome_core::color::{Observer, RgbSpace};
+use polychrome_core::geometry::curves::{self, CurveOptions, Tessellation};
 use polychrome_core::render::{render as core_render, RenderControl, RenderOutput, RenderSettings};
 use polychrome_core::scene::{Buffer, SceneDesc};
 use polychrome_core::spectrum::named::{RgbToSpectrum, SpectrumRole};
@@ -390,6 +391,64 @@ fn uplift<'py>(
     PyArray1::from_vec(py, out).reshape(out_shape)
 }
 
+fn tessellation_dict<'py>(py: Python<'py>, t: Tessellation) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let (nv, nt) = (t.vertex_count(), t.triangle_count());
+    d.set_item("vertices", PyArray1::from_vec(py, t.vertices).reshape([nv, 3])?)?;
+    d.set_item("normals", PyArray1::from_vec(py, t.normals).reshape([nv, 3])?)?;
+    d.set_item("uvs", PyArray1::from_vec(py, t.uvs).reshape([nv, 2])?)?;
+    d.set_item("triangles", PyArray1::from_vec(py, t.triangles).reshape([nt, 3])?)?;
+    d.set_item("owner", PyArray1::from_vec(py, t.owner))?;
+    Ok(d)
+}
+
+fn rows3(a: &PyReadonlyArrayDyn<'_, f32>, what: &str) -> PyResult<Vec<[f32; 3]>> {
+    let v: Vec<f32> = a.as_array().iter().copied().collect();
+    if !v.len().is_multiple_of(3) {
+        return Err(PyValueError::new_err(format!("{what} must have shape (N, 3)")));
+    }
+    Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+}
+
+/// tessellate_curves(name, keys (K, 3) f32, radii (K,) f32, counts (C,) u32,
+/// subdivisions, sides, linear) -> dict of vertices, normals, uvs, triangles, owner
+/// (the curve of each triangle): curves as tubes (geometry/curves.rs).
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+fn tessellate_curves<'py>(
+    py: Python<'py>,
+    name: &str,
+    keys: PyReadonlyArrayDyn<'py, f32>,
+    radii: PyReadonlyArrayDyn<'py, f32>,
+    counts: PyReadonlyArrayDyn<'py, u32>,
+    subdivisions: u32,
+    sides: u32,
+    linear: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let k = rows3(&keys, "keys")?;
+    let r: Vec<f32> = radii.as_array().iter().copied().collect();
+    let c: Vec<u32> = counts.as_array().iter().copied().collect();
+    let opts = CurveOptions { subdivisions, sides, linear };
+    let t = py.allow_threads(|| guarded("tessellate_curves", || curves::tessellate_curves(name, &k, &r, &c, &opts)))?;
+    tessellation_dict(py, t)
+}
+
+/// tessellate_points(name, positions (N, 3) f32, radii (N,) f32, level) -> dict as
+/// tessellate_curves (owner: the point of each triangle): points as icospheres.
+#[pyfunction]
+fn tessellate_points<'py>(
+    py: Python<'py>,
+    name: &str,
+    positions: PyReadonlyArrayDyn<'py, f32>,
+    radii: PyReadonlyArrayDyn<'py, f32>,
+    level: u32,
+) -> PyResult<Bound<'py, PyDict>> {
+    let p = rows3(&positions, "positions")?;
+    let r: Vec<f32> = radii.as_array().iter().copied().collect();
+    let t = py.allow_threads(|| guarded("tessellate_points", || curves::tessellate_points(name, &p, &r, level)))?;
+    tessellation_dict(py, t)
+}
+
 /// _panic_for_tests(message) — panics inside `guarded` on purpose, so tests can check
 /// that an internal panic reaches Python as a RuntimeError and never aborts the process.
 #[pyfunction]
@@ -459,6 +518,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(spectrum_values, m)?)?;
     m.add_function(wrap_pyfunction!(spectrum_xyz, m)?)?;
     m.add_function(wrap_pyfunction!(uplift, m)?)?;
+    m.add_function(wrap_pyfunction!(tessellate_curves, m)?)?;
+    m.add_function(wrap_pyfunction!(tessellate_points, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     m.add_function(wrap_pyfunction!(_evaluate_procedural, m)?)?;
     m.add_class::<RenderJob>()?;

@@ -1,6 +1,8 @@
 //! Geometry: triangle meshes, instances with transforms, rays, watertight
-//! ray/triangle intersection and robust ray offsets.
+//! ray/triangle intersection, robust ray offsets, and curves and point clouds
+//! tessellated into triangles.
 
+pub mod curves;
 pub mod frame;
 pub mod mesh;
 pub mod ray;
