@@ -15,6 +15,8 @@ pub mod microfacet;
 pub mod mix;
 pub mod param;
 pub mod principled;
+#[cfg(test)]
+pub mod testing;
 pub mod texture;
 pub mod thinfilm;
 
