@@ -10,6 +10,8 @@ pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
 pub mod dispersion;
+pub mod energy;
+pub mod energy_tables;
 pub mod fresnel;
 pub mod microfacet;
 pub mod mix;
