@@ -15,6 +15,7 @@ pub mod energy_tables;
 pub mod fresnel;
 pub mod microfacet;
 pub mod mix;
+pub mod oren_nayar;
 pub mod param;
 pub mod principled;
 #[cfg(test)]
@@ -30,6 +31,7 @@ pub use dielectric::{Dielectric, RoughDielectric};
 pub use diffuse::Diffuse;
 pub use dispersion::{IndexOfRefraction, IorDesc};
 pub use mix::MixBsdf;
+pub use oren_nayar::OrenNayar;
 pub use param::SpectralParam;
 pub use principled::{Principled, PrincipledParams};
 pub use texture::{Texture, Wrap};
