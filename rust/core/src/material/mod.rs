@@ -22,6 +22,7 @@ pub mod principled;
 pub mod testing;
 pub mod texture;
 pub mod thinfilm;
+pub mod translucent;
 
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 use glam::{Vec2, Vec3A};
@@ -36,6 +37,7 @@ pub use param::SpectralParam;
 pub use principled::{Principled, PrincipledParams};
 pub use texture::{Texture, Wrap};
 pub use thinfilm::ThinFilm;
+pub use translucent::Translucent;
 
 /// What an integrator needs to know about a BSDF without evaluating it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
