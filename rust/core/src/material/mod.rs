@@ -18,6 +18,8 @@ pub mod mix;
 pub mod oren_nayar;
 pub mod param;
 pub mod principled;
+pub mod sheen;
+pub mod sheen_ltc;
 #[cfg(test)]
 pub mod testing;
 pub mod texture;
@@ -35,6 +37,7 @@ pub use mix::MixBsdf;
 pub use oren_nayar::OrenNayar;
 pub use param::SpectralParam;
 pub use principled::{Principled, PrincipledParams};
+pub use sheen::Sheen;
 pub use texture::{Texture, Wrap};
 pub use thinfilm::ThinFilm;
 pub use translucent::Translucent;
