@@ -140,15 +140,19 @@ def test_no_previews_when_not_requested():
 def test_errors_surface_from_result_and_misuse_is_reported():
     with pytest.raises(ValueError, match="method"):
         pc.RenderJob(furnace_scene(EMISSION, ALBEDO), method="NOPE")
-    job = pc.RenderJob(furnace_scene(EMISSION, ALBEDO), width=8, height=8, samples=0)
+    with pytest.raises(ValueError, match="setting 'samples': 0 is below the minimum 1"):
+        pc.RenderJob(furnace_scene(EMISSION, ALBEDO), width=8, height=8, samples=0)  # checked when made
+    scene = furnace_scene(EMISSION, ALBEDO)
+    scene.camera.projection = "ORTHOGRAPHIC"  # light tracing cannot reach it: known only to the render
+    job = pc.RenderJob(scene, width=8, height=8, samples=1, direction="FORWARD")
     with pytest.raises(RuntimeError, match="not started"):
         job.wait(0.1)
     job.start()
     with pytest.raises(RuntimeError, match="already started"):
         job.start()
     assert job.wait(timeout=60)
-    with pytest.raises(ValueError, match="samples"):
+    with pytest.raises(ValueError, match="direction"):
         job.result()
-    with pytest.raises(ValueError, match="samples"):
+    with pytest.raises(ValueError, match="direction"):
         job.result()
     assert job.preview() is None

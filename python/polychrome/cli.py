@@ -86,9 +86,35 @@ USD_SUFFIXES = (".usd", ".usda", ".usdc", ".usdz")
 EXIT_INTERRUPTED = 130
 
 
+def flag(name: str) -> str:
+    """The command-line flag of setting ``name``: ``--max-bounces`` for ``max_bounces``."""
+    return "--" + name.replace("_", "-")
+
+
+def _flag_help(spec: dict) -> tuple[str, str]:
+    """(metavar, help) of a setting's flag, from the schema."""
+    from .settings import describe_default
+
+    kind = spec["kind"]
+    t = kind["type"]
+    metavar = {"int": "N", "float": kind.get("unit") or "X", "string": "TEXT", "float_list": "L1,L2,..."}.get(t, "")
+    text = spec["help"]
+    if t == "enum":
+        metavar = "|".join(item["name"] for item in kind["items"])
+    elif t == "float_list" and kind.get("count_setting"):
+        metavar = "N|L1,L2,..."
+        text += f" (a single whole number N sets {flag(kind['count_setting'])} instead)"
+    if spec["applies_when"]:
+        text += f"; {spec['applies_when']['value']} only"
+    return metavar, f"{text} (default: {describe_default(spec)})".replace("%", "%%")
+
+
 def _add_render_parser(subparsers) -> None:
-    """Declare `polychrome render SCENE -o OUT [--samples N] [--method M] [--wavelengths N]
-    [--seed S] [--threads T] [--time-limit SEC] [--width W --height H]`."""
+    """Declare `polychrome render SCENE -o OUT [--passes] [--quiet]` and one flag per
+    render setting, generated from the settings schema (``--samples``, ``--max-bounces``,
+    ...): same names, help and defaults as the Python API and Blender."""
+    from .settings import SETTINGS
+
     p = subparsers.add_parser(
         "render",
         help="render a USD stage or a .blend file to .exr/.png",
@@ -97,121 +123,61 @@ def _add_render_parser(subparsers) -> None:
     )
     p.add_argument("scene", metavar="SCENE", help="scene file: .usd, .usda, .usdc, .usdz or .blend")
     p.add_argument("-o", "--output", metavar="OUT", required=True, help="image to write: .exr or .png")
-    p.add_argument("--samples", type=int, metavar="N", help="samples per pixel")
-    p.add_argument("--method", metavar="M", help="POLYCHROMATIC, MONOCHROMATIC_RAYS, MONOCHROMATIC_SCENES or RGB")
-    p.add_argument("--direction", metavar="D", help="BACKWARD (from the camera), FORWARD (light tracing) or BIDIRECTIONAL")
-    p.add_argument(
-        "--dispersion-splitting",
-        action=argparse.BooleanOptionalAction,
-        default=None,
-        help="POLYCHROMATIC: one monochromatic path per wavelength at the first dispersive surface (deterministic mode)",
-    )
-    p.add_argument(
-        "--wavelengths",
-        metavar="N|L1,L2,...",
-        help="wavelength grid: a sample count (uniform over --wavelength-min..--wavelength-max, default 380-780 nm) "
-        "or an explicit ascending list of wavelengths in nm",
-    )
-    p.add_argument("--wavelength-min", type=float, metavar="NM", help="start of the uniform grid (default 380)")
-    p.add_argument("--wavelength-max", type=float, metavar="NM", help="end of the uniform grid (default 780)")
-    p.add_argument("--max-bounces", type=int, metavar="B", help="scattering events per path (0: only what the camera sees)")
-    p.add_argument("--uplift", metavar="U", help="RGB to spectrum map: LINEAR (the paper's eq. 10) or SMOOTH")
-    p.add_argument(
-        "--spectral-output",
-        action=argparse.BooleanOptionalAction,
-        default=None,
-        help="keep each pixel's spectrum (.exr output then uses the spectral EXR layout)",
-    )
-    p.add_argument("--seed", type=int, metavar="S", help="random seed (same seed, same pixels)")
-    p.add_argument("--threads", type=int, metavar="T", help="worker threads (0: every core)")
-    p.add_argument("--time-limit", type=float, metavar="SEC", help="seconds after which no new pass starts (0: none)")
-    p.add_argument("--width", type=int, metavar="W", help="image width in pixels")
-    p.add_argument("--height", type=int, metavar="H", help="image height in pixels")
-    p.add_argument(
-        "--quality",
-        metavar="Q",
-        help="AUTO (default: grid fitted to the scene, adaptive sampling), PREVIEW, FINAL or REFERENCE; "
-        "explicit flags override what the preset chooses",
-    )
-    p.add_argument("--noise-threshold", type=float, metavar="DE", help="adaptive sampling: stop a pixel at this estimated dE00 (0: off)")
     p.add_argument("--passes", action="store_true", help="EXR only: also write Depth, Normal and Albedo layers")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    groups = {}
+    for spec in SETTINGS.values():
+        group = groups.get(spec["group"])
+        if group is None:
+            group = groups[spec["group"]] = p.add_argument_group(f"{spec['group'].lower()} settings")
+        metavar, text = _flag_help(spec)
+        if spec["kind"]["type"] == "bool":
+            group.add_argument(flag(spec["name"]), dest=spec["name"], action=argparse.BooleanOptionalAction, default=None, help=text)
+        else:
+            # Values are checked against the schema in _render_overrides, so a bad one is
+            # one line naming the flag; unset flags stay None (the scene's value is kept).
+            group.add_argument(flag(spec["name"]), dest=spec["name"], metavar=metavar, help=text)
     p.set_defaults(handler=cmd_render)
 
 
+def _flag_value(spec: dict, text):
+    """A flag's text as the setting's value (before the schema's range check)."""
+    t = spec["kind"]["type"]
+    name = flag(spec["name"])
+    if t in ("bool", "enum", "string"):
+        return text
+    try:
+        if t == "int":
+            return int(text)
+        if t == "float":
+            return float(text)
+        parts = [x for x in str(text).replace(" ", "").split(",") if x]
+        return [float(x) for x in parts]
+    except ValueError:
+        kind = {"int": "a whole number", "float": "a number"}.get(t, "a comma-separated list of numbers")
+        raise ValueError(f"{name} must be {kind}, got '{text}'") from None
+
+
 def _render_overrides(args: argparse.Namespace) -> dict:
-    """RenderSettings fields given on the command line."""
-    pairs = {
-        "samples": args.samples,
-        **_spectral_overrides(args),
-        "seed": args.seed,
-        "threads": args.threads,
-        "time_limit": args.time_limit,
-        "width": args.width,
-        "height": args.height,
-        "quality": None if args.quality is None else args.quality.upper(),
-        "noise_threshold": args.noise_threshold,
-    }
-    for key in ("samples", "wavelength_count", "width", "height"):
-        if pairs[key] is not None and pairs[key] <= 0:
-            raise ValueError(f"--{key.replace('_count', 's').replace('_', '-')} must be positive, got {pairs[key]}")
-    for key in ("seed", "threads"):
-        if pairs[key] is not None and pairs[key] < 0:
-            raise ValueError(f"--{key} must not be negative, got {pairs[key]}")
-    if pairs["quality"] is not None and pairs["quality"] not in ("AUTO", "PREVIEW", "FINAL", "REFERENCE"):
-        raise ValueError(f"--quality must be AUTO, PREVIEW, FINAL or REFERENCE, got {args.quality}")
-    if pairs["noise_threshold"] is not None and not pairs["noise_threshold"] >= 0:
-        raise ValueError(f"--noise-threshold must not be negative, got {pairs['noise_threshold']}")
-    if pairs["time_limit"] is not None and not pairs["time_limit"] >= 0:
-        raise ValueError(f"--time-limit must not be negative, got {pairs['time_limit']}")
-    return {k: v for k, v in pairs.items() if v is not None}
+    """The RenderSettings fields given on the command line, checked against the schema
+    (ValueError naming the flag)."""
+    from .settings import SETTINGS, check
 
-
-def _choice(flag: str, value, choices) -> str | None:
-    if value is None:
-        return None
-    if value.upper() not in choices:
-        raise ValueError(f"--{flag} must be one of {', '.join(choices)}, got {value}")
-    return value.upper()
-
-
-def _spectral_overrides(args: argparse.Namespace) -> dict:
-    """The method, direction, grid and uplift flags as RenderSettings fields (None: not given).
-    ``--wavelengths`` is a count (``wavelength_count``) or a comma-separated list (``wavelengths``)."""
-    from .render import DIRECTIONS, METHODS, UPLIFTS
-
-    out = {
-        "method": _choice("method", args.method, METHODS),
-        "direction": _choice("direction", args.direction, DIRECTIONS),
-        "dispersion_splitting": args.dispersion_splitting,
-        "uplift": _choice("uplift", args.uplift, UPLIFTS),
-        "spectral_output": args.spectral_output,
-        "max_bounces": args.max_bounces,
-        "wavelength_min": args.wavelength_min,
-        "wavelength_max": args.wavelength_max,
-        "wavelength_count": None,
-        "wavelengths": None,
-    }
-    if out["max_bounces"] is not None and out["max_bounces"] < 0:
-        raise ValueError(f"--max-bounces must not be negative, got {out['max_bounces']}")
-    for key in ("wavelength_min", "wavelength_max"):
-        if out[key] is not None and not 360.0 <= out[key] <= 830.0:
-            raise ValueError(f"--{key.replace('_', '-')} must lie in 360..830 nm, got {out[key]}")
-    text = args.wavelengths
-    if text is not None:
-        parts = [p for p in str(text).replace(" ", "").split(",") if p]
+    out = {}
+    for name, spec in SETTINGS.items():
+        text = getattr(args, name, None)
+        if text is None:
+            continue
+        target, value = name, _flag_value(spec, text)
+        count = spec["kind"].get("count_setting")
+        if count and str(text).strip().isdigit():  # --wavelengths 41: a count
+            target, value = count, int(text)
         try:
-            values = [float(p) for p in parts]
-        except ValueError:
-            raise ValueError(f"--wavelengths must be a count or a comma-separated list of nm, got '{text}'") from None
-        if len(parts) == 1 and parts[0].isdigit():
-            out["wavelength_count"] = int(parts[0])
-            if out["wavelength_count"] <= 0:
-                raise ValueError(f"--wavelengths must be positive, got {text}")
-        elif len(values) < 2 or any(b <= a for a, b in zip(values, values[1:])):
-            raise ValueError(f"--wavelengths: a list must hold at least two strictly ascending wavelengths, got '{text}'")
-        else:
-            out["wavelengths"] = values
+            out[target] = check(target, value)
+        except ValueError as e:
+            raise ValueError(f"{flag(name)}: {str(e).split(': ', 1)[1]}") from None
+        if target == name and spec["kind"]["type"] == "float_list" and any(b <= a for a, b in zip(out[name], out[name][1:])):
+            raise ValueError(f"{flag(name)}: a list must be strictly ascending, got '{text}'")
     return out
 
 
@@ -228,12 +194,10 @@ def _merge_size(stored: dict, overrides: dict) -> dict:
 
 
 def _settings_from(values: dict):
-    import dataclasses
-
     from .render import RenderSettings
+    from .settings import SETTINGS
 
-    known = {f.name for f in dataclasses.fields(RenderSettings)}
-    return RenderSettings(**{k: v for k, v in values.items() if k in known})
+    return RenderSettings(**{k: v for k, v in values.items() if k in SETTINGS})
 
 
 def _load_usd(path: str, overrides: dict):

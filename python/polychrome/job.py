@@ -25,7 +25,7 @@ from collections.abc import Callable
 import numpy as np
 
 from . import _core
-from .render import RenderResult, RenderSettings, check_settings, description_json
+from .render import RenderResult, RenderSettings, description_json
 from .scene import Scene
 
 
@@ -53,8 +53,7 @@ class RenderJob:
         description: tuple[dict[str, Any], list[np.ndarray]] | None = None,
         **overrides: Any,
     ):
-        self.settings = replace(settings or RenderSettings(), **overrides)
-        check_settings(self.settings)
+        self.settings = replace(settings or RenderSettings(), **overrides)  # validates every setting
         if description is None:
             if scene is None:
                 raise ValueError("RenderJob needs a scene (or a description)")

@@ -3,7 +3,7 @@ bar, cancellation, and the result as numpy arrays with writers for EXR and PNG."
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import dataclass, field, replace
 import json
 from pathlib import Path
 import sys
@@ -14,67 +14,19 @@ from collections.abc import Callable
 import numpy as np
 
 from . import _core
+from . import settings as _settings
 from .scene import Scene
 
-METHODS = ("POLYCHROMATIC", "MONOCHROMATIC_RAYS", "MONOCHROMATIC_SCENES", "RGB")
-DIRECTIONS = ("BACKWARD", "FORWARD", "BIDIRECTIONAL")
-UPLIFTS = ("LINEAR", "SMOOTH")
+#: Generated from the core's settings schema (see polychrome.settings): the same names,
+#: defaults and ranges as the CLI flags and Blender's ``scene.polychrome``.
+RenderSettings = _settings.make_settings_class()
+METHODS = _settings.choices("method")
+DIRECTIONS = _settings.choices("direction")
+UPLIFTS = _settings.choices("uplift")
 #: ``quality`` presets; AUTO fits the grid to the scene and samples adaptively.
-QUALITIES = ("AUTO", "PREVIEW", "FINAL", "REFERENCE")
+QUALITIES = _settings.choices("quality")
 #: Settings a quality preset fills when they are left at None (not set explicitly).
-QUALITY_FIELDS = ("samples", "max_bounces", "wavelength_count", "wavelengths", "noise_threshold")
-
-
-@dataclass
-class RenderSettings:
-    """Everything that controls a render; names match the CLI flags and ``scene.polychrome``."""
-
-    width: int = 320
-    height: int = 240
-    #: None: chosen by ``quality`` (the maximum per pixel when sampling adaptively).
-    samples: int | None = None
-    method: str = "POLYCHROMATIC"
-    #: BACKWARD (from the camera), FORWARD (light tracing) or BIDIRECTIONAL.
-    direction: str = "BACKWARD"
-    #: POLYCHROMATIC only: split into one monochromatic path per wavelength at the
-    #: first dispersive surface instead of choosing one (deterministic mode).
-    dispersion_splitting: bool = False
-    #: None (and no ``wavelengths``): the grid is chosen by ``quality``.
-    wavelength_count: int | None = None
-    wavelength_min: float = 380.0
-    wavelength_max: float = 780.0
-    wavelengths: list[float] | None = None
-    max_bounces: int | None = None
-    seed: int = 0
-    threads: int = 0
-    time_limit: float = 0.0
-    uplift: str = "LINEAR"
-    spectral_output: bool = False
-    #: AUTO, PREVIEW, FINAL or REFERENCE: fills every setting of QUALITY_FIELDS left at
-    #: None; a value given explicitly always wins.
-    quality: str = "AUTO"
-    #: Adaptive sampling: stop a pixel at this estimated ΔE (0: off; None: from quality).
-    noise_threshold: float | None = None
-
-    def to_json(self) -> str:
-        d = {k: v for k, v in asdict(self).items() if v is not None or k not in QUALITY_FIELDS}
-        if str(d["quality"]).upper() not in QUALITIES:
-            raise ValueError(f"setting 'quality': '{d['quality']}' is not one of {', '.join(QUALITIES)}")
-        d["quality"] = d["quality"].upper()
-        if "noise_threshold" in d:
-            d["noise_threshold"] = float(d["noise_threshold"])
-            if not d["noise_threshold"] >= 0:
-                raise ValueError(f"setting 'noise_threshold': {d['noise_threshold']} must be 0 (off) or positive")
-        d["method"] = d["method"].upper()
-        d["direction"] = d["direction"].upper()
-        d["dispersion_splitting"] = bool(d["dispersion_splitting"])
-        d["uplift"] = d["uplift"].upper()
-        if d.get("wavelengths") is not None:
-            d["wavelengths"] = [float(x) for x in d["wavelengths"]]
-        for k in ("width", "height", "samples", "max_bounces", "seed", "threads", "wavelength_count"):
-            if k in d and int(d[k]) < 0:
-                raise ValueError(f"setting '{k}': {d[k]} must not be negative")
-        return json.dumps(d)
+QUALITY_FIELDS = tuple(name for name, s in _settings.SETTINGS.items() if s["from_quality"])
 
 
 @dataclass
@@ -142,14 +94,6 @@ def _nonfinite_path(value: Any, path: str = "") -> str | None:
     return None
 
 
-def check_settings(settings: RenderSettings) -> None:
-    """The enum checks, with a message naming the setting."""
-    for name, allowed in (("method", METHODS), ("direction", DIRECTIONS), ("uplift", UPLIFTS)):
-        value = getattr(settings, name)
-        if str(value).upper() not in allowed:
-            raise ValueError(f"setting '{name}': '{value}' is not one of {', '.join(allowed)}")
-
-
 def description_json(desc: dict[str, Any]) -> str:
     """JSON of a scene description; JSON has no NaN or infinity, so a non-finite number is
     reported here with where it is instead of as a parse error in the core."""
@@ -194,8 +138,7 @@ def render(
     Ctrl-C cancels too (KeyboardInterrupt). Errors in the scene raise ValueError naming
     the object and the problem.
     """
-    settings = replace(settings or RenderSettings(), **overrides)
-    check_settings(settings)
+    settings = replace(settings or RenderSettings(), **overrides)  # validates every setting
     desc, buffers = scene.description()
     close = None
     if progress is True:

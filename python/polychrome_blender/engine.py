@@ -12,38 +12,26 @@ import traceback
 import bpy
 import numpy as np
 import polychrome as pc
+from polychrome.settings import SETTINGS
 
 from . import passes, viewport
 from .export import Exporter, export_scene
 from .export.camera import render_size
 
-#: Settings the quality preset fills when they were never set in the panel (samples is
-#: always passed: it is the maximum per pixel the progress display counts against).
-PRESET_FILLED = ("wavelength_count", "max_bounces", "noise_threshold")
-
 
 def settings_from_scene(props, width, height):
-    """``scene.polychrome`` → ``polychrome.RenderSettings`` (same names)."""
-    values = dict(
-        width=width,
-        height=height,
-        samples=props.samples,
-        method=props.method,
-        direction=props.direction,
-        dispersion_splitting=bool(props.dispersion_splitting),
-        wavelength_count=props.wavelength_count,
-        max_bounces=props.max_bounces,
-        seed=props.seed,
-        threads=props.threads,
-        time_limit=props.time_limit,
-        uplift=props.uplift,
-        spectral_output=bool(props.spectral_output),
-        quality=props.quality,
-        noise_threshold=float(props.noise_threshold),
-    )
-    for key in PRESET_FILLED:
-        if not props.is_property_set(key):
-            values.pop(key)
+    """``scene.polychrome`` → ``polychrome.RenderSettings``, by the settings schema: every
+    setting that is a property, except those a quality preset fills that were never set
+    in the panel (the schema marks the ones Blender always passes, e.g. samples); the
+    size from the output resolution."""
+    values = dict(width=width, height=height)
+    for name, spec in SETTINGS.items():
+        b = spec["blender"]
+        if not b["property"]:
+            continue
+        if spec["from_quality"] and not b["always"] and not props.is_property_set(name):
+            continue
+        values[name] = getattr(props, name)
     return pc.RenderSettings(**values)
 
 

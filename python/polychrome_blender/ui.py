@@ -1,8 +1,10 @@
-"""Render Properties panel for ``scene.polychrome``, and POLYCHROME added to the
+"""Render Properties panel for ``scene.polychrome`` (its rows generated from the settings
+schema, grouped as the schema groups them), and POLYCHROME added to the
 built-in panels that work for any engine (format, output, colour management, lights,
 materials, world), as BlendLuxCore does."""
 
 import bpy
+from polychrome.settings import SETTINGS
 
 ENGINE = "POLYCHROME"
 
@@ -45,25 +47,27 @@ class RENDER_PT_polychrome(bpy.types.Panel):
         layout.use_property_split = True
         layout.use_property_decorate = False
         props = context.scene.polychrome
-        col = layout.column()
-        col.prop(props, "quality")
-        col.prop(props, "method")
-        col.prop(props, "direction")
-        if props.method == "POLYCHROMATIC":
-            col.prop(props, "dispersion_splitting")
-        col.prop(props, "wavelength_count")
-        col.prop(props, "uplift")
-        col.prop(props, "spectral_output")
-        col = layout.column()
-        col.prop(props, "samples")
-        col.prop(props, "noise_threshold")
-        col.prop(props, "time_limit")
-        col.prop(props, "max_bounces")
-        col.prop(props, "seed")
-        col.prop(props, "threads")
+        for group, names in panel_groups():
+            col = layout.column(heading=group)
+            for name in names:
+                row = col.row()
+                cond = SETTINGS[name]["applies_when"]
+                if cond is not None:
+                    row.active = getattr(props, cond["setting"]) == cond["value"]
+                row.prop(props, name)
         col = layout.column(heading="Viewport")
         col.prop(props, "viewport_samples", text="Samples")
         col.prop(props, "viewport_pixel_size", text="Pixel Size")
+
+
+def panel_groups():
+    """[(group, [setting names])] of the settings that are properties, in the schema's
+    order: the panel's columns and rows."""
+    groups = {}
+    for name, spec in SETTINGS.items():
+        if spec["blender"]["property"]:
+            groups.setdefault(spec["group"], []).append(name)
+    return list(groups.items())
 
 
 classes = (RENDER_PT_polychrome,)

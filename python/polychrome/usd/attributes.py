@@ -64,24 +64,22 @@ HAS_BACKING = "polychrome:hasBacking"
 
 # -- render settings (on /Render/PolychromeSettings, a UsdRender.Settings prim) --
 RENDER_SETTINGS_PATH = "/Render/PolychromeSettings"
-#: polychrome.RenderSettings field → (attribute name, Sdf value type name)
-SETTINGS = {
-    "samples": ("polychrome:samples", "Int"),
-    "method": ("polychrome:method", "Token"),
-    "wavelength_count": ("polychrome:wavelength_count", "Int"),
-    "wavelength_min": ("polychrome:wavelength_min", "Double"),
-    "wavelength_max": ("polychrome:wavelength_max", "Double"),
-    "wavelengths": ("polychrome:wavelengths", "DoubleArray"),
-    "max_bounces": ("polychrome:max_bounces", "Int"),
-    "seed": ("polychrome:seed", "Int"),
-    "time_limit": ("polychrome:time_limit", "Double"),
-    "uplift": ("polychrome:uplift", "Token"),
-    "spectral_output": ("polychrome:spectral_output", "Bool"),
-}
 # width and height are the standard ``resolution`` of UsdRender.Settings; threads belong
-# to the machine that renders and are not stored. Any other RenderSettings field is
-# stored as ``polychrome:<field>`` with the type of its value (see settings_items).
+# to the machine that renders and are not stored.
 NOT_STORED = ("width", "height", "threads")
+#: Sdf value type of each kind of setting in the settings schema.
+SDF_TYPES = {"int": "Int", "float": "Double", "bool": "Bool", "enum": "Token", "string": "String", "float_list": "DoubleArray"}
+
+
+def _settings_attributes():
+    from ..settings import SETTINGS as SCHEMA
+
+    return {name: (f"{NAMESPACE}:{name}", SDF_TYPES[spec["kind"]["type"]]) for name, spec in SCHEMA.items() if name not in NOT_STORED}
+
+
+#: polychrome.RenderSettings field → (attribute name, Sdf value type name): every stored
+#: setting of the settings schema, as ``polychrome:<field>``.
+SETTINGS = _settings_attributes()
 
 
 def settings_items(settings):

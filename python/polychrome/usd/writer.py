@@ -697,19 +697,10 @@ def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path
         rs.CreatePixelAspectRatioAttr(float(cam["pixel_aspect"]))
     rs.CreateCameraRel().SetTargets([camera.GetPath()])
     for field, value in A.settings_items(settings):
-        if isinstance(value, bool):
-            vtype = Sdf.ValueTypeNames.Bool
-        elif isinstance(value, int):
-            vtype = Sdf.ValueTypeNames.Int
-        elif isinstance(value, float):
-            vtype = Sdf.ValueTypeNames.Double
-        elif isinstance(value, str):
-            vtype, value = Sdf.ValueTypeNames.Token, value.upper()
-        elif isinstance(value, (list, tuple)):
-            vtype, value = Sdf.ValueTypeNames.DoubleArray, Vt.DoubleArray([float(x) for x in value])
-        else:
-            continue
-        rs.GetPrim().CreateAttribute(A.NAMESPACE + ":" + field, vtype).Set(value)
+        attr, type_name = A.SETTINGS[field]
+        if type_name == "DoubleArray":
+            value = Vt.DoubleArray([float(x) for x in value])
+        rs.GetPrim().CreateAttribute(attr, getattr(Sdf.ValueTypeNames, type_name)).Set(value)
     stage.SetMetadata("renderSettingsPrimPath", A.RENDER_SETTINGS_PATH)
 
     path.parent.mkdir(parents=True, exist_ok=True)

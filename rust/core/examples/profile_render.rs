@@ -6,8 +6,9 @@
 //!
 //! Prints the render seconds and camera paths per second.
 
-use polychrome_core::render::{render, RenderControl, RenderSettings};
+use polychrome_core::render::{render, RenderControl, ResolvedSettings};
 use polychrome_core::scene::{Buffer, SceneDesc};
+use polychrome_core::spectrum::WavelengthGrid;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
@@ -30,11 +31,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         })
         .collect();
-    let settings = RenderSettings {
+    let settings = ResolvedSettings {
         width: size,
         height: size,
         samples: spp,
-        wavelength_count: n,
+        grid: WavelengthGrid::uniform(n, 380.0, 780.0).unwrap(),
         threads: 1,
         seed: 1,
         ..Default::default()

@@ -8,10 +8,11 @@ mod common;
 
 use common::*;
 use glam::Vec3A;
-use polychrome_core::render::{render, Direction, RenderControl, RenderSettings};
+use polychrome_core::render::{render, Direction, RenderControl, ResolvedSettings};
 use polychrome_core::scene::{BsdfDesc, Buffer, MaterialDesc, SceneDesc};
 use polychrome_core::spectrum::named::SpectrumKind;
 use polychrome_core::spectrum::SpectrumDesc;
+use polychrome_core::spectrum::WavelengthGrid;
 
 const W: usize = 24;
 const H: usize = 24;
@@ -110,12 +111,12 @@ fn mirror_scene() -> (SceneDesc, Vec<Buffer>) {
 fn renders(scene: &(SceneDesc, Vec<Buffer>), direction: Direction, samples: u32, max_bounces: u32) -> Vec<Vec<f64>> {
     (0..SEEDS)
         .map(|seed| {
-            let s = RenderSettings {
+            let s = ResolvedSettings {
                 width: W as u32,
                 height: H as u32,
                 samples,
                 max_bounces,
-                wavelength_count: 16,
+                grid: WavelengthGrid::uniform(16, 380.0, 780.0).unwrap(),
                 direction,
                 seed,
                 ..Default::default()

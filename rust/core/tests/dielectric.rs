@@ -11,7 +11,7 @@ use polychrome_core::color::uplift::UpliftMethod;
 use polychrome_core::color::RgbSpace;
 use polychrome_core::geometry::{offset_ray_origin, Frame, Ray};
 use polychrome_core::material::{IorDesc, ShadingContext};
-use polychrome_core::render::{render, RenderControl, RenderSettings};
+use polychrome_core::render::{render, RenderControl, ResolvedSettings};
 use polychrome_core::scene::{BsdfDesc, Buffer, BuildOptions, LightDesc, MaterialDesc, Scene, SceneDesc, WorldDesc};
 use polychrome_core::spectrum::{SpectrumDesc, WavelengthGrid};
 
@@ -154,7 +154,7 @@ fn glass_ball_in_a_white_furnace_is_invisible() {
         (IorDesc::Abbe { nd: 1.6, vd: 30.0 }, 0.4),
     ] {
         let (desc, buffers) = furnace_scene(ior.clone(), roughness);
-        let settings = RenderSettings { width: 12, height: 12, samples: 32, max_bounces: 64, ..Default::default() };
+        let settings = ResolvedSettings { width: 12, height: 12, samples: 32, max_bounces: 64, ..Default::default() };
         let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
         assert_eq!(out.stats.nonfinite_samples, 0);
         let (mean, se) = mean_and_standard_error(&out.images.rgba);
@@ -177,7 +177,7 @@ fn glass_ball_in_a_white_furnace_is_invisible() {
             let o = render(
                 &d,
                 &[],
-                &RenderSettings { width: 2, height: 2, samples: 1, ..Default::default() },
+                &ResolvedSettings { width: 2, height: 2, samples: 1, ..Default::default() },
                 &RenderControl::new(),
             )
             .unwrap();
@@ -298,7 +298,7 @@ fn spot_light_on_a_plane_is_inverse_square_inside_and_black_outside() {
         ..Default::default()
     };
     let (w, hh) = (41u32, 41u32);
-    let settings = RenderSettings { width: w, height: hh, samples: 16, max_bounces: 1, ..Default::default() };
+    let settings = ResolvedSettings { width: w, height: hh, samples: 16, max_bounces: 1, ..Default::default() };
     let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
     let radius = h * 30f32.to_radians().tan();
     let mut inside = 0;
@@ -354,7 +354,7 @@ fn sun_on_a_plane_gives_irradiance_times_cosine() {
         to_world: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 5.0], [0.0, 0.0, 0.0, 1.0]],
         ..Default::default()
     };
-    let settings = RenderSettings { width: 8, height: 8, samples: 4, max_bounces: 1, ..Default::default() };
+    let settings = ResolvedSettings { width: 8, height: 8, samples: 4, max_bounces: 1, ..Default::default() };
     let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
     let expected = (rho / std::f32::consts::PI * e * theta.cos()) as f64;
     for p in out.images.rgba.chunks_exact(4) {
@@ -372,7 +372,7 @@ fn metals_in_a_uniform_world() {
     ] {
         let (mut desc, buffers) = furnace_scene(IorDesc::Constant { ior: 1.5 }, 0.0);
         desc.materials[0] = material("metal", bsdf);
-        let settings = RenderSettings { width: 8, height: 8, samples: 8, max_bounces: 16, ..Default::default() };
+        let settings = ResolvedSettings { width: 8, height: 8, samples: 8, max_bounces: 16, ..Default::default() };
         let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
         assert_eq!(out.stats.nonfinite_samples, 0);
         let (mean, se) = mean_and_standard_error(&out.images.rgba);
@@ -447,7 +447,7 @@ fn sun_through_a_glass_slab_is_found_by_forward_tracing() {
     let expected = (rho / std::f32::consts::PI * e * (1.0 - r) / (1.0 + r)) as f64;
     for direction in [Direction::Backward, Direction::Forward, Direction::Bidirectional] {
         let settings =
-            RenderSettings { width: 16, height: 16, samples: 64, max_bounces: 16, direction, ..Default::default() };
+            ResolvedSettings { width: 16, height: 16, samples: 64, max_bounces: 16, direction, ..Default::default() };
         let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
         assert_eq!(out.stats.nonfinite_samples, 0);
         // The central 8×8 pixels see the floor within |x| < 0.5 (all under the slab).

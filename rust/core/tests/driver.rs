@@ -7,9 +7,10 @@ mod common;
 
 use common::*;
 use polychrome_core::material::IorDesc;
-use polychrome_core::render::{compile, Direction, Driver, Method, RenderControl, RenderSettings, Timing};
+use polychrome_core::render::{compile, Direction, Driver, Method, RenderControl, ResolvedSettings, Timing};
 use polychrome_core::scene::{BsdfDesc, Buffer, LightDesc, MaterialDesc, Scene, SceneDesc};
 use polychrome_core::spectrum::SpectrumDesc;
+use polychrome_core::spectrum::WavelengthGrid;
 use std::time::Instant;
 
 /// A closed box with an emissive panel, a point light and a dispersive glass ball.
@@ -57,14 +58,14 @@ fn scene_desc() -> (SceneDesc, Vec<Buffer>) {
     (desc, buffers)
 }
 
-fn build(settings: &RenderSettings) -> Scene {
+fn build(settings: &ResolvedSettings) -> Scene {
     let (desc, buffers) = scene_desc();
     compile(&desc, &buffers, settings).unwrap()
 }
 
 /// The whole render through the pass loop, and the same passes rendered as `ranges`
 /// (in a different order) and added: the images agree to float rounding of the sums.
-fn assert_ranges_add_up(settings: RenderSettings, ranges: &[std::ops::Range<u32>]) {
+fn assert_ranges_add_up(settings: ResolvedSettings, ranges: &[std::ops::Range<u32>]) {
     let scene = build(&settings);
     let driver = Driver::new(&scene, &settings).unwrap();
     let total = driver.sample_passes();
@@ -92,17 +93,23 @@ fn assert_ranges_add_up(settings: RenderSettings, ranges: &[std::ops::Range<u32>
 
 #[test]
 fn pass_ranges_add_up_to_the_whole_render_backward() {
-    let settings = RenderSettings { width: 20, height: 14, samples: 7, wavelength_count: 8, ..Default::default() };
+    let settings = ResolvedSettings {
+        width: 20,
+        height: 14,
+        samples: 7,
+        grid: WavelengthGrid::uniform(8, 380.0, 780.0).unwrap(),
+        ..Default::default()
+    };
     assert_ranges_add_up(settings, &[0..2, 2..3, 3..7]);
 }
 
 #[test]
 fn pass_ranges_add_up_to_the_whole_render_bidirectional() {
-    let settings = RenderSettings {
+    let settings = ResolvedSettings {
         width: 20,
         height: 14,
         samples: 5,
-        wavelength_count: 8,
+        grid: WavelengthGrid::uniform(8, 380.0, 780.0).unwrap(),
         direction: Direction::Bidirectional,
         ..Default::default()
     };
@@ -111,11 +118,11 @@ fn pass_ranges_add_up_to_the_whole_render_bidirectional() {
 
 #[test]
 fn pass_ranges_add_up_across_the_wavelength_rounds_of_monochromatic_scenes() {
-    let settings = RenderSettings {
+    let settings = ResolvedSettings {
         width: 12,
         height: 10,
         samples: 3,
-        wavelength_count: 4,
+        grid: WavelengthGrid::uniform(4, 380.0, 780.0).unwrap(),
         method: Method::MonochromaticScenes,
         direction: Direction::Forward,
         ..Default::default()

@@ -8,7 +8,7 @@ use common::*;
 use glam::{Vec2, Vec3A};
 use polychrome_core::color::RgbSpace;
 use polychrome_core::light::{EmissionSample, Light, LightSample};
-use polychrome_core::render::{render_scene, Direction, Method, RenderControl, RenderSettings};
+use polychrome_core::render::{render_scene, Direction, Method, RenderControl, ResolvedSettings};
 use polychrome_core::sampling::{uniform_sphere, Distribution1D};
 use polychrome_core::scene::{BsdfDesc, Buffer, BuildOptions, MaterialDesc, Scene, SceneDesc};
 use polychrome_core::spectrum::{SampledSpectrum, SpectrumDesc, WavelengthGrid};
@@ -90,13 +90,13 @@ fn every_method_and_direction_drops_non_finite_samples() {
             let mut scene = Scene::build(&desc, &buffers, &opts).unwrap();
             scene.lights = vec![Box::new(PoisonLight { n: g.len() })];
             scene.light_distribution = Distribution1D::new(&[1.0]);
-            let settings = RenderSettings {
+            let settings = ResolvedSettings {
                 width: w,
                 height: h,
                 samples: 2,
                 method,
                 direction,
-                wavelength_count: 9,
+                grid: WavelengthGrid::uniform(9, 380.0, 780.0).unwrap(),
                 spectral_output: true,
                 ..Default::default()
             };

@@ -4,7 +4,7 @@
 mod common;
 
 use common::*;
-use polychrome_core::render::{render, Direction, Method, RenderControl, RenderSettings};
+use polychrome_core::render::{render, Direction, Method, RenderControl, ResolvedSettings};
 use polychrome_core::scene::{Buffer, MaterialDesc, SceneDesc};
 
 fn material(json: &str) -> MaterialDesc {
@@ -46,7 +46,7 @@ fn furnace_principled_white_mixed_with_black() {
         add_mesh(&mut desc, &mut buffers, "sphere", v, tri, 0);
         // Monochromatic and light paths are noisier per sample: more of them.
         let samples = if method == Method::MonochromaticRays || direction == Direction::Forward { 64 } else { 16 };
-        let settings = RenderSettings {
+        let settings = ResolvedSettings {
             width: 16,
             height: 16,
             samples,
@@ -88,7 +88,7 @@ fn bad_layered_parameters_name_the_material() {
         desc.materials.push(m);
         let (v, tri) = uv_sphere([0.0; 3], 1.0, 4, 8);
         add_mesh(&mut desc, &mut buffers, "s", v, tri, 0);
-        let settings = RenderSettings { width: 2, height: 2, samples: 1, ..Default::default() };
+        let settings = ResolvedSettings { width: 2, height: 2, samples: 1, ..Default::default() };
         let err = render(&desc, &buffers, &settings, &RenderControl::new()).err().expect("must fail").to_string();
         assert!(err.contains(&format!("material '{name}'")), "{err}");
     }

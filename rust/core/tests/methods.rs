@@ -8,7 +8,9 @@ use common::*;
 use glam::{Vec2, Vec3A};
 use polychrome_core::color::{Observer, RgbSpace};
 use polychrome_core::material::{Bsdf, BsdfFlags, BsdfSample, ShadingContext};
-use polychrome_core::render::{render, render_scene, Direction, Method, RenderControl, RenderSettings};
+use polychrome_core::render::{
+    render, render_scene, Direction, Method, RenderControl, RenderSettings, ResolvedSettings,
+};
 use polychrome_core::sampling::cosine_hemisphere;
 use polychrome_core::scene::{BsdfDesc, Buffer, BuildOptions, MaterialDesc, Scene, SceneDesc, WorldDesc};
 use polychrome_core::spectrum::named::{SpectrumKind, SpectrumRole};
@@ -122,7 +124,7 @@ fn furnace_forward_and_bidirectional_see_emission_over_one_minus_albedo() {
         for method in [Method::Polychromatic, Method::MonochromaticRays] {
             // Monochromatic light paths are not stratified per pixel: more of them.
             let samples = if method == Method::MonochromaticRays { 64 } else { 16 };
-            let settings = RenderSettings {
+            let settings = ResolvedSettings {
                 width: 16,
                 height: 16,
                 samples,
@@ -149,13 +151,13 @@ fn furnace_monochromatic_scenes_and_rgb_match_the_closed_form() {
     let (desc, buffers) = furnace_scene(l, a);
     let expected = l as f64 / (1.0 - a as f64);
     for (method, n) in [(Method::MonochromaticScenes, 8usize), (Method::Rgb, 41)] {
-        let settings = RenderSettings {
+        let settings = ResolvedSettings {
             width: 12,
             height: 12,
             samples: 8,
             max_bounces: 200,
             method,
-            wavelength_count: n,
+            grid: WavelengthGrid::uniform(n, 380.0, 780.0).unwrap(),
             ..Default::default()
         };
         let control = RenderControl::new();
@@ -173,15 +175,15 @@ fn furnace_monochromatic_scenes_and_rgb_match_the_closed_form() {
 fn every_method_and_direction_agrees_with_polychromatic_backward_on_a_lit_box() {
     let (desc, buffers) = box_scene();
     let (w, h) = (16usize, 16usize);
-    let base = RenderSettings {
+    let base = ResolvedSettings {
         width: w as u32,
         height: h as u32,
         max_bounces: 6,
-        wavelength_count: 21,
+        grid: WavelengthGrid::uniform(21, 380.0, 780.0).unwrap(),
         ..Default::default()
     };
     let reference =
-        render(&desc, &buffers, &RenderSettings { samples: 256, ..base.clone() }, &RenderControl::new()).unwrap();
+        render(&desc, &buffers, &ResolvedSettings { samples: 256, ..base.clone() }, &RenderControl::new()).unwrap();
     let reference = quadrant_means(&reference.images.rgba, w, h);
     assert!(reference.iter().all(|&(m, _)| m > 0.0));
     let cases = [
@@ -195,7 +197,7 @@ fn every_method_and_direction_agrees_with_polychromatic_backward_on_a_lit_box() 
         let out = render(
             &desc,
             &buffers,
-            &RenderSettings { method, direction, samples, ..base.clone() },
+            &ResolvedSettings { method, direction, samples, ..base.clone() },
             &RenderControl::new(),
         )
         .unwrap();
@@ -212,14 +214,19 @@ fn bidirectional_with_a_panorama_uses_the_camera_strategies_alone() {
     desc.camera.projection = polychrome_core::camera::Projection::Panoramic;
     desc.camera.to_world[1][3] = 0.0; // the middle of the box
     let (w, h) = (16usize, 8usize);
-    let base =
-        RenderSettings { width: w as u32, height: h as u32, max_bounces: 4, wavelength_count: 8, ..Default::default() };
+    let base = ResolvedSettings {
+        width: w as u32,
+        height: h as u32,
+        max_bounces: 4,
+        grid: WavelengthGrid::uniform(8, 380.0, 780.0).unwrap(),
+        ..Default::default()
+    };
     let reference =
-        render(&desc, &buffers, &RenderSettings { samples: 256, ..base.clone() }, &RenderControl::new()).unwrap();
+        render(&desc, &buffers, &ResolvedSettings { samples: 256, ..base.clone() }, &RenderControl::new()).unwrap();
     let out = render(
         &desc,
         &buffers,
-        &RenderSettings { direction: Direction::Bidirectional, samples: 128, ..base.clone() },
+        &ResolvedSettings { direction: Direction::Bidirectional, samples: 128, ..base.clone() },
         &RenderControl::new(),
     )
     .unwrap();
@@ -255,14 +262,19 @@ fn light_tracing_through_a_thin_lens_agrees_with_camera_paths() {
     desc.camera.aperture_blades = 6;
     desc.camera.aperture_ratio = 1.5;
     let (w, h) = (16usize, 16usize);
-    let base =
-        RenderSettings { width: w as u32, height: h as u32, max_bounces: 4, wavelength_count: 8, ..Default::default() };
+    let base = ResolvedSettings {
+        width: w as u32,
+        height: h as u32,
+        max_bounces: 4,
+        grid: WavelengthGrid::uniform(8, 380.0, 780.0).unwrap(),
+        ..Default::default()
+    };
     let reference =
-        render(&desc, &buffers, &RenderSettings { samples: 512, ..base.clone() }, &RenderControl::new()).unwrap();
+        render(&desc, &buffers, &ResolvedSettings { samples: 512, ..base.clone() }, &RenderControl::new()).unwrap();
     let reference = block_means(&reference.images.rgba, w, h, 4);
     for (direction, samples) in [(Direction::Forward, 256), (Direction::Bidirectional, 128)] {
         let out =
-            render(&desc, &buffers, &RenderSettings { direction, samples, ..base.clone() }, &RenderControl::new())
+            render(&desc, &buffers, &ResolvedSettings { direction, samples, ..base.clone() }, &RenderControl::new())
                 .unwrap();
         assert_eq!(out.stats.nonfinite_samples, 0);
         assert_close(&block_means(&out.images.rgba, w, h, 4), &reference, &format!("thin lens {direction:?}"));
@@ -278,20 +290,20 @@ fn same_seed_gives_identical_images_on_one_and_two_threads_for_every_method() {
         (Method::Polychromatic, Direction::Forward),
         (Method::Rgb, Direction::Bidirectional),
     ] {
-        let base = RenderSettings {
+        let base = ResolvedSettings {
             width: 20,
             height: 14,
             samples: 3,
             seed: 7,
             method,
             direction,
-            wavelength_count: 8,
+            grid: WavelengthGrid::uniform(8, 380.0, 780.0).unwrap(),
             ..Default::default()
         };
         let one =
-            render(&desc, &buffers, &RenderSettings { threads: 1, ..base.clone() }, &RenderControl::new()).unwrap();
+            render(&desc, &buffers, &ResolvedSettings { threads: 1, ..base.clone() }, &RenderControl::new()).unwrap();
         let two =
-            render(&desc, &buffers, &RenderSettings { threads: 2, ..base.clone() }, &RenderControl::new()).unwrap();
+            render(&desc, &buffers, &ResolvedSettings { threads: 2, ..base.clone() }, &RenderControl::new()).unwrap();
         assert_eq!(one.images.rgba, two.images.rgba, "{method:?} {direction:?}");
         assert!(one.images.rgba.iter().any(|&v| v > 0.0));
     }
@@ -403,14 +415,14 @@ fn dispersive_white_sphere_vanishes_in_a_uniform_environment_in_every_method() {
         let mut scene = Scene::build(&desc, &buffers, &opts).unwrap();
         scene.materials[0].bsdf = Box::new(TestDispersive);
         let samples = if method == Method::MonochromaticScenes { 8 } else { 64 };
-        let settings = RenderSettings {
+        let settings = ResolvedSettings {
             width: w,
             height: h,
             samples,
             max_bounces: 64,
             method,
             dispersion_splitting: splitting,
-            wavelength_count: 21,
+            grid: WavelengthGrid::uniform(21, 380.0, 780.0).unwrap(),
             ..Default::default()
         };
         let out = render_scene(&scene, &settings, &RenderControl::new()).unwrap();
@@ -449,9 +461,10 @@ fn rgb_mode_differs_from_spectral_under_narrow_band_light() {
         Some(world(&SpectrumDesc { kind: SpectrumKind::NarrowBand { center: 610.0, width: 20.0 }, scale: 1.0 }));
     let (v, t) = uv_sphere([0.0, 0.0, -4.0], 3.0, 16, 32);
     add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
-    let base = RenderSettings { width: 8, height: 8, samples: 16, max_bounces: 1, ..Default::default() };
+    let base = ResolvedSettings { width: 8, height: 8, samples: 16, max_bounces: 1, ..Default::default() };
     let spectral = render(&desc, &buffers, &base, &RenderControl::new()).unwrap();
-    let rgb = render(&desc, &buffers, &RenderSettings { method: Method::Rgb, ..base }, &RenderControl::new()).unwrap();
+    let rgb =
+        render(&desc, &buffers, &ResolvedSettings { method: Method::Rgb, ..base }, &RenderControl::new()).unwrap();
     // Centre pixel: the spectral product of a 610 nm band and a 540 nm reflectance is
     // far dimmer than RGB's red × green-channel product predicts, and differently hued.
     let i = (4 * 8 + 4) * 4;
@@ -466,7 +479,7 @@ fn rgb_mode_differs_from_spectral_under_narrow_band_light() {
 #[test]
 fn bad_combinations_are_reported_as_settings() {
     let (desc, buffers) = furnace_scene(0.5, 0.5);
-    let s = RenderSettings {
+    let s = ResolvedSettings {
         width: 4,
         height: 4,
         samples: 1,
@@ -477,7 +490,7 @@ fn bad_combinations_are_reported_as_settings() {
     let err = render(&desc, &buffers, &s, &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("dispersion_splitting"), "{err}");
     let json = r#"{"method": "MONOCHROMATIC_SCENES", "direction": "BIDIRECTIONAL", "dispersion_splitting": false}"#;
-    let parsed: RenderSettings = serde_json::from_str(json).unwrap();
+    let parsed = RenderSettings::from_json(json).unwrap();
     assert_eq!((parsed.method, parsed.direction), (Method::MonochromaticScenes, Direction::Bidirectional));
 }
 
@@ -508,18 +521,18 @@ fn dispersive_glass_sphere_vanishes_in_a_uniform_environment() {
         (Method::MonochromaticScenes, false, 4),
         (Method::Rgb, false, 64),
     ] {
-        let settings = RenderSettings {
+        let settings = ResolvedSettings {
             width: 12,
             height: 12,
             samples,
             max_bounces: 64,
             method,
             dispersion_splitting: splitting,
-            wavelength_count: 21,
+            grid: WavelengthGrid::uniform(21, 380.0, 780.0).unwrap(),
             ..Default::default()
         };
         let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
-        let g = settings.grid().unwrap();
+        let g = settings.grid.clone();
         let g = if method == Method::Rgb { WavelengthGrid::rgb_channels(&g, &RgbSpace::rec709()).unwrap() } else { g };
         let env_values = env.evaluate(&g, SpectrumRole::Illuminant, &NoRgbConv).unwrap();
         let expected = RgbSpace::rec709().xyz_to_rgb(Observer::new(&g).xyz(&env_values));
@@ -566,14 +579,14 @@ fn glass_ball_inside_a_furnace_is_invisible_forward_and_backward() {
     ] {
         let (desc, buffers) =
             if direction == Direction::Forward { (&behind, &behind_buffers) } else { (&desc, &buffers) };
-        let settings = RenderSettings {
+        let settings = ResolvedSettings {
             width: 12,
             height: 12,
             samples,
             max_bounces: 200,
             method,
             direction,
-            wavelength_count: 21,
+            grid: WavelengthGrid::uniform(21, 380.0, 780.0).unwrap(),
             ..Default::default()
         };
         let out = render(desc, buffers, &settings, &RenderControl::new()).unwrap();
@@ -621,31 +634,31 @@ fn bidirectional_adds_the_point_light_caustic_that_backward_misses() {
     let m = look_at([0.0, -3.0, 0.8], [0.0, 0.0, 0.0]);
     desc.camera.to_world = m;
     let (w, h) = (16usize, 16usize);
-    let base = RenderSettings {
+    let base = ResolvedSettings {
         width: w as u32,
         height: h as u32,
         max_bounces: 2,
-        wavelength_count: 16,
+        grid: WavelengthGrid::uniform(16, 380.0, 780.0).unwrap(),
         ..Default::default()
     };
     let fwd = render(
         &desc,
         &buffers,
-        &RenderSettings { direction: Direction::Forward, samples: 64, ..base.clone() },
+        &ResolvedSettings { direction: Direction::Forward, samples: 64, ..base.clone() },
         &RenderControl::new(),
     )
     .unwrap();
     let bid = render(
         &desc,
         &buffers,
-        &RenderSettings { direction: Direction::Bidirectional, samples: 32, ..base.clone() },
+        &ResolvedSettings { direction: Direction::Bidirectional, samples: 32, ..base.clone() },
         &RenderControl::new(),
     )
     .unwrap();
     let bwd = render(
         &desc,
         &buffers,
-        &RenderSettings { direction: Direction::Backward, samples: 32, ..base.clone() },
+        &ResolvedSettings { direction: Direction::Backward, samples: 32, ..base.clone() },
         &RenderControl::new(),
     )
     .unwrap();
@@ -673,14 +686,14 @@ fn look_at(eye: [f32; 3], target: [f32; 3]) -> [[f32; 4]; 4] {
 fn forward_needs_a_perspective_camera_and_time_limited_mono_scenes_say_so() {
     let (mut desc, buffers) = furnace_scene(0.5, 0.5);
     desc.camera.projection = polychrome_core::camera::Projection::Orthographic;
-    let s = RenderSettings { width: 4, height: 4, samples: 1, direction: Direction::Forward, ..Default::default() };
+    let s = ResolvedSettings { width: 4, height: 4, samples: 1, direction: Direction::Forward, ..Default::default() };
     let err = render(&desc, &buffers, &s, &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("direction") && err.contains("perspective"), "{err}");
     desc.camera.projection = polychrome_core::camera::Projection::Panoramic;
     let err = render(&desc, &buffers, &s, &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("direction") && err.contains("panoramic"), "{err}");
     let (desc, buffers) = furnace_scene(0.5, 0.5);
-    let s = RenderSettings {
+    let s = ResolvedSettings {
         width: 8,
         height: 8,
         samples: 64,
@@ -690,6 +703,6 @@ fn forward_needs_a_perspective_camera_and_time_limited_mono_scenes_say_so() {
     };
     let out = render(&desc, &buffers, &s, &RenderControl::new()).unwrap();
     assert!(out.stats.time_limited && out.stats.incomplete_spectrum);
-    let s = RenderSettings { samples: 2, time_limit: 0.0, ..s };
+    let s = ResolvedSettings { samples: 2, time_limit: 0.0, ..s };
     assert!(!render(&desc, &buffers, &s, &RenderControl::new()).unwrap().stats.incomplete_spectrum);
 }

@@ -3,7 +3,7 @@
 mod common;
 
 use common::*;
-use polychrome_core::render::{render, RenderControl, RenderSettings};
+use polychrome_core::render::{render, RenderControl, ResolvedSettings};
 use polychrome_core::scene::{BsdfDesc, Buffer, MaterialDesc, SceneDesc};
 use polychrome_core::spectrum::SpectrumDesc;
 use std::sync::mpsc;
@@ -46,7 +46,7 @@ fn watch(control: &RenderControl, stop: &std::sync::atomic::AtomicBool) -> Vec<p
 fn previews_arrive_during_the_render_converge_and_the_last_is_the_final_image() {
     let (desc, buffers, expected) = furnace();
     let settings =
-        RenderSettings { width: 24, height: 24, samples: 400, max_bounces: 100, threads: 2, ..Default::default() };
+        ResolvedSettings { width: 24, height: 24, samples: 400, max_bounces: 100, threads: 2, ..Default::default() };
     let control = RenderControl::with_previews();
     let stop = std::sync::atomic::AtomicBool::new(false);
     let (out, seen) = std::thread::scope(|s| {
@@ -96,7 +96,7 @@ fn previews_arrive_during_the_render_converge_and_the_last_is_the_final_image() 
 #[test]
 fn no_previews_unless_requested() {
     let (desc, buffers, _) = furnace();
-    let settings = RenderSettings { width: 8, height: 8, samples: 4, ..Default::default() };
+    let settings = ResolvedSettings { width: 8, height: 8, samples: 4, ..Default::default() };
     let control = RenderControl::new();
     render(&desc, &buffers, &settings, &control).unwrap();
     assert!(control.latest_preview().is_none());
@@ -105,7 +105,7 @@ fn no_previews_unless_requested() {
 #[test]
 fn cancel_from_another_thread_stops_promptly_and_publishes_what_was_rendered() {
     let (desc, buffers, expected) = furnace();
-    let settings = RenderSettings {
+    let settings = ResolvedSettings {
         width: 32,
         height: 32,
         samples: 1_000_000,

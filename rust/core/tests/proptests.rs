@@ -10,7 +10,7 @@ use glam::Vec3A;
 use polychrome_core::color::RgbSpace;
 use polychrome_core::material::TransportMode;
 use polychrome_core::material::{Bsdf, IndexOfRefraction, IorDesc, ShadingContext};
-use polychrome_core::render::{render, RenderControl, RenderSettings};
+use polychrome_core::render::{render, RenderControl, ResolvedSettings};
 use polychrome_core::sampling::Rng;
 use polychrome_core::scene::optics::{build_conductor, build_dielectric, build_glossy};
 use polychrome_core::scene::{Buffer, BuildOptions, InstanceDesc, MeshDesc, Scene, SceneDesc};
@@ -127,7 +127,7 @@ proptest! {
         desc.materials.push(serde_json::from_str(r#"{"name": "m0"}"#).unwrap());
         let buffers = vec![Buffer::F32(c.positions.clone()), Buffer::U32(c.indices.clone())];
         desc.meshes.push(MeshDesc { name: "prop mesh".into(), vertices: 0, triangles: 1, normals: None, uvs: None, material_ids: None, material: Some(0) });
-        let settings = RenderSettings { width: 4, height: 3, samples: 1, wavelength_count: 8, ..Default::default() };
+        let settings = ResolvedSettings { width: 4, height: 3, samples: 1, grid: WavelengthGrid::uniform(8, 380.0, 780.0).unwrap(), ..Default::default() };
         if let Ok(out) = render(&desc, &buffers, &settings, &RenderControl::new()) {
             prop_assert!(out.images.rgba.iter().all(|v| v.is_finite()));
             prop_assert_eq!(out.stats.nonfinite_samples, 0);

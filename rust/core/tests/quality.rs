@@ -1,5 +1,5 @@
-//! Issue 9 in Rust: which settings the quality preset fills (keys of the settings JSON
-//! are explicit; a struct built in Rust is fully explicit), and AUTO's grid for a scene
+//! Issue 9 in Rust: which settings the quality preset fills (the unset ones: `None` in
+//! Rust, absent or null in JSON; a value given wins), and AUTO's grid for a scene
 //! lit by a narrow band only, checked against the band's closed-form energy.
 
 use polychrome_core::render::quality::{auto_grid, resolve};
@@ -28,22 +28,34 @@ impl RgbToSpectrum for NoRgb {
 }
 
 #[test]
-fn json_keys_are_explicit_and_rust_structs_are_fully_explicit() {
-    let s = RenderSettings::from_json(r#"{"quality": "REFERENCE", "samples": 3}"#).unwrap();
-    let (r, why) = resolve(&s, None).unwrap();
+fn unset_settings_come_from_the_preset_and_given_ones_win() {
+    // JSON: what is absent (or null) is unset; REFERENCE fills it, the given samples win.
+    let s = RenderSettings::from_json(r#"{"quality": "REFERENCE", "samples": 3, "max_bounces": null}"#).unwrap();
+    let r = resolve(&s, None).unwrap();
     assert_eq!((r.samples, r.max_bounces, r.noise_threshold), (3, 16, 0.0));
-    assert_eq!(r.wavelength_count, 81);
-    assert!(why.iter().any(|w| w.contains("REFERENCE")), "{why:?}");
-    // Rust struct: nothing changes whatever the quality.
-    let rust = RenderSettings { quality: Quality::Preview, samples: 7, ..Default::default() };
-    let (r, why) = resolve(&rust, None).unwrap();
-    assert_eq!((r.samples, r.max_bounces, r.wavelength_count, r.noise_threshold), (7, 8, 41, 0.0));
-    assert!(why.is_empty());
-    // Nothing explicit: AUTO's adaptive maximum and threshold.
-    let (r, _) = resolve(&RenderSettings::with_quality(Quality::Auto), None).unwrap();
+    assert_eq!(r.grid.len(), 81);
+    assert!(r.notes.iter().any(|w| w.contains("REFERENCE")), "{:?}", r.notes);
+    // Rust: `Some` is given, `None` is the preset's.
+    let rust = RenderSettings { quality: Quality::Preview, samples: Some(7), ..Default::default() };
+    let r = resolve(&rust, None).unwrap();
+    assert_eq!((r.samples, r.max_bounces, r.grid.len(), r.noise_threshold), (7, 4, 16, 0.0));
+    let all_given = RenderSettings {
+        quality: Quality::Preview,
+        samples: Some(7),
+        max_bounces: Some(8),
+        noise_threshold: Some(0.0),
+        wavelength_count: Some(41),
+        ..Default::default()
+    };
+    let r = resolve(&all_given, None).unwrap();
+    assert_eq!((r.samples, r.max_bounces, r.grid.len(), r.noise_threshold), (7, 8, 41, 0.0));
+    assert!(r.notes.is_empty(), "{:?}", r.notes);
+    // Nothing given: AUTO's adaptive maximum and threshold.
+    let r = resolve(&RenderSettings::default(), None).unwrap();
     assert_eq!((r.samples, r.noise_threshold), (1024, 1.0));
     assert!(RenderSettings::from_json(r#"{"quality": "ULTRA"}"#).is_err());
-    assert!(RenderSettings::from_json(r#"{"noise_threshold": -1}"#).unwrap().validate().is_err());
+    assert!(RenderSettings::from_json(r#"{"noise_threshold": -1}"#).is_err());
+    assert!(RenderSettings { noise_threshold: Some(-1.0), ..Default::default() }.resolve(None).is_err());
 }
 
 #[test]

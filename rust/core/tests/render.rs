@@ -4,7 +4,7 @@ mod common;
 
 use common::*;
 use polychrome_core::camera::{CameraDesc, Projection};
-use polychrome_core::render::{render, RenderControl, RenderSettings};
+use polychrome_core::render::{render, RenderControl, ResolvedSettings};
 use polychrome_core::scene::{BsdfDesc, Buffer, LightDesc, MaterialDesc, SceneDesc};
 use polychrome_core::spectrum::SpectrumDesc;
 
@@ -26,7 +26,7 @@ fn furnace_sphere_sees_emission_over_one_minus_albedo() {
     desc.materials.push(diffuse("furnace", a, Some(l)));
     let (v, t) = uv_sphere([0.0; 3], 2.0, 24, 48);
     add_mesh(&mut desc, &mut buffers, "sphere", v, t, 0);
-    let settings = RenderSettings { width: 24, height: 24, samples: 16, max_bounces: 200, ..Default::default() };
+    let settings = ResolvedSettings { width: 24, height: 24, samples: 16, max_bounces: 200, ..Default::default() };
     let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
     let (mean, se) = mean_and_standard_error(&out.images.rgba);
     let expected = l as f64 / (1.0 - a as f64);
@@ -42,7 +42,7 @@ fn furnace_with_albedo_one_and_no_emission_is_black_and_finite() {
     desc.materials.push(diffuse("white", 1.0, None));
     let (v, t) = uv_sphere([0.0; 3], 2.0, 12, 24);
     add_mesh(&mut desc, &mut buffers, "sphere", v, t, 0);
-    let settings = RenderSettings { width: 8, height: 8, samples: 4, max_bounces: 50, ..Default::default() };
+    let settings = ResolvedSettings { width: 8, height: 8, samples: 4, max_bounces: 50, ..Default::default() };
     let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
     assert!(out.images.rgba.chunks_exact(4).all(|p| p[0] == 0.0 && p[1] == 0.0 && p[2] == 0.0 && p[3] == 1.0));
     assert_eq!(out.stats.nonfinite_samples, 0);
@@ -77,7 +77,7 @@ fn point_light_on_diffuse_plane_matches_inverse_square_cosine_law() {
         ..Default::default()
     };
     let (w, hh) = (41u32, 41u32);
-    let settings = RenderSettings { width: w, height: hh, samples: 64, max_bounces: 1, ..Default::default() };
+    let settings = ResolvedSettings { width: w, height: hh, samples: 64, max_bounces: 1, ..Default::default() };
     let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
     // Equal-energy spectra have Y equal to their value, so compare luminance.
     for &(px, py) in &[(20u32, 20u32), (0, 20), (20, 40), (35, 5)] {
@@ -103,12 +103,12 @@ fn same_seed_gives_identical_images_on_one_and_two_threads() {
     add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
     let (v, t) = uv_sphere([1.5, 1.5, -3.0], 0.3, 6, 12);
     add_mesh(&mut desc, &mut buffers, "light", v, t, 1);
-    let base = RenderSettings { width: 20, height: 14, samples: 5, seed: 42, ..Default::default() };
-    let one = render(&desc, &buffers, &RenderSettings { threads: 1, ..base.clone() }, &RenderControl::new()).unwrap();
-    let two = render(&desc, &buffers, &RenderSettings { threads: 2, ..base.clone() }, &RenderControl::new()).unwrap();
+    let base = ResolvedSettings { width: 20, height: 14, samples: 5, seed: 42, ..Default::default() };
+    let one = render(&desc, &buffers, &ResolvedSettings { threads: 1, ..base.clone() }, &RenderControl::new()).unwrap();
+    let two = render(&desc, &buffers, &ResolvedSettings { threads: 2, ..base.clone() }, &RenderControl::new()).unwrap();
     assert_eq!(one.images.rgba, two.images.rgba);
     assert!(one.images.rgba.iter().any(|&v| v > 0.0));
-    let other = render(&desc, &buffers, &RenderSettings { seed: 43, ..base }, &RenderControl::new()).unwrap();
+    let other = render(&desc, &buffers, &ResolvedSettings { seed: 43, ..base }, &RenderControl::new()).unwrap();
     assert_ne!(one.images.rgba, other.images.rgba);
 }
 
@@ -117,7 +117,7 @@ fn cancel_before_start_returns_no_samples() {
     let desc = SceneDesc::default();
     let control = RenderControl::new();
     control.cancel();
-    let out = render(&desc, &[], &RenderSettings::default(), &control).unwrap();
+    let out = render(&desc, &[], &ResolvedSettings::default(), &control).unwrap();
     assert_eq!(out.stats.samples_per_pixel, 0);
     assert!(out.stats.cancelled);
 }
@@ -134,11 +134,11 @@ fn bad_mesh_data_names_the_mesh() {
         vec![0, 1, 2],
         0,
     );
-    let err = render(&desc, &buffers, &RenderSettings::default(), &RenderControl::new()).err().unwrap().to_string();
+    let err = render(&desc, &buffers, &ResolvedSettings::default(), &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("mesh 'Broken'") && err.contains("vertex 1"), "{err}");
     let mut desc = SceneDesc::default();
     let mut buffers: Vec<Buffer> = Vec::new();
     add_mesh(&mut desc, &mut buffers, "OutOfRange", vec![0.0; 9], vec![0, 1, 7], 0);
-    let err = render(&desc, &buffers, &RenderSettings::default(), &RenderControl::new()).err().unwrap().to_string();
+    let err = render(&desc, &buffers, &ResolvedSettings::default(), &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("mesh 'OutOfRange'") && err.contains("vertex 7"), "{err}");
 }

@@ -7,7 +7,7 @@ mod common;
 use common::*;
 use polychrome_core::camera::{CameraDesc, Projection};
 use polychrome_core::material::texture::{srgb_decode, Texture, Wrap};
-use polychrome_core::render::{render, RenderControl, RenderOutput, RenderSettings};
+use polychrome_core::render::{render, RenderControl, RenderOutput, ResolvedSettings};
 use polychrome_core::scene::{
     BsdfDesc, Buffer, LightDesc, MaterialDesc, SceneDesc, TextureDesc, TextureEncoding, WorldDesc,
 };
@@ -100,7 +100,7 @@ fn hdri_seen_directly_returns_its_rgb() {
             let d = [co * d[0] - s * d[1], s * d[0] + co * d[1], d[2]];
             // Keep off the poles (the camera's up is +Z).
             desc.camera = camera_looking(d, 600.0);
-            let settings = RenderSettings { width: 4, height: 4, samples: 2, max_bounces: 0, ..Default::default() };
+            let settings = ResolvedSettings { width: 4, height: 4, samples: 2, max_bounces: 0, ..Default::default() };
             let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
             for p in out.images.rgba.chunks_exact(4) {
                 for k in 0..3 {
@@ -155,7 +155,7 @@ fn white_sphere_vanishes_under_a_uniform_world() {
         ),
     ];
     for (k, (desc, buffers)) in cases.iter().enumerate() {
-        let settings = RenderSettings { width: 12, height: 12, samples: 8, max_bounces: 64, ..Default::default() };
+        let settings = ResolvedSettings { width: 12, height: 12, samples: 8, max_bounces: 64, ..Default::default() };
         let out = render(desc, buffers, &settings, &RenderControl::new()).unwrap();
         // Every pixel is an estimate of the same value: check the mean per channel
         // against the world's RGB with the pixels' own standard error.
@@ -216,7 +216,7 @@ fn importance_sampling_a_sun_reduces_variance_without_bias() {
         };
         (desc, buffers)
     };
-    let settings = RenderSettings { width: 24, height: 24, samples: 4, max_bounces: 1, ..Default::default() };
+    let settings = ResolvedSettings { width: 24, height: 24, samples: 4, max_bounces: 1, ..Default::default() };
     let stats = |importance: bool| {
         let (desc, buffers) = scene(importance);
         let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
@@ -252,7 +252,7 @@ fn importance_sampling_a_sun_reduces_variance_without_bias() {
     );
     // Uniform sampling converges to the same value: more samples, since it is noisy.
     let (desc, buffers) = scene(false);
-    let out = render(&desc, &buffers, &RenderSettings { samples: 256, ..settings }, &RenderControl::new()).unwrap();
+    let out = render(&desc, &buffers, &ResolvedSettings { samples: 256, ..settings }, &RenderControl::new()).unwrap();
     let (m_u, se_u) = mean_and_standard_error(&out.images.rgba);
     assert!(
         (m_u - expected).abs() < 5.0 * se_u + 2e-3 * expected,
@@ -281,7 +281,7 @@ fn constant_colour_and_one_texel_texture_render_identically() {
         });
         (desc, buffers)
     };
-    let settings = RenderSettings { width: 16, height: 16, samples: 2, seed: 3, ..Default::default() };
+    let settings = ResolvedSettings { width: 16, height: 16, samples: 2, seed: 3, ..Default::default() };
     let rgb = [0.8f32, 0.3, 0.1];
     let (d0, b0) = base(SpectrumDesc::new(SpectrumKind::Rgb { rgb }));
     let constant = render(&d0, &b0, &settings, &RenderControl::new()).unwrap();
@@ -320,11 +320,11 @@ fn texture_errors_name_the_texture_or_material() {
         bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::new(SpectrumKind::Texture { texture: 2 }) },
         emission: None,
     });
-    let err = render(&desc, &buffers, &RenderSettings::default(), &RenderControl::new()).err().unwrap().to_string();
+    let err = render(&desc, &buffers, &ResolvedSettings::default(), &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("material 'Wood'") && err.contains("texture 2"), "{err}");
 
     add_texture(&mut desc, &mut buffers, "Grain", 2, 1, vec![0.1, 0.2, f32::INFINITY, 0.0, 0.0, 0.0]);
-    let err = render(&desc, &buffers, &RenderSettings::default(), &RenderControl::new()).err().unwrap().to_string();
+    let err = render(&desc, &buffers, &ResolvedSettings::default(), &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("texture 'Grain'") && err.contains("non-finite"), "{err}");
 
     let mut desc = SceneDesc::default();
@@ -339,7 +339,7 @@ fn texture_errors_name_the_texture_or_material() {
         encoding: TextureEncoding::Linear,
         wrap: Default::default(),
     });
-    let err = render(&desc, &buffers, &RenderSettings::default(), &RenderControl::new()).err().unwrap().to_string();
+    let err = render(&desc, &buffers, &ResolvedSettings::default(), &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("texture 'Sky'") && err.contains("float32"), "{err}");
 
     // A texture where only spectra make sense (a light's intensity) is refused by name.
@@ -349,7 +349,7 @@ fn texture_errors_name_the_texture_or_material() {
         position: [0.0; 3],
         intensity: SpectrumDesc::new(SpectrumKind::Texture { texture: 0 }),
     });
-    let err = render(&desc, &[], &RenderSettings::default(), &RenderControl::new()).err().unwrap().to_string();
+    let err = render(&desc, &[], &ResolvedSettings::default(), &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("light 'Lamp'") && err.contains("texture"), "{err}");
 }
 
@@ -372,7 +372,7 @@ fn extreme_hdri_is_finite_and_description_parses() {
         emission: None,
     });
     add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
-    let settings = RenderSettings { width: 8, height: 8, samples: 4, ..Default::default() };
+    let settings = ResolvedSettings { width: 8, height: 8, samples: 4, ..Default::default() };
     let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
     assert_eq!(out.stats.nonfinite_samples, 0);
     assert!(out.images.rgba.iter().all(|v| v.is_finite()));

@@ -7,6 +7,7 @@ use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn};
 use polychrome_core::color::uplift::Uplift;
 use polychrome_core::color::{Observer, RgbSpace};
 use polychrome_core::geometry::curves::{self, CurveOptions, Tessellation};
+use polychrome_core::render::settings::schema_json;
 use polychrome_core::render::{render as core_render, RenderControl, RenderOutput, RenderSettings};
 use polychrome_core::scene::{Buffer, SceneDesc};
 use polychrome_core::spectrum::named::{RgbToSpectrum, SpectrumRole};
@@ -82,15 +83,14 @@ fn render<'py>(
     progress: Option<PyObject>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let desc: SceneDesc = parse(scene_json, "scene description")?;
-    // Keys present in the JSON are the explicit settings; `quality` fills the rest.
-    let settings =
-        RenderSettings::from_json(settings_json).map_err(|e| PyValueError::new_err(format!("render settings: {e}")))?;
+    // Null or absent settings are left to `quality`; they are resolved on the worker.
+    let settings = RenderSettings::from_json(settings_json).map_err(to_py_err)?;
     let buffers = convert_buffers(buffers)?;
     let control = RenderControl::new();
     let mut callback_error: Option<PyErr> = None;
     let result = py.allow_threads(|| {
         std::thread::scope(|scope| {
-            let worker = scope.spawn(|| guarded("render", || core_render(&desc, &buffers, &settings, &control)));
+            let worker = scope.spawn(|| guarded("render", || resolve_and_render(&desc, &buffers, &settings, &control)));
             while !worker.is_finished() {
                 std::thread::sleep(Duration::from_millis(50));
                 Python::with_gil(|py| {
@@ -124,6 +124,17 @@ fn render<'py>(
 }
 
 type JobOutcome = PyResult<RenderOutput>;
+
+/// The settings resolved for the scene (quality preset, AUTO's grid), then the render.
+fn resolve_and_render(
+    desc: &SceneDesc,
+    buffers: &[Buffer],
+    settings: &RenderSettings,
+    control: &RenderControl,
+) -> Result<RenderOutput, Error> {
+    control.plan(settings.planned_pixel_samples()); // AUTO's grid fitting may take a moment
+    core_render(desc, buffers, &settings.resolve(Some(desc))?, control)
+}
 
 /// RenderJob(scene_json, buffers, settings_json, previews=True)
 ///
@@ -170,9 +181,8 @@ impl RenderJob {
     #[pyo3(signature = (scene_json, buffers, settings_json, previews=true))]
     fn new(scene_json: &str, buffers: Vec<Bound<'_, PyAny>>, settings_json: &str, previews: bool) -> PyResult<Self> {
         let desc: SceneDesc = parse(scene_json, "scene description")?;
-        // As `render`: keys present in the JSON are explicit, `quality` fills the rest.
-        let settings = RenderSettings::from_json(settings_json)
-            .map_err(|e| PyValueError::new_err(format!("render settings: {e}")))?;
+        // As `render`: resolved (quality, AUTO) on the render thread.
+        let settings = RenderSettings::from_json(settings_json).map_err(to_py_err)?;
         let buffers = convert_buffers(buffers)?;
         let control = if previews { RenderControl::with_previews() } else { RenderControl::new() };
         Ok(Self {
@@ -192,7 +202,7 @@ impl RenderJob {
         let control = self.control.clone();
         let handle = std::thread::Builder::new()
             .name("polychrome-render".into())
-            .spawn(move || guarded("render", || core_render(&desc, &buffers, &settings, &control)))
+            .spawn(move || guarded("render", || resolve_and_render(&desc, &buffers, &settings, &control)))
             .map_err(|e| PyRuntimeError::new_err(format!("cannot start the render thread: {e}")))?;
         *lock(&self.handle) = Some(handle);
         self.started.store(true, std::sync::atomic::Ordering::Release);
@@ -305,8 +315,8 @@ fn wavelength_grid<'py>(
     py: Python<'py>,
     settings_json: &str,
 ) -> PyResult<(Bound<'py, PyArray1<f32>>, Bound<'py, PyArray1<f32>>)> {
-    let settings: RenderSettings = parse(settings_json, "render settings")?;
-    let grid = guarded("wavelength_grid", || settings.grid())?;
+    let settings = RenderSettings::from_json(settings_json).map_err(to_py_err)?;
+    let grid = guarded("wavelength_grid", || Ok(settings.resolve(None)?.grid))?;
     Ok((PyArray1::from_slice(py, grid.lambdas()), PyArray1::from_slice(py, grid.weights())))
 }
 
@@ -329,10 +339,10 @@ fn spectrum_values<'py>(
     role: &str,
 ) -> PyResult<Bound<'py, PyArray1<f32>>> {
     let desc: SpectrumDesc = parse(spectrum_json, "spectrum")?;
-    let settings: RenderSettings = parse(settings_json, "render settings")?;
+    let settings = RenderSettings::from_json(settings_json).map_err(to_py_err)?;
     let role = role_from(role)?;
     let values = guarded("spectrum_values", || {
-        let grid = settings.grid()?;
+        let grid = settings.resolve(None)?.grid;
         let uplift = Uplift::new(&grid, &RgbSpace::rec709(), settings.uplift)?;
         desc.evaluate(&grid, role, &uplift).map_err(Error::Description)
     })?;
@@ -344,9 +354,9 @@ fn spectrum_values<'py>(
 #[pyfunction]
 fn spectrum_xyz(spectrum_json: &str, settings_json: &str) -> PyResult<(f64, f64, f64)> {
     let desc: SpectrumDesc = parse(spectrum_json, "spectrum")?;
-    let settings: RenderSettings = parse(settings_json, "render settings")?;
+    let settings = RenderSettings::from_json(settings_json).map_err(to_py_err)?;
     let xyz = guarded("spectrum_xyz", || {
-        let grid = settings.grid()?;
+        let grid = settings.resolve(None)?.grid;
         let uplift = Uplift::new(&grid, &RgbSpace::rec709(), settings.uplift)?;
         let v = desc.evaluate(&grid, SpectrumRole::Unbounded, &uplift).map_err(Error::Description)?;
         Ok(Observer::new(&grid).xyz(&v))
@@ -364,7 +374,7 @@ fn uplift<'py>(
     role: &str,
     settings_json: &str,
 ) -> PyResult<Bound<'py, numpy::PyArrayDyn<f32>>> {
-    let settings: RenderSettings = parse(settings_json, "render settings")?;
+    let settings = RenderSettings::from_json(settings_json).map_err(to_py_err)?;
     let role = role_from(role)?;
     let shape = rgb.as_array().shape().to_vec();
     if shape.last() != Some(&3) {
@@ -372,7 +382,7 @@ fn uplift<'py>(
     }
     let values: Vec<f32> = rgb.as_array().iter().copied().collect();
     let (n, out) = guarded("uplift", || {
-        let grid = settings.grid()?;
+        let grid = settings.resolve(None)?.grid;
         let up = Uplift::new(&grid, &RgbSpace::rec709(), settings.uplift)?;
         let n = grid.len();
         let mut out = vec![0.0f32; values.len() / 3 * n];
@@ -449,6 +459,14 @@ fn tessellate_points<'py>(
     tessellation_dict(py, t)
 }
 
+/// settings_schema() -> JSON text: every render setting (name, type, range or enum
+/// items, default, help, group, how Blender shows it) and the quality presets; the
+/// Python API, the CLI and the Blender add-on are generated from it.
+#[pyfunction]
+fn settings_schema() -> String {
+    schema_json()
+}
+
 /// _panic_for_tests(message) — panics inside `guarded` on purpose, so tests can check
 /// that an internal panic reaches Python as a RuntimeError and never aborts the process.
 #[pyfunction]
@@ -520,6 +538,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(uplift, m)?)?;
     m.add_function(wrap_pyfunction!(tessellate_curves, m)?)?;
     m.add_function(wrap_pyfunction!(tessellate_points, m)?)?;
+    m.add_function(wrap_pyfunction!(settings_schema, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     m.add_function(wrap_pyfunction!(_evaluate_procedural, m)?)?;
     m.add_class::<RenderJob>()?;

@@ -116,7 +116,7 @@ pub trait Technique: Send + Sync {
 
 /// The technique for `settings` on `scene` (a scene built for them), or an error naming
 /// the setting that does not apply.
-pub fn from_settings(scene: &Scene, settings: &crate::render::RenderSettings) -> crate::Result<Box<dyn Technique>> {
+pub fn from_settings(scene: &Scene, settings: &crate::render::ResolvedSettings) -> crate::Result<Box<dyn Technique>> {
     use crate::render::{Direction, Method};
     use crate::Error;
     if settings.dispersion_splitting && settings.method != Method::Polychromatic {
@@ -153,7 +153,7 @@ struct Tracers {
 }
 
 impl Tracers {
-    fn new(scene: &Scene, settings: &crate::render::RenderSettings) -> Self {
+    fn new(scene: &Scene, settings: &crate::render::ResolvedSettings) -> Self {
         use crate::render::{Direction, Method};
         Self {
             method: settings.method,

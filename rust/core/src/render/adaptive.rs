@@ -3,7 +3,7 @@
 //! split into two halves; the first halves' sums per pixel and the film's sums give the
 //! error estimate ([`pixel_error`]).
 
-use super::{Direction, Method, RenderSettings};
+use super::{Direction, Method, ResolvedSettings};
 use crate::color::delta_e::{de2000, lab};
 use crate::film::FilmBuffer;
 
@@ -12,8 +12,8 @@ pub const ADAPTIVE_MIN_SAMPLES: u32 = 16;
 
 /// Whether adaptive sampling applies: camera paths only (light paths are not per pixel),
 /// and not image-per-wavelength rendering.
-pub fn adaptive_supported(s: &RenderSettings) -> bool {
-    s.direction == Direction::Backward && s.method != Method::MonochromaticScenes
+pub fn adaptive_supported(method: Method, direction: Direction) -> bool {
+    direction == Direction::Backward && method != Method::MonochromaticScenes
 }
 
 /// The adaptive state of a render: which pixels still take samples, and the sums their
@@ -33,8 +33,8 @@ pub struct Adaptive {
 impl Adaptive {
     /// The state for `settings` (its noise threshold, image size and sample count), or
     /// None when adaptive sampling is off or does not apply.
-    pub fn new(settings: &RenderSettings) -> Option<Self> {
-        if !(settings.noise_threshold > 0.0 && adaptive_supported(settings)) {
+    pub fn new(settings: &ResolvedSettings) -> Option<Self> {
+        if !(settings.noise_threshold > 0.0 && adaptive_supported(settings.method, settings.direction)) {
             return None;
         }
         let pixels = (settings.width * settings.height) as usize;

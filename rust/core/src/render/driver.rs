@@ -10,7 +10,7 @@
 //! exactly to the sums of the whole render (up to float rounding of the additions).
 
 use super::adaptive::Adaptive;
-use super::{RenderControl, RenderOutput, RenderSettings, RenderStats, PREVIEW_INTERVAL};
+use super::{RenderControl, RenderOutput, RenderStats, ResolvedSettings, PREVIEW_INTERVAL};
 use crate::film::{Film, FilmBuffer, PixelSample};
 use crate::integrator::forward::Splat;
 use crate::integrator::monochromatic::Scratch;
@@ -45,7 +45,7 @@ struct Tile {
 /// Renders one compiled scene with one set of resolved settings.
 pub struct Driver<'a> {
     scene: &'a Scene,
-    settings: &'a RenderSettings,
+    settings: &'a ResolvedSettings,
     technique: Box<dyn Technique>,
     tiles: Vec<Tile>,
     /// A reflectance of 1 under D65 of luminance 1: makes the albedo pass read as a colour.
@@ -106,7 +106,7 @@ pub struct PassesDone {
 impl<'a> Driver<'a> {
     /// A driver for `scene` (built for `settings`) with resolved `settings`; errors name
     /// a setting the scene cannot be rendered with.
-    pub fn new(scene: &'a Scene, settings: &'a RenderSettings) -> Result<Self> {
+    pub fn new(scene: &'a Scene, settings: &'a ResolvedSettings) -> Result<Self> {
         let technique = integrator::from_settings(scene, settings)?;
         let (w, h) = (settings.width, settings.height);
         let tiles = (0..h.div_ceil(TILE))

@@ -1,9 +1,8 @@
-//! Rendering a scene description: resolves the settings (quality presets, AUTO),
-//! compiles the scene for the settings' grid and hands it to the pass loop
-//! ([`driver`]). Adaptive sampling lives in [`adaptive`], AUTO's wavelength grid in
+//! Rendering a scene description: compiles the scene for the resolved settings' grid
+//! and hands it to the pass loop ([`driver`]). The settings and their schema are in
+//! [`settings`], the quality presets that resolve them in [`quality`]. Adaptive sampling lives in [`adaptive`], AUTO's wavelength grid in
 //! [`auto_grid`].
 
-use crate::color::uplift::UpliftMethod;
 use crate::color::RgbSpace;
 use crate::film::FilmImages;
 use crate::scene::{Buffer, BuildOptions, Scene, SceneDesc};
@@ -18,8 +17,10 @@ pub mod adaptive;
 pub mod auto_grid;
 pub mod driver;
 pub mod quality;
+pub mod settings;
 pub use driver::{Driver, PassesDone, Timing};
 pub use quality::Quality;
+pub use settings::{RenderSettings, ResolvedSettings};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "SCREAMING_SNAKE_CASE")]
@@ -50,126 +51,6 @@ pub enum Direction {
     /// paths backward tracing cannot sample (delta light → specular first vertex:
     /// caustics of point lights). A partition of path space (weights 0/1), not MIS.
     Bidirectional,
-}
-
-/// Render settings; the same names are used by the Python API, the CLI and Blender.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct RenderSettings {
-    pub width: u32,
-    pub height: u32,
-    /// Samples per pixel.
-    pub samples: u32,
-    pub method: Method,
-    /// Backward (camera), forward (light) or bidirectional tracing.
-    pub direction: Direction,
-    /// POLYCHROMATIC: at the first dispersive surface continue one monochromatic
-    /// sub-path per wavelength instead of choosing one (deterministic mode).
-    pub dispersion_splitting: bool,
-    /// Uniform grid size over [wavelength_min, wavelength_max]...
-    pub wavelength_count: usize,
-    pub wavelength_min: f32,
-    pub wavelength_max: f32,
-    /// ...or an explicit ascending list of wavelengths (nm), which takes precedence.
-    pub wavelengths: Option<Vec<f32>>,
-    pub max_bounces: u32,
-    pub seed: u64,
-    /// Worker threads; 0 uses every core.
-    pub threads: usize,
-    /// Seconds after which no new pass starts; 0 means no limit.
-    pub time_limit: f64,
-    pub uplift: UpliftMethod,
-    /// Keep the per-pixel spectrum (for spectral EXR output).
-    pub spectral_output: bool,
-    /// AUTO (default), PREVIEW, FINAL or REFERENCE: fills every setting not given
-    /// explicitly (samples, max_bounces, noise_threshold, the grid); see [`quality`].
-    pub quality: Quality,
-    /// Adaptive sampling target: a pixel stops once its estimated error (ΔE, see
-    /// [`adaptive::pixel_error`]) is at most this; 0 renders every pixel `samples` times.
-    pub noise_threshold: f32,
-    /// The fields the user set (keys of the settings JSON, see [`Self::from_json`]);
-    /// None means every field is explicit (a struct built in Rust).
-    #[serde(skip)]
-    pub explicit: Option<std::collections::BTreeSet<String>>,
-}
-
-impl Default for RenderSettings {
-    fn default() -> Self {
-        Self {
-            width: 64,
-            height: 64,
-            samples: 16,
-            method: Method::Polychromatic,
-            direction: Direction::Backward,
-            dispersion_splitting: false,
-            wavelength_count: 41,
-            wavelength_min: 380.0,
-            wavelength_max: 780.0,
-            wavelengths: None,
-            max_bounces: 8,
-            seed: 0,
-            threads: 0,
-            time_limit: 0.0,
-            uplift: UpliftMethod::Linear,
-            spectral_output: false,
-            quality: Quality::Auto,
-            noise_threshold: 0.0,
-            explicit: None,
-        }
-    }
-}
-
-impl RenderSettings {
-    /// Parses settings JSON, recording its keys as the explicitly set fields (the
-    /// quality preset fills the others).
-    pub fn from_json(json: &str) -> Result<Self> {
-        let value: serde_json::Value =
-            serde_json::from_str(json).map_err(|e| Error::setting("settings", e.to_string()))?;
-        let keys = value.as_object().map(|m| m.keys().cloned().collect()).unwrap_or_default();
-        let mut s: Self = serde_json::from_value(value).map_err(|e| Error::setting("settings", e.to_string()))?;
-        s.explicit = Some(keys);
-        Ok(s)
-    }
-    /// Settings with nothing explicit: everything comes from `quality` (and the scene).
-    pub fn with_quality(quality: Quality) -> Self {
-        Self { quality, explicit: Some(Default::default()), ..Self::default() }
-    }
-    /// Whether `field` was set by the user (always true when `explicit` is None).
-    pub fn is_explicit(&self, field: &str) -> bool {
-        self.explicit.as_ref().is_none_or(|e| e.contains(field))
-    }
-
-    pub fn grid(&self) -> Result<WavelengthGrid> {
-        match &self.wavelengths {
-            Some(l) => WavelengthGrid::from_wavelengths(l.clone()),
-            None => WavelengthGrid::uniform(self.wavelength_count, self.wavelength_min, self.wavelength_max),
-        }
-    }
-
-    pub fn validate(&self) -> Result<()> {
-        if self.width == 0 || self.height == 0 || self.width > 65536 || self.height > 65536 {
-            return Err(Error::setting(
-                "width",
-                format!("image size {}×{} must be 1..65536 on each side", self.width, self.height),
-            ));
-        }
-        if self.samples == 0 {
-            return Err(Error::setting("samples", "must be at least 1"));
-        }
-        if !(self.time_limit.is_finite() && self.time_limit >= 0.0) {
-            return Err(Error::setting("time_limit", format!("{} s must be 0 (none) or positive", self.time_limit)));
-        }
-        if !(self.noise_threshold.is_finite() && self.noise_threshold >= 0.0) {
-            return Err(Error::setting(
-                "noise_threshold",
-                format!("{} must be 0 (off) or a positive ΔE", self.noise_threshold),
-            ));
-        }
-        if self.max_bounces > 1024 {
-            return Err(Error::setting("max_bounces", format!("{} exceeds 1024", self.max_bounces)));
-        }
-        Ok(())
-    }
 }
 
 /// Shared between the renderer and whoever watches it (another thread, Python).
@@ -216,6 +97,12 @@ impl RenderControl {
     /// (pixel samples done, pixel samples planned).
     pub fn progress(&self) -> (u64, u64) {
         (self.done.load(Ordering::Relaxed), self.total.load(Ordering::Relaxed))
+    }
+    /// Announces the pixel samples a render will take before it starts (while its
+    /// settings are resolved, see [`RenderSettings::planned_pixel_samples`]), so progress
+    /// shows the plan at once; the render refines it.
+    pub fn plan(&self, pixel_samples: u64) {
+        self.total.store(pixel_samples, Ordering::Relaxed);
     }
     /// A control whose render publishes previews (see [`RenderControl::latest_preview`]).
     pub fn with_previews() -> Self {
@@ -284,35 +171,31 @@ pub struct RenderOutput {
     pub stats: RenderStats,
 }
 
-/// Renders a scene description. Cancelling returns the samples finished so far.
+/// Renders a scene description with settings resolved for it
+/// ([`RenderSettings::resolve`] with the same `desc`). Cancelling returns the samples
+/// finished so far.
 pub fn render(
     desc: &SceneDesc,
     buffers: &[Buffer],
-    settings: &RenderSettings,
+    settings: &ResolvedSettings,
     control: &RenderControl,
 ) -> Result<RenderOutput> {
-    settings.validate()?;
     // The plan as soon as it is known (the render refines it for other methods).
-    let planned = if settings.is_explicit("samples") { settings.samples } else { settings.quality.preset().samples };
-    control.total.store(settings.width as u64 * settings.height as u64 * planned as u64, Ordering::Relaxed);
-    let (resolved, reasons) = quality::resolve(settings, Some(desc))?;
-    let settings = &resolved;
-    settings.validate()?;
-    settings.grid()?; // a bad grid is a settings error before any thread starts
+    control.total.store(settings.width as u64 * settings.height as u64 * settings.samples as u64, Ordering::Relaxed);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(settings.threads)
         .build()
         .map_err(|e| Error::setting("threads", e.to_string()))?;
     let threads = pool.current_num_threads();
     let mut out = pool.install(|| render_in_pool(desc, buffers, settings, control, threads))?;
-    out.stats.auto_reason.splice(0..0, reasons);
+    out.stats.auto_reason.splice(0..0, settings.notes.iter().cloned());
     Ok(out)
 }
 
 fn render_in_pool(
     desc: &SceneDesc,
     buffers: &[Buffer],
-    settings: &RenderSettings,
+    settings: &ResolvedSettings,
     control: &RenderControl,
     threads: usize,
 ) -> Result<RenderOutput> {
@@ -324,11 +207,10 @@ fn render_in_pool(
 
 /// Compiles a scene description for resolved `settings`: their image size and grid
 /// (for the RGB method, the three-channel grid of [`WavelengthGrid::rgb_channels`]).
-pub fn compile(desc: &SceneDesc, buffers: &[Buffer], settings: &RenderSettings) -> Result<Scene> {
-    let grid = settings.grid()?;
+pub fn compile(desc: &SceneDesc, buffers: &[Buffer], settings: &ResolvedSettings) -> Result<Scene> {
     let grid = match settings.method {
-        Method::Rgb => WavelengthGrid::rgb_channels(&grid, &RgbSpace::rec709())?,
-        _ => grid,
+        Method::Rgb => WavelengthGrid::rgb_channels(&settings.grid, &RgbSpace::rec709())?,
+        _ => settings.grid.clone(),
     };
     let opts = BuildOptions {
         grid,
@@ -343,10 +225,7 @@ pub fn compile(desc: &SceneDesc, buffers: &[Buffer], settings: &RenderSettings) 
 /// Renders an already compiled scene (built for `settings.width`×`settings.height`; for
 /// the RGB method on a grid from [`WavelengthGrid::rgb_channels`]). Lets tests and tools
 /// swap in their own materials or lights.
-pub fn render_scene(scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> Result<RenderOutput> {
-    settings.validate()?;
-    let (resolved, reasons) = quality::resolve(settings, None)?;
-    let settings = &resolved;
+pub fn render_scene(scene: &Scene, settings: &ResolvedSettings, control: &RenderControl) -> Result<RenderOutput> {
     if scene.camera.width() != settings.width || scene.camera.height() != settings.height {
         return Err(Error::setting(
             "width",
@@ -371,14 +250,14 @@ pub fn render_scene(scene: &Scene, settings: &RenderSettings, control: &RenderCo
         .map_err(|e| Error::setting("threads", e.to_string()))?;
     let threads = pool.current_num_threads();
     let mut out = pool.install(|| render_built(scene, settings, control, threads, Instant::now(), 0.0))?;
-    out.stats.auto_reason.splice(0..0, reasons);
+    out.stats.auto_reason.splice(0..0, settings.notes.iter().cloned());
     Ok(out)
 }
 
 /// Renders a compiled scene with resolved settings on the current thread pool.
 fn render_built(
     scene: &Scene,
-    settings: &RenderSettings,
+    settings: &ResolvedSettings,
     control: &RenderControl,
     threads: usize,
     start: Instant,

@@ -1,9 +1,9 @@
 //! Quality presets: what `quality` fills in for every setting the user did not set.
 //!
-//! `quality` fills `samples`, `max_bounces`, `noise_threshold` and the wavelength grid.
-//! "Explicitly set" is known from the settings' JSON (a key present is explicit, see
-//! [`RenderSettings::from_json`]); a `RenderSettings` built in Rust has `explicit: None`,
-//! meaning every field is explicit, so Rust callers keep exactly what they wrote.
+//! `quality` fills `samples`, `max_bounces`, `noise_threshold` and the wavelength grid
+//! when they are unset (`None` in [`RenderSettings`]: absent or null in JSON); a value
+//! given always wins. [`resolve`] turns the settings into the [`ResolvedSettings`] the
+//! renderer takes.
 //!
 //! AUTO models only what the scene requires: the wavelength grid fitted to the scene's
 //! spectra ([`super::auto_grid`]) and adaptive sampling to a per-pixel error target
@@ -12,8 +12,10 @@
 //! the scene disperses.
 
 use super::adaptive::{adaptive_supported, ADAPTIVE_MIN_SAMPLES};
-use super::{Method, RenderSettings};
+use super::settings::{Filled, RenderSettings, ResolvedSettings};
+use super::Method;
 use crate::scene::SceneDesc;
+use crate::spectrum::WavelengthGrid;
 use crate::Result;
 use serde::{Deserialize, Serialize};
 
@@ -62,7 +64,12 @@ impl Quality {
             Quality::Preview => {
                 Preset { samples: 32, noise_threshold: 3.0, max_bounces: 4, wavelength_count: Some(16) }
             }
-            Quality::Final => Preset { samples: 256, noise_threshold: 0.0, max_bounces: 8, wavelength_count: Some(41) },
+            Quality::Final => Preset {
+                samples: 256,
+                noise_threshold: 0.0,
+                max_bounces: 8,
+                wavelength_count: Some(PAPER_WAVELENGTH_COUNT),
+            },
             Quality::Reference => {
                 Preset { samples: 2048, noise_threshold: 0.0, max_bounces: 16, wavelength_count: Some(81) }
             }
@@ -70,34 +77,34 @@ impl Quality {
     }
 }
 
-/// The settings the render runs with: `settings` with every non-explicit field filled
-/// by its quality preset (and, for AUTO, from the scene `desc`), plus the reasons.
-pub fn resolve(settings: &RenderSettings, desc: Option<&SceneDesc>) -> Result<(RenderSettings, Vec<String>)> {
-    let mut s = settings.clone();
-    let mut why = Vec::new();
-    if settings.explicit.is_none() {
-        return Ok((s, why));
-    }
-    let q = settings.quality;
+/// The grid when there is nothing to fit it to (AUTO without a scene; the RGB method,
+/// whose grid only converts named spectra): the paper's 41 samples.
+pub const PAPER_WAVELENGTH_COUNT: usize = 41;
+
+/// The settings the render runs with: `settings` validated, with every unset field
+/// filled by its quality preset (and, for AUTO, from the scene `desc`), the grid built,
+/// and the reasons in `notes`.
+pub fn resolve(settings: &RenderSettings, desc: Option<&SceneDesc>) -> Result<ResolvedSettings> {
+    settings.validate()?;
+    let s = settings;
+    let q = s.quality;
     let p = q.preset();
-    let free = |k: &str| !settings.is_explicit(k);
-    if free("samples") {
-        s.samples = p.samples;
+    let mut why = Vec::new();
+    let samples = s.samples.unwrap_or_else(|| {
         why.push(format!(
             "samples {} ({} preset{})",
             p.samples,
             q.name(),
             if p.noise_threshold > 0.0 { ", the maximum per pixel" } else { "" }
         ));
-    }
-    if free("max_bounces") {
-        s.max_bounces = p.max_bounces;
-    }
-    if free("noise_threshold") {
+        p.samples
+    });
+    let max_bounces = s.max_bounces.unwrap_or(p.max_bounces);
+    let noise_threshold = s.noise_threshold.unwrap_or_else(|| {
         // An explicit sample count is a request for that many samples: no early stop
         // unless noise_threshold is given too.
-        s.noise_threshold = if free("samples") { p.noise_threshold } else { 0.0 };
-        if s.noise_threshold > 0.0 {
+        let t = if s.samples.is_none() { p.noise_threshold } else { 0.0 };
+        if t > 0.0 {
             why.push(format!(
                 "adaptive: a pixel stops at estimated ΔE00 ≤ {} after ≥ {ADAPTIVE_MIN_SAMPLES} samples",
                 p.noise_threshold
@@ -105,25 +112,34 @@ pub fn resolve(settings: &RenderSettings, desc: Option<&SceneDesc>) -> Result<(R
         } else if p.noise_threshold > 0.0 {
             why.push("adaptive off: samples set explicitly (set noise_threshold too for adaptive sampling)".into());
         }
-    }
-    if s.noise_threshold > 0.0 && !adaptive_supported(&s) {
+        t
+    });
+    if noise_threshold > 0.0 && !adaptive_supported(s.method, s.direction) {
         why.push(format!("adaptive sampling off: {:?} {:?} renders fixed sample counts", s.method, s.direction));
     }
-    if free("wavelengths") && free("wavelength_count") {
-        match (p.wavelength_count, desc) {
+    let uniform = |n| WavelengthGrid::uniform(n, s.wavelength_min, s.wavelength_max);
+    let grid = match (&s.wavelengths, s.wavelength_count) {
+        (Some(list), _) => WavelengthGrid::from_wavelengths(list.clone())?,
+        (None, Some(n)) => uniform(n)?,
+        (None, None) => match (p.wavelength_count, desc) {
             (Some(n), _) => {
-                s.wavelengths = None;
-                s.wavelength_count = n;
                 why.push(format!("{n} uniform wavelengths ({} preset)", q.name()));
+                uniform(n)?
             }
             (None, Some(d)) if s.method != Method::Rgb => {
                 let (lambdas, reasons) = auto_grid(d, s.wavelength_min, s.wavelength_max, s.uplift)?;
-                s.wavelengths = Some(lambdas);
                 why.extend(reasons);
+                WavelengthGrid::from_wavelengths(lambdas)?
             }
-            (None, Some(_)) => why.push("RGB method: the 41-sample grid only converts named spectra".into()),
-            (None, None) => why.push("prebuilt scene: its grid is kept".into()),
-        }
-    }
-    Ok((s, why))
+            (None, Some(_)) => {
+                why.push("RGB method: the 41-sample grid only converts named spectra".into());
+                uniform(PAPER_WAVELENGTH_COUNT)?
+            }
+            (None, None) => {
+                why.push("prebuilt scene: its grid is kept".into());
+                uniform(PAPER_WAVELENGTH_COUNT)?
+            }
+        },
+    };
+    Ok(s.assemble(Filled { samples, noise_threshold, max_bounces }, grid, why))
 }
