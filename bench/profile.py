@@ -33,7 +33,7 @@ CATEGORIES = [
     ("film", r"film::|Film"),
     ("shading (BSDF eval/sample, materials)", r"material::|Bsdf|bsdf|diffuse|Diffuse|dielectric|fresnel|microfacet"),
     ("lights, sampling, RNG", r"light::|Light|sampling::|Rng|Distribution|rand"),
-    ("integrator (path loop)", r"integrator::|PathTracer|path::"),
+    ("integrator (path walk)", r"integrator::|walk::|path::"),
     ("math library (exp, pow, sqrt, ...)", r"libm|__ieee|exp|pow|log|sqrt|sincos|__sin|__cos"),
 ]
 
@@ -98,7 +98,7 @@ def main(argv=None) -> int:
         f"`perf record -g` (2 kHz) of the release build with debug info (`rust/core/examples/profile_render.rs`), one thread, "
         f"Cornell box (examples/cornell_box.py), {args.size}×{args.size}, {args.spp} spp, {args.wavelengths} wavelengths, "
         "POLYCHROMATIC BACKWARD. Functions are grouped by name (inlined code counts where it was inlined: "
-        "the path loop in `PathTracer::sample` includes inlined spectral arithmetic and BSDF code).\n\n" + "\n".join(lines)
+        "the path walk in `integrator::walk::Walk::run` includes inlined spectral arithmetic and BSDF code).\n\n" + "\n".join(lines)
     )
     print(body)
     if args.write:

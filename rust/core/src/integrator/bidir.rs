@@ -22,19 +22,20 @@
 //! camera strategy can produce the path): there the two sides collapse to different
 //! wavelengths with different probabilities (eq. 9), which these weights do not model.
 
-use super::scatter;
-use super::{facing, Facing};
+use super::forward::{
+    connect_to_camera, light_context, light_seen_by_camera, pixel_of, start_light_path, walk_light, LightTracing, Splat,
+};
+use super::path::{trace_camera, CameraMis, DirectSample, PathTracing};
+use super::throughput::Throughput;
+use super::walk::{PathHooks, PathState, Vertex, Walk};
+use super::wavelengths::WavelengthPolicy;
+use super::{CameraSample, Scatter, Scratch, Technique};
 use crate::camera::CameraConnection;
 use crate::film::PixelSample;
-use crate::geometry::{offset_ray_origin, shadow_ray, Frame, Ray};
-use crate::integrator::forward::{connect_to_camera, Splat};
-use crate::integrator::monochromatic::{MonochromaticTracer, PathState, Scratch};
-use crate::integrator::Integrator;
-use crate::light::LeDensity;
+use crate::light::{LeDensity, Light};
 use crate::material::{ShadingContext, TransportMode};
 use crate::sampling::Rng;
 use crate::scene::Scene;
-use crate::spectrum::SampledSpectrum;
 use glam::Vec3A;
 
 /// A scattering vertex x1 … x(k−1), in camera order.
@@ -181,352 +182,276 @@ pub fn weights(cam: &CamEnd, verts: &[Vtx], light: &LightEnd, legacy: bool) -> [
     }
 }
 
-/// The camera side of BIDIRECTIONAL with MIS (POLYCHROMATIC and RGB).
-pub struct MisPathTracer {
-    pub max_bounces: u32,
-    pub rr_depth: u32,
-    pub dispersion_splitting: bool,
+/// The camera side of BIDIRECTIONAL with MIS: records the path's vertices and weighs
+/// emission (strategy A) and light samples (B) against the other strategies.
+pub struct BidirectionalMis {
+    cam: CamEnd,
+    verts: Vec<Vtx>,
+    /// The path met a dispersive surface: 0/1 partition from here on.
+    legacy: bool,
 }
 
-impl MisPathTracer {
-    fn mono(&self) -> MonochromaticTracer {
-        MonochromaticTracer { max_bounces: self.max_bounces, rr_depth: self.rr_depth }
-    }
-}
-
-impl Integrator for MisPathTracer {
-    fn sample(&self, scene: &Scene, x: f32, y: f32, rng: &mut Rng, out: &mut PixelSample) {
-        let n = scene.grid.len();
-        let Some(mut ray) = scene.camera.generate_ray(x, y, rng) else {
-            return; // outside the lens (fisheye, mirror ball): black
-        };
-        let mut cam = CamEnd { p: ray.origin, pdf_dir: 0.0, connectable: false };
-        let mut verts: Vec<Vtx> = Vec::with_capacity(self.max_bounces as usize + 1);
-        let mut legacy = false;
-        let mut beta = SampledSpectrum::splat(n, 1.0);
-        let mut f = SampledSpectrum::zeros(n);
-        let mut le = SampledSpectrum::zeros(n);
-        let radiance = &mut out.radiance;
-        let mut ctx = ShadingContext::new(&scene.grid);
-        let mut prev_p = ray.origin;
-        let mut depth = 0u32;
-        loop {
-            let Some(hit) = scene.intersect(&ray) else {
-                if let Some(env) = &scene.environment {
-                    let light = LightEnd {
-                        p: prev_p + ray.direction,
-                        pmf: scene.light_distribution.pmf(env.light),
-                        le: None,
-                        delta: false,
-                        infinite: true,
-                        pdf_li: scene.lights[env.light].pdf_li(prev_p, ray.direction, f32::INFINITY),
-                        cos: 1.0,
-                    };
-                    let w = if depth == 0 { 1.0 } else { weights(&cam, &verts, &light, legacy)[0] as f32 };
-                    let l = env.radiance_along(ray.direction, &mut le);
-                    radiance.add_product(&beta, l, w);
-                }
-                break;
-            };
-            let si = scene.interaction(&ray, &hit);
-            // Surfaces are two-sided: shade on the side the ray arrived from.
-            let Facing { wo, ng, ns, material } = facing(scene, &ray, &si, &mut ctx);
-            if depth == 0 {
-                out.depth = scene.camera.depth(si.p);
-                out.normal = si.ns;
-                material.bsdf.albedo(&ctx, &mut out.albedo);
-                if let Some(c) = scene.camera.connect_through(ray.origin, si.p) {
-                    // The pinhole as light paths see it (the same numbers on both sides).
-                    cam.p = si.p + c.wi * c.distance;
-                    cam.pdf_dir = c.importance * c.distance * c.distance;
-                    cam.connectable = true;
-                }
-            }
-
-            if let Some(emission) = &material.emission {
-                let w = match scene.triangle_light(si.instance, si.triangle) {
-                    Some(l) => {
-                        let light = LightEnd {
-                            p: si.p,
-                            pmf: scene.light_distribution.pmf(l),
-                            le: scene.lights[l].pdf_le(si.p, wo),
-                            delta: false,
-                            infinite: false,
-                            pdf_li: scene.lights[l].pdf_li(prev_p, ray.direction, si.t),
-                            cos: si.ng.dot(wo).abs(),
-                        };
-                        weights(&cam, &verts, &light, legacy)[0] as f32
-                    }
-                    None => 1.0,
-                };
-                radiance.add_product(&beta, emission, w);
-            }
-            if depth >= self.max_bounces {
-                break;
-            }
-            let frame = Frame::from_normal(ns);
-            let wo_local = frame.to_local(wo);
-            if wo_local.z == 0.0 {
-                break;
-            }
-            let flags = material.bsdf.flags();
-            legacy |= flags.dispersive;
-            let here = Vtx { p: si.p, n: si.ng, specular: false, pdf_cam: 0.0, pdf_light: 0.0 };
-
-            // Next-event estimation (strategy B).
-            if flags.smooth {
-                if let Some(l) = scene.light_distribution.sample(rng.uniform()) {
-                    let pmf = scene.light_distribution.pmf(l);
-                    let u = rng.uniform2();
-                    if let Some(ls) = scene.lights[l].sample_li(si.p, u, &mut le) {
-                        let wi_local = frame.to_local(ls.wi);
-                        let bsdf_pdf = material.bsdf.eval(&ctx, wo_local, wi_local, &mut f);
-                        if !f.is_black() && ls.wi.dot(ng) > 0.0 {
-                            let origin = offset_ray_origin(si.p, ng);
-                            if !scene.occluded(&shadow_ray(si.p, origin, ls.wi, ls.distance)) {
-                                let infinite = ls.distance.is_infinite();
-                                let lp = if infinite { si.p + ls.wi } else { si.p + ls.wi * ls.distance };
-                                let dens = scene.lights[l].pdf_le(lp, -ls.wi);
-                                ctx.mode = TransportMode::Importance;
-                                let pdf_light = material.bsdf.pdf(&ctx, wi_local, wo_local);
-                                ctx.mode = TransportMode::Radiance;
-                                let v = Vtx { pdf_cam: bsdf_pdf, pdf_light, ..here };
-                                verts.push(v);
-                                let light = LightEnd {
-                                    p: lp,
-                                    pmf,
-                                    le: dens,
-                                    delta: ls.delta,
-                                    infinite: infinite && !ls.delta,
-                                    pdf_li: ls.pdf,
-                                    cos: dens.map_or(1.0, |d| d.cos),
-                                };
-                                let w = weights(&cam, &verts, &light, legacy)[1] as f32;
-                                verts.pop();
-                                let light_pdf = pmf * ls.pdf;
-                                f.mul_assign(&beta);
-                                radiance.add_product(&f, &le, w / light_pdf);
-                            }
-                        }
-                    }
-                }
-            }
-
-            // Deterministic (splitting) mode: one monochromatic sub-path per wavelength
-            // (dispersive paths: the camera side's own MIS, as BACKWARD).
-            if self.dispersion_splitting && flags.dispersive && ctx.single_wavelength.is_none() {
-                self.mono().split_per_wavelength(
-                    scene,
-                    material.bsdf.as_ref(),
-                    &mut ctx,
-                    &frame,
-                    wo_local,
-                    si.p,
-                    ng,
-                    &beta,
-                    depth,
-                    rng,
-                    radiance,
-                );
-                break;
-            }
-
-            // Continue by sampling the BSDF (strategy A on the next emitter hit).
-            let Some(sc) = scatter(material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, rng, &mut beta) else {
-                break;
-            };
-            if !beta.is_finite() {
-                break;
-            }
-            let bs = sc.sample;
-            if depth == 0 && sc.transmitted {
-                // Light paths connect to the camera only on the side they arrive from.
-                cam.connectable = false;
-            }
-            let pdf_cam = if bs.specular { 0.0 } else { material.bsdf.pdf(&ctx, wo_local, bs.wi) };
-            ctx.mode = TransportMode::Importance;
-            let pdf_light = if bs.specular { 0.0 } else { material.bsdf.pdf(&ctx, bs.wi, wo_local) };
-            ctx.mode = TransportMode::Radiance;
-            verts.push(Vtx { specular: bs.specular, pdf_cam, pdf_light, ..here });
-            prev_p = si.p;
-            ray = sc.ray;
-            depth += 1;
-            if let Some(i) = bs.collapsed_to {
-                if ctx.single_wavelength.is_none() {
-                    // Collapsed (eq. 9): a dispersive path, finished by the scalar tracer
-                    // with the camera side's own MIS.
-                    let st = PathState { ray, specular: bs.specular, prev_pdf: bs.pdf, prev_p, depth };
-                    let l = self.mono().trace(scene, i, beta.get(i), st, rng, None, &mut Scratch::new(n));
-                    radiance.set(i, radiance.get(i) + l);
-                    break;
-                }
-                ctx.single_wavelength = Some(i);
-            }
-            if depth >= self.rr_depth {
-                let q = beta.max_value().min(1.0);
-                if q <= 0.0 || rng.uniform() >= q {
-                    break;
-                }
-                beta.scale(1.0 / q);
-            }
+impl BidirectionalMis {
+    pub fn new(max_bounces: u32) -> Self {
+        Self {
+            cam: CamEnd { p: Vec3A::ZERO, pdf_dir: 0.0, connectable: false },
+            verts: Vec::with_capacity(max_bounces as usize + 1),
+            legacy: false,
         }
     }
 }
 
-/// The light side of BIDIRECTIONAL with MIS: light tracing whose splats carry the
-/// weight of strategy C.
-pub struct MisLightTracer {
-    pub max_bounces: u32,
-    pub rr_depth: u32,
+impl CameraMis for BidirectionalMis {
+    fn first_hit(&mut self, scene: &Scene, v: &Vertex, st: &PathState) {
+        self.cam.p = st.ray.origin;
+        if let Some(c) = scene.camera.connect_through(st.ray.origin, v.si.p) {
+            // The pinhole as light paths see it (the same numbers on both sides).
+            self.cam.p = v.si.p + c.wi * c.distance;
+            self.cam.pdf_dir = c.importance * c.distance * c.distance;
+            self.cam.connectable = true;
+        }
+    }
+    fn emission(&mut self, scene: &Scene, v: &Vertex, st: &PathState) -> f32 {
+        let Some(l) = scene.triangle_light(v.si.instance, v.si.triangle) else { return 1.0 };
+        let light = LightEnd {
+            p: v.si.p,
+            pmf: scene.light_distribution.pmf(l),
+            le: scene.lights[l].pdf_le(v.si.p, v.wo),
+            delta: false,
+            infinite: false,
+            pdf_li: scene.lights[l].pdf_li(st.prev_p, st.ray.direction, v.si.t),
+            cos: v.si.ng.dot(v.wo).abs(),
+        };
+        weights(&self.cam, &self.verts, &light, self.legacy)[0] as f32
+    }
+    fn escape(&mut self, scene: &Scene, st: &PathState, env: usize) -> f32 {
+        if st.depth == 0 {
+            return 1.0;
+        }
+        let light = LightEnd {
+            p: st.prev_p + st.ray.direction,
+            pmf: scene.light_distribution.pmf(env),
+            le: None,
+            delta: false,
+            infinite: true,
+            pdf_li: scene.lights[env].pdf_li(st.prev_p, st.ray.direction, f32::INFINITY),
+            cos: 1.0,
+        };
+        weights(&self.cam, &self.verts, &light, self.legacy)[0] as f32
+    }
+    fn vertex(&mut self, v: &Vertex) {
+        self.legacy |= v.flags.dispersive;
+    }
+    fn direct(&mut self, scene: &Scene, ctx: &mut ShadingContext, v: &Vertex, d: &DirectSample) -> f32 {
+        let DirectSample { light, pmf, ls, wi_local, bsdf_pdf } = *d;
+        let infinite = ls.distance.is_infinite();
+        let lp = if infinite { v.si.p + ls.wi } else { v.si.p + ls.wi * ls.distance };
+        let dens = scene.lights[light].pdf_le(lp, -ls.wi);
+        let pdf_light = reverse_pdf(ctx, v, wi_local, v.wo_local, TransportMode::Importance);
+        self.verts.push(Vtx { p: v.si.p, n: v.si.ng, specular: false, pdf_cam: bsdf_pdf, pdf_light });
+        let end = LightEnd {
+            p: lp,
+            pmf,
+            le: dens,
+            delta: ls.delta,
+            infinite: infinite && !ls.delta,
+            pdf_li: ls.pdf,
+            cos: dens.map_or(1.0, |d| d.cos),
+        };
+        let w = weights(&self.cam, &self.verts, &end, self.legacy)[1] as f32;
+        self.verts.pop();
+        w
+    }
+    fn scattered(&mut self, ctx: &mut ShadingContext, v: &Vertex, st: &PathState, sc: &Scatter) {
+        let bs = sc.sample;
+        if st.depth == 0 && sc.transmitted {
+            // Light paths connect to the camera only on the side they arrive from.
+            self.cam.connectable = false;
+        }
+        let (pdf_cam, pdf_light) = if bs.specular {
+            (0.0, 0.0)
+        } else {
+            let pdf_cam = v.material.bsdf.pdf(ctx, v.wo_local, bs.wi);
+            (pdf_cam, reverse_pdf(ctx, v, bs.wi, v.wo_local, TransportMode::Importance))
+        };
+        self.verts.push(Vtx { p: v.si.p, n: v.si.ng, specular: bs.specular, pdf_cam, pdf_light });
+    }
 }
 
-impl MisLightTracer {
-    /// Traces one light path and pushes its weighted splats (radiance at the pixel, to
-    /// be divided by the light paths per pixel).
-    pub fn trace(&self, scene: &Scene, rng: &mut Rng, splats: &mut Vec<Splat>) {
-        let n = scene.grid.len();
-        let Some(l) = scene.light_distribution.sample(rng.uniform()) else {
-            return;
-        };
-        let pmf = scene.light_distribution.pmf(l);
-        let (u_pos, u_dir) = (rng.uniform2(), rng.uniform2());
-        let mut le = SampledSpectrum::zeros(n);
-        let light = &scene.lights[l];
-        let Some(es) = light.sample_le(u_pos, u_dir, &mut le) else {
-            return;
-        };
-        if !(pmf > 0.0 && es.pdf_pos > 0.0 && es.pdf_dir > 0.0) {
+/// The BSDF pdf at `v` of sampling `wi` from `wo` as the path of the other direction
+/// (`mode`) samples it; `ctx` keeps its own mode.
+fn reverse_pdf(ctx: &mut ShadingContext, v: &Vertex, wo: Vec3A, wi: Vec3A, mode: TransportMode) -> f32 {
+    let own = std::mem::replace(&mut ctx.mode, mode);
+    let pdf = v.material.bsdf.pdf(ctx, wo, wi);
+    ctx.mode = own;
+    pdf
+}
+
+/// The pinhole as seen from light-path vertex `p` through connection `c`.
+fn cam_end(p: Vec3A, c: &CameraConnection) -> CamEnd {
+    CamEnd { p: p + c.wi * c.distance, pdf_dir: c.importance * c.distance * c.distance, connectable: true }
+}
+
+/// The hooks of a BIDIRECTIONAL light path: camera connections (strategy C) weighted
+/// against the camera strategies, from the vertices recorded so far.
+struct MisLightPath<'a> {
+    splats: &'a mut Vec<Splat>,
+    light: &'a dyn Light,
+    pmf: f32,
+    origin: Vec3A,
+    delta_position: bool,
+    /// `sample_le` densities of the path's first ray.
+    dens: Option<LeDensity>,
+    /// Light-path vertices so far (light order).
+    path: Vec<Vtx>,
+    /// Scratch: a connection's vertices in camera order.
+    cam_verts: Vec<Vtx>,
+    legacy: bool,
+}
+
+impl<T: Throughput> PathHooks<T> for MisLightPath<'_> {
+    fn connect(
+        &mut self,
+        scene: &Scene,
+        ctx: &mut ShadingContext,
+        v: &Vertex,
+        _st: &PathState,
+        beta: &T,
+        rng: &mut Rng,
+        scratch: &mut Scratch,
+    ) {
+        self.legacy |= v.flags.dispersive;
+        if !v.flags.smooth {
             return;
         }
-        let width = scene.camera.width();
-        let pixel_of = |c: &CameraConnection| -> u32 {
-            let x = (c.raster.x as u32).min(width - 1);
-            let y = (c.raster.y as u32).min(scene.camera.height() - 1);
-            y * width + x
+        let Some(c) = connect_to_camera(scene, v, ctx, &mut scratch.f, rng) else {
+            return;
         };
-        let cam_end = |p: Vec3A, c: &CameraConnection| CamEnd {
-            p: p + c.wi * c.distance,
-            pdf_dir: c.importance * c.distance * c.distance,
-            connectable: true,
+        // Camera order: x1 = here, x2 … = the light path reversed.
+        let pdf_cam = reverse_pdf(ctx, v, v.frame.to_local(c.wi), v.wo_local, TransportMode::Radiance);
+        self.cam_verts.clear();
+        self.cam_verts.push(Vtx { p: v.si.p, n: v.si.ng, specular: false, pdf_cam, pdf_light: 0.0 });
+        self.cam_verts.extend(self.path.iter().rev().copied());
+        let first = self.path.first().map_or(v.si.p, |x| x.p);
+        let to_light = self.origin - first;
+        let dist = to_light.length();
+        let end = LightEnd {
+            p: self.origin,
+            pmf: self.pmf,
+            le: self.dens,
+            delta: self.delta_position,
+            infinite: false,
+            pdf_li: if self.delta_position { 1.0 } else { self.light.pdf_li(first, to_light / dist, dist) },
+            cos: self.dens.map_or(1.0, |d| d.cos),
         };
+        let w = weights(&cam_end(v.si.p, &c), &self.cam_verts, &end, self.legacy)[2] as f32;
+        if w > 0.0 {
+            self.splats.push(Splat { pixel: pixel_of(scene, &c), radiance: beta.times(&scratch.f, w * c.importance) });
+        }
+    }
+    fn scattered(
+        &mut self,
+        _scene: &Scene,
+        ctx: &mut ShadingContext,
+        v: &Vertex,
+        _st: &PathState,
+        sc: &Scatter,
+        _beta: &T,
+    ) -> bool {
+        // Record this vertex: light-order pdf (wo = light side, wi = camera side) and
+        // the camera-order pdf (wo = camera side, wi = light side).
+        let bs = sc.sample;
+        let (pdf_light, pdf_cam) = if bs.specular {
+            (0.0, 0.0)
+        } else {
+            let pdf_light = v.material.bsdf.pdf(ctx, v.wo_local, bs.wi);
+            (pdf_light, reverse_pdf(ctx, v, bs.wi, v.wo_local, TransportMode::Radiance))
+        };
+        self.path.push(Vtx { p: v.si.p, n: v.si.ng, specular: bs.specular, pdf_cam, pdf_light });
+        true
+    }
+}
 
+/// BIDIRECTIONAL with MIS (whole-spectrum methods): camera paths with the three-strategy
+/// weights, and light paths whose camera connections carry the weight of strategy C.
+pub struct Bidirectional<P> {
+    pub wavelengths: P,
+    pub camera: Walk,
+    pub light: Walk,
+}
+
+impl<P: WavelengthPolicy> Technique for Bidirectional<P> {
+    fn camera_sample(
+        &self,
+        scene: &Scene,
+        cs: CameraSample,
+        rng: &mut Rng,
+        out: &mut PixelSample,
+        scratch: &mut Scratch,
+    ) {
+        let wl = self.wavelengths.camera(cs.pixel, cs.pass);
+        let mis = BidirectionalMis::new(self.camera.max_bounces);
+        trace_camera(scene, &self.camera, cs.film, wl, mis, rng, out, scratch);
+    }
+    fn light_path(&self, scene: &Scene, pass: u32, rng: &mut Rng, splats: &mut Vec<Splat>, scratch: &mut Scratch) {
+        let wl = self.wavelengths.light(pass, rng);
+        let Some(start) = start_light_path(scene, &wl, rng) else { return };
+        let (es, pmf) = (start.es, start.pmf);
+        let light = scene.lights[start.light].as_ref();
         // The light vertex itself seen by the camera (area lights): k = 1.
-        if !es.delta_position {
-            if let (Some(nl), Some(c)) = (es.normal, scene.camera.connect(es.origin, rng)) {
-                let cos = nl.dot(c.wi).abs();
-                let origin = offset_ray_origin(es.origin, if nl.dot(c.wi) > 0.0 { nl } else { -nl });
-                if cos > 0.0
-                    // Aimed from the offset origin at the camera: along c.wi from the unshifted
-                    // point it missed by the offset (16 units at 1e6) and hit walls behind it.
-                    && !scene.occluded(&crate::geometry::shadow_ray(es.origin, origin, c.wi, c.distance))
-                {
-                    let end = LightEnd {
-                        p: es.origin,
-                        pmf,
-                        le: light.pdf_le(es.origin, c.wi),
-                        delta: false,
-                        infinite: false,
-                        pdf_li: 0.0,
-                        cos,
-                    };
-                    let w = weights(&cam_end(es.origin, &c), &[], &end, false)[2] as f32;
-                    if w > 0.0 {
-                        let mut r = le.clone();
-                        r.scale(w * cos * c.importance / (pmf * es.pdf_pos));
-                        splats.push(Splat { pixel: pixel_of(&c), radiance: r });
-                    }
-                }
-            }
-        }
-
-        let cos0 = es.normal.map_or(1.0, |nl| nl.dot(es.direction).abs());
-        let dens = light.pdf_le(es.origin, es.direction);
-        let mut beta = le;
-        beta.scale(cos0 / (pmf * es.pdf_pos * es.pdf_dir));
-        let start = match es.normal {
-            Some(nl) => offset_ray_origin(es.origin, if nl.dot(es.direction) > 0.0 { nl } else { -nl }),
-            None => es.origin,
-        };
-        let mut ray = Ray::new(start, es.direction);
-        let mut ctx = ShadingContext::new(&scene.grid);
-        ctx.mode = TransportMode::Importance;
-        let mut f = SampledSpectrum::zeros(n);
-        let mut path: Vec<Vtx> = Vec::with_capacity(self.max_bounces as usize + 1);
-        let mut cam_verts: Vec<Vtx> = Vec::with_capacity(self.max_bounces as usize + 1);
-        let mut legacy = false;
-        let mut depth = 0u32;
-        while let Some(hit) = scene.intersect(&ray) {
-            let si = scene.interaction(&ray, &hit);
-            // Surfaces are two-sided: shade on the side the ray arrived from.
-            let Facing { wo, ng, ns, material } = facing(scene, &ray, &si, &mut ctx);
-            let frame = Frame::from_normal(ns);
-            let wo_local = frame.to_local(wo);
-            if wo_local.z == 0.0 {
-                break;
-            }
-            let flags = material.bsdf.flags();
-            legacy |= flags.dispersive;
-            // Connect to the camera: a path with depth + 1 scattering events (strategy C).
-            if flags.smooth && depth < self.max_bounces {
-                if let Some(c) =
-                    connect_to_camera(scene, material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, &mut f, rng)
-                {
-                    let wc_local = frame.to_local(c.wi);
-                    // Camera order: x1 = here, x2 … = the light path reversed.
-                    ctx.mode = TransportMode::Radiance;
-                    let pdf_cam = material.bsdf.pdf(&ctx, wc_local, wo_local);
-                    ctx.mode = TransportMode::Importance;
-                    cam_verts.clear();
-                    cam_verts.push(Vtx { p: si.p, n: si.ng, specular: false, pdf_cam, pdf_light: 0.0 });
-                    cam_verts.extend(path.iter().rev().copied());
-                    let first = path.first().map_or(si.p, |v| v.p);
-                    let to_light = es.origin - first;
-                    let dist = to_light.length();
-                    let end = LightEnd {
-                        p: es.origin,
-                        pmf,
-                        le: dens,
-                        delta: es.delta_position,
-                        infinite: false,
-                        pdf_li: if es.delta_position { 1.0 } else { light.pdf_li(first, to_light / dist, dist) },
-                        cos: dens.map_or(1.0, |d| d.cos),
-                    };
-                    let w = weights(&cam_end(si.p, &c), &cam_verts, &end, legacy)[2] as f32;
-                    if w > 0.0 {
-                        splats.push(Splat::new(pixel_of(&c), &f, &beta, w * c.importance));
-                    }
-                }
-            }
-            if depth + 1 >= self.max_bounces {
-                break;
-            }
-            let Some(sc) = scatter(material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, rng, &mut beta) else {
-                break;
+        if let Some((c, cos)) = light_seen_by_camera(scene, &es, rng) {
+            let end = LightEnd {
+                p: es.origin,
+                pmf,
+                le: light.pdf_le(es.origin, c.wi),
+                delta: false,
+                infinite: false,
+                pdf_li: 0.0,
+                cos,
             };
-            if !beta.is_finite() {
-                break;
-            }
-            let bs = sc.sample;
-            if let Some(i) = bs.collapsed_to {
-                ctx.single_wavelength = Some(i);
-            }
-            // Record this vertex: light-order pdf (wo = light side, wi = camera side) and
-            // the camera-order pdf (wo = camera side, wi = light side).
-            let pdf_light = if bs.specular { 0.0 } else { material.bsdf.pdf(&ctx, wo_local, bs.wi) };
-            ctx.mode = TransportMode::Radiance;
-            let pdf_cam = if bs.specular { 0.0 } else { material.bsdf.pdf(&ctx, bs.wi, wo_local) };
-            ctx.mode = TransportMode::Importance;
-            path.push(Vtx { p: si.p, n: si.ng, specular: bs.specular, pdf_cam, pdf_light });
-            ray = sc.ray;
-            depth += 1;
-            if depth >= self.rr_depth {
-                let q = beta.max_value().min(1.0);
-                if q <= 0.0 || rng.uniform() >= q {
-                    break;
-                }
-                beta.scale(1.0 / q);
+            let w = weights(&cam_end(es.origin, &c), &[], &end, false)[2] as f32;
+            if w > 0.0 {
+                let radiance = start.le.scaled(scene.grid.len(), w * cos * c.importance / (pmf * es.pdf_pos));
+                splats.push(Splat { pixel: pixel_of(scene, &c), radiance });
             }
         }
+        let capacity = self.light.max_bounces as usize + 1;
+        let mut hooks = MisLightPath {
+            splats,
+            light,
+            pmf,
+            origin: es.origin,
+            delta_position: es.delta_position,
+            dens: light.pdf_le(es.origin, es.direction),
+            path: Vec::with_capacity(capacity),
+            cam_verts: Vec::with_capacity(capacity),
+            legacy: false,
+        };
+        let mut ctx = light_context(scene, &wl);
+        walk_light(scene, &self.light, &mut ctx, start.state, start.beta, rng, &mut hooks, scratch);
+    }
+}
+
+/// BIDIRECTIONAL as a 0/1 partition of path space (single-wavelength methods): camera
+/// paths for everything they can sample, light paths for caustics of delta lights.
+pub struct Partition<P> {
+    pub camera: PathTracing<P>,
+    pub light: LightTracing<P>,
+}
+
+impl<P: WavelengthPolicy> Technique for Partition<P> {
+    fn camera_sample(
+        &self,
+        scene: &Scene,
+        cs: CameraSample,
+        rng: &mut Rng,
+        out: &mut PixelSample,
+        scratch: &mut Scratch,
+    ) {
+        self.camera.camera_sample(scene, cs, rng, out, scratch);
+    }
+    fn light_path(&self, scene: &Scene, pass: u32, rng: &mut Rng, splats: &mut Vec<Splat>, scratch: &mut Scratch) {
+        self.light.light_path(scene, pass, rng, splats, scratch);
     }
 }
 

@@ -14,9 +14,13 @@
 //! - Environment lights and orthographic cameras are not reachable this way (their
 //!   light has no `sample_le`, the camera no pinhole to connect to).
 
-use super::scatter;
-use super::{facing, Facing};
-use crate::geometry::{offset_ray_origin, Frame, Ray};
+use super::throughput::Throughput;
+use super::walk::{russian_roulette, End, PathHooks, PathState, Vertex, Walk};
+use super::wavelengths::{WavelengthPolicy, Wavelengths};
+use super::{Scatter, Scratch, Technique};
+use crate::camera::CameraConnection;
+use crate::geometry::{offset_ray_origin, Ray};
+use crate::light::EmissionSample;
 use crate::material::{ShadingContext, TransportMode};
 use crate::sampling::Rng;
 use crate::scene::Scene;
@@ -29,7 +33,7 @@ pub enum ForwardPart {
     All,
     /// Only what backward path tracing cannot sample: paths from a delta-position light
     /// whose first scattering vertex is specular (caustics of point lights). Used by the
-    /// BIDIRECTIONAL direction, whose other paths come from backward tracing.
+    /// BIDIRECTIONAL partition, whose other paths come from backward tracing.
     BackwardUnreachable,
 }
 
@@ -39,224 +43,185 @@ pub struct Splat {
     pub radiance: SampledSpectrum,
 }
 
-impl Splat {
-    /// The contribution `β · f · scale` of a light-path vertex to one pixel.
-    pub fn new(pixel: u32, f: &SampledSpectrum, beta: &SampledSpectrum, scale: f32) -> Self {
-        let mut radiance = f.clone();
-        radiance.mul_assign(beta);
-        radiance.scale(scale);
-        Self { pixel, radiance }
-    }
+/// The pixel a camera connection lands in.
+pub fn pixel_of(scene: &Scene, c: &CameraConnection) -> u32 {
+    let width = scene.camera.width();
+    let x = (c.raster.x as u32).min(width - 1);
+    let y = (c.raster.y as u32).min(scene.camera.height() - 1);
+    y * width + x
 }
 
-/// Connects a light-path surface vertex at `p` to the camera (a point on its lens drawn
-/// from `rng` when it has one). On success `f`
-/// holds f·|cos θ| towards the camera; None when the camera is on the other side of the
-/// surface than the path, the BSDF sends nothing that way, or something blocks the view.
-#[allow(clippy::too_many_arguments)]
+/// Connects light-path vertex `v` to the camera (a point on its lens drawn from `rng`
+/// when it has one). On success `f` holds f·|cos θ| towards the camera; None when the
+/// camera is on the other side of the surface than the path, the BSDF sends nothing
+/// that way, or something blocks the view.
 pub fn connect_to_camera(
     scene: &Scene,
-    bsdf: &dyn crate::material::Bsdf,
+    v: &Vertex,
     ctx: &ShadingContext,
-    frame: &Frame,
-    wo_local: glam::Vec3A,
-    p: glam::Vec3A,
-    ng: glam::Vec3A,
     f: &mut SampledSpectrum,
     rng: &mut Rng,
-) -> Option<crate::camera::CameraConnection> {
-    let c = scene.camera.connect(p, rng)?;
-    if c.wi.dot(ng) <= 0.0 {
+) -> Option<CameraConnection> {
+    let c = scene.camera.connect(v.si.p, rng)?;
+    if c.wi.dot(v.ng) <= 0.0 {
         return None;
     }
-    bsdf.eval(ctx, wo_local, frame.to_local(c.wi), f);
+    v.material.bsdf.eval(ctx, v.wo_local, v.frame.to_local(c.wi), f);
     // Aimed from the offset origin at the camera: along c.wi from the unshifted point it
     // missed by the offset (16 units at 1e6) and hit walls behind it.
-    if f.is_black() || scene.occluded(&crate::geometry::shadow_ray(p, offset_ray_origin(p, ng), c.wi, c.distance)) {
+    let origin = offset_ray_origin(v.si.p, v.ng);
+    if f.is_black() || scene.occluded(&crate::geometry::shadow_ray(v.si.p, origin, c.wi, c.distance)) {
         return None;
     }
     Some(c)
 }
 
-pub struct LightTracer {
-    pub max_bounces: u32,
-    pub rr_depth: u32,
-    pub part: ForwardPart,
+/// The start of a light path: the light chosen, its emission sample, the emitted
+/// radiance on the path's wavelengths and the throughput leaving the light.
+pub struct LightStart<T> {
+    pub light: usize,
+    /// Selection probability of the light (eq. 7).
+    pub pmf: f32,
+    pub es: EmissionSample,
+    /// Emitted radiance along the ray, divided by the wavelengths' selection probability.
+    pub le: T,
+    /// `le·|cos|/(pmf·pdf_pos·pdf_dir)` (eq. 8).
+    pub beta: T,
+    pub state: PathState,
 }
 
-impl LightTracer {
-    /// Traces one light path; pushes its splats (radiance at the pixel, to be divided by
-    /// the light paths per pixel).
-    /// `wavelength`: monochromatic light paths carry only grid sample `i`, weighted by
-    /// `w` (1/its selection probability, or n for one of n whole-image rounds).
-    pub fn trace(&self, scene: &Scene, rng: &mut Rng, wavelength: Option<(usize, f32)>, splats: &mut Vec<Splat>) {
-        let n = scene.grid.len();
-        let Some(l) = scene.light_distribution.sample(rng.uniform()) else {
-            return;
-        };
-        let pmf = scene.light_distribution.pmf(l);
-        let (u_pos, u_dir) = (rng.uniform2(), rng.uniform2());
-        let mut le = SampledSpectrum::zeros(n);
-        let Some(es) = scene.lights[l].sample_le(u_pos, u_dir, &mut le) else {
-            return;
-        };
-        if !(pmf > 0.0 && es.pdf_pos > 0.0 && es.pdf_dir > 0.0) {
-            return;
-        }
-        if let Some((i, w)) = wavelength {
-            le.keep_only(i);
-            le.scale(w);
-        }
-        let width = scene.camera.width();
-        let pixel_of = |c: &crate::camera::CameraConnection| -> u32 {
-            let x = (c.raster.x as u32).min(width - 1);
-            let y = (c.raster.y as u32).min(scene.camera.height() - 1);
-            y * width + x
-        };
-        let all = self.part == ForwardPart::All;
+/// Chooses a light, samples a ray leaving it and the path's start on wavelengths `wl`;
+/// None when no light can start a path.
+pub fn start_light_path<W: Wavelengths>(scene: &Scene, wl: &W, rng: &mut Rng) -> Option<LightStart<W::Throughput>> {
+    let light = scene.light_distribution.sample(rng.uniform())?;
+    let pmf = scene.light_distribution.pmf(light);
+    let (u_pos, u_dir) = (rng.uniform2(), rng.uniform2());
+    let mut le = SampledSpectrum::zeros(scene.grid.len());
+    let es = scene.lights[light].sample_le(u_pos, u_dir, &mut le)?;
+    if !(pmf > 0.0 && es.pdf_pos > 0.0 && es.pdf_dir > 0.0) {
+        return None;
+    }
+    let le = wl.emitted(le);
+    let cos0 = es.normal.map_or(1.0, |nl| nl.dot(es.direction).abs());
+    let mut beta = le.clone();
+    beta.scale(cos0 / (pmf * es.pdf_pos * es.pdf_dir));
+    let origin = match es.normal {
+        Some(nl) => offset_ray_origin(es.origin, if nl.dot(es.direction) > 0.0 { nl } else { -nl }),
+        None => es.origin,
+    };
+    Some(LightStart { light, pmf, es, le, beta, state: PathState::start(Ray::new(origin, es.direction)) })
+}
 
-        // The light vertex itself, seen by the camera (area lights only).
-        if all && !es.delta_position {
-            if let (Some(nl), Some(c)) = (es.normal, scene.camera.connect(es.origin, rng)) {
-                let cos = nl.dot(c.wi).abs();
-                let origin = offset_ray_origin(es.origin, if nl.dot(c.wi) > 0.0 { nl } else { -nl });
-                if cos > 0.0
-                    // Aimed from the offset origin at the camera: along c.wi from the unshifted
-                    // point it missed by the offset (16 units at 1e6) and hit walls behind it.
-                    && !scene.occluded(&crate::geometry::shadow_ray(es.origin, origin, c.wi, c.distance))
-                {
-                    let mut r = le.clone();
-                    r.scale(cos * c.importance / (pmf * es.pdf_pos));
-                    splats.push(Splat { pixel: pixel_of(&c), radiance: r });
-                }
-            }
-        }
+/// The light vertex itself seen by the camera (area lights; a lens point drawn from
+/// `rng`): the connection and |cos| at the light towards it, or None when hidden or
+/// impossible.
+pub fn light_seen_by_camera(scene: &Scene, es: &EmissionSample, rng: &mut Rng) -> Option<(CameraConnection, f32)> {
+    if es.delta_position {
+        return None;
+    }
+    let c = scene.camera.connect(es.origin, rng);
+    let (nl, c) = (es.normal?, c?);
+    let cos = nl.dot(c.wi).abs();
+    let origin = offset_ray_origin(es.origin, if nl.dot(c.wi) > 0.0 { nl } else { -nl });
+    // Aimed from the offset origin at the camera: along c.wi from the unshifted point it
+    // missed by the offset (16 units at 1e6) and hit walls behind it.
+    if cos > 0.0 && !scene.occluded(&crate::geometry::shadow_ray(es.origin, origin, c.wi, c.distance)) {
+        Some((c, cos))
+    } else {
+        None
+    }
+}
 
-        let cos0 = es.normal.map_or(1.0, |nl| nl.dot(es.direction).abs());
-        let mut beta = le;
-        beta.scale(cos0 / (pmf * es.pdf_pos * es.pdf_dir));
-        let start = match es.normal {
-            Some(nl) => offset_ray_origin(es.origin, if nl.dot(es.direction) > 0.0 { nl } else { -nl }),
-            None => es.origin,
-        };
-        let mut ray = Ray::new(start, es.direction);
-        let mut ctx = ShadingContext::new(&scene.grid);
-        ctx.mode = TransportMode::Importance;
-        ctx.single_wavelength = wavelength.map(|(i, _)| i);
-        let mut f = SampledSpectrum::zeros(n);
-        let mut depth = 0u32; // scattering vertices so far
-        while let Some(hit) = scene.intersect(&ray) {
-            let si = scene.interaction(&ray, &hit);
-            // Surfaces are two-sided: shade on the side the ray arrived from.
-            let Facing { wo, ng, ns, material } = facing(scene, &ray, &si, &mut ctx);
-            let frame = Frame::from_normal(ns);
-            let wo_local = frame.to_local(wo);
-            if wo_local.z == 0.0 {
-                break;
-            }
-            let flags = material.bsdf.flags();
-            // Connect this vertex to the camera: a path with depth + 1 scattering events.
-            if all && flags.smooth && depth < self.max_bounces {
-                if let Some(c) =
-                    connect_to_camera(scene, material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, &mut f, rng)
-                {
-                    splats.push(Splat::new(pixel_of(&c), &f, &beta, c.importance));
-                }
-            }
-            if depth + 1 >= self.max_bounces {
-                break;
-            }
-            let Some(sc) = scatter(material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, rng, &mut beta) else {
-                break;
-            };
-            if !beta.is_finite() {
-                break;
-            }
-            if let Some(i) = sc.sample.collapsed_to {
-                ctx.single_wavelength = Some(i);
-            }
-            if !all && depth == 0 {
-                // Keep only caustic paths of delta lights: specular first vertex.
-                if !(es.delta_position && sc.sample.specular) {
-                    return;
-                }
-            }
-            ray = sc.ray;
-            depth += 1;
-            if !all && depth >= 1 {
-                // Connect the subsequent smooth vertices to the camera.
-                self.connect_unreachable(scene, &ray, &beta, &ctx, depth, splats, &pixel_of, rng);
-                return;
-            }
-            if depth >= self.rr_depth {
-                let q = beta.max_value().min(1.0);
-                if q <= 0.0 || rng.uniform() >= q {
-                    break;
-                }
-                beta.scale(1.0 / q);
+/// A light path's context: importance transport on the path's wavelengths.
+pub fn light_context<'s, W: Wavelengths>(scene: &'s Scene, wl: &W) -> ShadingContext<'s> {
+    let mut ctx = ShadingContext::new(&scene.grid);
+    ctx.mode = TransportMode::Importance;
+    ctx.single_wavelength = wl.single();
+    ctx
+}
+
+/// Walks a light path from `start`, continuing with one wavelength where it collapses.
+#[allow(clippy::too_many_arguments)]
+pub fn walk_light<T: Throughput, H: PathHooks<T> + PathHooks<super::throughput::SingleWavelength>>(
+    scene: &Scene,
+    walk: &Walk,
+    ctx: &mut ShadingContext,
+    start: PathState,
+    mut beta: T,
+    rng: &mut Rng,
+    hooks: &mut H,
+    scratch: &mut Scratch,
+) {
+    if let End::Collapsed { index, state } = walk.run(scene, ctx, start, &mut beta, rng, hooks, scratch) {
+        let Some(mut b) = beta.collapse(index) else { return };
+        // Light paths take Russian roulette at the collapse vertex too.
+        if russian_roulette(&mut b, state.depth, walk.rr_depth, rng) {
+            walk.run(scene, ctx, state, &mut b, rng, hooks, scratch);
+        }
+    }
+}
+
+/// The hooks of a light-tracing path: connect smooth vertices to the camera.
+struct LightPath<'a> {
+    part: ForwardPart,
+    /// The path started at a point or spot light.
+    delta_light: bool,
+    splats: &'a mut Vec<Splat>,
+}
+
+impl<T: Throughput> PathHooks<T> for LightPath<'_> {
+    fn connect(
+        &mut self,
+        scene: &Scene,
+        ctx: &mut ShadingContext,
+        v: &Vertex,
+        st: &PathState,
+        beta: &T,
+        rng: &mut Rng,
+        scratch: &mut Scratch,
+    ) {
+        // A vertex at depth d makes a path of d + 1 scattering events.
+        let keep = self.part == ForwardPart::All || st.depth >= 1;
+        if keep && v.flags.smooth {
+            if let Some(c) = connect_to_camera(scene, v, ctx, &mut scratch.f, rng) {
+                self.splats.push(Splat { pixel: pixel_of(scene, &c), radiance: beta.times(&scratch.f, c.importance) });
             }
         }
     }
+    fn scattered(
+        &mut self,
+        _scene: &Scene,
+        _ctx: &mut ShadingContext,
+        _v: &Vertex,
+        st: &PathState,
+        sc: &Scatter,
+        _beta: &T,
+    ) -> bool {
+        // BIDIRECTIONAL partition: keep only caustic paths of delta lights (specular
+        // first vertex); camera paths sample the rest.
+        self.part == ForwardPart::All || st.depth > 0 || (self.delta_light && sc.sample.specular)
+    }
+}
 
-    /// The rest of a caustic light path (BIDIRECTIONAL): like the main loop, with every
-    /// smooth vertex connected to the camera.
-    #[allow(clippy::too_many_arguments)]
-    fn connect_unreachable(
-        &self,
-        scene: &Scene,
-        ray: &Ray,
-        beta: &SampledSpectrum,
-        ctx0: &ShadingContext,
-        depth0: u32,
-        splats: &mut Vec<Splat>,
-        pixel_of: &dyn Fn(&crate::camera::CameraConnection) -> u32,
-        rng: &mut Rng,
-    ) {
-        let n = scene.grid.len();
-        let mut ray = *ray;
-        let mut beta = beta.clone();
-        let mut ctx = ShadingContext::new(&scene.grid);
-        ctx.mode = TransportMode::Importance;
-        ctx.single_wavelength = ctx0.single_wavelength;
-        let mut f = SampledSpectrum::zeros(n);
-        let mut depth = depth0;
-        while let Some(hit) = scene.intersect(&ray) {
-            let si = scene.interaction(&ray, &hit);
-            // Surfaces are two-sided: shade on the side the ray arrived from.
-            let Facing { wo, ng, ns, material } = facing(scene, &ray, &si, &mut ctx);
-            let frame = Frame::from_normal(ns);
-            let wo_local = frame.to_local(wo);
-            if wo_local.z == 0.0 {
-                break;
-            }
-            if material.bsdf.flags().smooth && depth < self.max_bounces {
-                if let Some(c) =
-                    connect_to_camera(scene, material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, &mut f, rng)
-                {
-                    splats.push(Splat::new(pixel_of(&c), &f, &beta, c.importance));
-                }
-            }
-            if depth + 1 >= self.max_bounces {
-                break;
-            }
-            let Some(sc) = scatter(material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, rng, &mut beta) else {
-                break;
-            };
-            if !beta.is_finite() {
-                break;
-            }
-            if let Some(i) = sc.sample.collapsed_to {
-                ctx.single_wavelength = Some(i);
-            }
-            ray = sc.ray;
-            depth += 1;
-            if depth >= self.rr_depth {
-                let q = beta.max_value().min(1.0);
-                if q <= 0.0 || rng.uniform() >= q {
-                    break;
-                }
-                beta.scale(1.0 / q);
+/// FORWARD (and the light side of the BIDIRECTIONAL partition): light paths only.
+pub struct LightTracing<P> {
+    pub wavelengths: P,
+    pub walk: Walk,
+    pub part: ForwardPart,
+}
+
+impl<P: WavelengthPolicy> Technique for LightTracing<P> {
+    fn light_path(&self, scene: &Scene, pass: u32, rng: &mut Rng, splats: &mut Vec<Splat>, scratch: &mut Scratch) {
+        let wl = self.wavelengths.light(pass, rng);
+        let Some(start) = start_light_path(scene, &wl, rng) else { return };
+        if self.part == ForwardPart::All {
+            if let Some((c, cos)) = light_seen_by_camera(scene, &start.es, rng) {
+                let radiance = start.le.scaled(scene.grid.len(), cos * c.importance / (start.pmf * start.es.pdf_pos));
+                splats.push(Splat { pixel: pixel_of(scene, &c), radiance });
             }
         }
+        let mut ctx = light_context(scene, &wl);
+        let mut hooks = LightPath { part: self.part, delta_light: start.es.delta_position, splats };
+        walk_light(scene, &self.walk, &mut ctx, start.state, start.beta, rng, &mut hooks, scratch);
     }
 }

@@ -1,18 +1,28 @@
-//! Integrators: how a camera sample's radiance is estimated. One file per method.
+//! Integrators: how pixel samples and light paths are estimated.
+//!
+//! A render's [`Technique`] (one per direction: `path.rs` BACKWARD, `forward.rs`
+//! FORWARD, `bidir.rs` BIDIRECTIONAL) is built once by [`from_settings`] around the
+//! method's wavelength policy (`wavelengths.rs`), so every method is a policy of the
+//! same tracer. Camera and light paths all go through one walk (`walk.rs`) whose
+//! per-vertex hooks are the technique's; what a path carries per wavelength is a
+//! [`throughput::Throughput`]. Materials, lights and the camera are seen through their
+//! narrow traits only.
 
 pub mod bidir;
 pub mod forward;
-pub mod monochromatic;
 pub mod path;
+pub mod throughput;
+pub mod walk;
+pub mod wavelengths;
 
 use crate::film::PixelSample;
+use crate::render::{Direction, Method, ResolvedSettings};
 use crate::sampling::Rng;
 use crate::scene::Scene;
-
-/// Estimates the radiance arriving through film position (x, y) in pixels.
-pub trait Integrator: Sync {
-    fn sample(&self, scene: &Scene, x: f32, y: f32, rng: &mut Rng, out: &mut PixelSample);
-}
+use crate::spectrum::SampledSpectrum;
+use crate::Error;
+use walk::Walk;
+use wavelengths::{AllWavelengths, OnePerPass, OnePerRay, WavelengthPolicy};
 
 /// A path continued from a surface: the BSDF sample and the ray leaving the surface.
 pub struct Scatter {
@@ -24,32 +34,26 @@ pub struct Scatter {
     pub ray: crate::geometry::Ray,
 }
 
-/// Samples `bsdf` at a hit (multiplying `throughput` by f·cos/pdf) and builds the ray
-/// that continues the path, offset off the surface on the side it leaves from. `ng` is
-/// the geometric normal facing the incoming ray. None when the BSDF absorbs the path or
-/// when the sampled direction's side disagrees between the shading and the geometric
-/// normal (following it would leak light through the surface). Every integrator
-/// continues its paths through here, so they draw their random numbers alike.
-#[allow(clippy::too_many_arguments)]
+/// Samples the BSDF at vertex `v` (multiplying `throughput` by f·cos/pdf) and builds the
+/// ray that continues the path, offset off the surface on the side it leaves from. None
+/// when the BSDF absorbs the path or when the sampled direction's side disagrees between
+/// the shading and the geometric normal (following it would leak light through the
+/// surface). Every path continues through here, so all draw their random numbers alike.
 pub fn scatter(
-    bsdf: &dyn crate::material::Bsdf,
+    v: &walk::Vertex,
     ctx: &crate::material::ShadingContext,
-    frame: &crate::geometry::Frame,
-    wo_local: glam::Vec3A,
-    p: glam::Vec3A,
-    ng: glam::Vec3A,
     rng: &mut Rng,
-    throughput: &mut crate::spectrum::SampledSpectrum,
+    throughput: &mut SampledSpectrum,
 ) -> Option<Scatter> {
     let u = rng.uniform2();
     let uc = rng.uniform();
-    let sample = bsdf.sample(ctx, wo_local, u, uc, throughput)?;
-    let wi = frame.to_world(sample.wi);
-    let transmitted = wi.dot(ng) < 0.0;
-    if (sample.wi.z * wo_local.z < 0.0) != transmitted {
+    let sample = v.material.bsdf.sample(ctx, v.wo_local, u, uc, throughput)?;
+    let wi = v.frame.to_world(sample.wi);
+    let transmitted = wi.dot(v.ng) < 0.0;
+    if (sample.wi.z * v.wo_local.z < 0.0) != transmitted {
         return None;
     }
-    let origin = crate::geometry::offset_ray_origin(p, if transmitted { -ng } else { ng });
+    let origin = crate::geometry::offset_ray_origin(v.si.p, if transmitted { -v.ng } else { v.ng });
     Some(Scatter { sample, wi, transmitted, ray: crate::geometry::Ray::new(origin, wi) })
 }
 
@@ -83,42 +87,80 @@ pub fn facing<'s>(
     }
 }
 
-/// How pixel samples and light paths are estimated for one render: the direction's
-/// technique with the method's wavelength choice, built once by [`from_settings`] (the
-/// pattern of pbrt-v4's `Create`), so the driver never looks at the settings per sample.
+/// How pixel samples and light paths are estimated: the direction's technique on the
+/// method's wavelength policy. A technique implements the estimates its [`Integrator`]
+/// asks for (the other one is never called).
 pub trait Technique: Send + Sync {
-    /// Pixel samples trace camera paths (BACKWARD, BIDIRECTIONAL).
-    fn traces_camera(&self) -> bool;
-    /// Every sample pass also traces one light path per pixel, splatted onto the film
-    /// (FORWARD, BIDIRECTIONAL).
-    fn traces_light(&self) -> bool;
-    /// How many times the pixel's sample count is taken: 1, or once per grid wavelength
-    /// (MONOCHROMATIC_SCENES). The render's sample passes are numbered
-    /// `0 .. rounds × samples`.
-    fn rounds(&self) -> u32;
-    /// One camera sample through film position `film` (pixels) of pixel `pixel` in sample
-    /// pass `pass`; `rng` is the sample's own stream, the pixel jitter already drawn.
-    #[allow(clippy::too_many_arguments)]
+    /// One camera sample; `rng` is the sample's own stream, the pixel jitter already
+    /// drawn. Fills `out` (zeroed by the caller).
     fn camera_sample(
         &self,
-        scene: &Scene,
-        film: glam::Vec2,
-        pixel: u64,
-        pass: u32,
-        rng: &mut Rng,
-        out: &mut PixelSample,
-        scratch: &mut monochromatic::Scratch,
-    );
+        _scene: &Scene,
+        _sample: CameraSample,
+        _rng: &mut Rng,
+        _out: &mut PixelSample,
+        _scratch: &mut Scratch,
+    ) {
+    }
     /// One light path of sample pass `pass` from its own stream `rng`; pushes its splats
     /// (radiance at a pixel, to be divided by the light paths per pixel).
-    fn light_path(&self, scene: &Scene, pass: u32, rng: &mut Rng, splats: &mut Vec<forward::Splat>);
+    fn light_path(
+        &self,
+        _scene: &Scene,
+        _pass: u32,
+        _rng: &mut Rng,
+        _splats: &mut Vec<forward::Splat>,
+        _scratch: &mut Scratch,
+    ) {
+    }
 }
 
-/// The technique for `settings` on `scene` (a scene built for them), or an error naming
+/// Which camera sample to take.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraSample {
+    /// Film position in pixels (the pixel's corner plus its jitter).
+    pub film: glam::Vec2,
+    /// Row-major pixel index.
+    pub pixel: u64,
+    /// Sample pass (see [`Integrator::rounds`]).
+    pub pass: u32,
+}
+
+/// Grid-wide scratch spectra that BSDFs and lights write into, reused across the paths
+/// a worker traces.
+pub struct Scratch {
+    /// BSDF values.
+    pub f: SampledSpectrum,
+    /// Light radiance.
+    pub le: SampledSpectrum,
+    /// A single-wavelength path's throughput spread over the grid for `Bsdf::sample`.
+    pub tp: SampledSpectrum,
+}
+
+impl Scratch {
+    pub fn new(n: usize) -> Self {
+        Self { f: SampledSpectrum::zeros(n), le: SampledSpectrum::zeros(n), tp: SampledSpectrum::zeros(n) }
+    }
+}
+
+/// A render's estimator, built once by [`from_settings`] (the pattern of pbrt-v4's
+/// `Create`), so the driver never looks at the settings per sample.
+pub struct Integrator {
+    pub technique: Box<dyn Technique>,
+    /// Pixel samples trace camera paths (BACKWARD, BIDIRECTIONAL).
+    pub camera_paths: bool,
+    /// Every sample pass also traces one light path per pixel, splatted onto the film
+    /// (FORWARD, BIDIRECTIONAL).
+    pub light_paths: bool,
+    /// How many times the pixel's sample count is taken: 1, or once per grid wavelength
+    /// (MONOCHROMATIC_SCENES). A render's sample passes are numbered
+    /// `0 .. rounds × samples`.
+    pub rounds: u32,
+}
+
+/// The integrator for `settings` on `scene` (a scene built for them), or an error naming
 /// the setting that does not apply.
-pub fn from_settings(scene: &Scene, settings: &crate::render::ResolvedSettings) -> crate::Result<Box<dyn Technique>> {
-    use crate::render::{Direction, Method};
-    use crate::Error;
+pub fn from_settings(scene: &Scene, settings: &ResolvedSettings) -> crate::Result<Integrator> {
     if settings.dispersion_splitting && settings.method != Method::Polychromatic {
         return Err(Error::setting("dispersion_splitting", "applies to the POLYCHROMATIC method only"));
     }
@@ -131,125 +173,36 @@ pub fn from_settings(scene: &Scene, settings: &crate::render::ResolvedSettings) 
             "FORWARD (light tracing) needs a perspective camera: light paths cannot connect to an orthographic or panoramic one",
         ));
     }
-    Ok(Box::new(Tracers::new(scene, settings)))
+    Ok(match settings.method {
+        Method::Polychromatic | Method::Rgb => with_policy(settings, AllWavelengths),
+        Method::MonochromaticRays => with_policy(settings, OnePerRay::new(scene, settings.seed, settings.samples)),
+        Method::MonochromaticScenes => with_policy(settings, OnePerPass::new(scene.grid.len(), settings.samples)),
+    })
 }
 
-/// Every tracer of the earlier driver behind one [`Technique`] (a step of the redesign:
-/// the method is still matched per sample here).
-struct Tracers {
-    method: crate::render::Method,
-    backward: bool,
-    forward: bool,
-    mis: bool,
-    samples: u32,
-    seed: u64,
-    n: usize,
-    path: path::PathTracer,
-    mono: monochromatic::MonochromaticTracer,
-    light: forward::LightTracer,
-    mis_camera: bidir::MisPathTracer,
-    mis_light: bidir::MisLightTracer,
-    lambda_dist: crate::sampling::Distribution1D,
-}
-
-impl Tracers {
-    fn new(scene: &Scene, settings: &crate::render::ResolvedSettings) -> Self {
-        use crate::render::{Direction, Method};
-        Self {
-            method: settings.method,
-            backward: settings.direction != Direction::Forward,
-            forward: settings.direction != Direction::Backward,
-            // BIDIRECTIONAL with MIS for the whole-spectrum methods (bidir.rs); the
-            // monochromatic methods keep the 0/1 partition.
-            mis: settings.direction == Direction::Bidirectional
-                && matches!(settings.method, Method::Polychromatic | Method::Rgb),
-            samples: settings.samples,
-            seed: settings.seed,
-            n: scene.grid.len(),
-            path: path::PathTracer {
-                max_bounces: settings.max_bounces,
-                dispersion_splitting: settings.dispersion_splitting,
-                ..Default::default()
-            },
-            mono: monochromatic::MonochromaticTracer { max_bounces: settings.max_bounces, ..Default::default() },
-            light: forward::LightTracer {
-                max_bounces: settings.max_bounces,
-                rr_depth: 3,
-                part: if settings.direction == Direction::Forward {
-                    forward::ForwardPart::All
-                } else {
-                    forward::ForwardPart::BackwardUnreachable
-                },
-            },
-            mis_camera: bidir::MisPathTracer {
-                max_bounces: settings.max_bounces,
-                rr_depth: 3,
-                dispersion_splitting: settings.dispersion_splitting,
-            },
-            mis_light: bidir::MisLightTracer { max_bounces: settings.max_bounces, rr_depth: 3 },
-            lambda_dist: monochromatic::wavelength_distribution(scene),
+/// The direction's technique on wavelengths `policy`.
+fn with_policy<P: WavelengthPolicy>(settings: &ResolvedSettings, policy: P) -> Integrator {
+    let camera = Walk::camera(settings.max_bounces, settings.dispersion_splitting);
+    let light = Walk::light(settings.max_bounces);
+    let rounds = policy.rounds();
+    let backward = path::PathTracing { wavelengths: policy.clone(), walk: camera };
+    let forward = |part| forward::LightTracing { wavelengths: policy.clone(), walk: light, part };
+    let technique: Box<dyn Technique> = match settings.direction {
+        Direction::Backward => Box::new(backward),
+        Direction::Forward => Box::new(forward(forward::ForwardPart::All)),
+        // MIS needs both sides on the same wavelengths: whole-spectrum paths. The
+        // single-wavelength methods keep the 0/1 partition.
+        Direction::Bidirectional if matches!(settings.method, Method::Polychromatic | Method::Rgb) => {
+            Box::new(bidir::Bidirectional { wavelengths: policy.clone(), camera, light })
         }
-    }
-}
-
-impl Technique for Tracers {
-    fn traces_camera(&self) -> bool {
-        self.backward
-    }
-    fn traces_light(&self) -> bool {
-        self.forward
-    }
-    fn rounds(&self) -> u32 {
-        if self.method == crate::render::Method::MonochromaticScenes {
-            self.n as u32
-        } else {
-            1
+        Direction::Bidirectional => {
+            Box::new(bidir::Partition { camera: backward, light: forward(forward::ForwardPart::BackwardUnreachable) })
         }
-    }
-    fn camera_sample(
-        &self,
-        scene: &Scene,
-        film: glam::Vec2,
-        pixel: u64,
-        pass: u32,
-        rng: &mut Rng,
-        ps: &mut PixelSample,
-        scratch: &mut monochromatic::Scratch,
-    ) {
-        use crate::render::Method;
-        let (fx, fy) = (film.x, film.y);
-        match self.method {
-            Method::Polychromatic | Method::Rgb if self.mis => self.mis_camera.sample(scene, fx, fy, rng, ps),
-            Method::Polychromatic | Method::Rgb => self.path.sample(scene, fx, fy, rng, ps),
-            Method::MonochromaticRays => {
-                let lambda =
-                    monochromatic::stratified_wavelength(&self.lambda_dist, self.seed, pixel, pass, self.samples);
-                let l = self.mono.sample_camera(scene, fx, fy, lambda, rng, ps, scratch);
-                ps.radiance.set(lambda, l / self.lambda_dist.pmf(lambda));
-            }
-            Method::MonochromaticScenes => {
-                // Every wavelength gets all samples; averaging n·L over n·spp entries sums
-                // the wavelengths.
-                let round = (pass / self.samples) as usize;
-                let l = self.mono.sample_camera(scene, fx, fy, round, rng, ps, scratch);
-                ps.radiance.set(round, l * self.n as f32);
-            }
-        }
-    }
-    fn light_path(&self, scene: &Scene, pass: u32, rng: &mut Rng, splats: &mut Vec<forward::Splat>) {
-        use crate::render::Method;
-        let wavelength = match self.method {
-            Method::Polychromatic | Method::Rgb => None,
-            Method::MonochromaticRays => {
-                let i = self.lambda_dist.sample(rng.uniform()).unwrap_or(0);
-                Some((i, 1.0 / self.lambda_dist.pmf(i)))
-            }
-            Method::MonochromaticScenes => Some(((pass / self.samples) as usize, self.n as f32)),
-        };
-        if self.mis {
-            self.mis_light.trace(scene, rng, splats);
-        } else {
-            self.light.trace(scene, rng, wavelength, splats);
-        }
+    };
+    Integrator {
+        technique,
+        camera_paths: settings.direction != Direction::Forward,
+        light_paths: settings.direction != Direction::Backward,
+        rounds,
     }
 }

@@ -1,180 +1,304 @@
-//! Polychromatic backward path tracing (the paper's method 3, camera side): every path
-//! carries the whole sampled spectrum; next-event estimation and BSDF sampling are
-//! combined with multiple importance sampling (power heuristic); Russian roulette on
-//! the largest throughput over the grid.
+//! Backward path tracing (camera paths): every vertex gathers the emission the path
+//! reaches and one light sample (next-event estimation, a light chosen ∝ its spectral
+//! power, eq. 7); the two are combined with multiple importance sampling. How they are
+//! weighted is a [`CameraMis`]: the power heuristic of the two strategies
+//! ([`PowerHeuristic`], BACKWARD) or the three-strategy weights of BIDIRECTIONAL
+//! (`bidir.rs`). Whole-spectrum paths that collapse at a dispersive surface (eq. 9) or
+//! split there continue as single-wavelength paths with the power heuristic.
 
-use super::monochromatic::{MonochromaticTracer, PathState, Scratch};
-use super::scatter;
-use super::Integrator;
-use super::{facing, Facing};
+use super::throughput::{SingleWavelength, Throughput};
+use super::walk::{End, PathHooks, PathState, Vertex, Walk};
+use super::wavelengths::{WavelengthPolicy, Wavelengths};
+use super::{CameraSample, Scatter, Scratch, Technique};
 use crate::film::PixelSample;
-use crate::geometry::{offset_ray_origin, Frame};
+use crate::geometry::{offset_ray_origin, shadow_ray};
+use crate::light::LightSample;
 use crate::material::ShadingContext;
 use crate::sampling::{power_heuristic, Rng};
 use crate::scene::Scene;
 use crate::spectrum::SampledSpectrum;
+use glam::{Vec2, Vec3A};
 
-pub struct PathTracer {
-    /// Scattering events after which a path ends (0: direct emission only).
-    pub max_bounces: u32,
-    /// Bounces before Russian roulette may end a path.
-    pub rr_depth: u32,
-    /// Deterministic mode at dispersive surfaces: instead of collapsing to one
-    /// wavelength chosen ∝ energy (eq. 9), continue one monochromatic sub-path per
-    /// wavelength that still carries energy.
-    pub dispersion_splitting: bool,
+/// A light sample taken at a vertex (next-event estimation).
+#[derive(Clone, Copy, Debug)]
+pub struct DirectSample {
+    /// The light and its selection probability (eq. 7).
+    pub light: usize,
+    pub pmf: f32,
+    pub ls: LightSample,
+    /// The sample's direction in the vertex's shading frame, and the BSDF's pdf of it.
+    pub wi_local: Vec3A,
+    pub bsdf_pdf: f32,
 }
 
-impl Default for PathTracer {
-    fn default() -> Self {
-        Self { max_bounces: 8, rr_depth: 3, dispersion_splitting: false }
+/// How a camera path weights the two ways it finds light. Methods draw no random numbers.
+pub trait CameraMis {
+    /// At the first hit `v` (depth 0) of the camera ray `st.ray`.
+    fn first_hit(&mut self, _scene: &Scene, _v: &Vertex, _st: &PathState) {}
+    /// Weight of emission reached at `v` by the path's last BSDF sample.
+    fn emission(&mut self, scene: &Scene, v: &Vertex, st: &PathState) -> f32;
+    /// Weight of the environment (light `env`) reached by the path escaping along `st.ray`.
+    fn escape(&mut self, scene: &Scene, st: &PathState, env: usize) -> f32;
+    /// At `v`, before it connects and scatters.
+    fn vertex(&mut self, _v: &Vertex) {}
+    /// Weight of light sample `d` taken at `v`.
+    fn direct(&mut self, scene: &Scene, ctx: &mut ShadingContext, v: &Vertex, d: &DirectSample) -> f32;
+    /// The BSDF at `v` was sampled.
+    fn scattered(&mut self, _ctx: &mut ShadingContext, _v: &Vertex, _st: &PathState, _sc: &Scatter) {}
+}
+
+/// Veach's power heuristic between BSDF sampling and light sampling.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PowerHeuristic;
+
+impl CameraMis for PowerHeuristic {
+    fn emission(&mut self, scene: &Scene, v: &Vertex, st: &PathState) -> f32 {
+        if st.specular {
+            return 1.0;
+        }
+        match scene.triangle_light(v.si.instance, v.si.triangle) {
+            Some(l) => {
+                let pl = scene.light_distribution.pmf(l) * scene.lights[l].pdf_li(st.prev_p, st.ray.direction, v.si.t);
+                power_heuristic(st.prev_pdf, pl)
+            }
+            None => 1.0,
+        }
+    }
+    fn escape(&mut self, scene: &Scene, st: &PathState, env: usize) -> f32 {
+        if st.specular {
+            return 1.0;
+        }
+        let pl =
+            scene.light_distribution.pmf(env) * scene.lights[env].pdf_li(st.prev_p, st.ray.direction, f32::INFINITY);
+        power_heuristic(st.prev_pdf, pl)
+    }
+    fn direct(&mut self, _scene: &Scene, _ctx: &mut ShadingContext, _v: &Vertex, d: &DirectSample) -> f32 {
+        if d.ls.delta {
+            1.0
+        } else {
+            power_heuristic(d.pmf * d.ls.pdf, d.bsdf_pdf)
+        }
     }
 }
 
-impl PathTracer {
-    fn mono(&self) -> MonochromaticTracer {
-        MonochromaticTracer { max_bounces: self.max_bounces, rr_depth: self.rr_depth }
-    }
+/// The first-hit passes of a pixel sample.
+pub struct FirstHit<'a> {
+    pub depth: &'a mut f32,
+    pub normal: &'a mut Vec3A,
+    pub albedo: &'a mut SampledSpectrum,
 }
 
-impl Integrator for PathTracer {
-    fn sample(&self, scene: &Scene, x: f32, y: f32, rng: &mut Rng, out: &mut PixelSample) {
-        let n = scene.grid.len();
-        let Some(mut ray) = scene.camera.generate_ray(x, y, rng) else {
-            return; // outside the lens (fisheye, mirror ball): black
+/// The hooks of a camera path: gathers into `gathered` what it reaches, weighted by `mis`.
+pub struct CameraPath<'a, T, M> {
+    pub mis: M,
+    pub gathered: &'a mut T,
+    pub first_hit: Option<FirstHit<'a>>,
+}
+
+impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, T, M> {
+    fn escaped(&mut self, scene: &Scene, st: &PathState, beta: &T, scratch: &mut Scratch) {
+        if let Some(env) = &scene.environment {
+            let w = self.mis.escape(scene, st, env.light);
+            let l = env.radiance_along(st.ray.direction, &mut scratch.le);
+            self.gathered.add_emitted(beta, l, w);
+        }
+    }
+
+    fn reached(
+        &mut self,
+        scene: &Scene,
+        ctx: &mut ShadingContext,
+        v: &Vertex,
+        st: &PathState,
+        beta: &T,
+        _scratch: &mut Scratch,
+    ) {
+        if st.depth == 0 {
+            if let Some(out) = self.first_hit.take() {
+                *out.depth = scene.camera.depth(v.si.p);
+                *out.normal = v.si.ns;
+                // The albedo pass is grid-wide whatever the path carries.
+                let single = ctx.single_wavelength.take();
+                v.material.bsdf.albedo(ctx, out.albedo);
+                ctx.single_wavelength = single;
+            }
+            self.mis.first_hit(scene, v, st);
+        }
+        if let Some(emission) = &v.material.emission {
+            let w = self.mis.emission(scene, v, st);
+            self.gathered.add_emitted(beta, emission, w);
+        }
+    }
+
+    fn connect(
+        &mut self,
+        scene: &Scene,
+        ctx: &mut ShadingContext,
+        v: &Vertex,
+        _st: &PathState,
+        beta: &T,
+        rng: &mut Rng,
+        scratch: &mut Scratch,
+    ) {
+        self.mis.vertex(v);
+        if !v.flags.smooth {
+            return;
+        }
+        // Next-event estimation: one light chosen ∝ its spectral power (eq. 7).
+        let Some(l) = scene.light_distribution.sample(rng.uniform()) else {
+            return;
         };
-        let mut beta = SampledSpectrum::splat(n, 1.0);
-        let mut f = SampledSpectrum::zeros(n);
-        let mut le = SampledSpectrum::zeros(n);
-        let radiance = &mut out.radiance;
-        let mut ctx = ShadingContext::new(&scene.grid);
-        let mut specular = true; // the camera ray counts as specular: no MIS on what it sees
-        let mut prev_pdf = 0.0f32;
-        let mut prev_p = ray.origin;
-        let mut depth = 0u32;
-        loop {
-            let Some(hit) = scene.intersect(&ray) else {
-                if let Some(env) = &scene.environment {
-                    let w = if specular {
-                        1.0
-                    } else {
-                        let pl = scene.light_distribution.pmf(env.light)
-                            * scene.lights[env.light].pdf_li(prev_p, ray.direction, f32::INFINITY);
-                        power_heuristic(prev_pdf, pl)
-                    };
-                    let l = env.radiance_along(ray.direction, &mut le);
-                    radiance.add_product(&beta, l, w);
-                }
-                break;
-            };
-            let si = scene.interaction(&ray, &hit);
-            // Surfaces are two-sided: shade on the side the ray arrived from.
-            let Facing { wo, ng, ns, material } = facing(scene, &ray, &si, &mut ctx);
-            if depth == 0 {
-                out.depth = scene.camera.depth(si.p);
-                out.normal = si.ns;
-                material.bsdf.albedo(&ctx, &mut out.albedo);
-            }
+        let pmf = scene.light_distribution.pmf(l);
+        let u = rng.uniform2();
+        let Some(ls) = scene.lights[l].sample_li(v.si.p, u, &mut scratch.le) else {
+            return;
+        };
+        if !(beta.carries(&scratch.le) && ls.wi.dot(v.ng) > 0.0) {
+            return;
+        }
+        let wi_local = v.frame.to_local(ls.wi);
+        let bsdf_pdf = v.material.bsdf.eval(ctx, v.wo_local, wi_local, &mut scratch.f);
+        if !beta.carries(&scratch.f) {
+            return;
+        }
+        // Aimed from the offset origin at the light point, stopping short of it (robust
+        // far from the origin: 1e6 units).
+        let origin = offset_ray_origin(v.si.p, v.ng);
+        if scene.occluded(&shadow_ray(v.si.p, origin, ls.wi, ls.distance)) {
+            return;
+        }
+        let w = self.mis.direct(scene, ctx, v, &DirectSample { light: l, pmf, ls, wi_local, bsdf_pdf });
+        self.gathered.add_direct(beta, &mut scratch.f, &scratch.le, w, pmf * ls.pdf);
+    }
 
-            if let Some(emission) = &material.emission {
-                let w = if specular {
-                    1.0
-                } else {
-                    match scene.triangle_light(si.instance, si.triangle) {
-                        Some(l) => {
-                            let pl =
-                                scene.light_distribution.pmf(l) * scene.lights[l].pdf_li(prev_p, ray.direction, si.t);
-                            power_heuristic(prev_pdf, pl)
-                        }
-                        None => 1.0,
-                    }
-                };
-                radiance.add_product(&beta, emission, w);
-            }
-            if depth >= self.max_bounces {
-                break;
-            }
+    fn scattered(
+        &mut self,
+        _scene: &Scene,
+        ctx: &mut ShadingContext,
+        v: &Vertex,
+        st: &PathState,
+        sc: &Scatter,
+        _beta: &T,
+    ) -> bool {
+        self.mis.scattered(ctx, v, st, sc);
+        true
+    }
+}
 
-            let frame = Frame::from_normal(ns);
-            let wo_local = frame.to_local(wo);
-            if wo_local.z == 0.0 {
-                break;
-            }
-            let flags = material.bsdf.flags();
+/// One camera sample through film position `film` on wavelengths `wl`, weighted by `mis`:
+/// fills `out` (radiance and first-hit passes).
+#[allow(clippy::too_many_arguments)]
+pub fn trace_camera<W: Wavelengths, M: CameraMis>(
+    scene: &Scene,
+    walk: &Walk,
+    film: Vec2,
+    wl: W,
+    mis: M,
+    rng: &mut Rng,
+    out: &mut PixelSample,
+    scratch: &mut Scratch,
+) {
+    let PixelSample { radiance, depth, normal, albedo } = out;
+    let mut ctx = ShadingContext::new(&scene.grid);
+    ctx.single_wavelength = wl.single();
+    let mut beta = wl.unit(scene.grid.len());
+    let mut gathered = beta.zero_like();
+    let Some(ray) = scene.camera.generate_ray(film.x, film.y, rng) else {
+        return; // outside the lens (fisheye, mirror ball): black
+    };
+    let start = PathState::start(ray);
+    let mut hooks = CameraPath { mis, gathered: &mut gathered, first_hit: Some(FirstHit { depth, normal, albedo }) };
+    let end = walk.run(scene, &mut ctx, start, &mut beta, rng, &mut hooks, scratch);
+    continue_single_wavelength(scene, walk, end, &mut ctx, &beta, &mut gathered, rng, scratch);
+    wl.resolve(gathered, radiance);
+}
 
-            // Next-event estimation: one light chosen ∝ its spectral power (eq. 7).
-            if flags.smooth {
-                if let Some(l) = scene.light_distribution.sample(rng.uniform()) {
-                    let pmf = scene.light_distribution.pmf(l);
-                    let u = rng.uniform2();
-                    if let Some(ls) = scene.lights[l].sample_li(si.p, u, &mut le) {
-                        let wi_local = frame.to_local(ls.wi);
-                        let bsdf_pdf = material.bsdf.eval(&ctx, wo_local, wi_local, &mut f);
-                        let same_side = ls.wi.dot(ng) > 0.0;
-                        if !f.is_black() && same_side {
-                            let origin = offset_ray_origin(si.p, ng);
-                            // Aimed from the offset origin at the light point, stopping short (robust at 1e6 units).
-                            if !scene.occluded(&crate::geometry::shadow_ray(si.p, origin, ls.wi, ls.distance)) {
-                                let light_pdf = pmf * ls.pdf;
-                                let w = if ls.delta { 1.0 } else { power_heuristic(light_pdf, bsdf_pdf) };
-                                f.mul_assign(&beta);
-                                radiance.add_product(&f, &le, w / light_pdf);
-                            }
-                        }
-                    }
-                }
-            }
-
-            // Deterministic (splitting) mode: one monochromatic sub-path per wavelength.
-            if self.dispersion_splitting && flags.dispersive && ctx.single_wavelength.is_none() {
-                self.mono().split_per_wavelength(
-                    scene,
-                    material.bsdf.as_ref(),
-                    &mut ctx,
-                    &frame,
-                    wo_local,
-                    si.p,
-                    ng,
-                    &beta,
-                    depth,
-                    rng,
-                    radiance,
-                );
-                break;
-            }
-
-            // Continue the path by sampling the BSDF.
-            let Some(sc) = scatter(material.bsdf.as_ref(), &ctx, &frame, wo_local, si.p, ng, rng, &mut beta) else {
-                break;
-            };
-            if !beta.is_finite() {
-                break;
-            }
-            let bs = sc.sample;
-            specular = bs.specular;
-            prev_pdf = bs.pdf;
-            prev_p = si.p;
-            ray = sc.ray;
-            depth += 1;
-            if let Some(i) = bs.collapsed_to {
-                if ctx.single_wavelength.is_none() {
-                    // Collapsed (eq. 9): the BSDF chose wavelength i and divided by its
-                    // probability; carry on as a scalar monochromatic path.
-                    let st = PathState { ray, specular, prev_pdf, prev_p, depth };
-                    let l = self.mono().trace(scene, i, beta.get(i), st, rng, None, &mut Scratch::new(n));
-                    radiance.set(i, radiance.get(i) + l);
-                    break;
-                }
-                ctx.single_wavelength = Some(i);
-            }
-
-            if depth >= self.rr_depth {
-                let q = beta.max_value().min(1.0);
-                if q <= 0.0 || rng.uniform() >= q {
-                    break;
-                }
-                beta.scale(1.0 / q);
+/// Carries a whole-spectrum camera path on past a dispersive surface with one wavelength
+/// per path (power-heuristic MIS), adding what each gathers at its wavelength.
+#[allow(clippy::too_many_arguments)]
+fn continue_single_wavelength<T: Throughput>(
+    scene: &Scene,
+    walk: &Walk,
+    end: End,
+    ctx: &mut ShadingContext,
+    beta: &T,
+    gathered: &mut T,
+    rng: &mut Rng,
+    scratch: &mut Scratch,
+) {
+    match end {
+        End::Done => {}
+        // Collapsed (eq. 9): the BSDF chose wavelength `index` and divided by its probability.
+        End::Collapsed { index, state } => {
+            if let Some(b) = beta.collapse(index) {
+                let l = trace_single(scene, walk, state, b, rng, scratch);
+                gathered.add_at(index, l);
             }
         }
+        // Deterministic (splitting) mode: one sub-path per wavelength that still carries
+        // energy, each scattering the vertex at its own wavelength.
+        End::Split { vertex: v, state } => {
+            for i in 0..scene.grid.len() {
+                let Some(mut b) = beta.collapse(i) else { return };
+                if !(b.value > 0.0) {
+                    continue;
+                }
+                ctx.single_wavelength = Some(i);
+                let Some(sc) = b.scatter(&v, ctx, rng, &mut scratch.tp) else {
+                    continue;
+                };
+                let st = PathState {
+                    ray: sc.ray,
+                    specular: sc.sample.specular,
+                    prev_pdf: sc.sample.pdf,
+                    prev_p: v.si.p,
+                    depth: state.depth + 1,
+                };
+                let l = trace_single(scene, walk, st, b, rng, scratch);
+                gathered.add_at(i, l);
+            }
+        }
+    }
+}
+
+/// The radiance a single-wavelength camera path from `st` with throughput `beta`
+/// gathers (already multiplied by `beta`). It has its own shading context: the vertex a
+/// split continues from keeps its own for the next wavelength.
+fn trace_single(
+    scene: &Scene,
+    walk: &Walk,
+    st: PathState,
+    mut beta: SingleWavelength,
+    rng: &mut Rng,
+    scratch: &mut Scratch,
+) -> f32 {
+    if !beta.is_alive() {
+        return 0.0;
+    }
+    let mut ctx = ShadingContext::new(&scene.grid);
+    ctx.single_wavelength = Some(beta.index);
+    let mut gathered = beta.zero_like();
+    let mut hooks = CameraPath { mis: PowerHeuristic, gathered: &mut gathered, first_hit: None };
+    walk.run(scene, &mut ctx, st, &mut beta, rng, &mut hooks, scratch);
+    gathered.value
+}
+
+/// BACKWARD: camera paths only.
+pub struct PathTracing<P> {
+    pub wavelengths: P,
+    pub walk: Walk,
+}
+
+impl<P: WavelengthPolicy> Technique for PathTracing<P> {
+    fn camera_sample(
+        &self,
+        scene: &Scene,
+        cs: CameraSample,
+        rng: &mut Rng,
+        out: &mut PixelSample,
+        scratch: &mut Scratch,
+    ) {
+        let wl = self.wavelengths.camera(cs.pixel, cs.pass);
+        trace_camera(scene, &self.walk, cs.film, wl, PowerHeuristic, rng, out, scratch);
     }
 }

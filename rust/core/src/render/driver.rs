@@ -1,7 +1,7 @@
 //! The pass loop: renders sample passes over tiles in parallel (rayon) until the sample
 //! count, the time limit, adaptive convergence or a cancel request ends it.
 //!
-//! Sample passes are numbered `0 .. rounds × samples` ([`Technique::rounds`]): pass `g`
+//! Sample passes are numbered `0 .. rounds × samples` ([`Integrator::rounds`]): pass `g`
 //! is the g-th sample of every pixel, and its light paths are numbered
 //! `g·pixels .. (g+1)·pixels`. Every pixel sample draws from its own random stream
 //! seeded by (seed, pixel, g), every light path from one seeded by (seed, its number),
@@ -13,8 +13,7 @@ use super::adaptive::Adaptive;
 use super::{RenderControl, RenderOutput, RenderStats, ResolvedSettings, PREVIEW_INTERVAL};
 use crate::film::{Film, FilmBuffer, PixelSample};
 use crate::integrator::forward::Splat;
-use crate::integrator::monochromatic::Scratch;
-use crate::integrator::{self, Technique};
+use crate::integrator::{self, CameraSample, Integrator, Scratch};
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::spectrum::named::{RgbToSpectrum, SpectrumKind, SpectrumRole};
@@ -46,7 +45,7 @@ struct Tile {
 pub struct Driver<'a> {
     scene: &'a Scene,
     settings: &'a ResolvedSettings,
-    technique: Box<dyn Technique>,
+    integrator: Integrator,
     tiles: Vec<Tile>,
     /// A reflectance of 1 under D65 of luminance 1: makes the albedo pass read as a colour.
     albedo_white: SampledSpectrum,
@@ -107,7 +106,7 @@ impl<'a> Driver<'a> {
     /// A driver for `scene` (built for `settings`) with resolved `settings`; errors name
     /// a setting the scene cannot be rendered with.
     pub fn new(scene: &'a Scene, settings: &'a ResolvedSettings) -> Result<Self> {
-        let technique = integrator::from_settings(scene, settings)?;
+        let integrator = integrator::from_settings(scene, settings)?;
         let (w, h) = (settings.width, settings.height);
         let tiles = (0..h.div_ceil(TILE))
             .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
@@ -118,12 +117,12 @@ impl<'a> Driver<'a> {
             .map_err(Error::Description)?;
         let mut albedo_white = SampledSpectrum::from_slice(&d65);
         albedo_white.scale(1.0 / scene.observer.xyz(&d65)[1] as f32);
-        Ok(Self { scene, settings, technique, tiles, albedo_white })
+        Ok(Self { scene, settings, integrator, tiles, albedo_white })
     }
 
     /// Sample passes of the whole render: `rounds × samples`.
     pub fn sample_passes(&self) -> u32 {
-        self.technique.rounds() * self.settings.samples
+        self.integrator.rounds * self.settings.samples
     }
 
     /// An empty film for this render's image.
@@ -151,16 +150,15 @@ impl<'a> Driver<'a> {
 
     /// Camera tiles and light paths of sample passes `passes`; None when cancelled.
     pub fn trace(&self, passes: Range<u32>, active: Option<&[bool]>, control: &RenderControl) -> Option<PassSums> {
-        let tiles = if self.technique.traces_camera() {
+        let tiles = if self.integrator.camera_paths {
             let tiles: Vec<Option<FilmBuffer>> =
                 self.tiles.par_iter().map(|&t| self.render_tile(t, passes.clone(), active, control)).collect();
             tiles.into_iter().zip(&self.tiles).map(|(b, &t)| b.map(|b| (t, b))).collect::<Option<Vec<_>>>()?
         } else {
             Vec::new()
         };
-        let splats =
-            if self.technique.traces_light() { self.light_paths(passes.clone(), control)? } else { Vec::new() };
-        let light_only_passes = (!self.technique.traces_camera()).then_some(passes.len() as u32);
+        let splats = if self.integrator.light_paths { self.light_paths(passes.clone(), control)? } else { Vec::new() };
+        let light_only_passes = (!self.integrator.camera_paths).then_some(passes.len() as u32);
         Some(PassSums { tiles, splats, light_only_passes })
     }
 
@@ -172,8 +170,8 @@ impl<'a> Driver<'a> {
         let per_round = w as u64
             * h as u64
             * s.samples as u64
-            * (self.technique.traces_camera() as u64 + self.technique.traces_light() as u64);
-        control.total.store(per_round * self.technique.rounds() as u64, Ordering::Relaxed);
+            * (self.integrator.camera_paths as u64 + self.integrator.light_paths as u64);
+        control.total.store(per_round * self.integrator.rounds as u64, Ordering::Relaxed);
         control.done.store(0, Ordering::Relaxed);
         let mut film = self.new_film();
         let mut adaptive = Adaptive::new(s);
@@ -222,7 +220,7 @@ impl<'a> Driver<'a> {
             method: s.method,
             direction: s.direction,
             // MONOCHROMATIC_SCENES stopped (cancel, time limit) after some wavelength images.
-            incomplete_spectrum: self.technique.rounds() > 1 && done.passes > 0 && done.passes < self.sample_passes(),
+            incomplete_spectrum: self.integrator.rounds > 1 && done.passes > 0 && done.passes < self.sample_passes(),
             wavelengths: scene.grid.len(),
             threads: timing.threads,
             nonfinite_samples: film.buffer.nonfinite,
@@ -250,7 +248,7 @@ impl<'a> Driver<'a> {
     /// Samples per pixel after `passes` sample passes: every pass counts, except that the
     /// rounds of MONOCHROMATIC_SCENES repeat the same samples for other wavelengths.
     fn samples_per_pixel(&self, passes: u32) -> u32 {
-        if self.technique.rounds() > 1 {
+        if self.integrator.rounds > 1 {
             passes.min(self.settings.samples)
         } else {
             passes
@@ -263,7 +261,7 @@ impl<'a> Driver<'a> {
     fn schedule(&self, adaptive: bool) -> impl Iterator<Item = Range<u32>> {
         let samples = self.settings.samples;
         let least = if adaptive { 2 } else { 1 };
-        (0..self.technique.rounds()).flat_map(move |round| {
+        (0..self.integrator.rounds).flat_map(move |round| {
             let mut s = 0u32;
             std::iter::from_fn(move || {
                 (s < samples).then(|| {
@@ -326,7 +324,8 @@ impl<'a> Driver<'a> {
                     let mut rng = Rng::for_sample(self.settings.seed, pixel, g as u64);
                     let jitter = rng.uniform2();
                     let film = glam::Vec2::new(x as f32 + jitter.x, y as f32 + jitter.y);
-                    self.technique.camera_sample(scene, film, pixel, g, &mut rng, &mut ps, &mut scratch);
+                    let cs = CameraSample { film, pixel, pass: g };
+                    self.integrator.technique.camera_sample(scene, cs, &mut rng, &mut ps, &mut scratch);
                     buf.add((ty * tile.w + tx) as usize, &ps, &scene.observer, &self.albedo_white);
                 }
             }
@@ -349,11 +348,18 @@ impl<'a> Driver<'a> {
                     return None;
                 }
                 let mut splats = Vec::new();
+                let mut scratch = Scratch::new(self.scene.grid.len());
                 let end = ((c + 1) * LIGHT_CHUNK).min(count);
                 for k in c * LIGHT_CHUNK..end {
                     let path = first + k;
                     let mut rng = Rng::for_sample(self.settings.seed ^ LIGHT_STREAM, path, 0);
-                    self.technique.light_path(self.scene, (path / pixels) as u32, &mut rng, &mut splats);
+                    self.integrator.technique.light_path(
+                        self.scene,
+                        (path / pixels) as u32,
+                        &mut rng,
+                        &mut splats,
+                        &mut scratch,
+                    );
                 }
                 control.done.fetch_add(end - c * LIGHT_CHUNK, Ordering::Relaxed);
                 Some(splats)

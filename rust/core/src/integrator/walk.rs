@@ -1,0 +1,222 @@
+//! The one path walk that camera and light paths share (the shape of pbrt-v4's
+//! `RandomWalk` and of Mitsuba 3's path integrator): intersect → orient the hit → let
+//! the technique gather and connect there → sample the BSDF → Russian roulette, until
+//! the path escapes, is absorbed or ends.
+//!
+//! What differs between techniques lives in [`PathHooks`]: camera paths gather emission
+//! and connect to lights (next-event estimation with MIS), light paths connect to the
+//! camera and splat, bidirectional MIS records the vertices it weighs. Where a
+//! whole-spectrum path meets a dispersive surface the walk returns to its caller
+//! ([`End::Collapsed`], [`End::Split`]), which carries on with one wavelength per path
+//! (eq. 9) — with the same or other hooks. Participating media would add a medium
+//! interaction between the intersection and the surface.
+
+use super::throughput::Throughput;
+use super::{facing, Facing, Scatter, Scratch};
+use crate::geometry::{Frame, Ray};
+use crate::material::{BsdfFlags, Material, ShadingContext};
+use crate::sampling::Rng;
+use crate::scene::{Scene, SurfaceInteraction};
+use glam::Vec3A;
+
+/// Where a path is: the ray it follows and what MIS needs of the vertex it left.
+#[derive(Clone, Copy, Debug)]
+pub struct PathState {
+    pub ray: Ray,
+    /// The last scattering was specular (or `ray` is the camera ray): no MIS on what the
+    /// ray hits.
+    pub specular: bool,
+    /// Solid-angle pdf of the last BSDF sample, for MIS on emission hit next.
+    pub prev_pdf: f32,
+    /// The vertex `ray` left.
+    pub prev_p: Vec3A,
+    /// Scattering events so far.
+    pub depth: u32,
+}
+
+impl PathState {
+    /// A path starting along `ray` (from the camera or a light).
+    pub fn start(ray: Ray) -> Self {
+        Self { ray, specular: true, prev_pdf: 0.0, prev_p: ray.origin, depth: 0 }
+    }
+}
+
+/// A surface vertex as the hooks see it: the hit oriented towards the arriving ray.
+#[derive(Clone, Copy)]
+pub struct Vertex<'s> {
+    pub si: SurfaceInteraction,
+    /// Unit direction back along the arriving ray.
+    pub wo: Vec3A,
+    /// Geometric and shading normals, facing `wo`.
+    pub ng: Vec3A,
+    pub ns: Vec3A,
+    pub material: &'s Material,
+    /// The shading frame about `ns`, and `wo` in it.
+    pub frame: Frame,
+    pub wo_local: Vec3A,
+    pub flags: BsdfFlags,
+}
+
+/// Why [`Walk::run`] returned.
+pub enum End<'s> {
+    /// The path is finished: escaped, absorbed, terminated or at its bounce limit.
+    Done,
+    /// The BSDF collapsed the path to grid wavelength `index` (eq. 9; the throughput
+    /// keeps that sample only, already divided by its probability). Continue it from
+    /// `state` with that wavelength's [`super::throughput::SingleWavelength`].
+    Collapsed { index: usize, state: PathState },
+    /// Dispersion splitting: the path reached dispersive `vertex` (with `state`, before
+    /// sampling there). Continue one single-wavelength sub-path per wavelength.
+    Split { vertex: Vertex<'s>, state: PathState },
+}
+
+/// What a technique does at the steps of a walk. Every method sees the throughput
+/// `beta` of the path so far (up to, not including, the vertex's own scattering).
+pub trait PathHooks<T: Throughput> {
+    /// The path left the scene along `st.ray`.
+    fn escaped(&mut self, _scene: &Scene, _st: &PathState, _beta: &T, _scratch: &mut Scratch) {}
+    /// The path reached `v`: emission, first-hit passes. Draws no random numbers.
+    fn reached(
+        &mut self,
+        _scene: &Scene,
+        _ctx: &mut ShadingContext,
+        _v: &Vertex,
+        _st: &PathState,
+        _beta: &T,
+        _scratch: &mut Scratch,
+    ) {
+    }
+    /// Connects `v` to a light (camera paths: next-event estimation) or to the camera
+    /// (light paths); may draw random numbers.
+    #[allow(clippy::too_many_arguments)]
+    fn connect(
+        &mut self,
+        scene: &Scene,
+        ctx: &mut ShadingContext,
+        v: &Vertex,
+        st: &PathState,
+        beta: &T,
+        rng: &mut Rng,
+        scratch: &mut Scratch,
+    );
+    /// The BSDF at `v` was sampled (`sc`; `beta` now includes it; a collapse has set
+    /// `ctx.single_wavelength` already). Records the vertex; false ends the path.
+    fn scattered(
+        &mut self,
+        _scene: &Scene,
+        _ctx: &mut ShadingContext,
+        _v: &Vertex,
+        _st: &PathState,
+        _sc: &Scatter,
+        _beta: &T,
+    ) -> bool {
+        true
+    }
+}
+
+/// How far a walk goes.
+#[derive(Clone, Copy, Debug)]
+pub struct Walk {
+    /// Scattering events after which a path ends (0: direct emission only).
+    pub max_bounces: u32,
+    /// Bounces before Russian roulette may end a path.
+    pub rr_depth: u32,
+    /// A vertex scatters only below this depth: `max_bounces` for camera paths (the next
+    /// vertex's emission still counts), one less for light paths (a light-path vertex at
+    /// depth d connects to the camera as a path of d + 1 scattering events).
+    pub scatter_below: u32,
+    /// Deterministic mode: stop at the first dispersive surface of a whole-spectrum
+    /// path ([`End::Split`]) instead of letting the BSDF collapse it.
+    pub split_dispersion: bool,
+}
+
+/// Bounces before Russian roulette may end a path.
+pub const RR_DEPTH: u32 = 3;
+
+impl Walk {
+    /// Camera paths of `max_bounces` scattering events.
+    pub fn camera(max_bounces: u32, split_dispersion: bool) -> Self {
+        Self { max_bounces, rr_depth: RR_DEPTH, scatter_below: max_bounces, split_dispersion }
+    }
+    /// Light paths whose camera connections have at most `max_bounces` scattering events.
+    pub fn light(max_bounces: u32) -> Self {
+        Self { max_bounces, rr_depth: RR_DEPTH, scatter_below: max_bounces.saturating_sub(1), split_dispersion: false }
+    }
+
+    /// Walks a path from `st` with throughput `beta` (updated as it goes).
+    #[allow(clippy::too_many_arguments)]
+    pub fn run<'s, T: Throughput, H: PathHooks<T>>(
+        &self,
+        scene: &'s Scene,
+        ctx: &mut ShadingContext,
+        mut st: PathState,
+        beta: &mut T,
+        rng: &mut Rng,
+        hooks: &mut H,
+        scratch: &mut Scratch,
+    ) -> End<'s> {
+        loop {
+            let Some(hit) = scene.intersect(&st.ray) else {
+                hooks.escaped(scene, &st, beta, scratch);
+                return End::Done;
+            };
+            let si = scene.interaction(&st.ray, &hit);
+            // Surfaces are two-sided: shade on the side the ray arrived from.
+            let Facing { wo, ng, ns, material } = facing(scene, &st.ray, &si, ctx);
+            let frame = Frame::from_normal(ns);
+            let v =
+                Vertex { si, wo, ng, ns, material, frame, wo_local: frame.to_local(wo), flags: material.bsdf.flags() };
+            hooks.reached(scene, ctx, &v, &st, beta, scratch);
+            if st.depth >= self.max_bounces || v.wo_local.z == 0.0 {
+                return End::Done;
+            }
+            hooks.connect(scene, ctx, &v, &st, beta, rng, scratch);
+            if st.depth >= self.scatter_below {
+                return End::Done;
+            }
+            if self.split_dispersion && v.flags.dispersive && ctx.single_wavelength.is_none() {
+                return End::Split { vertex: v, state: st };
+            }
+            let Some(sc) = beta.scatter(&v, ctx, rng, &mut scratch.tp) else {
+                return End::Done;
+            };
+            if !beta.is_alive() {
+                return End::Done;
+            }
+            let collapsed = sc.sample.collapsed_to.filter(|_| ctx.single_wavelength.is_none());
+            if let Some(i) = collapsed {
+                ctx.single_wavelength = Some(i);
+            }
+            if !hooks.scattered(scene, ctx, &v, &st, &sc, beta) {
+                return End::Done;
+            }
+            st = PathState {
+                ray: sc.ray,
+                specular: sc.sample.specular,
+                prev_pdf: sc.sample.pdf,
+                prev_p: si.p,
+                depth: st.depth + 1,
+            };
+            if let Some(index) = collapsed {
+                return End::Collapsed { index, state: st };
+            }
+            if !russian_roulette(beta, st.depth, self.rr_depth, rng) {
+                return End::Done;
+            }
+        }
+    }
+}
+
+/// Russian roulette after `depth` scattering events: from `rr_depth` on, a path survives
+/// with probability min(1, max β) and is divided by it. False: the path ends.
+pub fn russian_roulette<T: Throughput>(beta: &mut T, depth: u32, rr_depth: u32, rng: &mut Rng) -> bool {
+    if depth < rr_depth {
+        return true;
+    }
+    let q = beta.survival_probability();
+    if q <= 0.0 || rng.uniform() >= q {
+        return false;
+    }
+    beta.divide_by_survival(q);
+    true
+}
