@@ -1,4 +1,4 @@
-"""The paper's method timing (figures 12 and 13, SPEC §7): a closed room of spectral
+"""The paper's method timing (figures 12 and 13, docs/design.md#timing): a closed room of spectral
 diffuse walls with an area light, and the same room with a dispersive glass ball,
 rendered at 41 wavelengths with each method, release build.
 

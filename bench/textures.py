@@ -1,4 +1,4 @@
-"""Textures and HDRIs (SPEC §4, deferred conversion): memory held for a large float HDRI
+"""Textures and HDRIs (docs/design.md#rgb-data, deferred conversion): memory held for a large float HDRI
 against its raw RGB size, and the cost of converting RGB to a spectrum at each lookup.
 
     python bench/textures.py [--width 8192 --height 4096] [--write docs/BENCHMARKS.md]

@@ -10,7 +10,7 @@ walls are tabulated reflectance curves, the light a blackbody.
 
 Renders POLYCHROMATIC (the paper's method) and prints the time. With ``--compare`` it
 also renders the same image with MONOCHROMATIC_SCENES (one image per wavelength, the
-same samples per wavelength: the paper's method timing of SPEC §7) and
+same samples per wavelength: the paper's method timing of docs/design.md#timing) and
 MONOCHROMATIC_RAYS, and prints their times as ratios and their mean ΔE00 to the
 POLYCHROMATIC image (``bench/methods.py`` does this properly, at equal error).
 """

@@ -3,7 +3,7 @@
     python examples/fig14_spectral_paint.py [--samples 64] [--width 384] [--height 216]
                                             [--out examples/out/fig14_spectral_paint]
 
-Mixed RGB and spectral data in one scene (SPEC §4): the sky is an RGB HDRI (generated
+Mixed RGB and spectral data in one scene (docs/design.md#rgb-data): the sky is an RGB HDRI (generated
 here, procedurally: a blue-to-white gradient, a warm sun disk with a glow, a dim ground)
 converted to radiance at each lookup; the left ball wears a *measured* reflectance
 spectrum (the ColorChecker "orange" patch, BabelColor average, from colour-science; a

@@ -1,4 +1,4 @@
-"""Shared pieces of the paper's figure examples (SPEC §6): meshes, spectra, the
+"""Shared pieces of the paper's figure examples (docs/design.md#figures): meshes, spectra, the
 left-RGB / right-spectral split image, and measurements on images.
 
 The examples (``fig02_*.py`` ... ``fig13_*.py``) and ``tests/test_figures.py`` import
@@ -151,15 +151,6 @@ def side_by_side(left: np.ndarray, right: np.ndarray, gap: int = 2) -> np.ndarra
     h = left.shape[0]
     sep = np.ones((h, gap, left.shape[2]), left.dtype)
     return np.concatenate([left, sep, right], axis=1)
-
-
-def rgb_to_lab(rgb, white_y: float = 1.0) -> np.ndarray:
-    """CIE L*a*b* (D65 white of luminance ``white_y``) of linear Rec.709 colours."""
-    xyz = np.asarray(rgb, np.float64)[..., :3] @ RGB_TO_XYZ.T / white_y
-    white = RGB_TO_XYZ @ np.ones(3)
-    f = lambda t: np.where(t > (6 / 29) ** 3, np.cbrt(t), t / (3 * (6 / 29) ** 2) + 4 / 29)
-    fx, fy, fz = (f(xyz[..., i] / white[i]) for i in range(3))
-    return np.stack([116 * fy - 16, 500 * (fx - fy), 200 * (fy - fz)], axis=-1)
 
 
 def masked_mean(rgba: np.ndarray, mask: np.ndarray) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""Numerical stability at the extremes (SPEC §8), through the real pipeline.
+"""Numerical stability at the extremes (docs/design.md#extremes), through the real pipeline.
 
 Every case renders with the Python API (``polychrome.render``) and is checked by
 :func:`check_finite`: no NaN or infinity in any pass (rgba, depth, normal, albedo,
@@ -555,7 +555,7 @@ def test_scene_translated_by_1e6_renders_like_the_original(direction):
 
 @pytest.mark.parametrize("count", [4, 5, 6, 7, 8, 9, 10, 11])
 def test_rgb_scene_renders_on_tiny_grids(count):
-    """SPEC §2: 4..401 samples work. On 4, 5, 7, 8, 9 and 11 samples over 380..780 nm no
+    """docs/design.md#spectra: 4..401 samples work. On 4, 5, 7, 8, 9 and 11 samples over 380..780 nm no
     bounded, exactly reversible basis exists; the fallback (a fine-grid basis averaged
     over each sample's cell) keeps reflectances in [0, 1] and white flat, and the render
     reports its round-trip error."""

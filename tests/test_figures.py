@@ -1,4 +1,4 @@
-"""The paper's figures as tests (SPEC §6, issue 4), on tiny images.
+"""The paper's figures as tests (docs/design.md#figures, issue 4), on tiny images.
 
 - Figures 2-5: RGB mode and the spectral render of the green sphere differ by a large
   ΔE00 under a narrow-band red light and under a "white" light with D65's RGB but not

@@ -136,6 +136,20 @@ def test_sun_irradiance():
     assert np.allclose(luminance(out.rgba), rho / math.pi * e * math.cos(theta), rtol=2e-3)
 
 
+def test_fraunhofer_lines_and_catalogue_come_from_the_core():
+    # SCHOTT TIE-29 / ISO 7944: He d 587.5618 nm, H F 486.1327 nm, H C 656.2725 nm (one definition, in the core)
+    assert (ior.LAMBDA_D, ior.LAMBDA_F, ior.LAMBDA_C) == (587.5618, 486.1327, 656.2725)
+    bk7 = ior.named("N-BK7")
+    nd, nf, nc = (bk7.index_at(lam) for lam in (ior.LAMBDA_D, ior.LAMBDA_F, ior.LAMBDA_C))
+    # SCHOTT's N-BK7 data sheet: nd 1.51680, nF 1.52238, nC 1.51432, Vd 64.17
+    assert nd == pytest.approx(1.51680, abs=2e-5) and nf == pytest.approx(1.52238, abs=2e-5)
+    assert nc == pytest.approx(1.51432, abs=2e-5) and (nd - 1) / (nf - nc) == pytest.approx(64.17, abs=0.05)
+    assert set(ior.GLASSES) >= {"N-BK7", "Fused Silica", "N-SF11", "Water", "Diamond"}
+    assert ior.GLASSES["N-BK7"]["nd"] == 1.5168
+    # a Sellmeier pole is NaN in the readout, not an exception
+    assert math.isnan(ior.sellmeier([1.0], [0.25]).index_at(500.0))
+
+
 def test_ior_helpers_and_errors():
     a, b = ior.abbe_to_cauchy(1.5168, 64.17)
     n = lambda nm: a + b / (nm * 1e-3) ** 2  # noqa: E731

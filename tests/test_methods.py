@@ -1,4 +1,4 @@
-"""The four methods and three directions (SPEC §3) through the Python API: every
+"""The four methods and three directions (docs/design.md#methods) through the Python API: every
 spectral method and direction converges to the same image as a high-sample
 POLYCHROMATIC BACKWARD reference (mean CIEDE2000 < 0.5), and RGB mode differs from the
 spectral render by a large ΔE00 under a narrow-band light (the paper's figure 2/3)."""

@@ -1,4 +1,4 @@
-"""Textures and HDRI environments through the Python API (SPEC §4): the uplift round trip
+"""Textures and HDRI environments through the Python API (docs/design.md#rgb-data): the uplift round trip
 against colour-science, image files to textures, HDRIs seen directly, constant colour vs
 1×1 texture, and errors that name the file or texture."""
 

@@ -1,4 +1,4 @@
-"""Indices of refraction for :class:`polychrome.Dielectric` (SPEC §5).
+"""Indices of refraction for :class:`polychrome.Dielectric` (docs/materials.md).
 
 Each helper returns an :class:`Ior`, a small description the core evaluates on the
 render's wavelength grid. An index that is not finite, below 1 or near a Sellmeier
@@ -10,14 +10,21 @@ varies over the grid; :func:`constant` never does.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import json
 import math
 from typing import Any
 from collections.abc import Sequence
 
-#: Fraunhofer lines of the Abbe number (nm): helium d, hydrogen F and C.
-LAMBDA_D = 587.56
-LAMBDA_F = 486.13
-LAMBDA_C = 656.27
+from . import _core
+
+#: Fraunhofer lines of the Abbe number (nm): helium d, hydrogen F and C, as SCHOTT and
+#: ISO 7944 give them; defined once, in the core (material/dispersion.rs).
+LAMBDA_D: float = _core.LAMBDA_D
+LAMBDA_F: float = _core.LAMBDA_F
+LAMBDA_C: float = _core.LAMBDA_C
+#: The named glasses of the core's catalogue (material/catalogue.rs): name → dict of
+#: aliases, Sellmeier ``b`` and ``c`` (µm²), published ``nd`` and ``vd``, ``source``.
+GLASSES: dict[str, dict[str, Any]] = {g["name"]: g for g in _core.glass_catalogue()}
 
 
 @dataclass(frozen=True)
@@ -29,6 +36,11 @@ class Ior:
 
     def to_dict(self) -> dict[str, Any]:
         return {"type": self.kind, **self.params}
+
+    def index_at(self, wavelength_nm: float) -> float:
+        """The index at ``wavelength_nm`` as the core evaluates it (NaN where the model is
+        undefined, e.g. at a Sellmeier pole)."""
+        return _core.ior_index(json.dumps(self.to_dict()), [float(wavelength_nm)])[0]
 
 
 def _finite(value: Any, what: str) -> float:
@@ -62,7 +74,7 @@ def sellmeier(b: Sequence[float], c: Sequence[float]) -> Ior:
 
 
 def abbe(nd: float, vd: float) -> Ior:
-    """Index ``nd`` at 587.56 nm and Abbe number ``vd`` = (nd − 1)/(nF − nC), as Blender
+    """Index ``nd`` at the d line (:data:`LAMBDA_D`) and Abbe number ``vd`` = (nd − 1)/(nF − nC), as Blender
     gives them; mapped to the two-term Cauchy fit that reproduces both."""
     vd = _finite(vd, "Abbe number")
     if vd <= 0:
@@ -71,16 +83,14 @@ def abbe(nd: float, vd: float) -> Ior:
 
 
 def named(name: str) -> Ior:
-    """A catalogue glass with published Sellmeier coefficients: "N-BK7", "Fused Silica",
-    "N-SF11", "Water", "Diamond" (case, '-', '_' and spaces are ignored)."""
+    """A catalogue glass with published Sellmeier coefficients (:data:`GLASSES`: "N-BK7",
+    "Fused Silica", "N-SF11", "Water", "Diamond", ...; case, '-', '_' and spaces are ignored)."""
     return Ior("named", {"name": str(name)})
 
 
 def abbe_to_cauchy(nd: float, vd: float) -> tuple[float, float]:
-    """(A, B) of the two-term Cauchy fit used for :func:`abbe` (λ in µm)."""
-    inv2 = lambda nm: 1.0 / (nm * 1e-3) ** 2  # noqa: E731
-    b = (nd - 1.0) / (vd * (inv2(LAMBDA_F) - inv2(LAMBDA_C)))
-    return nd - b * inv2(LAMBDA_D), b
+    """(A, B in µm²) of the two-term Cauchy fit used for :func:`abbe` (λ in µm): the core's."""
+    return _core.abbe_to_cauchy(float(nd), float(vd))
 
 
 def as_ior(value: Any) -> Ior:

@@ -1,5 +1,5 @@
 """Image textures and HDRI environments, kept RGB and converted to spectra by the core
-when a ray hits them (SPEC §4, deferred conversion).
+when a ray hits them (docs/design.md#rgb-data, deferred conversion).
 
 A :class:`Texture` holds an RGB image as float32 linear values or as 8-bit sRGB bytes
 (row 0 = the top of the image, Blender's UV convention: v = 0 at the bottom). Use it as

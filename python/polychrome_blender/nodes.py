@@ -1,11 +1,11 @@
 """Polychrome's own shader nodes, usable in the standard Shader Editor (plain custom
-nodes, BLENDER_NOTES §5; their properties are saved in the .blend):
+nodes registered on the standard ShaderNodeTree; their properties are saved in the .blend):
 
 * **Spectral Reflectance** (BSDF): a diffuse surface with a measured reflectance, either
   32 curve samples over 380-780 nm or a named ColorChecker Classic patch.
 * **Dispersion** (BSDF): a dispersive dielectric given by Cauchy, Sellmeier, a named
-  catalogue glass or Blender-style IOR + Abbe number; shows n at 486.13 / 587.56 /
-  656.27 nm (F, d, C lines).
+  catalogue glass or Blender-style IOR + Abbe number; shows n at the F, d and C lines
+  (486.1327 / 587.5618 / 656.2725 nm), evaluated by the core.
 * **Spectral Emission** (Emission): blackbody, D65, A, E or a narrow band, times strength.
 
 Cycles and EEVEE ignore these nodes. Export: ``node.polychrome_export(mat, warnings)``.
@@ -25,23 +25,11 @@ CURVE_WAVELENGTHS = tuple(380.0 + 400.0 * i / (CURVE_SAMPLES - 1) for i in range
 PATCH_ITEMS = [(f"P{i + 1:02d}", name.title(), f"ColorChecker patch {i + 1}: {name}") for i, name in enumerate(PATCHES)]
 PATCH_NAMES = list(PATCHES)
 
-# Sellmeier coefficients (B in 1, C in µm²), as rust/core/src/material/catalogue.rs (with its sources).
-CATALOGUE = {
-    "N-BK7": ((1.03961212, 0.231792344, 1.01046945), (0.00600069867, 0.0200179144, 103.560653)),
-    "Fused Silica": ((0.6961663, 0.4079426, 0.8974794), (0.0684043**2, 0.1162414**2, 9.896161**2)),
-    "N-SF11": ((1.73759695, 0.313747346, 1.89878101), (0.013188707, 0.0623068142, 155.23629)),
-    "Water": (
-        (5.684027565e-1, 1.726177391e-1 + 2.086189578e-2, 1.130748688e-1),
-        (
-            5.101829712e-3,
-            (1.726177391e-1 * 1.821153936e-2 + 2.086189578e-2 * 2.620722293e-2) / (1.726177391e-1 + 2.086189578e-2),
-            1.069792721e1,
-        ),
-    ),
-    "Diamond": ((0.3306, 4.3356, 0.0), (0.1750**2, 0.1060**2, 0.0)),
-}
+#: The core's glass catalogue (material/catalogue.rs, with its sources).
+CATALOGUE = pc.ior.GLASSES
 NAMED_ITEMS = [(k.upper().replace(" ", "_").replace("-", "_"), k, f"{k} (Sellmeier)") for k in CATALOGUE]
-LINE_F, LINE_D, LINE_C = 486.1327, 587.5618, 656.2725
+#: The F, d and C lines the node shows the index at (the core's, see polychrome.ior).
+LINE_F, LINE_D, LINE_C = pc.ior.LAMBDA_F, pc.ior.LAMBDA_D, pc.ior.LAMBDA_C
 
 
 def _tree_poll(cls, ntree):
@@ -97,19 +85,6 @@ class PolychromeSpectralReflectanceNode(bpy.types.Node):
         return pc.Diffuse(self.spectrum(), name=mat.name)
 
 
-def sellmeier_n(b, c, lam_nm):
-    l2 = (lam_nm / 1000.0) ** 2
-    n2 = 1.0 + sum(bk * l2 / (l2 - ck) for bk, ck in zip(b, c) if bk != 0.0)
-    return math.sqrt(n2) if n2 > 0.0 and math.isfinite(n2) else float("nan")
-
-
-def abbe_to_cauchy(nd, vd):
-    """Two-term Cauchy (A, B in µm²) through nd at the d line with (nF − nC) = (nd − 1)/Vd."""
-    dn = (nd - 1.0) / vd
-    b = dn / ((LINE_F / 1000.0) ** -2 - (LINE_C / 1000.0) ** -2)
-    return nd - b / (LINE_D / 1000.0) ** 2, b
-
-
 class PolychromeDispersionNode(bpy.types.Node):
     """A dispersive dielectric: index of refraction that depends on wavelength"""
 
@@ -131,8 +106,8 @@ class PolychromeDispersionNode(bpy.types.Node):
     cauchy_a: FloatProperty(name="A", default=1.5046, min=1.0, soft_max=3.0, precision=5)
     cauchy_b: FloatProperty(name="B (µm²)", default=0.0042, precision=6)
     cauchy_c: FloatProperty(name="C (µm⁴)", default=0.0, precision=6)
-    sellmeier_b: FloatVectorProperty(name="B", size=3, default=CATALOGUE["N-BK7"][0], precision=6)
-    sellmeier_c: FloatVectorProperty(name="C (µm²)", size=3, default=CATALOGUE["N-BK7"][1], precision=6)
+    sellmeier_b: FloatVectorProperty(name="B", size=3, default=CATALOGUE["N-BK7"]["b"], precision=6)
+    sellmeier_c: FloatVectorProperty(name="C (µm²)", size=3, default=CATALOGUE["N-BK7"]["c"], precision=6)
     named: EnumProperty(name="Material", items=NAMED_ITEMS, default="N_BK7")
     abbe_nd: FloatProperty(name="IOR (nd)", default=1.5168, min=1.0, soft_max=3.0, precision=4)
     abbe_vd: FloatProperty(name="Abbe (Vd)", default=64.17, min=1.0, soft_max=100.0, precision=2)
@@ -147,17 +122,12 @@ class PolychromeDispersionNode(bpy.types.Node):
         return {k: name for k, name, _ in NAMED_ITEMS}[self.named]
 
     def ior(self, lam_nm):
-        """Index of refraction at ``lam_nm`` nanometres (NaN where the model is undefined)."""
-        if self.model == "CAUCHY":
-            l2 = (lam_nm / 1000.0) ** 2
-            return self.cauchy_a + self.cauchy_b / l2 + self.cauchy_c / (l2 * l2)
-        if self.model == "SELLMEIER":
-            return sellmeier_n(tuple(self.sellmeier_b), tuple(self.sellmeier_c), lam_nm)
-        if self.model == "NAMED":
-            b, c = CATALOGUE[self.named_material()]
-            return sellmeier_n(b, c, lam_nm)
-        a, b = abbe_to_cauchy(self.abbe_nd, self.abbe_vd)
-        return a + b / (lam_nm / 1000.0) ** 2
+        """Index of refraction at ``lam_nm`` nanometres as the core evaluates the node's
+        model (NaN where it is undefined or the values are invalid)."""
+        try:
+            return self.polychrome_ior().index_at(lam_nm)
+        except ValueError:
+            return float("nan")
 
     def draw_buttons(self, context, layout):
         layout.prop(self, "model", text="")

@@ -1,4 +1,4 @@
-//! Micro-benchmark of deferred RGB → spectrum conversion (SPEC §4): the cost of one
+//! Micro-benchmark of deferred RGB → spectrum conversion (docs/design.md#rgb-data): the cost of one
 //! textured reflectance lookup (bilinear RGB fetch + eq. 10 uplift into the grid's
 //! samples) against a constant spectrum copy, and of one HDRI radiance lookup.
 //!

@@ -464,7 +464,7 @@ fn sun_through_a_glass_slab_is_found_by_forward_tracing() {
     }
 }
 
-/// SPEC §8: grazing incidence, total internal reflection, indices 1.0001 and 4.0, the
+/// docs/design.md#extremes: grazing incidence, total internal reflection, indices 1.0001 and 4.0, the
 /// grid's end wavelengths: every BSDF returns finite values (or no sample) from both
 /// faces, and `eval`/`pdf` never produce NaN.
 #[test]

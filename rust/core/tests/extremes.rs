@@ -1,4 +1,4 @@
-//! SPEC §8 in the core: the film's guard sees every method and direction (a light that
+//! docs/design.md#extremes in the core: the film's guard sees every method and direction (a light that
 //! emits NaN is dropped and counted, never averaged into any pass), and a light
 //! distribution over all-zero or non-finite powers picks nothing.
 

@@ -1,4 +1,4 @@
-//! The four methods and three directions (SPEC §3) against closed forms and against
+//! The four methods and three directions (docs/design.md#methods) against closed forms and against
 //! each other: furnaces (L/(1−a), white furnace), a lit box rendered every way, a
 //! test-only dispersive BSDF for the collapse (eq. 9) and splitting logic, determinism.
 
@@ -13,7 +13,7 @@ use polychrome_core::render::{
 };
 use polychrome_core::sampling::cosine_hemisphere;
 use polychrome_core::scene::{BsdfDesc, Buffer, BuildOptions, MaterialDesc, Scene, SceneDesc, WorldDesc};
-use polychrome_core::spectrum::named::{SpectrumKind, SpectrumRole};
+use polychrome_core::spectrum::named::{NoRgb, SpectrumKind, SpectrumRole};
 use polychrome_core::spectrum::{SampledSpectrum, SpectrumDesc, WavelengthGrid};
 
 fn diffuse(name: &str, reflectance: SpectrumDesc, emission: Option<SpectrumDesc>) -> MaterialDesc {
@@ -427,7 +427,7 @@ fn dispersive_white_sphere_vanishes_in_a_uniform_environment_in_every_method() {
         };
         let out = render_scene(&scene, &settings, &RenderControl::new()).unwrap();
         // Reference: the environment's colour through the CIE observer (or as RGB).
-        let env_values = env.evaluate(&g, SpectrumRole::Illuminant, &NoRgbConv).unwrap();
+        let env_values = env.evaluate(&g, SpectrumRole::Illuminant, &NoRgb).unwrap();
         let expected = RgbSpace::rec709().xyz_to_rgb(Observer::new(&g).xyz(&env_values));
         let means = channel_means(&out.images.rgba);
         for c in 0..3 {
@@ -442,14 +442,7 @@ fn dispersive_white_sphere_vanishes_in_a_uniform_environment_in_every_method() {
     }
 }
 
-struct NoRgbConv;
-impl polychrome_core::spectrum::named::RgbToSpectrum for NoRgbConv {
-    fn convert(&self, _: [f32; 3], _: SpectrumRole) -> Vec<f32> {
-        Vec::new()
-    }
-}
-
-/// SPEC §1 (a): a narrow-band red light on a green sphere. RGB mode multiplies RGBs and
+/// docs/design.md#why-spectral (a): a narrow-band red light on a green sphere. RGB mode multiplies RGBs and
 /// gets a very different colour from the spectral product.
 #[test]
 fn rgb_mode_differs_from_spectral_under_narrow_band_light() {
@@ -534,7 +527,7 @@ fn dispersive_glass_sphere_vanishes_in_a_uniform_environment() {
         let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
         let g = settings.grid.clone();
         let g = if method == Method::Rgb { WavelengthGrid::rgb_channels(&g, &RgbSpace::rec709()).unwrap() } else { g };
-        let env_values = env.evaluate(&g, SpectrumRole::Illuminant, &NoRgbConv).unwrap();
+        let env_values = env.evaluate(&g, SpectrumRole::Illuminant, &NoRgb).unwrap();
         let expected = RgbSpace::rec709().xyz_to_rgb(Observer::new(&g).xyz(&env_values));
         let means = channel_means(&out.images.rgba);
         for c in 0..3 {

@@ -5,7 +5,7 @@
 use polychrome_core::render::quality::{auto_grid, resolve};
 use polychrome_core::render::{Quality, RenderSettings};
 use polychrome_core::scene::SceneDesc;
-use polychrome_core::spectrum::named::{RgbToSpectrum, SpectrumKind, SpectrumRole};
+use polychrome_core::spectrum::named::{NoRgb, SpectrumKind, SpectrumRole};
 use polychrome_core::spectrum::{SpectrumDesc, WavelengthGrid};
 
 fn narrow_band_scene(center: f32, width: f32) -> SceneDesc {
@@ -18,13 +18,6 @@ fn narrow_band_scene(center: f32, width: f32) -> SceneDesc {
         "meshes": [], "lights": []
     });
     serde_json::from_value(json).expect("valid description")
-}
-
-struct NoRgb;
-impl RgbToSpectrum for NoRgb {
-    fn convert(&self, _: [f32; 3], _: SpectrumRole) -> Vec<f32> {
-        Vec::new()
-    }
 }
 
 #[test]

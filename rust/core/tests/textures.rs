@@ -1,4 +1,4 @@
-//! Textures and HDRI environments (SPEC §4): deferred RGB → spectrum conversion checked
+//! Textures and HDRI environments (docs/design.md#rgb-data): deferred RGB → spectrum conversion checked
 //! end to end against closed forms (round trip of an HDRI seen directly, furnace under
 //! an image world, identical constant vs 1×1 texture, unbiased importance sampling).
 

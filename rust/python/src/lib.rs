@@ -7,6 +7,8 @@ use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn};
 use polychrome_core::color::uplift::Uplift;
 use polychrome_core::color::{Observer, RgbSpace};
 use polychrome_core::geometry::curves::{self, CurveOptions, Tessellation};
+use polychrome_core::material::catalogue;
+use polychrome_core::material::dispersion::{self, IorDesc};
 use polychrome_core::render::settings::schema_json;
 use polychrome_core::render::{render as core_render, RenderControl, RenderOutput, RenderSettings};
 use polychrome_core::scene::{Buffer, SceneDesc};
@@ -467,6 +469,43 @@ fn settings_schema() -> String {
     schema_json()
 }
 
+/// ior_index(ior_json, wavelengths) -> list of float: an index-of-refraction model
+/// (`{"type": "abbe", "nd": .., "vd": ..}`, as `polychrome.ior` writes it) at each
+/// wavelength in nm, NaN where the model is undefined (e.g. at a Sellmeier pole). The
+/// Blender Dispersion node shows these.
+#[pyfunction]
+fn ior_index(ior_json: &str, wavelengths: Vec<f64>) -> PyResult<Vec<f64>> {
+    let ior: IorDesc = parse(ior_json, "index of refraction")?;
+    Ok(wavelengths.iter().map(|&l| ior.index_at(l).unwrap_or(f64::NAN)).collect())
+}
+
+/// abbe_to_cauchy(nd, vd) -> (A, B in µm²): the two-term Cauchy fit through nd at the d
+/// line with nF − nC = (nd − 1)/vd (material/dispersion.rs).
+#[pyfunction]
+fn abbe_to_cauchy(nd: f64, vd: f64) -> (f64, f64) {
+    dispersion::abbe_to_cauchy(nd, vd)
+}
+
+/// glass_catalogue() -> list of dict (name, aliases, b, c, nd, vd, source): the named
+/// glasses of material/catalogue.rs with their Sellmeier coefficients and sources.
+#[pyfunction]
+fn glass_catalogue(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
+    catalogue::CATALOGUE
+        .iter()
+        .map(|m| {
+            let d = PyDict::new(py);
+            d.set_item("name", m.name)?;
+            d.set_item("aliases", m.aliases.to_vec())?;
+            d.set_item("b", m.sellmeier.b.to_vec())?;
+            d.set_item("c", m.sellmeier.c.to_vec())?;
+            d.set_item("nd", m.nd)?;
+            d.set_item("vd", m.vd)?;
+            d.set_item("source", m.source)?;
+            Ok(d)
+        })
+        .collect()
+}
+
 /// _panic_for_tests(message) — panics inside `guarded` on purpose, so tests can check
 /// that an internal panic reaches Python as a RuntimeError and never aborts the process.
 #[pyfunction]
@@ -539,6 +578,13 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(tessellate_curves, m)?)?;
     m.add_function(wrap_pyfunction!(tessellate_points, m)?)?;
     m.add_function(wrap_pyfunction!(settings_schema, m)?)?;
+    m.add_function(wrap_pyfunction!(ior_index, m)?)?;
+    m.add_function(wrap_pyfunction!(abbe_to_cauchy, m)?)?;
+    m.add_function(wrap_pyfunction!(glass_catalogue, m)?)?;
+    // The Fraunhofer lines of the Abbe number (nm), defined once in material/dispersion.rs.
+    m.add("LAMBDA_D", dispersion::LAMBDA_D)?;
+    m.add("LAMBDA_F", dispersion::LAMBDA_F)?;
+    m.add("LAMBDA_C", dispersion::LAMBDA_C)?;
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     m.add_function(wrap_pyfunction!(_evaluate_procedural, m)?)?;
     m.add_class::<RenderJob>()?;

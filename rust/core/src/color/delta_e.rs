@@ -2,18 +2,30 @@
 //! (adaptive sampling, the AUTO grid). White is D65 at Y = 1, as
 //! `polychrome.colordiff.image_delta_e` uses.
 
+/// The D65 white of Y = 1 that [`lab`] is relative to.
+pub const D65_WHITE: [f64; 3] = [0.950_47, 1.0, 1.088_83];
+
 /// CIE 1976 L*a*b* of an XYZ colour relative to a D65 white of Y = 1.
 pub fn lab(xyz: [f64; 3]) -> [f64; 3] {
-    const W: [f64; 3] = [0.950_47, 1.0, 1.088_83];
-    let f = |t: f64| {
-        if t > 216.0 / 24389.0 {
-            t.cbrt()
-        } else {
-            (24389.0 / 27.0 * t + 16.0) / 116.0
-        }
-    };
-    let (fx, fy, fz) = (f(xyz[0] / W[0]), f(xyz[1] / W[1]), f(xyz[2] / W[2]));
-    [116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz)]
+    lab_relative(xyz, D65_WHITE)
+}
+
+/// CIE 1976 L*a*b* of `xyz` relative to the reference white `white` (CIE 15:2004 eq. 8.1).
+pub fn lab_relative(xyz: [f64; 3], white: [f64; 3]) -> [f64; 3] {
+    let f: [f64; 3] = std::array::from_fn(|k| lab_f(xyz[k] / white[k]).0);
+    [116.0 * f[1] - 16.0, 500.0 * (f[0] - f[1]), 200.0 * (f[1] - f[2])]
+}
+
+/// CIELAB's f(t) (the cube root, linear below (6/29)³) and its derivative f'(t), which
+/// the smooth uplift's Gauss–Newton fit needs for its Jacobian.
+pub fn lab_f(t: f64) -> (f64, f64) {
+    const D: f64 = 6.0 / 29.0;
+    if t > D * D * D {
+        let c = t.cbrt();
+        (c, 1.0 / (3.0 * c * c))
+    } else {
+        (t / (3.0 * D * D) + 4.0 / 29.0, 1.0 / (3.0 * D * D))
+    }
 }
 
 /// CIEDE2000 (Sharma, Wu & Dalal 2005) between two CIELAB colours.

@@ -2,11 +2,14 @@
 //! and the RGB → spectrum maps (eq. 10) in [`uplift`].
 
 pub mod delta_e;
+pub mod rgb_grid;
 pub mod space;
 pub mod uplift;
 
-use crate::spectrum::named::interpolate;
+use crate::spectrum::named::{self, interpolate};
+use crate::spectrum::rgb_channels::RgbChannels;
 use crate::spectrum::{tables, WavelengthGrid};
+use crate::{Error, Result};
 
 pub use space::RgbSpace;
 
@@ -41,13 +44,21 @@ fn cie_lambdas() -> &'static [f32] {
 impl Observer {
     pub fn new(grid: &WavelengthGrid) -> Self {
         if let Some(channels) = grid.rgb() {
-            return channels.observer();
+            return Self::of_rgb_channels(channels);
         }
         let cmfs: Vec<[f32; 3]> = grid.lambdas().iter().map(|&l| cmf(l)).collect();
         let y_integral: f64 = cmfs.iter().zip(grid.weights()).map(|(c, &w)| c[1] as f64 * w as f64).sum();
         let norm = (1.0 / y_integral) as f32;
         let fold = |k: usize| -> Vec<f32> { cmfs.iter().zip(grid.weights()).map(|(c, &w)| c[k] * w * norm).collect() };
         Self { x: fold(0), y: fold(1), z: fold(2) }
+    }
+
+    /// The observer of the RGB method's three-lane grid: lane c contributes column c of
+    /// the working space's RGB → XYZ matrix, so the film writes the lanes back unchanged.
+    pub fn of_rgb_channels(channels: &RgbChannels) -> Self {
+        let m = &channels.rgb_to_xyz;
+        let row = |k: usize| (0..3).map(|c| m[k][c] as f32).collect::<Vec<f32>>();
+        Self { x: row(0), y: row(1), z: row(2) }
     }
 
     /// XYZ of the per-wavelength product of two spectra (e.g. reflectance × illuminant),
@@ -68,4 +79,26 @@ impl Observer {
         let dot = |w: &[f32]| s.iter().zip(w).map(|(&a, &b)| a as f64 * b as f64).sum::<f64>();
         [dot(&self.x), dot(&self.y), dot(&self.z)]
     }
+}
+
+/// The grid's D65 (1 at 560 nm), the un-normalised reflectance → RGB rows under D65,
+/// `K[c][i] = (xyz_to_rgb · cmf_i·w_i/Σȳw)_c · D65_i`, and Y of D65 (`Σ ȳ_i w_i D65_i/Σȳw`),
+/// in f64. A reflectance ρ on the grid has the RGB `K·ρ` seen under D65; the linear uplift
+/// (eq. 10) inverts these rows and the RGB method folds spectra with them.
+pub fn reflectance_rows(grid: &WavelengthGrid, space: &RgbSpace) -> Result<(Vec<f64>, [Vec<f64>; 3], f64)> {
+    let e = named::d65(grid).map_err(|p| Error::setting("wavelengths", format!("D65 on the grid: {p}")))?;
+    let obs = Observer::new(grid);
+    let n = grid.len();
+    let mut k: [Vec<f64>; 3] = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+    let mut y_e = 0.0;
+    for i in 0..n {
+        let xyz = [obs.x[i] as f64, obs.y[i] as f64, obs.z[i] as f64];
+        let rgb = space.xyz_to_rgb(xyz);
+        let ei = e[i] as f64;
+        for c in 0..3 {
+            k[c][i] = rgb[c] * ei;
+        }
+        y_e += xyz[1] * ei;
+    }
+    Ok((e.iter().map(|&v| v as f64).collect(), k, y_e))
 }

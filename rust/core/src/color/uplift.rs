@@ -1,4 +1,4 @@
-//! RGB → spectrum maps (SPEC §4, the paper's eq. 10).
+//! RGB → spectrum maps (docs/design.md#rgb-data, the paper's eq. 10).
 //!
 //! Everything a scene gives as RGB becomes a spectrum on the render's grid:
 //!
@@ -22,7 +22,7 @@
 //! D65 seen through the grid's observer is not exactly the working space's white
 //! (1,1,1). All reflectance ↔ RGB statements here use the *normalised* map
 //! `rgb_c(ρ) = RGB_c[ρ·D65] / RGB_c[D65]` (per channel, both through the grid's
-//! [`Observer`] and the working space), which gives exactly (1,1,1) for ρ = 1.
+//! [`super::Observer`] and the working space), which gives exactly (1,1,1) for ρ = 1.
 //! Emission is not normalised: an emission spectrum seen through the grid's observer
 //! and the working space gives back exactly its RGB.
 
@@ -30,8 +30,9 @@
 // purpose so that NaN counts as failure.
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
-use crate::color::{Observer, RgbSpace};
-use crate::spectrum::named::{RgbToSpectrum, SpectrumDesc, SpectrumKind, SpectrumRole};
+use crate::color::delta_e::lab_f;
+use crate::color::{reflectance_rows, RgbSpace};
+use crate::spectrum::named::{RgbToSpectrum, SpectrumRole};
 use crate::spectrum::WavelengthGrid;
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -75,36 +76,6 @@ pub struct Uplift {
     emission_exact: bool,
 }
 
-/// An `RgbToSpectrum` that is never asked for RGB: used to evaluate D65 on the grid.
-struct NoRgb;
-impl RgbToSpectrum for NoRgb {
-    fn convert(&self, _: [f32; 3], _: SpectrumRole) -> Vec<f32> {
-        Vec::new()
-    }
-}
-
-/// The grid's D65 (normalised to 1 at 560 nm) and the un-normalised reflectance → RGB
-/// rows `K[c][i] = (xyz_to_rgb · cmf_i·w_i/Σȳw)_c · D65_i`, in f64.
-fn reflectance_rows(grid: &WavelengthGrid, space: &RgbSpace) -> Result<(Vec<f64>, [Vec<f64>; 3], f64)> {
-    let e = SpectrumDesc::new(SpectrumKind::D65)
-        .evaluate(grid, SpectrumRole::Illuminant, &NoRgb)
-        .map_err(|p| Error::setting("wavelengths", format!("D65 on the grid: {p}")))?;
-    let obs = Observer::new(grid);
-    let n = grid.len();
-    let mut k: [Vec<f64>; 3] = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
-    let mut y_e = 0.0;
-    for i in 0..n {
-        let xyz = [obs.x[i] as f64, obs.y[i] as f64, obs.z[i] as f64];
-        let rgb = space.xyz_to_rgb(xyz);
-        let ei = e[i] as f64;
-        for c in 0..3 {
-            k[c][i] = rgb[c] * ei;
-        }
-        y_e += xyz[1] * ei;
-    }
-    Ok((e.iter().map(|&v| v as f64).collect(), k, y_e))
-}
-
 impl Uplift {
     pub fn new(grid: &WavelengthGrid, space: &RgbSpace, method: UpliftMethod) -> Result<Self> {
         let n = grid.len();
@@ -124,7 +95,7 @@ impl Uplift {
         let white_ok = !sums.iter().any(|&s| !(s > 1e-3 * y_e));
         // A grid too coarse to reproduce D65 white at all (4 samples over 380..780 nm: red
         // of white < 0) still gets the LINEAR fallback basis below, with the map
-        // normalised by luminance instead of per channel (SPEC §2: 4..401 samples work).
+        // normalised by luminance instead of per channel (docs/design.md#spectra: 4..401 samples work).
         let coverage_fallback = !white_ok && method == UpliftMethod::Linear && y_e.is_finite() && y_e > 0.0 && n >= 4;
         if !(y_e.is_finite() && y_e > 0.0) || (!white_ok && !coverage_fallback) {
             return Err(Error::setting(
@@ -152,7 +123,7 @@ impl Uplift {
         let (w, fallback_samples) = match solved {
             Ok(w) => (w, None),
             // Some small grids (4, 5, 7, 8, 9, 11 samples over 380..780 nm) admit no basis
-            // that is both bounded and exactly reversible, yet SPEC §2 wants 4..401 samples
+            // that is both bounded and exactly reversible, yet docs/design.md#spectra wants 4..401 samples
             // to work: fall back to a basis solved on a fine grid over the same range and
             // averaged over each coarse sample's cell (see `fallback_basis`).
             Err(why) => match fallback_basis(grid, space) {
@@ -1055,16 +1026,6 @@ struct Fitter<'a> {
     white: [f64; 3],
 }
 
-fn lab_f(t: f64) -> (f64, f64) {
-    const D: f64 = 6.0 / 29.0;
-    if t > D * D * D {
-        let c = t.cbrt();
-        (c, 1.0 / (3.0 * c * c))
-    } else {
-        (t / (3.0 * D * D) + 4.0 / 29.0, 1.0 / (3.0 * D * D))
-    }
-}
-
 impl Fitter<'_> {
     /// CIELAB of an RGB of the normalised map and its Jacobian d Lab / d rgb.
     fn lab(&self, rgb: [f64; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
@@ -1384,6 +1345,8 @@ fn solve3(j: [[f32; 3]; 3], r: [f32; 3]) -> Option<[f32; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::color::Observer;
+    use crate::spectrum::named::{SpectrumDesc, SpectrumKind};
 
     fn grids() -> Vec<(&'static str, WavelengthGrid)> {
         vec![
@@ -1412,7 +1375,7 @@ mod tests {
     impl Eye {
         fn new(grid: &WavelengthGrid) -> Self {
             let space = RgbSpace::rec709();
-            let d65 = SpectrumDesc::new(SpectrumKind::D65).evaluate(grid, SpectrumRole::Illuminant, &NoRgb).unwrap();
+            let d65 = crate::spectrum::named::d65(grid).unwrap();
             let obs = Observer::new(grid);
             let white = space.xyz_to_rgb(obs.xyz(&d65));
             Self { obs, d65, space, white }

@@ -65,7 +65,7 @@ impl FilmBuffer {
         // Folded without a temporary spectrum: this runs once per camera sample.
         let axyz = observer.xyz_of_product(s.albedo.values(), albedo_white.values());
         // The auxiliary passes are guarded too: a NaN depth, normal or albedo would
-        // otherwise reach its pass unseen (SPEC §8: no NaN in any pass).
+        // otherwise reach its pass unseen (docs/design.md#extremes: no NaN in any pass).
         if !(s.depth.is_finite() && s.normal.is_finite() && axyz.iter().all(|v| v.is_finite())) {
             self.nonfinite += 1;
             return;

@@ -30,7 +30,7 @@ pub struct NamedMaterial {
     pub sellmeier: SellmeierCoefficients,
     /// Where the coefficients come from.
     pub source: &'static str,
-    /// Published refractive index at 587.56 nm (He d line).
+    /// Published refractive index at the He d line (`dispersion::LAMBDA_D`).
     pub nd: f64,
     /// Published Abbe number (nd − 1) / (nF − nC).
     pub vd: f64,
@@ -166,9 +166,7 @@ pub fn sellmeier_index(c: &SellmeierCoefficients, lambda_nm: f64) -> f64 {
 mod tests {
     use super::*;
 
-    const LAMBDA_D: f64 = 587.5618;
-    const LAMBDA_F: f64 = 486.1327;
-    const LAMBDA_C: f64 = 656.2725;
+    use crate::material::dispersion::{LAMBDA_C, LAMBDA_D, LAMBDA_F};
 
     fn nd_vd(c: &SellmeierCoefficients) -> (f64, f64) {
         let nd = sellmeier_index(c, LAMBDA_D);

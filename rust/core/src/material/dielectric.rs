@@ -4,7 +4,7 @@
 //! index crossed is `n` when the ray arrives from outside the object
 //! (`ctx.front_face`) and `1/n` from inside.
 //!
-//! Polychromatic rays (SPEC §3, eq. 9): reflection sends every wavelength the same
+//! Polychromatic rays (docs/design.md#methods, eq. 9): reflection sends every wavelength the same
 //! way, so the lobe is chosen by the energy-weighted spectral mean of the Fresnel
 //! reflectance R̄ and the ray keeps all its wavelengths (weight R_λ/R̄). Refraction
 //! through a dispersive glass has no common direction: the ray collapses to one grid

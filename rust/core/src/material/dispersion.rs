@@ -1,4 +1,4 @@
-//! Refractive index models (SPEC §5): constant, Cauchy, Sellmeier, Abbe number (as
+//! Refractive index models (docs/design.md#dispersion): constant, Cauchy, Sellmeier, Abbe number (as
 //! Blender gives it) and named catalogue glasses. A model is evaluated once on the
 //! render's grid when the scene is built; bad values (non-finite, below 1, near a
 //! Sellmeier pole) are load-time errors that name the material and the wavelength.
@@ -8,10 +8,15 @@ use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 
-/// Fraunhofer lines used by the Abbe number (nm): helium d, hydrogen F and C.
-pub const LAMBDA_D: f64 = 587.56;
-pub const LAMBDA_F: f64 = 486.13;
-pub const LAMBDA_C: f64 = 656.27;
+/// The Fraunhofer lines of the Abbe number Vd = (nd − 1)/(nF − nC), in nm: the helium d
+/// line and the hydrogen F and C lines, as SCHOTT's catalogue and ISO 7944 give them
+/// (SCHOTT Technical Information TIE-29, "Refractive Index and Dispersion", its table
+/// of spectral lines).
+/// The only definition: Python (`polychrome.ior.LAMBDA_D`, ...) and the Blender node
+/// read these from `_core`.
+pub const LAMBDA_D: f64 = 587.5618;
+pub const LAMBDA_F: f64 = 486.1327;
+pub const LAMBDA_C: f64 = 656.2725;
 
 /// Indices closer than this (over the grid) count as constant: the material does not
 /// disperse and never collapses a ray.
@@ -32,7 +37,8 @@ pub enum IorDesc {
     },
     /// n² = 1 + Σ B_k λ²/(λ² − C_k), λ in µm, C_k in µm².
     Sellmeier { b: [f64; 3], c: [f64; 3] },
-    /// nd at 587.56 nm and Vd = (nd − 1)/(nF − nC), mapped to a two-term Cauchy fit.
+    /// nd at the d line ([`LAMBDA_D`]) and Vd = (nd − 1)/(nF − nC), mapped to the
+    /// two-term Cauchy fit of [`abbe_to_cauchy`].
     Abbe { nd: f64, vd: f64 },
     /// A glass of the catalogue (`material::catalogue`), e.g. "N-BK7".
     Named { name: String },
@@ -186,10 +192,10 @@ mod tests {
     fn sellmeier_bk7_matches_published_nd() {
         let bk7 = catalogue::find("N-BK7").unwrap();
         let d = IorDesc::Sellmeier { b: bk7.sellmeier.b, c: bk7.sellmeier.c };
-        let nd = d.index_at(587.5618).unwrap();
+        let nd = d.index_at(LAMBDA_D).unwrap();
         assert!((nd - 1.51680).abs() < 2e-5, "{nd}");
         let named = IorDesc::Named { name: "bk7".into() };
-        assert_eq!(named.index_at(587.5618).unwrap(), nd);
+        assert_eq!(named.index_at(LAMBDA_D).unwrap(), nd);
         // Data-sheet nF and nC (SCHOTT N-BK7): 1.52238, 1.51432.
         assert!((d.index_at(486.1327).unwrap() - 1.52238).abs() < 2e-5);
         assert!((d.index_at(656.2725).unwrap() - 1.51432).abs() < 2e-5);

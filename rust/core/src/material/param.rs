@@ -10,7 +10,7 @@ use std::sync::Arc;
 pub enum SpectralParam {
     Constant(SampledSpectrum),
     /// An RGB image texture converted to a reflectance at each hit (deferred conversion,
-    /// SPEC §4): the bilinear RGB at the hit's uv goes through `uplift.reflectance_into`,
+    /// docs/design.md#rgb-data): the bilinear RGB at the hit's uv goes through `uplift.reflectance_into`,
     /// then is multiplied by `scale`. The uplift is shared (one per scene), not copied.
     Texture {
         texture: Arc<Texture>,

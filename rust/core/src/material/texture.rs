@@ -1,4 +1,4 @@
-//! Image textures kept as RGB in memory (SPEC §4, deferred conversion): no per-texel
+//! Image textures kept as RGB in memory (docs/design.md#rgb-data, deferred conversion): no per-texel
 //! spectra are ever stored. A lookup returns linear RGB; the caller converts it to a
 //! spectrum with the render's uplift (eq. 10) at the hit.
 //!

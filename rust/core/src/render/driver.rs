@@ -16,8 +16,8 @@ use crate::integrator::forward::Splat;
 use crate::integrator::{self, CameraSample, Integrator, Scratch};
 use crate::sampling::Rng;
 use crate::scene::Scene;
-use crate::spectrum::named::{RgbToSpectrum, SpectrumKind, SpectrumRole};
-use crate::spectrum::{SampledSpectrum, SpectrumDesc};
+use crate::spectrum::named;
+use crate::spectrum::SampledSpectrum;
 use crate::{Error, Result};
 use rayon::prelude::*;
 use std::ops::Range;
@@ -112,9 +112,7 @@ impl<'a> Driver<'a> {
             .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
             .map(|(x0, y0)| Tile { x0, y0, w: TILE.min(w - x0), h: TILE.min(h - y0) })
             .collect();
-        let d65 = SpectrumDesc::new(SpectrumKind::D65)
-            .evaluate(&scene.grid, SpectrumRole::Illuminant, &NoRgb)
-            .map_err(Error::Description)?;
+        let d65 = named::d65(&scene.grid).map_err(Error::Description)?;
         let mut albedo_white = SampledSpectrum::from_slice(&d65);
         albedo_white.scale(1.0 / scene.observer.xyz(&d65)[1] as f32);
         Ok(Self { scene, settings, integrator, tiles, albedo_white })
@@ -374,12 +372,4 @@ pub struct Timing {
     pub start: Instant,
     pub build_seconds: f64,
     pub threads: usize,
-}
-
-/// For evaluating named spectra that never ask for RGB conversion.
-struct NoRgb;
-impl RgbToSpectrum for NoRgb {
-    fn convert(&self, _: [f32; 3], _: SpectrumRole) -> Vec<f32> {
-        Vec::new()
-    }
 }

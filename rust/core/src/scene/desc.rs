@@ -25,7 +25,7 @@ pub struct SceneDesc {
     pub instances: Option<Vec<InstanceDesc>>,
     pub lights: Vec<LightDesc>,
     pub world: Option<WorldDesc>,
-    /// RGB images, kept RGB and converted to spectra when a ray hits them (SPEC §4).
+    /// RGB images, kept RGB and converted to spectra when a ray hits them (docs/design.md#rgb-data).
     /// Referenced by index: `{"type": "texture", "texture": i}` in a diffuse
     /// reflectance, `world.texture` for an HDRI environment.
     pub textures: Vec<TextureDesc>,

@@ -189,7 +189,7 @@ impl Scene {
         let uplift = uplift_result.as_ref().ok().cloned();
         let camera = Camera::new(&desc.camera, opts.width, opts.height)?;
 
-        // Textures: kept RGB, converted at each hit (SPEC §4).
+        // Textures: kept RGB, converted at each hit (docs/design.md#rgb-data).
         let textures: Vec<Arc<Texture>> =
             desc.textures.iter().map(|t| Texture::from_desc(t, buffers).map(Arc::new)).collect::<Result<_>>()?;
 

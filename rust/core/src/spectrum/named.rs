@@ -2,7 +2,7 @@
 //!
 //! Tabulated data (measured spectra, CIE illuminants) are resampled by averaging the
 //! piecewise-linear curve over each sample's cell, not by point sampling, so a narrow
-//! peak between two grid samples keeps its energy (SPEC §2).
+//! peak between two grid samples keeps its energy (docs/design.md#spectra).
 
 use super::grid::WavelengthGrid;
 use super::tables;
@@ -45,7 +45,7 @@ pub enum SpectrumKind {
     /// Scene RGB, converted by the render's RGB → spectrum map (eq. 10).
     Rgb { rgb: [f32; 3] },
     /// Texture `texture` of the scene's `textures` list, kept RGB and converted at each
-    /// hit (SPEC §4). Only parameters that vary over a surface accept it (a diffuse
+    /// hit (docs/design.md#rgb-data). Only parameters that vary over a surface accept it (a diffuse
     /// reflectance); elsewhere it is an error.
     Texture { texture: usize },
 }
@@ -64,6 +64,21 @@ pub enum SpectrumRole {
 /// Converts scene RGB to a spectrum on the render's grid (eq. 10); see `color::uplift`.
 pub trait RgbToSpectrum {
     fn convert(&self, rgb: [f32; 3], role: SpectrumRole) -> Vec<f32>;
+}
+
+/// For evaluating spectra that hold no RGB (named illuminants, measured curves): an RGB
+/// colour evaluated through it gets no values, which [`SpectrumDesc::evaluate`] reports
+/// as an error naming the colour.
+pub struct NoRgb;
+impl RgbToSpectrum for NoRgb {
+    fn convert(&self, _: [f32; 3], _: SpectrumRole) -> Vec<f32> {
+        Vec::new()
+    }
+}
+
+/// CIE D65 on `grid` (1 at 560 nm), the white of reflectances and of the RGB spaces.
+pub fn d65(grid: &WavelengthGrid) -> std::result::Result<Vec<f32>, String> {
+    SpectrumDesc::new(SpectrumKind::D65).evaluate(grid, SpectrumRole::Illuminant, &NoRgb)
 }
 
 impl SpectrumDesc {
@@ -143,7 +158,11 @@ impl SpectrumDesc {
                 if !rgb.iter().all(|c| c.is_finite()) {
                     return Err(format!("RGB {rgb:?} is not finite"));
                 }
-                uplift.convert(*rgb, role)
+                let v = uplift.convert(*rgb, role);
+                if v.len() != grid.len() {
+                    return Err(format!("RGB {rgb:?} cannot be converted here (no RGB → spectrum map)"));
+                }
+                v
             }
             SpectrumKind::Texture { texture } => {
                 return Err(format!(
@@ -302,11 +321,14 @@ pub fn evaluate_for(
 mod tests {
     use super::*;
 
-    struct NoUplift;
-    impl RgbToSpectrum for NoUplift {
-        fn convert(&self, _: [f32; 3], _: SpectrumRole) -> Vec<f32> {
-            unreachable!()
-        }
+    #[test]
+    fn rgb_through_no_rgb_map_is_an_error_naming_the_colour() {
+        let g = WavelengthGrid::default();
+        let err = SpectrumDesc::new(SpectrumKind::Rgb { rgb: [0.1, 0.2, 0.3] })
+            .evaluate(&g, SpectrumRole::Reflectance, &NoRgb)
+            .unwrap_err();
+        assert!(err.contains("[0.1, 0.2, 0.3]") && err.contains("no RGB"), "{err}");
+        assert_eq!(d65(&g).unwrap().len(), g.len());
     }
 
     #[test]
@@ -314,7 +336,7 @@ mod tests {
         let g = WavelengthGrid::default();
         // A 1 nm wide band at 589 nm, between the 580 and 590 samples.
         let d = SpectrumDesc::new(SpectrumKind::NarrowBand { center: 589.0, width: 1.0 });
-        let v = d.evaluate(&g, SpectrumRole::Illuminant, &NoUplift).unwrap();
+        let v = d.evaluate(&g, SpectrumRole::Illuminant, &NoRgb).unwrap();
         let sigma = 1.0 / (8.0f64 * 2f64.ln()).sqrt();
         let exact = sigma * (2.0 * std::f64::consts::PI).sqrt();
         assert!((g.integrate(&v) - exact).abs() < 1e-4 * exact);
@@ -327,7 +349,7 @@ mod tests {
             wavelengths: vec![500.0, 503.0, 504.0, 505.0, 508.0],
             values: vec![0.0, 0.0, 10.0, 0.0, 0.0],
         });
-        let v = d.evaluate(&g, SpectrumRole::Illuminant, &NoUplift).unwrap();
+        let v = d.evaluate(&g, SpectrumRole::Illuminant, &NoRgb).unwrap();
         assert!((g.integrate(&v) - 10.0).abs() < 1e-4, "{}", g.integrate(&v));
     }
 
@@ -343,10 +365,10 @@ mod tests {
     fn bad_spectra_are_reported() {
         let g = WavelengthGrid::default();
         let neg = SpectrumDesc::constant(-1.0);
-        assert!(neg.evaluate(&g, SpectrumRole::Reflectance, &NoUplift).unwrap_err().contains("negative"));
-        assert!(neg.evaluate(&g, SpectrumRole::Unbounded, &NoUplift).is_ok());
+        assert!(neg.evaluate(&g, SpectrumRole::Reflectance, &NoRgb).unwrap_err().contains("negative"));
+        assert!(neg.evaluate(&g, SpectrumRole::Unbounded, &NoRgb).is_ok());
         let t = SpectrumDesc::new(SpectrumKind::Tabulated { wavelengths: vec![500.0, 400.0], values: vec![1.0, 1.0] });
-        assert!(t.evaluate(&g, SpectrumRole::Reflectance, &NoUplift).unwrap_err().contains("ascending"));
+        assert!(t.evaluate(&g, SpectrumRole::Reflectance, &NoRgb).unwrap_err().contains("ascending"));
         assert!((erf(0.5) - 0.520_499_877_8).abs() < 2e-7);
     }
 }
