@@ -129,6 +129,27 @@ pub fn compensation(e: f32, e_avg: f32, f_ss: f32) -> f32 {
     1.0 + multiscatter_color(f_ss, e_avg) * (1.0 - e) / e
 }
 
+/// The factor of a rough dielectric interface with its multiple scattering (Blender's
+/// Multiscatter GGX glass), seen from cosine `mu` on the side of relative index
+/// `eta_rel`; `f_ss` is the colour the repeated events take (Cycles uses the glass's
+/// transmission tint; 1 for clear glass).
+pub fn glass_compensation(roughness: f32, mu: f32, eta_rel: f32, f_ss: f32) -> f32 {
+    compensation(glass_e(roughness, mu, eta_rel), glass_e_avg(roughness, eta_rel), f_ss)
+}
+
+/// The factor of a GGX reflection lobe of average Fresnel `f_ss` (Multiscatter GGX
+/// metals and Glossy), seen from cosine `mu`.
+pub fn reflection_compensation(roughness: f32, mu: f32, f_ss: f32) -> f32 {
+    compensation(ggx_e(roughness, mu), ggx_e_avg(roughness), f_ss)
+}
+
+/// 2∫F(μ)μ dμ of Blender's F82-tint Fresnel F0 + (1 − F0)(1 − μ)⁵ − b·μ(1 − μ)⁶ (Cycles'
+/// `bsdf_microfacet_setup_fresnel_f82_tint`): F0 + (1 − F0)/21 − b/126; b = 0 is
+/// Schlick's average.
+pub fn f82_average(f0: f32, b: f32) -> f32 {
+    (f0 + (1.0 - f0) / 21.0 - b / 126.0).clamp(0.0, 1.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -169,6 +190,25 @@ mod tests {
         assert!((fresnel_avg(1.5) - 0.0918).abs() < 3e-3, "{}", fresnel_avg(1.5));
         let inside = 1.0 - (1.0 - 0.0918) / (1.5 * 1.5);
         assert!((fresnel_avg(1.0 / 1.5) - inside).abs() < 5e-3, "{} vs {inside}", fresnel_avg(1.0 / 1.5));
+    }
+
+    /// F82's average against a quadrature of Blender's F82-tint Fresnel
+    /// (principled::f82_tint), with b chosen as Cycles does from the tint.
+    #[test]
+    fn f82_average_is_the_cosine_weighted_mean() {
+        for &(f0, tint) in &[(0.9f32, 1.0f32), (0.5, 0.6), (0.04, 0.6), (0.95, 0.9)] {
+            let f = 6.0f32 / 7.0;
+            let f5 = f.powi(5);
+            let b = (f0 + (1.0 - f0) * f5) * (7.0 / (f5 * f)) * (1.0 - tint);
+            let n = 20_000;
+            let q: f64 = (0..n)
+                .map(|i| {
+                    let mu = (i as f32 + 0.5) / n as f32;
+                    2.0 * (crate::material::principled::f82_tint(mu, f0, tint) * mu) as f64 / n as f64
+                })
+                .sum();
+            assert!((f82_average(f0, b) as f64 - q).abs() < 1e-3, "F0 {f0} tint {tint}: {} vs {q}", f82_average(f0, b));
+        }
     }
 
     #[test]
