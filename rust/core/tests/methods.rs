@@ -678,7 +678,6 @@ fn look_at(eye: [f32; 3], target: [f32; 3]) -> [[f32; 4]; 4] {
 #[test]
 fn forward_needs_a_perspective_camera_and_time_limited_mono_scenes_say_so() {
     let (mut desc, buffers) = furnace_scene(0.5, 0.5);
-    desc.camera.projection = polychrome_core::camera::Projection::Orthographic;
     let s = ResolvedSettings { width: 4, height: 4, samples: 1, direction: Direction::Forward, ..Default::default() };
     let err = render(&desc, &buffers, &s, &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("direction") && err.contains("perspective"), "{err}");
@@ -698,4 +697,50 @@ fn forward_needs_a_perspective_camera_and_time_limited_mono_scenes_say_so() {
     assert!(out.stats.time_limited && out.stats.incomplete_spectrum);
     let s = ResolvedSettings { samples: 2, time_limit: 0.0, ..s };
     assert!(!render(&desc, &buffers, &s, &RenderControl::new()).unwrap().stats.incomplete_spectrum);
+}
+
+/// A lamp seen through one rough dielectric interface (a frosted pane with the lamp
+/// on its far side): every path to the camera crosses it by rough refraction, which
+/// next-event estimation (camera paths) and the camera connection (light paths) must
+/// follow to the other side of the surface. FORWARD, BIDIRECTIONAL and BACKWARD then
+/// agree; before, light tracing saw nothing through the pane and camera paths lost the
+/// share MIS gave the missing connection.
+#[test]
+fn rough_transmission_is_connected_through_in_every_direction() {
+    let mut desc = SceneDesc::default();
+    let mut buffers = Vec::new();
+    desc.materials.push(
+        serde_json::from_value(serde_json::json!({"name": "frosted",
+            "bsdf": {"type": "dielectric", "ior": {"type": "constant", "ior": 1.5}, "roughness": 0.4}}))
+        .unwrap(),
+    );
+    desc.materials.push(diffuse("lamp", SpectrumDesc::constant(0.0), Some(SpectrumDesc::constant(2.0))));
+    let quad = |z: f32, s: f32| -> (Vec<f32>, Vec<u32>) {
+        (vec![-s, -s, z, s, -s, z, s, s, z, -s, s, z], vec![0, 1, 2, 0, 2, 3])
+    };
+    let (v, t) = quad(0.0, 1.0);
+    add_mesh(&mut desc, &mut buffers, "pane", v, t, 0);
+    let (v, t) = quad(-0.4, 0.5);
+    add_mesh(&mut desc, &mut buffers, "lamp", v, t, 1);
+    desc.camera.to_world = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 2.0], [0.0, 0.0, 0.0, 1.0]];
+    let base = ResolvedSettings {
+        width: 16,
+        height: 16,
+        max_bounces: 8,
+        grid: WavelengthGrid::uniform(9, 400.0, 700.0).unwrap(),
+        ..Default::default()
+    };
+    let mean = |direction, samples| {
+        let out =
+            render(&desc, &buffers, &ResolvedSettings { direction, samples, ..base.clone() }, &RenderControl::new())
+                .unwrap();
+        assert_eq!(out.stats.nonfinite_samples, 0);
+        mean_and_standard_error(&out.images.rgba).0
+    };
+    let backward = mean(Direction::Backward, 128);
+    assert!(backward > 0.05, "the lamp shows through the pane: {backward}");
+    for (direction, samples) in [(Direction::Forward, 512), (Direction::Bidirectional, 128)] {
+        let m = mean(direction, samples);
+        assert!((m - backward).abs() < 0.03 * backward, "{direction:?}: image mean {m} vs BACKWARD {backward}");
+    }
 }

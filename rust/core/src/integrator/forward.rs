@@ -53,8 +53,8 @@ pub fn pixel_of(scene: &Scene, c: &CameraConnection) -> u32 {
 
 /// Connects light-path vertex `v` to the camera (a point on its lens drawn from `rng`
 /// when it has one). On success `f` holds f·|cos θ| towards the camera; None when the
-/// camera is on the other side of the surface than the path, the BSDF sends nothing
-/// that way, or something blocks the view.
+/// normals disagree about the camera's side ([`super::connection_side`]), the BSDF
+/// sends nothing that way, or something blocks the view.
 pub fn connect_to_camera(
     scene: &Scene,
     v: &Vertex,
@@ -63,13 +63,12 @@ pub fn connect_to_camera(
     rng: &mut Rng,
 ) -> Option<CameraConnection> {
     let c = scene.camera.connect(v.si.p, rng)?;
-    if c.wi.dot(v.ng) <= 0.0 {
-        return None;
-    }
-    v.material.bsdf.eval(ctx, v.wo_local, v.frame.to_local(c.wi), f);
+    let wi_local = v.frame.to_local(c.wi);
+    let side = super::connection_side(v.ng, v.wo_local, wi_local, c.wi)?;
+    v.material.bsdf.eval(ctx, v.wo_local, wi_local, f);
     // Aimed from the offset origin at the camera: along c.wi from the unshifted point it
     // missed by the offset (16 units at 1e6) and hit walls behind it.
-    let origin = offset_ray_origin(v.si.p, v.ng);
+    let origin = offset_ray_origin(v.si.p, side);
     if f.is_black() || scene.occluded(&crate::geometry::shadow_ray(v.si.p, origin, c.wi, c.distance)) {
         return None;
     }

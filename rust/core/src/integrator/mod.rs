@@ -57,6 +57,26 @@ pub fn scatter(
     Some(Scatter { sample, wi, transmitted, ray: crate::geometry::Ray::new(origin, wi) })
 }
 
+/// The side of the surface a connection along world direction `wi` (`wi_local` in the
+/// shading frame) leaves from: the normal to offset its shadow ray along, or None when
+/// the geometric and the shading normal disagree about it (reflection must be above
+/// both, transmission below both, as [`scatter`] requires of sampled directions; this
+/// keeps light from leaking through closed opaque meshes while rough glass and
+/// translucent surfaces are lit through).
+#[inline]
+pub fn connection_side(
+    ng: glam::Vec3A,
+    wo_local: glam::Vec3A,
+    wi_local: glam::Vec3A,
+    wi: glam::Vec3A,
+) -> Option<glam::Vec3A> {
+    let transmitted = wi.dot(ng) < 0.0;
+    if wi.dot(ng) == 0.0 || (wi_local.z * wo_local.z < 0.0) != transmitted {
+        return None;
+    }
+    Some(if transmitted { -ng } else { ng })
+}
+
 /// A hit seen from the side the ray arrived on: surfaces are two-sided, so normals are
 /// flipped to face the incoming ray and the shading context learns which face it is.
 pub struct Facing<'s> {

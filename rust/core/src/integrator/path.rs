@@ -153,17 +153,20 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, T, M> {
         let Some(ls) = scene.lights[l].sample_li(v.si.p, u, &mut scratch.le) else {
             return;
         };
-        if !(beta.carries(&scratch.le) && ls.wi.dot(v.ng) > 0.0) {
+        if !beta.carries(&scratch.le) {
             return;
         }
         let wi_local = v.frame.to_local(ls.wi);
+        let Some(side) = super::connection_side(v.ng, v.wo_local, wi_local, ls.wi) else {
+            return;
+        };
         let bsdf_pdf = v.material.bsdf.eval(ctx, v.wo_local, wi_local, &mut scratch.f);
         if !beta.carries(&scratch.f) {
             return;
         }
         // Aimed from the offset origin at the light point, stopping short of it (robust
         // far from the origin: 1e6 units).
-        let origin = offset_ray_origin(v.si.p, v.ng);
+        let origin = offset_ray_origin(v.si.p, side);
         if scene.occluded(&shadow_ray(v.si.p, origin, ls.wi, ls.distance)) {
             return;
         }
