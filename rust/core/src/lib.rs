@@ -16,6 +16,7 @@ pub mod integrator;
 pub mod light;
 pub mod material;
 pub mod medium;
+pub mod numeric;
 pub mod procedural;
 pub mod render;
 pub mod sampling;

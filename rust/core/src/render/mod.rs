@@ -159,7 +159,7 @@ pub struct RenderStats {
     pub max_bounces: u32,
     /// Largest reflectance round-trip error of the RGB → spectrum map on this grid: 0
     /// normally; a few percent (more on 4–5 samples) on grids that needed the
-    /// cell-averaged fallback basis (see color/uplift.rs).
+    /// cell-averaged fallback basis (see color/uplift/linear.rs).
     pub uplift_round_trip_error: f32,
 }
 
