@@ -75,8 +75,9 @@ def build_scene(glass: bool = False) -> pc.Scene:
     return scene
 
 
-def run(glass: bool, default_out: str, argv=None) -> int:
-    parser = argparse.ArgumentParser(description=(__doc__ if not glass else sys.modules["__main__"].__doc__).splitlines()[0])
+def run(glass: bool, default_out: str, argv=None, doc: str | None = None) -> int:
+    # The calling example passes its own docstring (fig13 reuses this runner).
+    parser = argparse.ArgumentParser(description=(doc or __doc__).splitlines()[0])
     parser.add_argument("--samples", type=int, default=48)
     parser.add_argument("--width", type=int, default=320)
     parser.add_argument("--height", type=int, default=240)

@@ -37,7 +37,7 @@ def add_glass(scene: pc.Scene) -> None:
 def main(argv=None) -> int:
     from fig12_room import run
 
-    return run(True, "fig13_room_glass", argv)
+    return run(True, "fig13_room_glass", argv, doc=__doc__)
 
 
 if __name__ == "__main__":
