@@ -176,7 +176,9 @@ def _render_overrides(args: argparse.Namespace) -> dict:
             out[target] = check(target, value)
         except ValueError as e:
             raise ValueError(f"{flag(name)}: {str(e).split(': ', 1)[1]}") from None
-        if target == name and spec["kind"]["type"] == "float_list" and any(b <= a for a, b in zip(out[name], out[name][1:])):
+        # A list with a count setting is a wavelength grid: strictly ascending.
+        grid = spec["kind"]["type"] == "float_list" and spec["kind"].get("count_setting")
+        if target == name and grid and any(b <= a for a, b in zip(out[name], out[name][1:])):
             raise ValueError(f"{flag(name)}: a list must be strictly ascending, got '{text}'")
     return out
 

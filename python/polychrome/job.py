@@ -25,7 +25,7 @@ from collections.abc import Callable
 import numpy as np
 
 from . import _core
-from .render import RenderResult, RenderSettings, description_json
+from .render import RenderResult, RenderSettings, description_json, warn_left_out
 from .scene import Scene
 
 
@@ -118,6 +118,7 @@ class RenderJob:
                 raise
             stats = json.loads(out["stats"])
             stats["wall_seconds"] = time.perf_counter() - (self._started or time.perf_counter())
+            warn_left_out(stats)
             self._result = RenderResult(
                 rgba=out["rgba"],
                 depth=out["depth"],

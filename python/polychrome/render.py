@@ -94,6 +94,14 @@ def _nonfinite_path(value: Any, path: str = "") -> str | None:
     return None
 
 
+def warn_left_out(stats: dict[str, Any]) -> None:
+    """One warning per thing the core left out of the render (``stats["warnings"]``)."""
+    import warnings
+
+    for message in stats.get("warnings", []):
+        warnings.warn(message, stacklevel=3)
+
+
 def description_json(desc: dict[str, Any]) -> str:
     """JSON of a scene description; JSON has no NaN or infinity, so a non-finite number is
     reported here with where it is instead of as a parse error in the core."""
@@ -155,6 +163,7 @@ def render(
             close()
     stats = json.loads(out["stats"])
     stats["wall_seconds"] = time.perf_counter() - start
+    warn_left_out(stats)
     return RenderResult(
         rgba=out["rgba"],
         depth=out["depth"],

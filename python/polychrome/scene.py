@@ -36,6 +36,24 @@ def _finite_floats(values: Any, what: str) -> list[float]:
     return out
 
 
+def _motion_matrices(value: Any, what: str) -> list[list[list[float]]]:
+    """Motion keys: K ≥ 2 finite 4×4 matrices evenly spaced over the shutter."""
+    m = np.asarray(value, dtype=np.float64)
+    if m.ndim != 3 or m.shape[1:] != (4, 4) or m.shape[0] < 2:
+        raise ValueError(f"{what}: motion must be K ≥ 2 matrices of 4×4 (shape (K, 4, 4)), got shape {m.shape}")
+    return [_matrix(k, f"{what}: motion key {i}") for i, k in enumerate(m)]
+
+
+def _motion_keys(value: Any, shape: tuple[int, ...], what: str) -> list[np.ndarray]:
+    """Per-vertex motion keys: K ≥ 2 arrays of ``shape``."""
+    a = np.ascontiguousarray(value, dtype=np.float32)
+    if a.ndim != 3 or a.shape[1:] != tuple(shape) or a.shape[0] < 2:
+        raise ValueError(f"{what} must have shape (K ≥ 2, {shape[0]}, {shape[1]}), got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{what} has non-finite values")
+    return list(a)
+
+
 def look_at(position: Sequence[float], target: Sequence[float], up: Sequence[float] = (0.0, 0.0, 1.0)) -> np.ndarray:
     """Camera → world matrix of a camera at ``position`` looking at ``target`` (Blender's
     convention: the camera looks down its local −Z with +Y up; the world is Z-up)."""
@@ -119,6 +137,16 @@ class Camera:
     central_cylindrical_range_v_min: float = -1.0
     central_cylindrical_range_v_max: float = 1.0
     central_cylindrical_radius: float = 1.0
+    #: Motion blur: camera → world transforms (K ≥ 2, 4×4) evenly spaced from shutter
+    #: open to close; None: the camera stands at ``to_world``.
+    motion: Any = None
+    #: How open the shutter is at evenly spaced times from open to close (Blender's
+    #: shutter curve); None: fully open throughout.
+    shutter_curve: Sequence[float] | None = None
+    #: Rolling shutter (Cycles' TOP type) and the share of the shutter each row is
+    #: exposed for (Cycles' rolling shutter duration).
+    rolling_shutter: bool = False
+    rolling_shutter_duration: float = 0.1
     name: str = "Camera"
 
     @classmethod
@@ -187,6 +215,10 @@ class Camera:
             "aperture_blades": blades,
             "panorama_type": panorama,
             "fisheye_polynomial": polynomial,
+            "motion": [] if self.motion is None or np.size(self.motion) == 0 else _motion_matrices(self.motion, what),
+            "shutter_curve": [] if self.shutter_curve is None else _finite_floats(self.shutter_curve, f"{what}: shutter_curve"),
+            "rolling_shutter": bool(self.rolling_shutter),
+            "rolling_shutter_duration": _finite_floats([self.rolling_shutter_duration], f"{what}: rolling_shutter_duration")[0],
         }
 
 
@@ -591,12 +623,20 @@ class Scene:
         material_ids: Any = None,
         transform: Any = None,
         place: bool = True,
+        motion_vertices: Any = None,
+        motion_normals: Any = None,
+        motion: Any = None,
     ) -> int:
         """Adds a triangle mesh from arrays: vertices (V, 3), triangles (T, 3) vertex
         indices, optional per-vertex normals (V, 3) and uvs (V, 2), one material or
         per-triangle ``material_ids`` (T,). Returns the mesh index. Unless ``place`` is
         False the mesh is placed once with ``transform`` (4×4, object → world);
-        :meth:`add_instance` places it again."""
+        :meth:`add_instance` places it again.
+
+        Motion blur (docs/camera.md): ``motion_vertices`` (K, V, 3), K ≥ 2 positions
+        evenly spaced from shutter open to close, makes a deforming mesh (with
+        ``motion_normals`` of the same shape, optionally); ``motion`` (K, 4, 4)
+        transforms move the placement made here."""
         v = np.ascontiguousarray(vertices, dtype=np.float32)
         if v.ndim != 2 or v.shape[1] != 3:
             raise ValueError(f"mesh '{name}': vertices must have shape (V, 3), got {v.shape}")
@@ -631,10 +671,22 @@ class Scene:
             entry["material_ids"] = self._buffer(np.ascontiguousarray(ids, dtype=np.uint32))
         else:
             entry["material"] = self._material_index(material, name)
+        if motion_vertices is not None:
+            keys = _motion_keys(motion_vertices, v.shape, f"mesh '{name}': motion_vertices")
+            entry["motion_vertices"] = [self._buffer(k.ravel()) for k in keys]
+            if motion_normals is not None:
+                nkeys = _motion_keys(motion_normals, v.shape, f"mesh '{name}': motion_normals")
+                if len(nkeys) != len(keys):
+                    raise ValueError(f"mesh '{name}': {len(nkeys)} motion_normals keys for {len(keys)} motion_vertices keys")
+                entry["motion_normals"] = [self._buffer(k.ravel()) for k in nkeys]
+        elif motion_normals is not None:
+            raise ValueError(f"mesh '{name}': motion_normals need motion_vertices")
         self._meshes.append(entry)
         index = len(self._meshes) - 1
         if place:
-            self.add_instance(index, np.eye(4) if transform is None else transform, name)
+            self.add_instance(index, np.eye(4) if transform is None else transform, name, motion=motion)
+        elif motion is not None:
+            raise ValueError(f"mesh '{name}': motion moves a placement, but place=False makes none")
         return index
 
     def add_curves(
@@ -695,13 +747,18 @@ class Scene:
             ids = per_point[tri_point]
         return self.add_mesh(name, v, t, normals=n, uvs=uv, material=material, material_ids=ids, transform=transform, place=place)
 
-    def add_instance(self, mesh: int, transform: Any, name: str = "") -> None:
-        """Places mesh ``mesh`` again with ``transform``; instances share the mesh's data."""
+    def add_instance(self, mesh: int, transform: Any, name: str = "", *, motion: Any = None) -> None:
+        """Places mesh ``mesh`` again with ``transform``; instances share the mesh's data.
+        ``motion``: object → world transforms (K ≥ 2, 4×4 each) evenly spaced from
+        shutter open to close, for motion blur; ``transform`` is then its placement at
+        the frame (docs/camera.md)."""
         if not 0 <= mesh < len(self._meshes):
             raise ValueError(f"instance '{name}': mesh {mesh} does not exist")
-        self._instances.append(
-            {"name": name or self._meshes[mesh]["name"], "mesh": int(mesh), "transform": _matrix(transform, f"instance '{name}'")}
-        )
+        label = name or self._meshes[mesh]["name"]
+        entry = {"name": label, "mesh": int(mesh), "transform": _matrix(transform, f"instance '{label}'")}
+        if motion is not None:
+            entry["motion"] = _motion_matrices(motion, f"instance '{label}'")
+        self._instances.append(entry)
 
     def add_light(self, light: Any) -> None:
         self.lights.append(light)

@@ -76,14 +76,15 @@ def sync_viewport_view(session, region_data, region_width, region_height, pixel_
 
 def border_rect(scene, width, height):
     """Blender's render border in pixels (x0, y0, x1, y1), y from the bottom; the whole
-    frame when the border is off. Polychrome renders the whole frame and crops."""
+    frame when the border is off. Only the border is rendered (the ``region`` setting)."""
     r = scene.render
     if not r.use_border:
         return 0, 0, width, height
-    x0 = min(max(int(round(r.border_min_x * width)), 0), width)
-    x1 = min(max(int(round(r.border_max_x * width)), x0), width)
-    y0 = min(max(int(round(r.border_min_y * height)), 0), height)
-    y1 = min(max(int(round(r.border_max_y * height)), y0), height)
+    # Blender truncates the border's corners to pixels (its render result is that size).
+    x0 = min(max(int(r.border_min_x * width), 0), width)
+    x1 = min(max(int(r.border_max_x * width), x0), width)
+    y0 = min(max(int(r.border_min_y * height), 0), height)
+    y1 = min(max(int(r.border_max_y * height), y0), height)
     if x1 - x0 < 1 or y1 - y0 < 1:
         return 0, 0, width, height
     return x0, y0, x1, y1
@@ -292,9 +293,13 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
             settings = material_preview_settings(props, width, height)
         else:
             settings = settings_from_scene(props, width, height)
+            x0, y0, x1, y1 = border_rect(depsgraph.scene, width, height)
+            if (x0, y0, x1, y1) != (0, 0, width, height):
+                # Only the border is rendered (rows counted from the top in the core).
+                settings.region = (x0, height - y1, x1, height - y0)
         self.update_stats("", "Polychrome | exporting scene")
         t0 = time.perf_counter()
-        scene, warnings = export_scene(depsgraph)
+        scene, warnings = export_scene(depsgraph, frame_set=None if self.is_preview else self.frame_set)
         cls.last_warnings = list(warnings)
         if not self.is_preview:  # the preview scene's checker floor etc. would warn every time
             for w in warnings:
@@ -328,6 +333,9 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
         out = self._run_render(scene, settings, progress, depsgraph, width, height)
         stats = dict(out.stats)
         stats["export_seconds"] = export_time
+        for w in stats.get("warnings", []):  # what the core left out (e.g. FORWARD and moving emitters)
+            cls.last_warnings.append(w)
+            self._report("WARNING", w)
         cls.last_stats = stats
         self.update_progress(1.0)
         self.update_stats(

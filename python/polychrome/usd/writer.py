@@ -363,6 +363,12 @@ def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path
     for key, value in desc.items():
         if key not in ("camera", "materials", "meshes", "instances", "lights", "world", "textures") and value:
             warnings.warn(f"{path}: the scene's '{key}' cannot be written to USD yet and is left out", stacklevel=2)
+    for what, entries, field in (("instance", desc["instances"], "motion"), ("mesh", desc["meshes"], "motion_vertices")):
+        for e in entries:
+            if e.get(field):
+                warnings.warn(
+                    f"{path}: {what} '{e['name']}': motion blur ({field}) is not written to USD; it is placed at the frame", stacklevel=2
+                )
     rgb = _Rgb(PREVIEW_GRID)  # preview colours do not depend on the render's grid
 
     stage = Usd.Stage.CreateInMemory()

@@ -18,11 +18,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import polychrome as pc
 
-from .camera import export_camera
+from .camera import camera_matrix, export_camera
 from .lights import export_lights
 from .materials import MaterialExport
 from .curves import hair_systems, particle_hair_arrays
 from .meshes import GEOMETRY_TYPES, MeshArrays, read_mesh
+from . import motion as motion_blur
 from .textures import TextureCache
 from .warnings import Warnings
 from .world import export_world
@@ -61,6 +62,7 @@ class Exporter:
 
     def __init__(self):
         self.textures = TextureCache()
+        self._motion = None  # export/motion.py's Motion while exporting with motion blur
         self._meshes = {}  # (evaluated data pointer, material slot names) -> _CachedMesh
         self._materials = {}  # material name (None: no material) -> _Cached
         self.counts = {"meshes": 0, "materials": 0, "images": 0}
@@ -99,21 +101,43 @@ class Exporter:
         self.textures.clear()
 
     # -- export ------------------------------------------------------------------
-    def export(self, depsgraph, camera=None):
+    def export(self, depsgraph, camera=None, frame_set=None):
         """Returns ``(polychrome.Scene, [warning messages])``. ``camera`` (a
-        ``polychrome.Camera``, e.g. the viewport's) replaces the scene camera."""
+        ``polychrome.Camera``, e.g. the viewport's) replaces the scene camera.
+        ``frame_set(frame, subframe)`` (``RenderEngine.frame_set``) lets the export
+        evaluate the scene over the shutter for motion blur (export/motion.py)."""
         self.counts = {"meshes": 0, "materials": 0, "images": 0}
         self.textures.converted = 0
         warnings = Warnings()
         scene = pc.Scene()
-        scene.camera = export_camera(depsgraph, warnings) if camera is None else camera
+        self._motion = None
         if depsgraph.scene.render.use_motion_blur:
-            warnings.add(("motion blur",), "motion blur is not supported yet: objects and the camera render at the current frame")
+            if frame_set is None:
+                warnings.add(("motion blur",), "motion blur is rendered in final renders only: the viewport shows the current frame")
+            else:
+                self._motion = motion_blur.sample_motion(depsgraph, frame_set)
+        scene.camera = export_camera(depsgraph, warnings) if camera is None else camera
+        if self._motion is not None and camera is None:
+            self._camera_motion(depsgraph, scene.camera)
         self._export_meshes(depsgraph, scene, warnings)
         export_lights(depsgraph, scene, warnings)
         export_world(depsgraph, scene, warnings, self.textures)
         self.counts["images"] = self.textures.converted
         return scene, warnings.messages
+
+    def _camera_motion(self, depsgraph, cam):
+        """The camera's keys and the shutter's shape (Cycles' shutter curve, rolling shutter)."""
+        m = self._motion
+        cam_ob = depsgraph.scene.camera
+        if m.camera and motion_blur.object_keys(cam_ob) > 0:
+            keys = [camera_matrix(k) for k in m.camera]
+            if not all(np.allclose(keys[0], k, rtol=0, atol=1e-7) for k in keys[1:]):
+                cam.motion = keys
+        cam.shutter_curve = motion_blur.shutter_curve(depsgraph.scene)
+        cycles = getattr(depsgraph.scene, "cycles", None)
+        if cycles is not None and getattr(cycles, "rolling_shutter_type", "NONE") == "TOP":
+            cam.rolling_shutter = True
+            cam.rolling_shutter_duration = float(cycles.rolling_shutter_duration)
 
     def _material(self, ob, slot, scene, indices, warnings):
         """Scene index of the material in ``ob``'s ``slot`` (None: no slot), exported
@@ -170,7 +194,12 @@ class Exporter:
                     slots = [self._material(ob, s, scene, materials, warnings) for s in range(len(ob.material_slots))]
                     slot_map = np.asarray(slots or [self._material(ob, None, scene, materials, warnings)], dtype=np.int64)
                     ids = slot_map[np.clip(a.tri_slot, 0, len(slot_map) - 1)]
-                    placed[key] = scene.add_mesh(name, a.vertices, a.triangles, normals=a.normals, uvs=a.uvs, material_ids=ids, place=False)
+                    deform = None
+                    if self._motion is not None and not inst.is_instance:
+                        deform = self._motion.vertex_motion(ob, a.source)
+                    placed[key] = scene.add_mesh(
+                        name, a.vertices, a.triangles, normals=a.normals, uvs=a.uvs, material_ids=ids, place=False, motion_vertices=deform
+                    )
             else:
                 cached = self._meshes[key]
                 cached.owners.add(name)  # another object showing the same evaluated geometry
@@ -182,7 +211,8 @@ class Exporter:
             m = np.array(inst.matrix_world, dtype=np.float64)
             if not np.all(np.isfinite(m)):
                 raise ValueError(f"object '{name}': its transform is not finite")
-            scene.add_instance(mesh, m, name)
+            moves = None if self._motion is None else self._motion.instance_motion(inst)
+            scene.add_instance(mesh, m, name, motion=moves)
         # what no object shows any more (deleted, hidden, re-evaluated) is dropped
         self._meshes = {k: v for k, v in self._meshes.items() if k in used}
         self._materials = {k: v for k, v in self._materials.items() if k in materials}
@@ -213,6 +243,6 @@ class Exporter:
                 scene.add_instance(placed[key], np.array(inst.matrix_world, dtype=np.float64), f"{name}/{ps.name}")
 
 
-def export_scene(depsgraph, camera=None):
-    """A one-off export (final renders, scripts): ``Exporter().export(depsgraph, camera)``."""
-    return Exporter().export(depsgraph, camera)
+def export_scene(depsgraph, camera=None, frame_set=None):
+    """A one-off export (final renders, scripts): ``Exporter().export(depsgraph, camera, frame_set)``."""
+    return Exporter().export(depsgraph, camera, frame_set)

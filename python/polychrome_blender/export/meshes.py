@@ -17,6 +17,7 @@ class MeshArrays(NamedTuple):
     normals: np.ndarray  # (V, 3) float32
     uvs: np.ndarray | None  # (V, 2) float32, from the active UV map
     tri_slot: np.ndarray  # (T,) material slot of each triangle
+    source: np.ndarray | None = None  # (V,) the Blender vertex of each vertex (motion blur)
 
 
 def _unique_rows(keys):
@@ -95,7 +96,7 @@ def mesh_arrays(ob, name):
         normals = cn[first]
         uvs = None if uv is None else uv[first]
         triangles = inverse[tl].reshape(-1, 3).astype(np.uint32)
-        return MeshArrays(vertices, triangles, normals, uvs, tri_slot)
+        return MeshArrays(vertices, triangles, normals, uvs, tri_slot, cv[first])
     finally:
         ob.to_mesh_clear()
 

@@ -99,8 +99,14 @@ fn build_case(c: &MeshCase) -> polychrome_core::Result<Scene> {
         uvs,
         material_ids: None,
         material: Some(c.material),
+        ..Default::default()
     });
-    desc.instances = Some(vec![InstanceDesc { name: "prop instance".into(), mesh: 0, transform: c.transform }]);
+    desc.instances = Some(vec![InstanceDesc {
+        name: "prop instance".into(),
+        mesh: 0,
+        transform: c.transform,
+        ..Default::default()
+    }]);
     let opts =
         BuildOptions { grid: grid(), space: RgbSpace::rec709(), uplift: Default::default(), width: 4, height: 3 };
     Scene::build(&desc, &buffers, &opts)
@@ -126,7 +132,7 @@ proptest! {
         let mut desc = SceneDesc::default();
         desc.materials.push(serde_json::from_str(r#"{"name": "m0"}"#).unwrap());
         let buffers = vec![Buffer::F32(c.positions.clone()), Buffer::U32(c.indices.clone())];
-        desc.meshes.push(MeshDesc { name: "prop mesh".into(), vertices: 0, triangles: 1, normals: None, uvs: None, material_ids: None, material: Some(0) });
+        desc.meshes.push(MeshDesc { name: "prop mesh".into(), vertices: 0, triangles: 1, normals: None, uvs: None, material_ids: None, material: Some(0), ..Default::default() });
         let settings = ResolvedSettings { width: 4, height: 3, samples: 1, grid: WavelengthGrid::uniform(8, 380.0, 780.0).unwrap(), ..Default::default() };
         if let Ok(out) = render(&desc, &buffers, &settings, &RenderControl::new()) {
             prop_assert!(out.images.rgba.iter().all(|v| v.is_finite()));

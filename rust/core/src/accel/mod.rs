@@ -1,7 +1,13 @@
 //! Two-level acceleration structure: one compressed-wide BVH (obvhs CwBvh) per mesh in
 //! object space, and one over the instances in world space. Instances of one mesh
 //! share its BVH and triangles.
+//!
+//! Motion blur (docs/camera.md): a moving instance's box in the top level bounds it over
+//! the whole shutter and rays are taken into its object space as it is at their time; a
+//! deforming mesh's boxes bound each triangle over all its motion keys (linear
+//! interpolation stays inside them) and the triangle is interpolated at the ray's time.
 
+use crate::geometry::motion::key_span;
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::{Instance, Mesh, Ray};
 use glam::Vec3A;
@@ -29,6 +35,23 @@ struct MeshBvh {
     bvh: CwBvh,
     /// Triangles in BVH leaf order, so traversal reads them without indirection.
     triangles: Vec<[Vec3A; 3]>,
+    /// A deforming mesh: the triangles at each motion key, in leaf order.
+    motion: Option<Vec<Vec<[Vec3A; 3]>>>,
+}
+
+impl MeshBvh {
+    /// Leaf triangle `i` at shutter time `time`.
+    #[inline]
+    fn triangle(&self, i: usize, time: f32) -> [Vec3A; 3] {
+        match &self.motion {
+            None => self.triangles[i],
+            Some(keys) => {
+                let (a, b, w) = key_span(keys.len(), time);
+                let (ta, tb) = (keys[a][i], keys[b][i]);
+                [ta[0].lerp(tb[0], w), ta[1].lerp(tb[1], w), ta[2].lerp(tb[2], w)]
+            }
+        }
+    }
 }
 
 pub struct Accel {
@@ -57,15 +80,32 @@ impl Accel {
                 if m.indices.is_empty() {
                     return None;
                 }
+                let keys = m.motion.as_ref().map_or(0, |v| v.key_count());
                 let aabbs: Vec<Aabb> = (0..m.indices.len())
                     .map(|i| {
                         let [a, b, c] = m.triangle(i);
-                        Aabb::new(a.min(b).min(c), a.max(b).max(c))
+                        let mut bb = Aabb::new(a.min(b).min(c), a.max(b).max(c));
+                        for k in 0..keys {
+                            for p in m.triangle_at(i, k as f32 / (keys - 1) as f32) {
+                                bb.extend(p);
+                            }
+                        }
+                        bb
                     })
                     .collect();
                 let bvh = build_cwbvh(&aabbs, build_params_for(aabbs.len()), &mut Duration::default());
                 let triangles = bvh.primitive_indices.iter().map(|&i| m.triangle(i as usize)).collect();
-                Some(MeshBvh { bvh, triangles })
+                let motion = m.motion.as_ref().map(|v| {
+                    (0..v.key_count())
+                        .map(|k| {
+                            bvh.primitive_indices
+                                .iter()
+                                .map(|&i| m.indices[i as usize].map(|j| v.positions[k][j as usize]))
+                                .collect()
+                        })
+                        .collect()
+                });
+                Some(MeshBvh { bvh, triangles, motion })
             })
             .collect();
         let mut tlas_instances = Vec::new();
@@ -99,14 +139,15 @@ impl Accel {
             let inst = &instances[inst_id as usize];
             let mb = self.meshes[inst.mesh as usize].as_ref().expect("tlas holds meshes with triangles");
             // Object space: the direction is not renormalised, so t is the same in both spaces.
-            let o = inst.to_object.transform_point3a(r.origin);
-            let d = inst.to_object.transform_vector3a(r.direction);
+            let to_object = inst.to_object_at(ray.time);
+            let o = to_object.transform_point3a(r.origin);
+            let d = to_object.transform_vector3a(r.direction);
             let wt = WatertightRay::new(o, d);
             let local = bvh_ray(o, d, r.tmin, r.tmax);
             let mut local_hit = RayHit::none();
             let mut bary = (0.0, 0.0);
             mb.bvh.ray_traverse(local, &mut local_hit, |lr, tri| {
-                let [a, b, c] = mb.triangles[tri];
+                let [a, b, c] = mb.triangle(tri, ray.time);
                 match wt.intersect(a, b, c, lr.tmin, lr.tmax) {
                     Some((t, b1, b2)) => {
                         bary = (b1, b2);
@@ -139,12 +180,13 @@ impl Accel {
         !tlas.ray_traverse_miss(world_ray, |r, slot| {
             let inst = &instances[self.tlas_instances[slot] as usize];
             let mb = self.meshes[inst.mesh as usize].as_ref().expect("tlas holds meshes with triangles");
-            let o = inst.to_object.transform_point3a(r.origin);
-            let d = inst.to_object.transform_vector3a(r.direction);
+            let to_object = inst.to_object_at(ray.time);
+            let o = to_object.transform_point3a(r.origin);
+            let d = to_object.transform_vector3a(r.direction);
             let wt = WatertightRay::new(o, d);
             let local = bvh_ray(o, d, r.tmin, r.tmax);
             let miss = mb.bvh.ray_traverse_miss(local, |lr, tri| {
-                let [a, b, c] = mb.triangles[tri];
+                let [a, b, c] = mb.triangle(tri, ray.time);
                 wt.intersect(a, b, c, lr.tmin, lr.tmax).map_or(f32::INFINITY, |h| h.0)
             });
             if miss {
@@ -162,7 +204,13 @@ fn bvh_ray(origin: Vec3A, direction: Vec3A, tmin: f32, tmax: f32) -> BvhRay {
     BvhRay::new(origin, direction + Vec3A::ZERO, tmin, tmax)
 }
 
+/// The world box of an instance's object-space box `b`, over the whole shutter when it
+/// moves.
 fn transform_aabb(b: &Aabb, inst: &Instance) -> Aabb {
+    if let Some(m) = &inst.motion {
+        let (lo, hi) = m.bounds(b.min, b.max);
+        return Aabb::new(lo, hi);
+    }
     let mut out = Aabb::empty();
     for k in 0..8 {
         let p = Vec3A::new(

@@ -12,6 +12,7 @@ mod panorama;
 pub use aperture::Aperture;
 pub use panorama::{equirectangular_range, Panorama, PanoramaType};
 
+use crate::geometry::motion::TransformMotion;
 use crate::geometry::Ray;
 use crate::sampling::Rng;
 use crate::{Error, Result};
@@ -86,6 +87,17 @@ pub struct CameraDesc {
     pub central_cylindrical_range_v_min: f32,
     pub central_cylindrical_range_v_max: f32,
     pub central_cylindrical_radius: f32,
+    /// Camera → world keys evenly spaced over the shutter (motion blur); empty: the
+    /// camera stands at `to_world`.
+    pub motion: Vec<[[f32; 4]; 4]>,
+    /// How open the shutter is at evenly spaced times from open to close (Blender's
+    /// shutter curve); empty: fully open throughout. Times are drawn ∝ this curve.
+    pub shutter_curve: Vec<f32>,
+    /// Rolling shutter (Cycles' TOP type): rows are exposed from the top down.
+    pub rolling_shutter: bool,
+    /// Share of the shutter time each row is exposed for (Cycles' rolling shutter
+    /// duration: 0 pure rolling, 1 no rolling effect).
+    pub rolling_shutter_duration: f32,
 }
 
 pub const IDENTITY_ROWS: [[f32; 4]; 4] =
@@ -127,6 +139,10 @@ impl Default for CameraDesc {
             central_cylindrical_range_v_min: -1.0,
             central_cylindrical_range_v_max: 1.0,
             central_cylindrical_radius: 1.0,
+            motion: Vec::new(),
+            shutter_curve: Vec::new(),
+            rolling_shutter: false,
+            rolling_shutter_duration: 0.1,
         }
     }
 }
@@ -154,12 +170,19 @@ enum Kind {
 /// A camera ready to generate rays for an image of `width` × `height` pixels.
 #[derive(Clone, Debug)]
 pub struct Camera {
+    name: String,
     to_world: Affine3A,
     to_camera: Affine3A,
+    /// Camera → world over the shutter, when the camera moves.
+    motion: Option<TransformMotion>,
+    /// How shutter times are drawn; None when nothing in the scene moves (then no time
+    /// is drawn and every ray has time 0.5).
+    shutter: Option<Shutter>,
     kind: Kind,
     /// The thin lens (None: a pinhole).
     aperture: Option<Aperture>,
     focus_distance: f32,
+    shutter_desc: ShutterDesc,
     width: u32,
     height: u32,
     clip_start: f32,
@@ -246,9 +269,31 @@ impl Camera {
                 shift: Vec2::new(desc.shift_x, desc.shift_y),
             },
         };
+        if let Some(v) = desc.shutter_curve.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+            return Err(bad(format!("shutter curve value {v} must be finite and not negative")));
+        }
+        if !desc.shutter_curve.is_empty() && !desc.shutter_curve.iter().any(|v| *v > 0.0) {
+            return Err(bad("the shutter curve is closed everywhere".into()));
+        }
+        if !(0.0..=1.0).contains(&desc.rolling_shutter_duration) {
+            return Err(bad(format!("rolling shutter duration {} must lie in 0…1", desc.rolling_shutter_duration)));
+        }
+        let shutter_desc = ShutterDesc {
+            curve: desc.shutter_curve.clone(),
+            rolling: desc.rolling_shutter.then_some(desc.rolling_shutter_duration),
+        };
         Ok(Self {
+            name: desc.name.clone(),
+            shutter_desc,
             to_world,
             to_camera: to_world.inverse(),
+            shutter: None,
+            motion: if desc.motion.is_empty() {
+                None
+            } else {
+                let keys: Vec<Affine3A> = desc.motion.iter().map(affine_from_rows).collect();
+                Some(TransformMotion::new("camera", &desc.name, &keys)?)
+            },
             kind,
             aperture,
             // Cycles clamps the focus distance the same way.
@@ -335,6 +380,52 @@ impl Camera {
     pub fn position(&self) -> Vec3A {
         self.to_world.translation
     }
+    /// Something in the scene moves: rays get a shutter time (drawn from the shutter
+    /// curve, rows offset by a rolling shutter). Static scenes draw no time.
+    pub fn enable_motion_blur(&mut self) {
+        self.shutter = Some(Shutter::new(&self.shutter_desc));
+    }
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+    /// The camera itself moves over the shutter.
+    pub fn moves(&self) -> bool {
+        self.motion.is_some()
+    }
+    /// Rays carry shutter times (something in the scene moves).
+    pub fn has_motion_blur(&self) -> bool {
+        self.shutter.is_some()
+    }
+
+    /// A shutter time for a ray through film row `y` (pixels from the top), or 0.5
+    /// (nothing drawn) when nothing moves. Cycles' `camera_sample`: the time from the
+    /// shutter curve's inverse CDF, then the rolling shutter's row offset.
+    pub fn sample_time(&self, y: f32, rng: &mut Rng) -> f32 {
+        match &self.shutter {
+            None => 0.5,
+            Some(s) => s.sample(rng.uniform(), y / self.height as f32),
+        }
+    }
+
+    /// A shutter time for a light path (light tracing), or 0.5 when nothing moves: from
+    /// the shutter curve, without the rolling shutter's row offset (light paths reach
+    /// rows only when they connect; docs/camera.md says what this leaves out).
+    pub fn sample_light_path_time(&self, rng: &mut Rng) -> f32 {
+        match &self.shutter {
+            None => 0.5,
+            Some(s) => s.sample_curve(rng.uniform()),
+        }
+    }
+
+    /// The camera has a rolling shutter and something moves.
+    pub fn has_rolling_shutter(&self) -> bool {
+        self.shutter.as_ref().is_some_and(|s| s.rolling.is_some())
+    }
+
+    fn to_world_at(&self, time: f32) -> Affine3A {
+        self.motion.as_ref().map_or(self.to_world, |m| m.at(time))
+    }
+
     /// The camera has a lens aperture (depth of field).
     pub fn has_aperture(&self) -> bool {
         self.aperture.is_some()
@@ -357,6 +448,8 @@ impl Camera {
     /// camera with an aperture draws one lens sample from `rng`; a pinhole draws none.
     pub fn generate_ray(&self, x: f32, y: f32, rng: &mut Rng) -> Option<Ray> {
         let lens = self.aperture.map(|a| a.sample(rng.uniform2()));
+        let time = self.sample_time(y, rng);
+        let to_world = self.to_world_at(time);
         let f = self.focus_distance;
         // Origin, direction and the direction's component along the view axis (planar
         // cameras clip against planes), all in camera space.
@@ -390,15 +483,15 @@ impl Camera {
                 (m * o, d, d.length())
             }
         };
-        let origin = self.to_world.transform_point3a(o);
-        let dw = self.to_world.transform_vector3a(d);
+        let origin = to_world.transform_point3a(o);
+        let dw = to_world.transform_vector3a(d);
         let len = dw.length();
         // A local length along the axis of 1 is reached at t = |dw| / axial.
         let scale = len / axial;
         if !(scale.is_finite() && scale > 0.0) {
             return None;
         }
-        Some(Ray { origin, direction: dw / len, tmin: self.clip_start * scale, tmax: self.clip_end * scale })
+        Some(Ray { origin, direction: dw / len, tmin: self.clip_start * scale, tmax: self.clip_end * scale, time })
     }
 }
 
@@ -427,25 +520,31 @@ impl Camera {
         matches!(self.kind, Kind::Planar { perspective: true, .. })
     }
 
-    /// Connects a world point to the camera: a point on the lens sampled from `rng`
-    /// (nothing drawn for a pinhole), then [`Camera::connect_through`].
-    pub fn connect(&self, p: Vec3A, rng: &mut Rng) -> Option<CameraConnection> {
+    /// Connects a world point to the camera as it is at shutter time `time`: a point on
+    /// the lens sampled from `rng` (nothing drawn for a pinhole), then
+    /// [`Camera::connect_through`].
+    pub fn connect(&self, p: Vec3A, time: f32, rng: &mut Rng) -> Option<CameraConnection> {
         if !self.is_perspective() {
             return None;
         }
         let lens = self.aperture.map_or(Vec2::ZERO, |a| a.sample(rng.uniform2()));
-        self.connect_through(self.to_world.transform_point3a(Vec3A::new(lens.x, lens.y, 0.0)), p)
+        self.connect_through(self.to_world_at(time).transform_point3a(Vec3A::new(lens.x, lens.y, 0.0)), p, time)
     }
 
-    /// Connects world point `p` to the camera through `lens_point` (world space, on the
-    /// lens; the camera's position for a pinhole). None for orthographic and panoramic
-    /// cameras, behind the camera, outside the image or the clip range.
-    pub fn connect_through(&self, lens_point: Vec3A, p: Vec3A) -> Option<CameraConnection> {
+    /// Connects world point `p` to the camera (as it is at shutter time `time`) through
+    /// `lens_point` (world space, on the lens; the camera's position for a pinhole).
+    /// None for orthographic and panoramic cameras, behind the camera, outside the image
+    /// or the clip range.
+    pub fn connect_through(&self, lens_point: Vec3A, p: Vec3A, time: f32) -> Option<CameraConnection> {
         let Kind::Planar { perspective: true, half, shift } = self.kind else {
             return None;
         };
-        let lens = self.to_camera.transform_point3a(lens_point);
-        let local = self.to_camera.transform_point3a(p);
+        let to_camera = match &self.motion {
+            None => self.to_camera,
+            Some(m) => m.at(time).inverse(),
+        };
+        let lens = to_camera.transform_point3a(lens_point);
+        let local = to_camera.transform_point3a(p);
         let d = local - lens;
         let dw = p - lens_point;
         let distance = dw.length();
@@ -479,6 +578,81 @@ impl Camera {
             distance,
             importance,
         })
+    }
+}
+
+/// The camera's shutter settings, kept until the scene says whether anything moves.
+#[derive(Clone, Debug)]
+struct ShutterDesc {
+    curve: Vec<f32>,
+    rolling: Option<f32>,
+}
+
+/// Draws shutter times.
+#[derive(Clone, Debug)]
+struct Shutter {
+    /// Inverse CDF of the shutter curve at evenly spaced probabilities (None: uniform).
+    inverse_cdf: Option<Vec<f32>>,
+    /// Rolling shutter duration.
+    rolling: Option<f32>,
+}
+
+impl Shutter {
+    /// Cycles tabulates the inverse CDF of the curve (`util_cdf_inverted`, 256 entries);
+    /// so does this, of the curve taken as piecewise linear.
+    fn new(d: &ShutterDesc) -> Self {
+        let inverse_cdf = (d.curve.len() >= 2 && d.curve.iter().any(|v| *v != d.curve[0])).then(|| {
+            let n = d.curve.len() - 1;
+            let mut cdf = vec![0.0f64; n + 1];
+            for i in 0..n {
+                cdf[i + 1] = cdf[i] + 0.5 * (d.curve[i] + d.curve[i + 1]) as f64;
+            }
+            let total = cdf[n];
+            const TABLE: usize = 256;
+            (0..TABLE)
+                .map(|k| {
+                    let target = total * k as f64 / (TABLE - 1) as f64;
+                    let i = cdf.partition_point(|&c| c < target).clamp(1, n) - 1;
+                    let (a, b) = (d.curve[i] as f64, d.curve[i + 1] as f64);
+                    // Solve ∫ of the linear piece from its start = target − cdf[i].
+                    let rest = target - cdf[i];
+                    let x = if (b - a).abs() < 1e-12 {
+                        if a > 0.0 {
+                            rest / a
+                        } else {
+                            0.0
+                        }
+                    } else {
+                        let disc = (a * a + 2.0 * (b - a) * rest).max(0.0);
+                        (disc.sqrt() - a) / (b - a)
+                    };
+                    ((i as f64 + x.clamp(0.0, 1.0)) / n as f64) as f32
+                })
+                .collect()
+        });
+        Self { inverse_cdf, rolling: d.rolling }
+    }
+
+    /// The time for uniform `u` from the shutter curve alone.
+    fn sample_curve(&self, u: f32) -> f32 {
+        match &self.inverse_cdf {
+            None => u,
+            Some(table) => {
+                let x = u * (table.len() - 1) as f32;
+                let i = (x as usize).min(table.len() - 2);
+                table[i] + (table[i + 1] - table[i]) * (x - i as f32)
+            }
+        }
+    }
+
+    /// The time for uniform `u` at film height `row` (0 top … 1 bottom).
+    fn sample(&self, u: f32, row: f32) -> f32 {
+        let t = self.sample_curve(u);
+        match self.rolling {
+            None => t,
+            // The row's own time plus its share of the exposure (Cycles' blend).
+            Some(d) => (t - 0.5) * d + (row.clamp(0.0, 1.0) - 0.5) * (1.0 - d) + 0.5,
+        }
     }
 }
 
@@ -521,7 +695,7 @@ mod tests {
         let cam = Camera::new(&desc, 40, 30).unwrap();
         let mut rng = crate::sampling::Rng::new(1, 2);
         let r = cam.generate_ray(13.25, 7.5, &mut rng).unwrap();
-        let c = cam.connect(r.at(5.0), &mut rng).unwrap();
+        let c = cam.connect(r.at(5.0), 0.5, &mut rng).unwrap();
         assert!((c.raster.x - 13.25).abs() < 1e-3 && (c.raster.y - 7.5).abs() < 1e-3, "{:?}", c.raster);
         assert!((c.wi + r.direction).length() < 1e-5);
         // ∫ We cos dω over the image = 1: a unit sphere of directions, Monte Carlo.
@@ -529,7 +703,7 @@ mod tests {
         let mut sum = 0.0f64;
         for _ in 0..n {
             let w = crate::sampling::uniform_sphere(rng.uniform2());
-            if let Some(c) = cam.connect(w, &mut rng) {
+            if let Some(c) = cam.connect(w, 0.5, &mut rng) {
                 sum += (c.importance * c.distance * c.distance) as f64 * 4.0 * std::f64::consts::PI;
             }
         }
@@ -570,7 +744,7 @@ mod tests {
         for _ in 0..100 {
             let (x, y) = (rng.uniform() * 40.0, rng.uniform() * 30.0);
             let r = cam.generate_ray(x, y, &mut rng).unwrap();
-            let c = cam.connect_through(r.origin, r.at(1.0 + 6.0 * rng.uniform())).unwrap();
+            let c = cam.connect_through(r.origin, r.at(1.0 + 6.0 * rng.uniform()), 0.5).unwrap();
             assert!((c.raster.x - x).abs() < 2e-3 && (c.raster.y - y).abs() < 2e-3, "{:?} vs {x} {y}", c.raster);
         }
         // From any lens point the importance integrates to 1 over the sphere of directions
@@ -581,7 +755,7 @@ mod tests {
             let l = cam.aperture.unwrap().sample(rng.uniform2());
             let lens = Vec3A::new(l.x, l.y, 0.0);
             let w = crate::sampling::uniform_sphere(rng.uniform2());
-            if let Some(c) = cam.connect_through(lens, lens + w * 2.0) {
+            if let Some(c) = cam.connect_through(lens, lens + w * 2.0, 0.5) {
                 sum += (c.importance * c.distance * c.distance) as f64 * 4.0 * std::f64::consts::PI;
             }
         }
@@ -645,6 +819,6 @@ mod tests {
         assert!((cam.depth(r.at(2.0)) - 2.0).abs() < 1e-5);
         // Outside the fisheye circle: no ray. Light tracing cannot connect to a panorama.
         assert!(cam.generate_ray(0.5, 0.5, &mut rng).is_none());
-        assert!(!cam.is_perspective() && cam.connect(Vec3A::new(1.0, 2.0, 0.0), &mut rng).is_none());
+        assert!(!cam.is_perspective() && cam.connect(Vec3A::new(1.0, 2.0, 0.0), 0.5, &mut rng).is_none());
     }
 }

@@ -1,5 +1,6 @@
 //! Triangle meshes (object space) and their instances (object → world transforms).
 
+use super::motion::{TransformMotion, VertexMotion};
 use crate::{Error, Result};
 use glam::{Affine3A, Mat3A, Vec2, Vec3A};
 
@@ -17,6 +18,8 @@ pub struct Mesh {
     pub uvs: Option<Vec<Vec2>>,
     /// Per-triangle index into the scene's materials.
     pub material_ids: Vec<u32>,
+    /// A deforming mesh: vertex positions (and normals) at keys over the shutter.
+    pub motion: Option<VertexMotion>,
 }
 
 impl Mesh {
@@ -94,7 +97,66 @@ impl Mesh {
             normals,
             uvs,
             material_ids: material_ids.to_vec(),
+            motion: None,
         })
+    }
+
+    /// Makes the mesh deform over the shutter: `keys` are vertex positions (V×3 floats
+    /// each) evenly spaced from shutter open to close, `normal_keys` optionally the
+    /// normals at the same keys. Errors name the mesh.
+    pub fn set_motion(&mut self, keys: &[&[f32]], normal_keys: Option<&[&[f32]]>) -> Result<()> {
+        let bad = |p: String| Error::object("mesh", &self.name, p);
+        if keys.len() < 2 {
+            return Err(bad(format!("vertex motion needs at least 2 keys, got {}", keys.len())));
+        }
+        let nv = self.positions.len();
+        let read = |k: usize, v: &[f32], what: &str| -> Result<Vec<Vec3A>> {
+            if v.len() != nv * 3 {
+                return Err(bad(format!("{what} key {k} has {} floats for {nv} vertices", v.len())));
+            }
+            if let Some(i) = v.iter().position(|x| !(x.is_finite() && x.abs() <= MAX_COORDINATE)) {
+                return Err(bad(format!(
+                    "{what} key {k}: vertex {} is not finite or beyond ±{MAX_COORDINATE:e}",
+                    i / 3
+                )));
+            }
+            Ok(v.chunks_exact(3).map(|c| Vec3A::new(c[0], c[1], c[2])).collect())
+        };
+        let positions = keys.iter().enumerate().map(|(k, v)| read(k, v, "vertex motion")).collect::<Result<_>>()?;
+        let normals = match normal_keys {
+            None => None,
+            Some(n) if n.len() != keys.len() => {
+                return Err(bad(format!("{} normal keys for {} vertex motion keys", n.len(), keys.len())));
+            }
+            Some(n) => Some(
+                n.iter()
+                    .enumerate()
+                    .map(|(k, v)| {
+                        read(k, v, "normal motion").map(|n| n.into_iter().map(|x| x.normalize_or_zero()).collect())
+                    })
+                    .collect::<Result<_>>()?,
+            ),
+        };
+        self.motion = Some(VertexMotion { positions, normals });
+        Ok(())
+    }
+
+    /// Triangle `i` at shutter time `time` (its rest position when it does not deform).
+    #[inline]
+    pub fn triangle_at(&self, i: usize, time: f32) -> [Vec3A; 3] {
+        match &self.motion {
+            None => self.triangle(i),
+            Some(m) => self.indices[i].map(|v| m.position(v as usize, time)),
+        }
+    }
+
+    /// Every position any vertex takes (the rest positions, or all motion keys: linear
+    /// interpolation stays inside their hull).
+    pub fn all_positions(&self) -> Box<dyn Iterator<Item = Vec3A> + '_> {
+        match &self.motion {
+            None => Box::new(self.positions.iter().copied()),
+            Some(m) => Box::new(m.positions.iter().flatten().copied()),
+        }
     }
 
     pub fn triangle(&self, i: usize) -> [Vec3A; 3] {
@@ -112,6 +174,9 @@ pub struct Instance {
     pub to_object: Affine3A,
     /// Transforms normals: the inverse transpose of the linear part.
     pub normal_to_world: Mat3A,
+    /// Object → world over the shutter, when the instance moves (then `to_world` is its
+    /// transform at the frame itself, for what needs one placement).
+    pub motion: Option<TransformMotion>,
 }
 
 impl Instance {
@@ -125,6 +190,43 @@ impl Instance {
             return Err(bad("transform is singular (zero scale?)"));
         }
         let to_object = to_world.inverse();
-        Ok(Self { name: name.to_string(), mesh, to_world, to_object, normal_to_world: to_object.matrix3.transpose() })
+        Ok(Self {
+            name: name.to_string(),
+            mesh,
+            to_world,
+            to_object,
+            normal_to_world: to_object.matrix3.transpose(),
+            motion: None,
+        })
+    }
+
+    /// An instance moving through transform `keys` evenly spaced over the shutter;
+    /// `to_world` is its placement at the frame.
+    pub fn with_motion(name: &str, mesh: u32, to_world: Affine3A, keys: &[Affine3A]) -> Result<Self> {
+        let mut inst = Self::new(name, mesh, to_world)?;
+        inst.motion = Some(TransformMotion::new("instance", name, keys)?);
+        Ok(inst)
+    }
+
+    /// Object → world, world → object and the normal transform at shutter time `time`.
+    #[inline]
+    pub fn transforms_at(&self, time: f32) -> (Affine3A, Affine3A, Mat3A) {
+        match &self.motion {
+            None => (self.to_world, self.to_object, self.normal_to_world),
+            Some(m) => {
+                let w = m.at(time);
+                let o = w.inverse();
+                (w, o, o.matrix3.transpose())
+            }
+        }
+    }
+
+    /// World → object at shutter time `time`.
+    #[inline]
+    pub fn to_object_at(&self, time: f32) -> Affine3A {
+        match &self.motion {
+            None => self.to_object,
+            Some(m) => m.at(time).inverse(),
+        }
     }
 }

@@ -5,6 +5,7 @@
 pub mod curves;
 pub mod frame;
 pub mod mesh;
+pub mod motion;
 pub mod ray;
 pub mod triangle;
 

@@ -9,14 +9,24 @@ pub struct Ray {
     pub direction: Vec3A,
     pub tmin: f32,
     pub tmax: f32,
+    /// When in the shutter the ray travels, 0 (open) … 1 (closed): moving geometry is
+    /// intersected where it is then (geometry/motion.rs). One time per path, shared by
+    /// all its rays and wavelengths.
+    pub time: f32,
 }
 
 impl Ray {
     pub fn new(origin: Vec3A, direction: Vec3A) -> Self {
-        Self { origin, direction, tmin: 0.0, tmax: f32::INFINITY }
+        Self { origin, direction, tmin: 0.0, tmax: f32::INFINITY, time: 0.5 }
     }
     pub fn segment(origin: Vec3A, direction: Vec3A, tmax: f32) -> Self {
-        Self { origin, direction, tmin: 0.0, tmax }
+        Self { origin, direction, tmin: 0.0, tmax, time: 0.5 }
+    }
+    /// The same ray at shutter time `time`.
+    #[inline]
+    pub fn with_time(mut self, time: f32) -> Self {
+        self.time = time;
+        self
     }
     pub fn at(&self, t: f32) -> Vec3A {
         self.origin + self.direction * t
@@ -51,18 +61,19 @@ pub fn offset_ray_origin(p: Vec3A, n: Vec3A) -> Vec3A {
 /// `wi` from `p` reaches the light's plane up to 0.25·(1/cos − cos) units early), and the
 /// margin must grow with the coordinates (16 ulps of the larger end) besides the
 /// relative 1e-4. Infinitely distant lights keep `wi` and an unbounded ray.
-pub fn shadow_ray(p: Vec3A, origin: Vec3A, wi: Vec3A, distance: f32) -> Ray {
+/// `time` is the path's shutter time.
+pub fn shadow_ray(p: Vec3A, origin: Vec3A, wi: Vec3A, distance: f32, time: f32) -> Ray {
     if !distance.is_finite() {
-        return Ray::new(origin, wi);
+        return Ray::new(origin, wi).with_time(time);
     }
     let end = p + wi * distance;
     let d = end - origin;
     let len = d.length();
     if !(len > 0.0 && len.is_finite()) {
-        return Ray::segment(origin, wi, 0.0);
+        return Ray::segment(origin, wi, 0.0).with_time(time);
     }
     let magnitude = origin.abs().max_element().max(end.abs().max_element());
-    Ray::segment(origin, d / len, (len * (1.0 - 1e-4) - magnitude * (16.0 * f32::EPSILON)).max(0.0))
+    Ray::segment(origin, d / len, (len * (1.0 - 1e-4) - magnitude * (16.0 * f32::EPSILON)).max(0.0)).with_time(time)
 }
 
 #[cfg(test)]
@@ -88,7 +99,7 @@ mod tests {
             for wi in [Vec3A::Z, Vec3A::new(0.6, 0.0, 0.8), Vec3A::new(-0.3, 0.3, 0.2).normalize()] {
                 // The light is a plane 200 units above p (its normal along z).
                 let distance = 200.0 / wi.z;
-                let r = shadow_ray(p, origin, wi, distance);
+                let r = shadow_ray(p, origin, wi, distance, 0.5);
                 let hit_plane = (p.z + 200.0 - r.origin.z) / r.direction.z;
                 // Short of the light's plane by more than its rounding...
                 assert!(
@@ -101,6 +112,6 @@ mod tests {
                 assert!(r.tmax > hit_plane - slack, "{s} {wi}: {} vs {hit_plane}", r.tmax);
             }
         }
-        assert_eq!(shadow_ray(Vec3A::ZERO, Vec3A::ZERO, Vec3A::Z, f32::INFINITY).tmax, f32::INFINITY);
+        assert_eq!(shadow_ray(Vec3A::ZERO, Vec3A::ZERO, Vec3A::Z, f32::INFINITY, 0.5).tmax, f32::INFINITY);
     }
 }

@@ -204,7 +204,7 @@ impl BidirectionalMis {
 impl CameraMis for BidirectionalMis {
     fn first_hit(&mut self, scene: &Scene, v: &Vertex, st: &PathState) {
         self.cam.p = st.ray.origin;
-        if let Some(c) = scene.camera.connect_through(st.ray.origin, v.si.p) {
+        if let Some(c) = scene.camera.connect_through(st.ray.origin, v.si.p, st.ray.time) {
             // The pinhole as light paths see it (the same numbers on both sides).
             self.cam.p = v.si.p + c.wi * c.distance;
             self.cam.pdf_dir = c.importance * c.distance * c.distance;
@@ -399,7 +399,7 @@ impl<P: WavelengthPolicy> Technique for Bidirectional<P> {
         let (es, pmf) = (start.es, start.pmf);
         let light = scene.lights[start.light].as_ref();
         // The light vertex itself seen by the camera (area lights): k = 1.
-        if let Some((c, cos)) = light_seen_by_camera(scene, &es, rng) {
+        if let Some((c, cos)) = light_seen_by_camera(scene, &es, start.state.ray.time, rng) {
             let end = LightEnd {
                 p: es.origin,
                 pmf,

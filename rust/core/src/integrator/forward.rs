@@ -62,14 +62,14 @@ pub fn connect_to_camera(
     f: &mut SampledSpectrum,
     rng: &mut Rng,
 ) -> Option<CameraConnection> {
-    let c = scene.camera.connect(v.si.p, rng)?;
+    let c = scene.camera.connect(v.si.p, v.si.time, rng)?;
     let wi_local = v.frame.to_local(c.wi);
     let side = super::connection_side(v.ng, v.wo_local, wi_local, c.wi)?;
     v.material.bsdf.eval(ctx, v.wo_local, wi_local, f);
     // Aimed from the offset origin at the camera: along c.wi from the unshifted point it
     // missed by the offset (16 units at 1e6) and hit walls behind it.
     let origin = offset_ray_origin(v.si.p, side);
-    if f.is_black() || scene.occluded(&crate::geometry::shadow_ray(v.si.p, origin, c.wi, c.distance)) {
+    if f.is_black() || scene.occluded(&crate::geometry::shadow_ray(v.si.p, origin, c.wi, c.distance, v.si.time)) {
         return None;
     }
     Some(c)
@@ -108,23 +108,38 @@ pub fn start_light_path<W: Wavelengths>(scene: &Scene, wl: &W, rng: &mut Rng) ->
         Some(nl) => offset_ray_origin(es.origin, if nl.dot(es.direction) > 0.0 { nl } else { -nl }),
         None => es.origin,
     };
-    Some(LightStart { light, pmf, es, le, beta, state: PathState::start(Ray::new(origin, es.direction)) })
+    // One shutter time for the whole light path (motion blur; none drawn when nothing moves).
+    let time = scene.camera.sample_light_path_time(rng);
+    Some(LightStart {
+        light,
+        pmf,
+        es,
+        le,
+        beta,
+        state: PathState::start(Ray::new(origin, es.direction).with_time(time)),
+    })
 }
 
 /// The light vertex itself seen by the camera (area lights; a lens point drawn from
 /// `rng`): the connection and |cos| at the light towards it, or None when hidden or
 /// impossible.
-pub fn light_seen_by_camera(scene: &Scene, es: &EmissionSample, rng: &mut Rng) -> Option<(CameraConnection, f32)> {
+/// `time`: the light path's shutter time.
+pub fn light_seen_by_camera(
+    scene: &Scene,
+    es: &EmissionSample,
+    time: f32,
+    rng: &mut Rng,
+) -> Option<(CameraConnection, f32)> {
     if es.delta_position {
         return None;
     }
-    let c = scene.camera.connect(es.origin, rng);
+    let c = scene.camera.connect(es.origin, time, rng);
     let (nl, c) = (es.normal?, c?);
     let cos = nl.dot(c.wi).abs();
     let origin = offset_ray_origin(es.origin, if nl.dot(c.wi) > 0.0 { nl } else { -nl });
     // Aimed from the offset origin at the camera: along c.wi from the unshifted point it
     // missed by the offset (16 units at 1e6) and hit walls behind it.
-    if cos > 0.0 && !scene.occluded(&crate::geometry::shadow_ray(es.origin, origin, c.wi, c.distance)) {
+    if cos > 0.0 && !scene.occluded(&crate::geometry::shadow_ray(es.origin, origin, c.wi, c.distance, time)) {
         Some((c, cos))
     } else {
         None
@@ -214,7 +229,7 @@ impl<P: WavelengthPolicy> Technique for LightTracing<P> {
         let wl = self.wavelengths.light(pass, rng);
         let Some(start) = start_light_path(scene, &wl, rng) else { return };
         if self.part == ForwardPart::All {
-            if let Some((c, cos)) = light_seen_by_camera(scene, &start.es, rng) {
+            if let Some((c, cos)) = light_seen_by_camera(scene, &start.es, start.state.ray.time, rng) {
                 let radiance = start.le.scaled(scene.grid.len(), cos * c.importance / (start.pmf * start.es.pdf_pos));
                 splats.push(Splat { pixel: pixel_of(scene, &c), radiance });
             }

@@ -54,7 +54,7 @@ pub fn scatter(
         return None;
     }
     let origin = crate::geometry::offset_ray_origin(v.si.p, if transmitted { -v.ng } else { v.ng });
-    Some(Scatter { sample, wi, transmitted, ray: crate::geometry::Ray::new(origin, wi) })
+    Some(Scatter { sample, wi, transmitted, ray: crate::geometry::Ray::new(origin, wi).with_time(v.si.time) })
 }
 
 /// The side of the surface a connection along world direction `wi` (`wi_local` in the

@@ -167,7 +167,7 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, T, M> {
         // Aimed from the offset origin at the light point, stopping short of it (robust
         // far from the origin: 1e6 units).
         let origin = offset_ray_origin(v.si.p, side);
-        if scene.occluded(&shadow_ray(v.si.p, origin, ls.wi, ls.distance)) {
+        if scene.occluded(&shadow_ray(v.si.p, origin, ls.wi, ls.distance, v.si.time)) {
             return;
         }
         let w = self.mis.direct(scene, ctx, v, &DirectSample { light: l, pmf, ls, wi_local, bsdf_pdf });

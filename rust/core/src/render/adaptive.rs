@@ -28,6 +28,8 @@ pub struct Adaptive {
     half_xyz: Vec<[f64; 3]>,
     half_count: Vec<u32>,
     err: Vec<f64>,
+    /// Pixels outside the render region (inactive throughout, not converged).
+    outside: u64,
 }
 
 impl Adaptive {
@@ -38,15 +40,23 @@ impl Adaptive {
             return None;
         }
         let pixels = (settings.width * settings.height) as usize;
+        // Pixels outside the render region take no samples from the start.
+        let [x0, y0, x1, y1] = settings.region_rect();
+        let active: Vec<bool> = (0..pixels as u32)
+            .map(|i| (x0..x1).contains(&(i % settings.width)) && (y0..y1).contains(&(i / settings.width)))
+            .collect();
+        let outside = active.iter().filter(|&&a| !a).count() as u64;
+        let err = active.iter().map(|&a| if a { f64::INFINITY } else { f64::NAN }).collect();
         Some(Self {
+            outside,
             threshold: settings.noise_threshold as f64,
             min_samples: ADAPTIVE_MIN_SAMPLES.min(settings.samples),
             width: settings.width,
             height: settings.height,
-            active: vec![true; pixels],
+            active,
             half_xyz: vec![[0.0; 3]; pixels],
             half_count: vec![0; pixels],
-            err: vec![f64::INFINITY; pixels],
+            err,
         })
     }
     /// Per pixel (row-major): still taking samples.
@@ -58,7 +68,7 @@ impl Adaptive {
     }
     /// Pixels that reached the target.
     pub fn converged_pixels(&self) -> u64 {
-        self.active.iter().filter(|&&a| !a).count() as u64
+        self.active.iter().filter(|&&a| !a).count() as u64 - self.outside
     }
     /// Adds pixel `i`'s sums of the first half of a pass.
     pub fn add_first_half(&mut self, i: usize, xyz: &[f64; 3], count: u32) {
@@ -137,7 +147,8 @@ pub fn update_active(
             for dy in -1..=1 {
                 for dx in -1..=1 {
                     let (nx, ny) = (x + dx, y + dy);
-                    if nx >= 0 && ny >= 0 && nx < w && ny < h {
+                    // NaN: outside the render region, like outside the image.
+                    if nx >= 0 && ny >= 0 && nx < w && ny < h && !err[(ny * w + nx) as usize].is_nan() {
                         sum += err[(ny * w + nx) as usize];
                         k += 1;
                     }

@@ -107,10 +107,12 @@ impl<'a> Driver<'a> {
     /// a setting the scene cannot be rendered with.
     pub fn new(scene: &'a Scene, settings: &'a ResolvedSettings) -> Result<Self> {
         let integrator = integrator::from_settings(scene, settings)?;
-        let (w, h) = (settings.width, settings.height);
+        // Tiles cover the render region only: pixels outside it are never sampled.
+        let [rx0, ry0, rx1, ry1] = settings.region_rect();
+        let (w, h) = (rx1 - rx0, ry1 - ry0);
         let tiles = (0..h.div_ceil(TILE))
             .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
-            .map(|(x0, y0)| Tile { x0, y0, w: TILE.min(w - x0), h: TILE.min(h - y0) })
+            .map(|(x0, y0)| Tile { x0: rx0 + x0, y0: ry0 + y0, w: TILE.min(w - x0), h: TILE.min(h - y0) })
             .collect();
         let d65 = named::d65(&scene.grid).map_err(Error::Description)?;
         let mut albedo_white = SampledSpectrum::from_slice(&d65);
@@ -165,10 +167,11 @@ impl<'a> Driver<'a> {
     pub fn run(&self, control: &RenderControl, start: Instant) -> (Film, PassesDone) {
         let s = self.settings;
         let (w, h) = (s.width, s.height);
-        let per_round = w as u64
-            * h as u64
-            * s.samples as u64
-            * (self.integrator.camera_paths as u64 + self.integrator.light_paths as u64);
+        let [rx0, ry0, rx1, ry1] = s.region_rect();
+        let region_pixels = (rx1 - rx0) as u64 * (ry1 - ry0) as u64;
+        let per_round = s.samples as u64
+            * (self.integrator.camera_paths as u64 * region_pixels
+                + self.integrator.light_paths as u64 * w as u64 * h as u64);
         control.total.store(per_round * self.integrator.rounds as u64, Ordering::Relaxed);
         control.done.store(0, Ordering::Relaxed);
         let mut film = self.new_film();
@@ -197,7 +200,9 @@ impl<'a> Driver<'a> {
             }
             if control.previews_requested() && last_preview.is_none_or(|t| t.elapsed() >= PREVIEW_INTERVAL) {
                 let spp = self.samples_per_pixel(done.passes);
-                control.publish_preview(film.rgba(&self.scene.space), w, h, spp, false);
+                let mut rgba = film.rgba(&self.scene.space);
+                self.clear_outside_region(&mut rgba);
+                control.publish_preview(rgba, w, h, spp, false);
                 last_preview = Some(Instant::now());
             }
         }
@@ -235,12 +240,50 @@ impl<'a> Driver<'a> {
             max_samples: s.samples,
             max_bounces: s.max_bounces,
             uplift_round_trip_error: scene.uplift.as_ref().map_or(0.0, |u| u.round_trip_error()),
+            warnings: self.warnings(),
         };
-        let images = film.images(&scene.space);
+        let mut images = film.images(&scene.space);
+        self.clear_outside_region(&mut images.rgba);
         if control.previews_requested() {
             control.publish_preview(images.rgba.clone(), s.width, s.height, spp, true);
         }
         RenderOutput { width: s.width, height: s.height, images, wavelengths: scene.grid.lambdas().to_vec(), stats }
+    }
+
+    /// What this render leaves out of the scene (motion blur with light paths).
+    fn warnings(&self) -> Vec<String> {
+        let scene = self.scene;
+        let mut out = Vec::new();
+        if self.integrator.light_paths && !self.integrator.camera_paths {
+            for name in &scene.moving_emitters {
+                out.push(format!(
+                    "instance '{name}': a moving emitter is not a light that light paths start from, so FORWARD \
+                     renders without its light (BACKWARD and BIDIRECTIONAL see it)"
+                ));
+            }
+        }
+        if self.integrator.light_paths && scene.camera.has_rolling_shutter() {
+            out.push(format!(
+                "camera '{}': light paths ignore the rolling shutter (they take times from the whole shutter)",
+                scene.camera.name()
+            ));
+        }
+        out
+    }
+
+    /// Outside the render region nothing was rendered: black with alpha 0.
+    fn clear_outside_region(&self, rgba: &mut [f32]) {
+        let [x0, y0, x1, y1] = self.settings.region_rect();
+        if [x0, y0, x1, y1] == [0, 0, self.settings.width, self.settings.height] {
+            return;
+        }
+        let w = self.settings.width;
+        for (i, px) in rgba.chunks_exact_mut(4).enumerate() {
+            let (x, y) = (i as u32 % w, i as u32 / w);
+            if !((x0..x1).contains(&x) && (y0..y1).contains(&y)) {
+                px.fill(0.0);
+            }
+        }
     }
 
     /// Samples per pixel after `passes` sample passes: every pass counts, except that the
@@ -358,6 +401,15 @@ impl<'a> Driver<'a> {
                         &mut splats,
                         &mut scratch,
                     );
+                }
+                if self.settings.region.is_some() {
+                    // Light paths reach the whole image; only the region is kept.
+                    let [x0, y0, x1, y1] = self.settings.region_rect();
+                    let w = self.settings.width;
+                    splats.retain(|sp| {
+                        let (x, y) = (sp.pixel % w, sp.pixel / w);
+                        (x0..x1).contains(&x) && (y0..y1).contains(&y)
+                    });
                 }
                 control.done.fetch_add(end - c * LIGHT_CHUNK, Ordering::Relaxed);
                 Some(splats)

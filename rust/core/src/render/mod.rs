@@ -161,6 +161,9 @@ pub struct RenderStats {
     /// normally; a few percent (more on 4–5 samples) on grids that needed the
     /// cell-averaged fallback basis (see color/uplift/linear.rs).
     pub uplift_round_trip_error: f32,
+    /// What this render left out, one sentence each naming the object and the feature
+    /// (the Python API and the add-on show them as warnings).
+    pub warnings: Vec<String>,
 }
 
 pub struct RenderOutput {

@@ -86,6 +86,7 @@ pub const PAPER_WAVELENGTH_COUNT: usize = 41;
 /// and the reasons in `notes`.
 pub fn resolve(settings: &RenderSettings, desc: Option<&SceneDesc>) -> Result<ResolvedSettings> {
     settings.validate()?;
+    super::settings::check_region(settings)?;
     let s = settings;
     let q = s.quality;
     let p = q.preset();

@@ -227,6 +227,16 @@ settings! {
     /// Image height in pixels.
     height: copy u32 = 240 => Spec::new("Image", "Height", "Image height in pixels", int_soft(1, 65536, 8192))
         .blender(Blender::Elsewhere("Output Properties > Format: Resolution Y × %"));
+    /// Render region (Blender's border): only pixels `x0 ≤ x < x1`, `y0 ≤ y < y1` (from
+    /// the image's top-left corner) are rendered; the rest stays black with alpha 0.
+    region: copy Option<Vec<f32>> = None => Spec::new(
+        "Image",
+        "Region",
+        "Render only the pixels x0 <= x < x1, y0 <= y < y1 (x0,y0,x1,y1 counted from the top-left corner); the rest stays black with alpha 0",
+        Kind::FloatList { min: 0.0, max: 65536.0, min_len: 4, max_len: 4, unit: Some("px"), count_setting: None },
+    )
+    .blender(Blender::Elsewhere("Output Properties > Format: Render Region (the border, cropped or not)"))
+    .see("camera.md");
     /// Fills every setting a preset fills that is not set.
     quality: copy Quality = Quality::Auto => Spec::new(
         "Sampling",
@@ -392,6 +402,32 @@ impl RenderSettings {
     pub fn resolve(&self, desc: Option<&SceneDesc>) -> Result<ResolvedSettings> {
         quality::resolve(self, desc)
     }
+}
+
+impl ResolvedSettings {
+    /// The rendered rectangle `[x0, y0, x1, y1)`: the region, or the whole image.
+    pub fn region_rect(&self) -> [u32; 4] {
+        match &self.region {
+            Some(r) if r.len() == 4 => [r[0] as u32, r[1] as u32, r[2] as u32, r[3] as u32],
+            _ => [0, 0, self.width, self.height],
+        }
+    }
+}
+
+/// The region (whole pixels, a non-empty rectangle inside the image), named in the error.
+pub(super) fn check_region(s: &RenderSettings) -> Result<()> {
+    let Some(r) = &s.region else { return Ok(()) };
+    let whole = r.iter().all(|v| v.fract() == 0.0);
+    if !(whole && r.len() == 4 && r[0] < r[2] && r[1] < r[3] && r[2] <= s.width as f32 && r[3] <= s.height as f32) {
+        return Err(Error::setting(
+            "region",
+            format!(
+                "{r:?} must be whole pixels x0, y0, x1, y1 of a non-empty rectangle inside the {}×{} image",
+                s.width, s.height
+            ),
+        ));
+    }
+    Ok(())
 }
 
 impl Default for ResolvedSettings {

@@ -182,7 +182,7 @@ impl Default for BsdfDesc {
     }
 }
 
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeshDesc {
     pub name: String,
@@ -202,9 +202,16 @@ pub struct MeshDesc {
     /// ...or one material for the whole mesh (default: material 0).
     #[serde(default)]
     pub material: Option<u32>,
+    /// A deforming mesh (motion blur): buffers of V×3 f32 positions at keys evenly
+    /// spaced over the shutter, open to close (at least 2; empty: rigid).
+    #[serde(default)]
+    pub motion_vertices: Vec<usize>,
+    /// Per-vertex normals at the same keys (optional).
+    #[serde(default)]
+    pub motion_normals: Vec<usize>,
 }
 
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InstanceDesc {
     #[serde(default)]
@@ -212,6 +219,10 @@ pub struct InstanceDesc {
     pub mesh: u32,
     /// Object → world, row-major 4×4.
     pub transform: [[f32; 4]; 4],
+    /// Motion blur: object → world at keys evenly spaced over the shutter, open to
+    /// close (at least 2; empty: the instance stands still at `transform`).
+    #[serde(default)]
+    pub motion: Vec<[[f32; 4]; 4]>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]

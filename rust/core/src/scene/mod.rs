@@ -44,6 +44,9 @@ pub struct SurfaceInteraction {
     pub instance: u32,
     pub triangle: u32,
     pub t: f32,
+    /// The shutter time of the ray that found the hit (motion blur): the path goes on
+    /// at it — its bounces, shadow rays and camera connections.
+    pub time: f32,
 }
 
 /// The uniform world, kept beside its light for radiance lookups on escaped rays.
@@ -105,6 +108,9 @@ pub struct Scene {
     /// Centre and radius of a sphere bounding all geometry.
     pub bounds_center: Vec3A,
     pub bounds_radius: f32,
+    /// Instances whose emissive triangles move over the shutter: they are not sampled
+    /// as lights (next-event estimation, light paths), only found by paths that hit them.
+    pub moving_emitters: Vec<String>,
 }
 
 /// The RGB → spectrum map while building: where the grid has none, the first RGB
@@ -287,7 +293,23 @@ impl Scene {
                     format!("uses material {bad} but the scene has {} materials", materials.len()),
                 ));
             }
-            meshes.push(Mesh::from_buffers(name, positions, indices, normals, uvs, &ids)?);
+            let mut mesh = Mesh::from_buffers(name, positions, indices, normals, uvs, &ids)?;
+            if !md.motion_vertices.is_empty() {
+                let keys: Vec<&[f32]> = md
+                    .motion_vertices
+                    .iter()
+                    .map(|&i| buffer_f32(buffers, i, name, "motion_vertices"))
+                    .collect::<Result<_>>()?;
+                let normal_keys: Option<Vec<&[f32]>> = (!md.motion_normals.is_empty())
+                    .then(|| {
+                        md.motion_normals.iter().map(|&i| buffer_f32(buffers, i, name, "motion_normals")).collect()
+                    })
+                    .transpose()?;
+                mesh.set_motion(&keys, normal_keys.as_deref())?;
+            } else if !md.motion_normals.is_empty() {
+                return Err(Error::object("mesh", name, "motion_normals given without motion_vertices"));
+            }
+            meshes.push(mesh);
         }
 
         // Instances.
@@ -305,7 +327,13 @@ impl Scene {
                             format!("refers to mesh {} but the scene has {}", i.mesh, meshes.len()),
                         ));
                     }
-                    Instance::new(&i.name, i.mesh, affine_from_rows(&i.transform))
+                    let to_world = affine_from_rows(&i.transform);
+                    if i.motion.is_empty() {
+                        Instance::new(&i.name, i.mesh, to_world)
+                    } else {
+                        let keys: Vec<glam::Affine3A> = i.motion.iter().map(affine_from_rows).collect();
+                        Instance::with_motion(&i.name, i.mesh, to_world, &keys)
+                    }
                 })
                 .collect::<Result<_>>()?,
         };
@@ -313,10 +341,13 @@ impl Scene {
         // boxes (obvhs panics): reject it naming the instance (found by proptest).
         for inst in &instances {
             let limit = crate::geometry::mesh::MAX_COORDINATE;
-            if let Some(w) = meshes[inst.mesh as usize]
-                .positions
-                .iter()
-                .map(|p| inst.to_world.transform_point3a(*p))
+            let keys = inst.motion.as_ref().map_or(1, |m| m.key_count());
+            if let Some(w) = (0..keys)
+                .flat_map(|k| {
+                    let t = if keys > 1 { k as f32 / (keys - 1) as f32 } else { 0.5 };
+                    let m = inst.transforms_at(t).0;
+                    meshes[inst.mesh as usize].all_positions().map(move |p| m.transform_point3a(p))
+                })
                 .find(|w| !(w.is_finite() && w.abs().max_element() <= limit))
             {
                 return Err(Error::object(
@@ -328,13 +359,23 @@ impl Scene {
         }
         let accel = Accel::build(&meshes, &instances);
 
-        // Scene bounds, for infinite lights.
+        // Motion blur: rays get shutter times when anything moves.
+        let mut camera = camera;
+        if camera.moves() || meshes.iter().any(|m| m.motion.is_some()) || instances.iter().any(|i| i.motion.is_some()) {
+            camera.enable_motion_blur();
+        }
+
+        // Scene bounds, for infinite lights (over the whole shutter).
         let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
         for inst in &instances {
-            for p in &meshes[inst.mesh as usize].positions {
-                let w = inst.to_world.transform_point3a(*p);
-                lo = lo.min(w);
-                hi = hi.max(w);
+            let keys = inst.motion.as_ref().map_or(1, |m| 16 * (m.key_count() - 1) + 1);
+            for k in 0..keys {
+                let m = inst.transforms_at(if keys > 1 { k as f32 / (keys - 1) as f32 } else { 0.5 }).0;
+                for p in meshes[inst.mesh as usize].all_positions() {
+                    let w = m.transform_point3a(p);
+                    lo = lo.min(w);
+                    hi = hi.max(w);
+                }
             }
         }
         let (bounds_center, bounds_radius) =
@@ -343,9 +384,17 @@ impl Scene {
         // Lights: emissive triangles, explicit lights, the world.
         let mut lights: Vec<Box<dyn Light>> = Vec::new();
         let mut triangle_lights = vec![None; instances.len()];
+        let mut moving_emitters = Vec::new();
         for (k, inst) in instances.iter().enumerate() {
             let mesh = &meshes[inst.mesh as usize];
             if !mesh.material_ids.iter().any(|&m| materials[m as usize].emission.is_some()) {
+                continue;
+            }
+            // A moving emitter is no light to sample: its triangles are elsewhere at
+            // each path's time. Paths that hit it still see its emission (with MIS
+            // weight 1, as for any emitter without a light).
+            if inst.motion.is_some() || mesh.motion.is_some() {
+                moving_emitters.push(inst.name.clone());
                 continue;
             }
             let mut map = vec![u32::MAX; mesh.indices.len()];
@@ -482,7 +531,13 @@ impl Scene {
             texture_bytes,
             bounds_center,
             bounds_radius,
+            moving_emitters,
         })
+    }
+
+    /// Anything in the scene moves over the shutter (rays carry times).
+    pub fn has_motion_blur(&self) -> bool {
+        self.camera.has_motion_blur()
     }
 
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
@@ -499,13 +554,20 @@ impl Scene {
         let [i0, i1, i2] = mesh.indices[hit.triangle as usize].map(|i| i as usize);
         let (b1, b2) = (hit.b1, hit.b2);
         let b0 = 1.0 - b1 - b2;
-        let [p0, p1, p2] = [mesh.positions[i0], mesh.positions[i1], mesh.positions[i2]];
+        // Where the geometry is at the ray's time (motion blur).
+        let (to_world, _, normal_to_world) = inst.transforms_at(ray.time);
+        let [p0, p1, p2] = mesh.triangle_at(hit.triangle as usize, ray.time);
         let p_obj = p0 * b0 + p1 * b1 + p2 * b2;
-        let p = inst.to_world.transform_point3a(p_obj);
-        let ng = (inst.normal_to_world * (p1 - p0).cross(p2 - p0)).normalize_or_zero();
+        let p = to_world.transform_point3a(p_obj);
+        let ng = (normal_to_world * (p1 - p0).cross(p2 - p0)).normalize_or_zero();
+        let motion_normals = mesh.motion.as_ref().filter(|m| m.normals.is_some());
+        let normal = |i: usize| match motion_normals {
+            Some(m) => m.normal(i, ray.time).unwrap_or(Vec3A::ZERO),
+            None => mesh.normals.as_ref().map_or(Vec3A::ZERO, |n| n[i]),
+        };
         let ns = match &mesh.normals {
-            Some(n) => {
-                let s = (inst.normal_to_world * (n[i0] * b0 + n[i1] * b1 + n[i2] * b2)).normalize_or_zero();
+            Some(_) => {
+                let s = (normal_to_world * (normal(i0) * b0 + normal(i1) * b1 + normal(i2) * b2)).normalize_or_zero();
                 if s == Vec3A::ZERO {
                     ng
                 } else if s.dot(ng) < 0.0 {
@@ -531,6 +593,7 @@ impl Scene {
             instance: hit.instance,
             triangle: hit.triangle,
             t: hit.t,
+            time: ray.time,
         }
     }
 

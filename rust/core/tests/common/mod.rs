@@ -48,6 +48,7 @@ pub fn add_mesh(
         uvs: None,
         material_ids: None,
         material: Some(material),
+        ..Default::default()
     });
     desc.meshes.len() - 1
 }
