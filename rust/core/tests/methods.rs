@@ -678,6 +678,7 @@ fn look_at(eye: [f32; 3], target: [f32; 3]) -> [[f32; 4]; 4] {
 #[test]
 fn forward_needs_a_perspective_camera_and_time_limited_mono_scenes_say_so() {
     let (mut desc, buffers) = furnace_scene(0.5, 0.5);
+    desc.camera.projection = polychrome_core::camera::Projection::Orthographic;
     let s = ResolvedSettings { width: 4, height: 4, samples: 1, direction: Direction::Forward, ..Default::default() };
     let err = render(&desc, &buffers, &s, &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("direction") && err.contains("perspective"), "{err}");
