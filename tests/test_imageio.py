@@ -6,6 +6,7 @@ import OpenEXR
 import pytest
 from PIL import Image
 
+from polychrome import imageio
 from polychrome.imageio import (
     linear_to_srgb,
     read_image,
@@ -235,3 +236,41 @@ def test_not_an_exr_names_the_file(tmp_path):
     path.write_bytes(b"not an exr at all")
     with pytest.raises(ValueError, match="fake.exr"):
         read_image(path)
+
+
+@pytest.mark.parametrize("suffix", [".png", ".exr"])
+def test_a_failed_write_leaves_the_existing_image_and_no_temporary_file(tmp_path, monkeypatch, suffix):
+    """Writers go through a temporary file renamed over the target: a write that dies
+    half-way (here: the encoder raises after writing some bytes) keeps the good image."""
+    path = tmp_path / f"image{suffix}"
+    good = np.full((4, 5, 4), 0.5, np.float32)
+    write = imageio.write_png if suffix == ".png" else imageio.write_exr
+    write(path, good)
+    before = path.read_bytes()
+
+    def broken(self, target, *args, **kwargs):
+        with open(target, "wb") as f:
+            f.write(b"truncated")
+        raise OSError("disk full")
+
+    if suffix == ".png":
+        from PIL import Image
+
+        monkeypatch.setattr(Image.Image, "save", broken)
+    else:
+        import OpenEXR
+
+        monkeypatch.setattr(OpenEXR.File, "write", broken)
+    with pytest.raises(OSError, match="disk full"):
+        write(path, np.zeros((4, 5, 4), np.float32))
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == [path.name]
+
+
+@pytest.mark.parametrize("suffix", [".png", ".exr"])
+def test_metadata_round_trips(tmp_path, suffix):
+    path = tmp_path / f"m{suffix}"
+    write = imageio.write_png if suffix == ".png" else imageio.write_exr
+    write(path, np.zeros((2, 3, 4), np.float32), metadata={"polychrome:partial": "1", "note": "x y"})
+    meta = imageio.read_metadata(path)
+    assert meta["polychrome:partial"] == "1" and meta["note"] == "x y"

@@ -125,6 +125,13 @@ def _add_render_parser(subparsers) -> None:
     p.add_argument("-o", "--output", metavar="OUT", required=True, help="image to write: .exr or .png")
     p.add_argument("--passes", action="store_true", help="EXR only: also write Depth, Normal and Albedo layers")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--frames",
+        metavar="A-B",
+        help="render an animation: frames A to B (or one frame), each written as it completes to OUT with the frame number "
+        "in place of the last run of '#' (zero-padded to its length), else appended as 4 digits; with --scheduler the frames are tasks",
+    )
+    p.add_argument("--frame-step", metavar="N", type=int, default=1, help="with --frames: every N-th frame (default 1)")
     groups = {}
     for spec in SETTINGS.values():
         group = groups.get(spec["group"])
@@ -202,7 +209,7 @@ def _settings_from(values: dict):
     return RenderSettings(**{k: v for k, v in values.items() if k in SETTINGS})
 
 
-def _load_usd(path: str, overrides: dict):
+def _load_usd(path: str, overrides: dict, time=None):
     from . import usd
 
     stored = usd.read_settings(path)
@@ -211,7 +218,7 @@ def _load_usd(path: str, overrides: dict):
         # flags, else the default width).
         from .render import RenderSettings
 
-        scene = usd.read_stage(path)  # camera fitted to its own aperture: kept as is
+        scene = usd.read_stage(path, time=time)  # camera fitted to its own aperture: kept as is
         cam = scene.camera
         aspect = cam.sensor_width / cam.sensor_height if cam.sensor_height > 0 else 4 / 3
         if "height" in overrides:
@@ -221,12 +228,17 @@ def _load_usd(path: str, overrides: dict):
             stored = {**stored, "width": width, "height": max(1, round(width / aspect))}
         return scene, _settings_from(_merge_size(stored, overrides))
     settings = _settings_from(_merge_size(stored, overrides))
-    scene = usd.read_stage(path, resolution=(settings.width, settings.height))
+    scene = usd.read_stage(path, resolution=(settings.width, settings.height), time=time)
     return scene, settings
 
 
 def _load_blend(path: str, overrides: dict):
     """Opens a .blend with bpy and exports it with the add-on's exporter."""
+    return next(_blend_frames(path, overrides, [None]))
+
+
+def _blend_frames(path: str, overrides: dict, frames):
+    """(scene, settings) of each frame of a .blend (None: the current frame), opened once."""
     import dataclasses
     import os
 
@@ -244,14 +256,17 @@ def _load_blend(path: str, overrides: dict):
     polychrome_blender.register()  # before opening, so scene.polychrome is read back
     try:
         bpy.ops.wm.open_mainfile(filepath=os.path.abspath(path))
-        depsgraph = bpy.context.evaluated_depsgraph_get()
-        bscene = depsgraph.scene
-        width, height = render_size(bscene)
-        stored = dataclasses.asdict(settings_from_scene(bscene.polychrome, width, height))
-        scene, messages = export_scene(depsgraph)
-        for message in messages:
-            print(f"polychrome render: warning: {message}", file=sys.stderr)
-        return scene, _settings_from(_merge_size(stored, overrides))
+        for frame in frames:
+            if frame is not None:
+                bpy.context.scene.frame_set(frame)
+            depsgraph = bpy.context.evaluated_depsgraph_get()
+            bscene = depsgraph.scene
+            width, height = render_size(bscene)
+            stored = dataclasses.asdict(settings_from_scene(bscene.polychrome, width, height))
+            scene, messages = export_scene(depsgraph)
+            for message in messages:
+                print(f"polychrome render: warning: {message}", file=sys.stderr)
+            yield scene, _settings_from(_merge_size(stored, overrides))
     finally:
         polychrome_blender.unregister()
 
@@ -266,6 +281,8 @@ def cmd_render(args: argparse.Namespace) -> int:
         raise ValueError(f"{out}: unsupported image type '{out.suffix}' (use .exr or .png)")
     overrides = _render_overrides(args)
     suffix = Path(args.scene).suffix.lower()
+    if args.frames is not None:
+        return _render_frames(args, out, overrides, suffix)
     if suffix in USD_SUFFIXES:
         import warnings
 
@@ -283,14 +300,83 @@ def cmd_render(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     try:
         result = render(scene, settings, progress=not args.quiet)
-    except KeyboardInterrupt:
-        print("polychrome render: cancelled", file=sys.stderr)
+    except KeyboardInterrupt as e:
+        partial = getattr(e, "result", None)  # a distributed render keeps what finished
+        if partial is None:
+            print("polychrome render: cancelled", file=sys.stderr)
+            return EXIT_INTERRUPTED
+        partial.save(out, passes=args.passes)
+        print(
+            f"polychrome render: cancelled; wrote the finished part to {out} ({partial.stats.get('samples_per_pixel')} samples, marked partial)",
+            file=sys.stderr,
+        )
         return EXIT_INTERRUPTED
     result.save(out, passes=args.passes)
     print(
         f"wrote {out} ({settings.width}x{settings.height}, {result.stats.get('samples_per_pixel')} samples, "
         f"{settings.method}, {result.stats.get('wavelengths')} wavelengths, quality {result.stats.get('quality')}, {time.perf_counter() - start:.1f} s)"
     )
+    return EXIT_OK
+
+
+def _render_frames(args: argparse.Namespace, out, overrides: dict, suffix: str) -> int:
+    """--frames: every frame rendered (locally, or as one task each on --scheduler) and
+    written as it completes."""
+    import warnings
+
+    from .distributed import frame_path, parse_frames
+    from .render import render
+
+    frames = parse_frames(args.frames, args.frame_step)
+    if suffix in USD_SUFFIXES:
+
+        def scenes():
+            for frame in frames:
+                with warnings.catch_warnings(record=True) as caught:
+                    warnings.simplefilter("always")
+                    loaded = _load_usd(args.scene, overrides, time=frame)
+                for w in caught:
+                    print(f"polychrome render: warning: frame {frame}: {w.message}", file=sys.stderr)
+                yield loaded
+
+    elif suffix == ".blend":
+        scenes = lambda: _blend_frames(args.scene, overrides, frames)
+    else:
+        raise ValueError(f"{args.scene}: unsupported scene type '{suffix}' (use {', '.join(USD_SUFFIXES)} or .blend)")
+
+    def write(frame, result):
+        path = frame_path(str(out), frame)
+        result.save(path, passes=args.passes)
+        print(f"wrote {path} (frame {frame}, {result.stats.get('samples_per_pixel')} samples)")
+
+    source = scenes()
+    first_scene, first_settings = next(source)
+    scheduler = first_settings.scheduler
+    try:
+        if scheduler:
+            from .distributed import render_frames
+
+            pending = {"first": (first_scene, first_settings)}
+
+            def describe(frame):
+                scene, settings = pending.pop("first", None) or next(source)
+                desc, buffers = scene.description()
+                return desc, buffers, settings
+
+            done = render_frames(frames, describe, scheduler, on_frame=write)
+        else:
+            done = []
+            loaded = (first_scene, first_settings)
+            for frame in frames:
+                scene, settings = loaded if frame == frames[0] else next(source)
+                write(frame, render(scene, settings, progress=not args.quiet))
+                done.append(frame)
+    except KeyboardInterrupt:
+        print("polychrome render: cancelled; the frames written so far are complete", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    finally:
+        source.close()
+    print(f"rendered {len(done)} frame(s)")
     return EXIT_OK
 
 

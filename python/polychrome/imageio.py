@@ -17,8 +17,10 @@ e.g. ``S0.550,000000nm``.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
+import uuid
 from pathlib import Path
 from collections.abc import Mapping, Sequence
 
@@ -107,12 +109,30 @@ def _exr_header(**attributes) -> dict:
     return {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage, **attributes}
 
 
-def _write_channels(path, channels: Mapping[str, np.ndarray], **attributes) -> None:
-    """Write named 2-D float32 planes to one EXR file."""
+@contextlib.contextmanager
+def atomic_path(path):
+    """A temporary name beside ``path`` to write to; renamed over ``path`` (atomically, on
+    the same file system) only once the write has succeeded, so an interrupted or failed
+    write never leaves a truncated image over a good one."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.stem}.{uuid.uuid4().hex[:8]}.tmp{path.suffix}")
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            tmp.unlink()
+
+
+def _write_channels(path, channels: Mapping[str, np.ndarray], metadata: Mapping[str, str] | None = None, **attributes) -> None:
+    """Write named 2-D float32 planes to one EXR file (atomically), with string
+    ``metadata`` as header attributes."""
     import OpenEXR
 
     planes = {name: np.ascontiguousarray(plane, dtype=np.float32) for name, plane in channels.items()}
-    OpenEXR.File(_exr_header(**attributes), planes).write(os.fspath(path))
+    header = _exr_header(**attributes, **{k: str(v) for k, v in (metadata or {}).items()})
+    with atomic_path(path) as tmp:
+        OpenEXR.File(header, planes).write(os.fspath(tmp))
 
 
 def _rgba_planes(rgba: np.ndarray, prefix: str = "", suffixes=RGBA_CHANNELS) -> dict:
@@ -143,13 +163,14 @@ def _read_exr_channels(path) -> dict:
 # --------------------------------------------------------------------------- EXR writers
 
 
-def write_exr(path, rgba) -> None:
-    """Write a scene-linear float32 (H, W, 3|4) image as channels R, G, B(, A); row 0 is the top."""
+def write_exr(path, rgba, metadata: Mapping[str, str] | None = None) -> None:
+    """Write a scene-linear float32 (H, W, 3|4) image as channels R, G, B(, A); row 0 is the top.
+    ``metadata``: string header attributes (every writer here takes them)."""
     image = _check_image(rgba)
-    _write_channels(path, _rgba_planes(image))
+    _write_channels(path, _rgba_planes(image), metadata)
 
 
-def write_exr_layers(path, layers: Mapping[str, np.ndarray], channel_names=None) -> None:
+def write_exr_layers(path, layers: Mapping[str, np.ndarray], channel_names=None, metadata: Mapping[str, str] | None = None) -> None:
     """Write render passes as one multi-channel EXR with "Layer.Channel" names.
 
     Each layer is (H, W) or (H, W, C). Channel suffixes come from `channel_names`
@@ -172,7 +193,7 @@ def write_exr_layers(path, layers: Mapping[str, np.ndarray], channel_names=None)
         planes.update(_rgba_planes(arr, f"{layer}.", suffixes))
     if not planes:
         raise ValueError("write_exr_layers needs at least one layer")
-    _write_channels(path, planes)
+    _write_channels(path, planes, metadata)
 
 
 def _layer_suffixes(layer: str, count: int, explicit=None) -> Sequence[str]:
@@ -190,7 +211,7 @@ def spectral_channel_name(wavelength_nm: float) -> str:
     return "S0." + f"{float(wavelength_nm):f}".replace(".", ",") + "nm"
 
 
-def write_spectral_exr(path, spectral, wavelengths_nm, rgba=None) -> None:
+def write_spectral_exr(path, spectral, wavelengths_nm, rgba=None, metadata: Mapping[str, str] | None = None) -> None:
     """Write an (H, W, N) emissive spectral image (Fichet et al. 2021 layout) with an optional RGB(A) preview."""
     data = np.asarray(spectral, dtype=np.float32)
     wavelengths = np.asarray(wavelengths_nm, dtype=np.float64).reshape(-1)
@@ -207,7 +228,7 @@ def write_spectral_exr(path, spectral, wavelengths_nm, rgba=None) -> None:
         if preview.shape[:2] != data.shape[:2]:
             raise ValueError(f"rgba preview is {preview.shape[:2]}, spectral image is {data.shape[:2]}")
         planes.update(_rgba_planes(preview))
-    _write_channels(path, planes, spectralLayoutVersion=SPECTRAL_LAYOUT_VERSION, emissiveUnits=EMISSIVE_UNITS)
+    _write_channels(path, planes, metadata, spectralLayoutVersion=SPECTRAL_LAYOUT_VERSION, emissiveUnits=EMISSIVE_UNITS)
 
 
 # --------------------------------------------------------------------------- readers
@@ -270,13 +291,33 @@ def _read_png_rgba(path) -> np.ndarray:
 # --------------------------------------------------------------------------- PNG writer
 
 
-def write_png(path, rgba, exposure: float = 0.0) -> None:
-    """Write scene-linear (H, W, 3|4) as 8-bit sRGB PNG; colour scaled by 2**exposure, clamped, NaN -> 0."""
-    from PIL import Image
+def write_png(path, rgba, exposure: float = 0.0, metadata: Mapping[str, str] | None = None) -> None:
+    """Write scene-linear (H, W, 3|4) as 8-bit sRGB PNG (atomically); colour scaled by
+    2**exposure, clamped, NaN -> 0; ``metadata`` as PNG text chunks."""
+    from PIL import Image, PngImagePlugin
 
     image = np.asarray(_check_image(rgba), dtype=np.float64)
     image = np.nan_to_num(image, nan=0.0, posinf=1.0, neginf=0.0)
     colour = linear_to_srgb(image[:, :, :3] * (2.0**exposure))
     encoded = np.concatenate([colour, image[:, :, 3:]], axis=-1)
     pixels = np.rint(np.clip(np.nan_to_num(encoded), 0.0, 1.0) * 255.0).astype(np.uint8)
-    Image.fromarray(pixels, "RGBA" if pixels.shape[2] == 4 else "RGB").save(os.fspath(path), format="PNG")
+    info = PngImagePlugin.PngInfo()
+    for k, v in (metadata or {}).items():
+        info.add_text(k, str(v))
+    with atomic_path(path) as tmp:
+        Image.fromarray(pixels, "RGBA" if pixels.shape[2] == 4 else "RGB").save(os.fspath(tmp), format="PNG", pnginfo=info)
+
+
+def read_metadata(path) -> dict[str, str]:
+    """The string metadata of an image written here: EXR header string attributes or PNG
+    text chunks."""
+    p = _require_file(path)
+    if p.suffix.lower() == ".png":
+        from PIL import Image
+
+        with Image.open(p) as im:
+            return {k: str(v) for k, v in getattr(im, "text", {}).items()}
+    import OpenEXR
+
+    with OpenEXR.File(str(p)) as exr:
+        return {k: v for k, v in exr.header().items() if isinstance(v, str)}

@@ -41,26 +41,46 @@ class RenderResult:
     wavelengths: np.ndarray
     stats: dict[str, Any] = field(default_factory=dict)
 
+    @property
+    def partial(self) -> bool:
+        """The render stopped early (cancelled, Ctrl-C): not every sample was taken."""
+        return bool(self.stats.get("partial") or self.stats.get("cancelled"))
+
+    def metadata(self) -> dict[str, str]:
+        """What :meth:`save` writes into the file (EXR header attributes, PNG text):
+        ``polychrome:partial`` ("1" when the render stopped early), the samples per pixel
+        and the stats as JSON."""
+        return {
+            "polychrome:partial": "1" if self.partial else "0",
+            "polychrome:samples": str(self.stats.get("samples_per_pixel", "")),
+            "polychrome:stats": json.dumps(self.stats, default=str),
+        }
+
     def save(self, path: str | Path, *, passes: bool = False) -> Path:
         """Writes the image by extension: ``.png`` (sRGB 8-bit) or ``.exr`` (float; with
         ``passes`` also Depth, Normal, Albedo layers; a spectral render also writes the
-        spectrum in the JCGT 2021 spectral-EXR layout beside the RGB)."""
+        spectrum in the JCGT 2021 spectral-EXR layout beside the RGB). The file is written
+        to a temporary name and renamed over ``path``, so a failed or interrupted write never
+        truncates an existing image; :meth:`metadata` goes into the file."""
         from . import imageio
 
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         ext = path.suffix.lower()
+        meta = self.metadata()
         if ext == ".png":
-            imageio.write_png(path, self.rgba)
+            imageio.write_png(path, self.rgba, metadata=meta)
         elif ext == ".exr":
             if self.spectral is not None:
-                imageio.write_spectral_exr(path, self.spectral, self.wavelengths, rgba=self.rgba)
+                imageio.write_spectral_exr(path, self.spectral, self.wavelengths, rgba=self.rgba, metadata=meta)
             elif passes:
                 imageio.write_exr_layers(
-                    path, {"Combined": self.rgba, "Depth": self.depth[..., None], "Normal": self.normal, "Albedo": self.albedo}
+                    path,
+                    {"Combined": self.rgba, "Depth": self.depth[..., None], "Normal": self.normal, "Albedo": self.albedo},
+                    metadata=meta,
                 )
             else:
-                imageio.write_exr(path, self.rgba)
+                imageio.write_exr(path, self.rgba, metadata=meta)
         else:
             raise ValueError(f"{path}: unsupported image type '{ext}' (use .png or .exr)")
         return path
@@ -145,7 +165,15 @@ def render(
     (pixel samples) called about 20 times a second that may return False to cancel.
     Ctrl-C cancels too (KeyboardInterrupt). Errors in the scene raise ValueError naming
     the object and the problem.
+
+    ``scheduler``: a Dask scheduler address (``tcp://host:8786``) or a
+    ``distributed.Client`` renders on that cluster (docs/distributed.md): the same image
+    for the same seed; Ctrl-C raises ``polychrome.distributed.RenderInterrupted``, whose
+    ``result`` holds the finished passes.
     """
+    client = None
+    if not isinstance(overrides.get("scheduler", ""), str):  # a distributed.Client
+        client = overrides.pop("scheduler")
     settings = replace(settings or RenderSettings(), **overrides)  # validates every setting
     desc, buffers = scene.description()
     close = None
@@ -156,6 +184,10 @@ def render(
     else:
         callback = None
     try:
+        if client is not None or settings.scheduler:
+            from . import distributed
+
+            return distributed.render(desc, buffers, settings, client or settings.scheduler, progress=callback)
         start = time.perf_counter()
         out = _core.render(description_json(desc), buffers, settings.to_json(), callback)
     finally:

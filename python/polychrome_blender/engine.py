@@ -39,14 +39,19 @@ def viewport_settings(props, width=1, height=1):
     """Settings of the interactive viewport render: the scene's, with the viewport's
     sample count, no time limit and no spectral passes."""
     settings = settings_from_scene(props, width, height)
-    return dataclasses.replace(settings, samples=int(props.viewport_samples), time_limit=0.0, spectral_output=False)
+    # The viewport renders on this machine (a cluster round trip per redraw is no help).
+    return dataclasses.replace(settings, samples=int(props.viewport_samples), time_limit=0.0, spectral_output=False, scheduler="")
 
 
 def material_preview_settings(props, width, height):
     """Settings of material / world / light preview renders (small, few samples)."""
     settings = settings_from_scene(props, width, height)
     return dataclasses.replace(
-        settings, samples=viewport.MATERIAL_PREVIEW_SAMPLES, time_limit=viewport.MATERIAL_PREVIEW_TIME_LIMIT, spectral_output=False
+        settings,
+        samples=viewport.MATERIAL_PREVIEW_SAMPLES,
+        time_limit=viewport.MATERIAL_PREVIEW_TIME_LIMIT,
+        spectral_output=False,
+        scheduler="",
     )
 
 
@@ -204,8 +209,9 @@ class PolychromeRenderEngine(bpy.types.RenderEngine):
 
     def _run_render(self, scene, settings, progress, depsgraph, width, height):
         """The render itself; with a UI (``progressive_final``), on a background job whose
-        previews are shown in the Image Editor about every ``PROGRESSIVE_INTERVAL`` s."""
-        if self.is_preview or not self._progressive_final():
+        previews are shown in the Image Editor about every ``PROGRESSIVE_INTERVAL`` s. With
+        ``scene.polychrome.scheduler`` set, on that Dask cluster (docs/distributed.md)."""
+        if self.is_preview or not self._progressive_final() or settings.scheduler:
             return pc.render(scene, settings, progress=progress)
         job = pc.RenderJob(scene, settings).start()
         shown, last_shown = 0, time.perf_counter()

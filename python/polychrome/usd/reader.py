@@ -192,7 +192,7 @@ def _spectrum_from_dict(d: dict[str, Any]):
 
 
 class _Reader:
-    def __init__(self, path: Path, resolution=None):
+    def __init__(self, path: Path, resolution=None, time=None):
         Gf, Sdf, Usd, UsdGeom, UsdLux, UsdRender, UsdShade = _pxr()
         self.Gf, self.Sdf, self.Usd, self.UsdGeom, self.UsdLux, self.UsdRender, self.UsdShade = (
             Gf,
@@ -205,7 +205,8 @@ class _Reader:
         )
         self.path = path
         self.stage = open_stage(path)
-        self.time = Usd.TimeCode.EarliestTime()
+        # An animation's frame is a time code (Blender writes frame n at time code n).
+        self.time = Usd.TimeCode.EarliestTime() if time is None else Usd.TimeCode(float(time))
         self.cache = UsdGeom.XformCache(self.time)
         self.mpu = float(UsdGeom.GetStageMetersPerUnit(self.stage))
         if not (math.isfinite(self.mpu) and self.mpu > 0):
@@ -1364,13 +1365,14 @@ def read_settings_from_stage(stage, path) -> dict[str, Any]:
     return out
 
 
-def read_stage(path, *, resolution=None):
+def read_stage(path, *, resolution=None, time=None):
     """Reads the USD stage at ``path`` into a :class:`polychrome.Scene`.
 
     ``resolution`` (width, height) decides how the camera's aperture is conformed to the
     image (UsdRender's expandAperture); by default the stage's render settings' resolution,
-    else the aperture's own aspect."""
-    reader = _Reader(Path(path), resolution)
+    else the aperture's own aspect. ``time``: the time code to read animated values at
+    (an animation's frame number); by default the earliest."""
+    reader = _Reader(Path(path), resolution, time)
     try:
         return reader.read()
     except Exception as e:  # noqa: BLE001 - pxr's Tf.ErrorException is not importable by name here

@@ -7,7 +7,7 @@ mod common;
 
 use common::*;
 use polychrome_core::material::IorDesc;
-use polychrome_core::render::{compile, Direction, Driver, Method, RenderControl, ResolvedSettings, Timing};
+use polychrome_core::render::{compile, Direction, Driver, Merge, Method, RenderControl, ResolvedSettings, Timing};
 use polychrome_core::scene::{BsdfDesc, Buffer, LightDesc, MaterialDesc, Scene, SceneDesc};
 use polychrome_core::spectrum::SpectrumDesc;
 use polychrome_core::spectrum::WavelengthGrid;
@@ -129,4 +129,58 @@ fn pass_ranges_add_up_across_the_wavelength_rounds_of_monochromatic_scenes() {
     };
     // 4 wavelengths × 3 samples = 12 passes; ranges straddle the rounds.
     assert_ranges_add_up(settings, &[0..5, 5..6, 6..12]);
+}
+
+/// Adaptive sampling across tasks: each group of the pass loop split into tasks (every
+/// task inside one half, added in reverse order, as workers may finish) through a
+/// [`Merge`] gives the pass loop's image, sample counts and converged pixels.
+#[test]
+fn adaptive_sampling_split_into_tasks_equals_the_pass_loop() {
+    let settings = ResolvedSettings {
+        width: 20,
+        height: 14,
+        samples: 64,
+        noise_threshold: 4.0,
+        grid: WavelengthGrid::uniform(8, 380.0, 780.0).unwrap(),
+        ..Default::default()
+    };
+    let scene = build(&settings);
+    let driver = Driver::new(&scene, &settings).unwrap();
+    assert!(driver.adaptive());
+    let control = RenderControl::new();
+    let timing = Timing { start: Instant::now(), build_seconds: 0.0, threads: 1 };
+    let (film, done) = driver.run(&control, timing.start);
+    let whole = driver.output(&film, done, &control, timing);
+    let converged = whole.stats.converged_pixels;
+    assert!(converged > 0 && converged < 20 * 14, "the test needs some pixels stopped early and some not: {converged}");
+
+    let mut merge = Merge::new(&driver);
+    for group in driver.groups() {
+        if !merge.any_active() {
+            break;
+        }
+        let active = merge.active().map(|a| a.to_vec());
+        let mut tasks = Vec::new();
+        for (h, half) in merge.halves(group.clone()).into_iter().enumerate() {
+            let mid = half.start + half.len() as u32 / 2;
+            for r in [half.start..mid, mid..half.end] {
+                if !r.is_empty() {
+                    tasks.push((driver.render_passes(r, active.as_deref(), &control).unwrap(), h == 0));
+                }
+            }
+        }
+        for (sums, first_half) in tasks.iter().rev() {
+            merge.add(sums, *first_half);
+        }
+        merge.end_group(&driver, group.len() as u32);
+    }
+    let parts = merge.output(&driver, false, &control, timing);
+
+    assert_eq!(whole.stats.total_samples, parts.stats.total_samples);
+    assert_eq!(whole.stats.converged_pixels, parts.stats.converged_pixels);
+    assert_eq!(whole.stats.samples_per_pixel, parts.stats.samples_per_pixel);
+    let peak = whole.images.rgba.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+    for (k, (a, b)) in whole.images.rgba.iter().zip(&parts.images.rgba).enumerate() {
+        assert!((a - b).abs() <= 1e-5 * peak, "value {k}: pass loop {a}, tasks {b}");
+    }
 }

@@ -3,15 +3,19 @@
 //! calling thread, and map every error — and, as a last resort, every panic — to a
 //! Python exception with a readable message.
 
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn};
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArrayDyn};
 use polychrome_core::color::uplift::Uplift;
 use polychrome_core::color::{Observer, RgbSpace};
+use polychrome_core::film::FilmBuffer;
 use polychrome_core::geometry::curves::{self, CurveOptions, Tessellation};
 use polychrome_core::material::catalogue;
 use polychrome_core::material::dispersion::{self, IorDesc};
 use polychrome_core::render::settings::schema_json;
-use polychrome_core::render::{render as core_render, RenderControl, RenderOutput, RenderSettings};
-use polychrome_core::scene::{Buffer, SceneDesc};
+use polychrome_core::render::{
+    compile, render as core_render, Driver, Merge, RenderControl, RenderOutput, RenderSettings, ResolvedSettings,
+    Timing,
+};
+use polychrome_core::scene::{Buffer, Scene, SceneDesc};
 use polychrome_core::spectrum::named::{RgbToSpectrum, SpectrumRole};
 use polychrome_core::spectrum::SpectrumDesc;
 use polychrome_core::Error;
@@ -293,6 +297,242 @@ impl Drop for RenderJob {
     }
 }
 
+/// PassRenderer(scene_json, buffers, settings_json)
+///
+/// A scene compiled once for rendering in tasks (`polychrome.distributed`). A worker
+/// calls `render_passes(start, end, active)` for the sums of a range of sample passes;
+/// the client adds tasks' sums with `add(sums, first_half)` and `end_group(passes)` in
+/// the groups of `groups()` (adaptive sampling: `active()` between groups) and takes the
+/// image with `output(...)`, the dict of `render`. Same seed and settings: the same
+/// image as `render`, to float rounding.
+#[pyclass(module = "polychrome._core", frozen)]
+struct PassRenderer {
+    scene: Scene,
+    settings: ResolvedSettings,
+    pool: rayon::ThreadPool,
+    build_seconds: f64,
+    merge: Mutex<Option<Merge>>,
+}
+
+impl PassRenderer {
+    fn driver(&self) -> PyResult<Driver<'_>> {
+        Driver::new(&self.scene, &self.settings).map_err(to_py_err)
+    }
+
+    fn with_merge<T>(&self, f: impl FnOnce(&Driver, &mut Merge) -> PyResult<T>) -> PyResult<T> {
+        let driver = self.driver()?;
+        let mut slot = lock(&self.merge);
+        let merge = slot.get_or_insert_with(|| Merge::new(&driver));
+        f(&driver, merge)
+    }
+
+    fn pixels(&self) -> usize {
+        self.settings.width as usize * self.settings.height as usize
+    }
+}
+
+/// The sums of a film buffer as numpy arrays (pixels row-major).
+fn sums_dict<'py>(py: Python<'py>, b: FilmBuffer) -> PyResult<Bound<'py, PyDict>> {
+    let n = b.count.len();
+    let d = PyDict::new(py);
+    let flat3 = |v: Vec<[f64; 3]>| v.into_iter().flatten().collect::<Vec<f64>>();
+    d.set_item("xyz", PyArray1::from_vec(py, flat3(b.xyz)).reshape([n, 3])?)?;
+    d.set_item("albedo_xyz", PyArray1::from_vec(py, flat3(b.albedo_xyz)).reshape([n, 3])?)?;
+    d.set_item("depth", PyArray1::from_vec(py, b.depth))?;
+    d.set_item("normal", PyArray1::from_vec(py, flat3(b.normal)).reshape([n, 3])?)?;
+    d.set_item("count", PyArray1::from_vec(py, b.count))?;
+    match b.spectral {
+        Some(s) => d.set_item("spectral", PyArray1::from_vec(py, s))?,
+        None => d.set_item("spectral", py.None())?,
+    }
+    d.set_item("nonfinite", b.nonfinite)?;
+    Ok(d)
+}
+
+/// A film buffer of `pixels` pixels from the dict of [`sums_dict`]; errors name the array.
+fn sums_from_dict(d: &Bound<'_, PyDict>, pixels: usize, spectral_len: Option<usize>) -> PyResult<FilmBuffer> {
+    let get = |name: &str| -> PyResult<Bound<'_, PyAny>> {
+        d.get_item(name)?.ok_or_else(|| PyValueError::new_err(format!("pass sums: '{name}' is missing")))
+    };
+    let f64s = |name: &str, per: usize| -> PyResult<Vec<f64>> {
+        let a: PyReadonlyArrayDyn<f64> = get(name)?.extract()?;
+        let v: Vec<f64> = a.as_array().iter().copied().collect();
+        if v.len() != pixels * per {
+            return Err(PyValueError::new_err(format!(
+                "pass sums: '{name}' has {} values, expected {}",
+                v.len(),
+                pixels * per
+            )));
+        }
+        Ok(v)
+    };
+    let rows = |v: Vec<f64>| v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect::<Vec<_>>();
+    let count: PyReadonlyArray1<u32> = get("count")?.extract()?;
+    let count = count.as_array().to_vec();
+    if count.len() != pixels {
+        return Err(PyValueError::new_err(format!("pass sums: 'count' has {} values, expected {pixels}", count.len())));
+    }
+    let spectral = match (spectral_len, get("spectral")?.is_none()) {
+        (Some(n), false) => Some(f64s("spectral", n)?),
+        (None, true) => None,
+        _ => return Err(PyValueError::new_err("pass sums: 'spectral' does not match the render's spectral_output")),
+    };
+    Ok(FilmBuffer {
+        xyz: rows(f64s("xyz", 3)?),
+        albedo_xyz: rows(f64s("albedo_xyz", 3)?),
+        depth: f64s("depth", 1)?,
+        normal: rows(f64s("normal", 3)?),
+        count,
+        spectral,
+        nonfinite: get("nonfinite")?.extract()?,
+    })
+}
+
+#[pymethods]
+impl PassRenderer {
+    #[new]
+    fn new(py: Python<'_>, scene_json: &str, buffers: Vec<Bound<'_, PyAny>>, settings_json: &str) -> PyResult<Self> {
+        let desc: SceneDesc = parse(scene_json, "scene description")?;
+        let given = RenderSettings::from_json(settings_json).map_err(to_py_err)?;
+        let buffers = convert_buffers(buffers)?;
+        py.allow_threads(|| {
+            guarded("scene build", || {
+                let settings = given.resolve(Some(&desc))?;
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(settings.threads)
+                    .build()
+                    .map_err(|e| Error::setting("threads", e.to_string()))?;
+                let start = std::time::Instant::now();
+                let scene = pool.install(|| compile(&desc, &buffers, &settings))?;
+                Driver::new(&scene, &settings)?; // settings the scene cannot be rendered with fail here
+                Ok(Self {
+                    scene,
+                    settings,
+                    pool,
+                    build_seconds: start.elapsed().as_secs_f64(),
+                    merge: Mutex::new(None),
+                })
+            })
+        })
+    }
+
+    /// Sample passes of the whole render (rounds × samples).
+    fn sample_passes(&self) -> PyResult<u32> {
+        Ok(self.driver()?.sample_passes())
+    }
+
+    /// The pass loop's groups as (start, end) ranges, in order.
+    fn groups(&self) -> PyResult<Vec<(u32, u32)>> {
+        Ok(self.driver()?.groups().into_iter().map(|r| (r.start, r.end)).collect())
+    }
+
+    /// Whether adaptive sampling applies (tasks must then keep to the groups).
+    fn adaptive(&self) -> PyResult<bool> {
+        Ok(self.driver()?.adaptive())
+    }
+
+    /// (width, height) of the image.
+    fn size(&self) -> (u32, u32) {
+        (self.settings.width, self.settings.height)
+    }
+
+    /// The resolved time limit in seconds (0: none).
+    fn time_limit(&self) -> f64 {
+        self.settings.time_limit
+    }
+
+    /// Seconds the scene took to compile.
+    fn build_seconds(&self) -> f64 {
+        self.build_seconds
+    }
+
+    /// Sums of sample passes `start..end` over the pixels whose `active` entry is true
+    /// (all when None), as numpy arrays: `xyz`, `albedo_xyz`, `normal` (pixels, 3),
+    /// `depth`, `count` (pixels,), `spectral` (pixels × wavelengths,) or None, and
+    /// `nonfinite`. Renders on this object's thread pool without the GIL.
+    #[pyo3(signature = (start, end, active=None))]
+    fn render_passes<'py>(
+        &self,
+        py: Python<'py>,
+        start: u32,
+        end: u32,
+        active: Option<PyReadonlyArray1<'py, bool>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let driver = self.driver()?;
+        let total = driver.sample_passes();
+        if start >= end || end > total {
+            return Err(PyValueError::new_err(format!("passes {start}..{end}: not a range inside 0..{total}")));
+        }
+        let active = active.map(|a| a.as_array().to_vec());
+        if active.as_ref().is_some_and(|a| a.len() != self.pixels()) {
+            return Err(PyValueError::new_err(format!("active: expected {} pixels", self.pixels())));
+        }
+        let control = RenderControl::new();
+        let sums = py.allow_threads(|| {
+            guarded("render_passes", || {
+                Ok(self.pool.install(|| driver.render_passes(start..end, active.as_deref(), &control)))
+            })
+        })?;
+        sums_dict(py, sums.expect("never cancelled"))
+    }
+
+    /// Adds a task's sums (from `render_passes` of this scene and settings);
+    /// `first_half`: the task lies in its group's first half (see `halves`).
+    fn add(&self, py: Python<'_>, sums: &Bound<'_, PyDict>, first_half: bool) -> PyResult<()> {
+        let spectral_len = self.settings.spectral_output.then_some(self.scene.grid.len());
+        let buffer = sums_from_dict(sums, self.pixels(), spectral_len)?;
+        py.allow_threads(|| self.with_merge(|_, m| Ok(m.add(&buffer, first_half))))
+    }
+
+    /// A group's two halves as (start, end) ranges (without adaptive sampling the first
+    /// is the whole group and the second empty).
+    fn halves(&self, start: u32, end: u32) -> PyResult<[(u32, u32); 2]> {
+        self.with_merge(|_, m| Ok(m.halves(start..end).map(|r| (r.start, r.end))))
+    }
+
+    /// After every task of a group of `passes` passes was added.
+    fn end_group(&self, passes: u32) -> PyResult<()> {
+        self.with_merge(|d, m| Ok(m.end_group(d, passes)))
+    }
+
+    /// Adaptive sampling: the pixels still sampled (bool per pixel, row-major), or None.
+    fn active<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray1<bool>>>> {
+        self.with_merge(|_, m| Ok(m.active().map(|a| PyArray1::from_slice(py, a))))
+    }
+
+    /// False once adaptive sampling has stopped every pixel.
+    fn any_active(&self) -> PyResult<bool> {
+        self.with_merge(|_, m| Ok(m.any_active()))
+    }
+
+    /// Passes counted by `end_group` so far.
+    fn passes(&self) -> PyResult<u32> {
+        self.with_merge(|_, m| Ok(m.passes()))
+    }
+
+    /// The dict of `render` for what was added; `cancelled` marks it partial in the stats.
+    #[pyo3(signature = (cancelled, time_limited, seconds))]
+    fn output<'py>(
+        &self,
+        py: Python<'py>,
+        cancelled: bool,
+        time_limited: bool,
+        seconds: f64,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let control = RenderControl::new();
+        if cancelled {
+            control.cancel();
+        }
+        let start = std::time::Instant::now()
+            .checked_sub(Duration::from_secs_f64(seconds.max(0.0)))
+            .unwrap_or_else(std::time::Instant::now);
+        let timing = Timing { start, build_seconds: self.build_seconds, threads: self.pool.current_num_threads() };
+        let mut out = self.with_merge(|d, m| Ok(m.output(d, time_limited, &control, timing)))?;
+        out.stats.auto_reason.splice(0..0, self.settings.notes.iter().cloned());
+        output_dict(py, out)
+    }
+}
+
 fn output_dict<'py>(py: Python<'py>, out: RenderOutput) -> PyResult<Bound<'py, PyDict>> {
     let (h, w) = (out.height as usize, out.width as usize);
     let d = PyDict::new(py);
@@ -571,6 +811,7 @@ fn _evaluate_procedural<'py>(
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render, m)?)?;
+    m.add_class::<PassRenderer>()?;
     m.add_function(wrap_pyfunction!(wavelength_grid, m)?)?;
     m.add_function(wrap_pyfunction!(spectrum_values, m)?)?;
     m.add_function(wrap_pyfunction!(spectrum_xyz, m)?)?;

@@ -125,6 +125,22 @@ impl<'a> Driver<'a> {
         self.integrator.rounds * self.settings.samples
     }
 
+    /// The resolved settings this driver renders with.
+    pub fn settings(&self) -> &ResolvedSettings {
+        self.settings
+    }
+
+    /// Whether adaptive sampling applies to this render.
+    pub fn adaptive(&self) -> bool {
+        let s = self.settings;
+        s.noise_threshold > 0.0 && super::adaptive::adaptive_supported(s.method, s.direction)
+    }
+
+    /// The groups of passes of the pass loop, in order (see [`super::tasks::Merge`]).
+    pub fn groups(&self) -> Vec<Range<u32>> {
+        self.schedule(self.adaptive()).collect()
+    }
+
     /// An empty film for this render's image.
     pub fn new_film(&self) -> Film {
         let n = self.scene.grid.len();
@@ -288,7 +304,7 @@ impl<'a> Driver<'a> {
 
     /// Samples per pixel after `passes` sample passes: every pass counts, except that the
     /// rounds of MONOCHROMATIC_SCENES repeat the same samples for other wavelengths.
-    fn samples_per_pixel(&self, passes: u32) -> u32 {
+    pub fn samples_per_pixel(&self, passes: u32) -> u32 {
         if self.integrator.rounds > 1 {
             passes.min(self.settings.samples)
         } else {

@@ -1,6 +1,7 @@
 //! Rendering a scene description: compiles the scene for the resolved settings' grid
 //! and hands it to the pass loop ([`driver`]). The settings and their schema are in
-//! [`settings`], the quality presets that resolve them in [`quality`]. Adaptive sampling lives in [`adaptive`], AUTO's wavelength grid in
+//! [`settings`], the quality presets that resolve them in [`quality`]; a render split
+//! into tasks (distributed rendering) is added up in [`tasks`]. Adaptive sampling lives in [`adaptive`], AUTO's wavelength grid in
 //! [`auto_grid`].
 
 use crate::color::RgbSpace;
@@ -18,9 +19,11 @@ pub mod auto_grid;
 pub mod driver;
 pub mod quality;
 pub mod settings;
+pub mod tasks;
 pub use driver::{Driver, PassesDone, Timing};
 pub use quality::Quality;
 pub use settings::{RenderSettings, ResolvedSettings};
+pub use tasks::Merge;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "SCREAMING_SNAKE_CASE")]

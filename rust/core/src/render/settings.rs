@@ -369,6 +369,15 @@ settings! {
     );
     /// Worker threads; 0 uses every core.
     threads: copy usize = 0 => Spec::new("System", "Threads", "Worker threads (0: every core)", int(0, 1024));
+    /// A Dask scheduler to render on (docs/distributed.md); empty renders on this
+    /// machine. The core never reads it: the Python front end splits the render into
+    /// tasks for the cluster.
+    scheduler: copy String = String::new() => Spec::new(
+        "System",
+        "Scheduler",
+        "Address of a Dask scheduler (tcp://host:8786) whose workers render the sample passes and frames; empty renders on this machine",
+        Kind::String,
+    ).see("distributed.md");
 }
 
 impl RenderSettings {

@@ -1,0 +1,365 @@
+"""Distributed rendering on Dask.distributed (docs/distributed.md).
+
+The scene is described once on the client (Python API, USD or .blend) and its
+description and buffers are scattered once to the workers, which compile it once each
+and keep it for the render's tasks. A task renders a range of sample passes and returns
+per-pixel sums (weighted sums and sample counts); the client adds them up. Every pixel
+sample draws from its own random stream seeded by (seed, pixel, pass), so the image
+equals the local render with the same seed and settings to float rounding, however the
+passes are split or which worker renders them. With adaptive sampling the tasks keep
+the local pass loop's groups (see rust/core/src/render/tasks.rs), so it is exact too.
+
+A worker that dies loses only its running tasks: Dask reschedules them on the others.
+Ctrl-C on the client cancels the tasks and returns what finished, marked partial
+(:class:`RenderInterrupted`). Workers need only ``pip install polychrome[distributed]``.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from dataclasses import dataclass, replace
+import hashlib
+import json
+import math
+import threading
+import time
+import uuid
+from typing import Any
+
+import numpy as np
+
+from . import _core
+
+
+class RenderInterrupted(KeyboardInterrupt):
+    """Ctrl-C during a distributed render: ``result`` holds the passes that finished
+    (its stats have ``partial`` true). A KeyboardInterrupt, so code that does not catch
+    it stops as on any Ctrl-C."""
+
+    def __init__(self, result):
+        super().__init__("render interrupted; result holds the finished passes")
+        self.result = result
+
+
+@dataclass(frozen=True)
+class SceneInputs:
+    """What a worker needs to render: scattered once per render, compiled once per worker."""
+
+    token: str
+    scene_json: str
+    buffers: tuple[np.ndarray, ...]
+    settings_json: str
+
+
+def _token(scene_json: str, buffers: list[np.ndarray], settings_json: str) -> str:
+    h = hashlib.sha256()
+    h.update(scene_json.encode())
+    for b in buffers:
+        a = np.ascontiguousarray(b)
+        h.update(f"{a.dtype.str}{a.shape}".encode())
+        h.update(a.data)
+    h.update(settings_json.encode())
+    return h.hexdigest()
+
+
+# Compiled scenes of this process (a worker's), newest last; a few are kept so the
+# frames of an animation or consecutive renders do not recompile.
+_CACHE: OrderedDict[str, Any] = OrderedDict()
+_CACHE_SIZE = 2
+_CACHE_LOCK = threading.Lock()
+#: Scenes this process compiled (the tests check a worker compiles a scene once).
+_COMPILES = 0
+
+
+def _renderer(inputs: SceneInputs):
+    global _COMPILES
+    with _CACHE_LOCK:  # one compile per scene even when a worker runs tasks in parallel
+        r = _CACHE.get(inputs.token)
+        if r is None:
+            _COMPILES += 1
+            r = _core.PassRenderer(inputs.scene_json, list(inputs.buffers), inputs.settings_json)
+            _CACHE[inputs.token] = r
+            while len(_CACHE) > _CACHE_SIZE:
+                _CACHE.popitem(last=False)
+        _CACHE.move_to_end(inputs.token)
+        return r
+
+
+def _worker_name() -> str:
+    try:
+        from distributed import get_worker
+
+        return get_worker().address
+    except (ImportError, ValueError):  # not on a worker (e.g. a synchronous test)
+        return "local"
+
+
+def render_passes_task(inputs: SceneInputs, start: int, end: int, active: np.ndarray | None) -> tuple[dict, str]:
+    """A task: the sums of sample passes ``start..end`` and the worker's address."""
+    return _renderer(inputs).render_passes(start, end, active), _worker_name()
+
+
+def connect(scheduler):
+    """(client, owned): a ``distributed.Client`` as given, or one connected to an address
+    (closed by the caller when ``owned``)."""
+    try:
+        import distributed
+    except ImportError:
+        raise ValueError("rendering on a scheduler needs Dask: pip install 'polychrome[distributed]'") from None
+    if isinstance(scheduler, distributed.Client):
+        return scheduler, False
+    if not isinstance(scheduler, str) or not scheduler:
+        raise ValueError(f"scheduler: expected an address such as tcp://host:8786 or a distributed.Client, got {scheduler!r}")
+    try:
+        return distributed.Client(scheduler, timeout="20s"), True
+    except OSError as e:
+        raise ValueError(f"scheduler {scheduler}: cannot connect ({e})") from None
+
+
+def _split(r: tuple[int, int], parts: int) -> list[tuple[int, int]]:
+    """``r`` cut into at most ``parts`` contiguous non-empty ranges."""
+    a, b = r
+    n = b - a
+    parts = max(1, min(parts, n))
+    cuts = [a + (n * k) // parts for k in range(parts + 1)]
+    return [(cuts[k], cuts[k + 1]) for k in range(parts) if cuts[k + 1] > cuts[k]]
+
+
+def render(
+    desc: dict[str, Any],
+    buffers: list[np.ndarray],
+    settings,
+    scheduler,
+    *,
+    progress=None,
+    tasks_per_worker: int = 4,
+):
+    """Renders a scene description on a Dask cluster; a :class:`~polychrome.RenderResult`
+    as :func:`polychrome.render` returns for the same settings, with
+    ``stats["distributed"]`` (scheduler, tasks, pixel samples per worker).
+
+    ``scheduler``: an address or a ``distributed.Client``. ``progress``: a callable
+    ``f(done, total)`` (pixel samples) called as tasks finish; returning False cancels.
+    Ctrl-C raises :class:`RenderInterrupted` holding the finished part.
+    """
+    from distributed import as_completed
+
+    from .render import description_json
+
+    client, owned = connect(scheduler)
+    try:
+        local = replace(settings, scheduler="")  # the workers render; they need no address
+        scene_json = description_json(desc)
+        settings_json = local.to_json()
+        start_time = time.perf_counter()
+        merge = _core.PassRenderer(scene_json, buffers, settings_json)  # the client's image; checks the scene
+        token = _token(scene_json, buffers, settings_json)
+        inputs = client.scatter(
+            SceneInputs(token, scene_json, tuple(np.ascontiguousarray(b) for b in buffers), settings_json), broadcast=True, hash=False
+        )
+        width, height = merge.size()
+        pixels = width * height
+        total = merge.sample_passes() * pixels
+        workers = max(1, len(client.scheduler_info().get("workers", {})))
+        if merge.adaptive():
+            # Adaptive: the pass loop's groups in order, each cut into tasks inside its halves.
+            groups = [list(merge.halves(*g)) for g in merge.groups()]
+        else:
+            # Every pass in one group; tasks small enough to balance and to lose little.
+            groups = [[(0, merge.sample_passes()), (merge.sample_passes(), merge.sample_passes())]]
+        per_worker: dict[str, int] = {}
+        done_samples = 0
+        cancelled = time_limited = False
+        tasks = 0
+        limit = merge.time_limit()
+        run = uuid.uuid4().hex[:8]
+        pending = []
+        try:
+            for halves in groups:
+                if not merge.any_active():
+                    break
+                if limit > 0 and merge.passes() > 0 and time.perf_counter() - start_time >= limit:
+                    time_limited = True
+                    break
+                active = merge.active()
+                if active is not None:
+                    active = client.scatter(active, hash=False)
+                pieces = max(1, workers * tasks_per_worker if len(groups) == 1 else math.ceil(workers / 2))
+                futures = {}
+                for h, half in enumerate(halves):
+                    if half[1] <= half[0]:
+                        continue
+                    for s, e in _split(half, pieces):
+                        f = client.submit(render_passes_task, inputs, s, e, active, key=f"polychrome-passes-{run}-{s}-{e}", pure=False)
+                        futures[f] = (h == 0, s, e)
+                pending = list(futures)
+                group_passes = 0
+                for f in as_completed(pending):
+                    sums, worker = f.result()
+                    first_half, s, e = futures[f]
+                    merge.add(sums, first_half)
+                    pending.remove(f)
+                    f.release()
+                    samples = int(np.asarray(sums["count"]).sum())
+                    per_worker[worker] = per_worker.get(worker, 0) + samples
+                    done_samples += (e - s) * pixels
+                    group_passes += e - s
+                    tasks += 1
+                    if progress is not None and progress(done_samples, total) is False:
+                        cancelled = True
+                    if limit > 0 and time.perf_counter() - start_time >= limit and pending:
+                        time_limited = True
+                    if cancelled or time_limited:
+                        client.cancel(pending)
+                        break
+                merge.end_group(group_passes)
+                if cancelled or time_limited:
+                    break
+        except KeyboardInterrupt:
+            client.cancel(pending)
+            cancelled = True
+            result = _result(merge, True, time_limited, start_time, client, per_worker, tasks)
+            raise RenderInterrupted(result) from None
+        except BaseException:
+            client.cancel(pending)
+            raise
+        return _result(merge, cancelled, time_limited, start_time, client, per_worker, tasks)
+    finally:
+        if owned:
+            client.close()
+
+
+def _result(merge, cancelled, time_limited, start_time, client, per_worker, tasks):
+    from .render import RenderResult
+
+    seconds = time.perf_counter() - start_time
+    out = merge.output(cancelled, time_limited, seconds)
+    stats = json.loads(out["stats"])
+    stats["wall_seconds"] = seconds
+    stats["partial"] = bool(cancelled or stats.get("cancelled"))
+    stats["distributed"] = {
+        "scheduler": client.scheduler.address,
+        "tasks": tasks,
+        "workers": dict(sorted(per_worker.items())),
+    }
+    return RenderResult(
+        rgba=out["rgba"],
+        depth=out["depth"],
+        normal=out["normal"],
+        albedo=out["albedo"],
+        spectral=out["spectral"],
+        wavelengths=out["wavelengths"],
+        stats=stats,
+    )
+
+
+def render_frame_task(inputs: SceneInputs) -> tuple[dict, str]:
+    """A task: one whole frame rendered on the worker (as a local render), and the
+    worker's address."""
+    return _core.render(inputs.scene_json, list(inputs.buffers), inputs.settings_json), _worker_name()
+
+
+def _result_from(out: dict, wall: float):
+    from .render import RenderResult
+
+    stats = json.loads(out["stats"])
+    stats["wall_seconds"] = wall
+    stats["partial"] = bool(stats.get("cancelled"))
+    return RenderResult(
+        rgba=out["rgba"],
+        depth=out["depth"],
+        normal=out["normal"],
+        albedo=out["albedo"],
+        spectral=out["spectral"],
+        wavelengths=out["wavelengths"],
+        stats=stats,
+    )
+
+
+def render_frames(frames, describe, scheduler, *, on_frame, progress=None) -> list[int]:
+    """Renders the frames of an animation as tasks, one frame each, and calls
+    ``on_frame(frame, result)`` on this thread as each completes (in completion order).
+    ``describe(frame)`` gives ``(desc, buffers, settings)`` for a frame (read on the
+    client). Frames are submitted as they are described, so workers start at once.
+    ``progress(done, total)`` counts frames. Returns the frames written; Ctrl-C cancels
+    the rest and raises KeyboardInterrupt after the finished frames were handed over."""
+    from distributed import as_completed
+
+    from .render import description_json
+
+    frames = list(frames)
+    client, owned = connect(scheduler)
+    futures: dict = {}
+    written: list[int] = []
+    run = uuid.uuid4().hex[:8]
+    try:
+        start = time.perf_counter()
+        ac = as_completed()
+        for frame in frames:
+            desc, buffers, settings = describe(frame)
+            scene_json = description_json(desc)
+            settings_json = replace(settings, scheduler="").to_json()
+            inputs = SceneInputs(
+                _token(scene_json, buffers, settings_json), scene_json, tuple(np.ascontiguousarray(b) for b in buffers), settings_json
+            )
+            [scattered] = client.scatter([inputs], hash=False)
+            f = client.submit(render_frame_task, scattered, key=f"polychrome-frame-{run}-{frame}", pure=False)
+            futures[f] = frame
+            ac.add(f)
+        for f in ac:
+            out, worker = f.result()
+            frame = futures.pop(f)
+            result = _result_from(out, time.perf_counter() - start)
+            result.stats["distributed"] = {
+                "scheduler": client.scheduler.address,
+                "tasks": 1,
+                "workers": {worker: result.stats["total_samples"]},
+            }
+            result.stats["frame"] = frame
+            on_frame(frame, result)
+            written.append(frame)
+            f.release()
+            if progress is not None and progress(len(written), len(frames)) is False:
+                break
+        return written
+    finally:
+        if futures:
+            client.cancel(list(futures))
+        if owned:
+            client.close()
+
+
+def frame_path(pattern: str, frame: int) -> str:
+    """The output file of ``frame`` as Blender names it: the last run of ``#`` in the file
+    name is replaced by the frame number zero-padded to its length; without ``#`` four
+    digits are appended to the name before the extension (``out.png`` → ``out0001.png``)."""
+    import os
+    import re
+
+    head, tail = os.path.split(pattern)
+    runs = list(re.finditer(r"#+", tail))
+    if runs:
+        m = runs[-1]
+        tail = f"{tail[: m.start()]}{frame:0{len(m.group())}d}{tail[m.end() :]}"
+    else:
+        stem, ext = os.path.splitext(tail)
+        tail = f"{stem}{frame:04d}{ext}"
+    return os.path.join(head, tail)
+
+
+def parse_frames(text: str, step: int = 1) -> list[int]:
+    """``"1-250"`` or ``"7"`` (and a step) as the list of frames; ValueError naming the problem."""
+    text = str(text).strip()
+    try:
+        if "-" in text[1:]:
+            i = text.index("-", 1)
+            a, b = int(text[:i]), int(text[i + 1 :])
+        else:
+            a = b = int(text)
+    except ValueError:
+        raise ValueError(f"--frames: expected a frame or a range such as 1-250, got '{text}'") from None
+    if b < a:
+        raise ValueError(f"--frames: the range {a}-{b} ends before it starts")
+    if step < 1:
+        raise ValueError(f"--frame-step: must be at least 1, got {step}")
+    return list(range(a, b + 1, step))

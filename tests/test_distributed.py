@@ -1,0 +1,280 @@
+"""Distributed rendering on a real Dask cluster: a `dask scheduler` and two `dask worker`
+processes on 127.0.0.1 (free ports), started and killed by the tests themselves. The
+reference is the local render of the same scene, seed and settings: the distributed one
+must equal it to float rounding (the per-sample random streams do not depend on how
+passes are split), also with adaptive sampling, and also when a worker is SIGKILLed
+mid-render (Dask reschedules its tasks)."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import socket
+import subprocess
+import sys
+import threading
+
+import numpy as np
+import pytest
+
+import polychrome as pc
+
+distributed = pytest.importorskip("distributed")
+
+pytestmark = pytest.mark.timeout(300)
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _stop(procs: list[subprocess.Popen]) -> None:
+    for p in procs:
+        if p.poll() is None:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(p.pid, signal.SIGKILL)
+    for p in procs:
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            p.wait(timeout=10)
+
+
+@contextlib.contextmanager
+def dask_cluster(workers: int = 2):
+    """(address, worker processes): a scheduler and `workers` single-threaded workers
+    without nannies (so a SIGKILL ends a worker for good), each in its own process group
+    so that everything is killed on the way out, whatever happened."""
+    port = _free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    dask = [sys.executable, "-m", "dask"]
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    procs: list[subprocess.Popen] = []
+    try:
+        procs.append(
+            subprocess.Popen(
+                [*dask, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard", "--no-show"],
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+                start_new_session=True,
+                env=env,
+            )
+        )
+        worker_procs = []
+        for _ in range(workers):
+            p = subprocess.Popen(
+                [
+                    *dask,
+                    "worker",
+                    address,
+                    "--host",
+                    "127.0.0.1",
+                    "--nthreads",
+                    "1",
+                    "--no-nanny",
+                    "--no-dashboard",
+                    "--memory-limit",
+                    "0",
+                    "--death-timeout",
+                    "60",
+                ],
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+                start_new_session=True,
+                env=env,
+            )
+            procs.append(p)
+            worker_procs.append(p)
+        with distributed.Client(address, timeout="60s") as client:
+            client.wait_for_workers(workers, timeout=120)
+        yield address, worker_procs
+    finally:
+        _stop(procs)
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    with dask_cluster(2) as c:
+        yield c
+
+
+def box_scene() -> pc.Scene:
+    """A closed grey box lit by a small emissive panel, with a red and a green wall."""
+    scene = pc.Scene()
+    grey = scene.add_material(pc.Diffuse(0.7, name="grey"))
+    red = scene.add_material(pc.Diffuse(pc.spectra.rgb(0.8, 0.1, 0.1), name="red"))
+    green = scene.add_material(pc.Diffuse(pc.spectra.rgb(0.1, 0.8, 0.1), name="green"))
+    lamp = scene.add_material(pc.Diffuse(0.0, emission=8.0, name="lamp"))
+    s = 1.0
+
+    def quad(name, p, m):
+        scene.add_mesh(name, np.array(p, np.float32), np.array([[0, 1, 2], [0, 2, 3]]), material=m)
+
+    quad("floor", [[-s, -s, -s], [s, -s, -s], [s, s, -s], [-s, s, -s]], grey)
+    quad("ceiling", [[-s, -s, s], [-s, s, s], [s, s, s], [s, -s, s]], grey)
+    quad("left", [[-s, -s, -s], [-s, s, -s], [-s, s, s], [-s, -s, s]], red)
+    quad("right", [[s, -s, -s], [s, -s, s], [s, s, s], [s, s, -s]], green)
+    quad("back", [[-s, s, -s], [s, s, -s], [s, s, s], [-s, s, s]], grey)
+    quad("front", [[-s, -s, -s], [-s, -s, s], [s, -s, s], [s, -s, -s]], grey)
+    quad("lamp", [[-0.3, -0.3, 0.98], [0.3, -0.3, 0.98], [0.3, 0.3, 0.98], [-0.3, 0.3, 0.98]], lamp)
+    scene.camera = pc.Camera.looking_at((0, -0.95, 0), (0, 1, 0), up=(0, 0, 1))
+    return scene
+
+
+SETTINGS = dict(width=24, height=18, samples=24, quality="FINAL", wavelength_count=8, max_bounces=4, seed=7, threads=1)
+
+
+def assert_same_image(a: pc.RenderResult, b: pc.RenderResult) -> None:
+    peak = float(np.abs(a.rgba).max())
+    assert peak > 0.01, "a black image proves nothing"
+    err = float(np.abs(a.rgba - b.rgba).max())
+    assert err <= 1e-5 * peak, f"distributed and local images differ by {err} (peak {peak})"
+    assert a.stats["total_samples"] == b.stats["total_samples"]
+    assert a.stats["samples_per_pixel"] == b.stats["samples_per_pixel"]
+
+
+def test_distributed_render_equals_the_local_render(cluster):
+    address, _ = cluster
+    scene = box_scene()
+    local = pc.render(scene, **SETTINGS)
+    remote = pc.render(scene, scheduler=address, **SETTINGS)
+    assert_same_image(remote, local)
+    d = remote.stats["distributed"]
+    assert d["scheduler"] == address
+    assert d["tasks"] >= 2
+    # Both workers took part and every camera sample is accounted to one of them.
+    assert len(d["workers"]) == 2, d
+    assert sum(d["workers"].values()) == local.stats["total_samples"]
+    assert remote.stats["partial"] is False and remote.stats["cancelled"] is False
+    # A different seed is a different image (the comparison above can fail).
+    other = pc.render(scene, **{**SETTINGS, "seed": 8})
+    assert float(np.abs(other.rgba - local.rgba).max()) > 1e-3
+
+
+def test_scene_is_scattered_once_and_compiled_once_per_worker(cluster):
+    address, _ = cluster
+    scene = box_scene()
+    settings = {**SETTINGS, "seed": 11}
+    with distributed.Client(address) as client:
+        before = client.run(lambda: __import__("polychrome.distributed").distributed._COMPILES)
+        pc.render(scene, scheduler=client, **settings)
+        after = client.run(lambda: __import__("polychrome.distributed").distributed._COMPILES)
+    assert set(after) == set(before) and len(after) == 2
+    assert all(after[w] - before[w] <= 1 for w in after), (before, after)
+    assert sum(after[w] - before[w] for w in after) >= 1
+
+
+def test_adaptive_sampling_across_tasks_equals_the_local_render(cluster):
+    address, _ = cluster
+    scene = box_scene()
+    settings = {**SETTINGS, "samples": 64, "noise_threshold": 3.0}
+    local = pc.render(scene, **settings)
+    converged = local.stats["converged_pixels"]
+    assert 0 < converged < 24 * 18, f"the test needs pixels that stop early and pixels that do not: {converged}"
+    remote = pc.render(scene, scheduler=address, **settings)
+    assert_same_image(remote, local)
+    assert remote.stats["converged_pixels"] == converged
+
+
+def test_cancelling_returns_the_finished_passes_marked_partial(cluster):
+    address, _ = cluster
+    scene = box_scene()
+    calls = []
+
+    def progress(done, total):
+        calls.append((done, total))
+        return False  # cancel after the first task
+
+    result = pc.render(scene, scheduler=address, progress=progress, **{**SETTINGS, "samples": 64})
+    assert result.stats["partial"] is True and result.stats["cancelled"] is True
+    assert 0 < result.stats["samples_per_pixel"] < 64
+    assert calls and calls[0][1] == 64 * 24 * 18
+    assert np.isfinite(result.rgba).all() and float(result.rgba[..., :3].max()) > 0
+
+
+def test_a_worker_killed_mid_render_loses_nothing():
+    scene = box_scene()
+    settings = {**SETTINGS, "width": 32, "height": 24, "samples": 96}
+    local = pc.render(scene, **settings)
+    with dask_cluster(2) as (address, workers):
+        victim = workers[1]
+        first_task = threading.Event()
+        out: dict = {}
+
+        def progress(done, total):
+            first_task.set()
+
+        def run():
+            try:
+                out["result"] = pc.render(scene, scheduler=address, progress=progress, **settings)
+            except BaseException as e:  # reported below
+                out["error"] = e
+
+        t = threading.Thread(target=run, daemon=True)
+        t.start()
+        assert first_task.wait(120), "no task finished"
+        os.kill(victim.pid, signal.SIGKILL)
+        victim.wait(timeout=10)
+        t.join(240)
+        assert not t.is_alive(), "the render did not finish after a worker was killed"
+    assert "error" not in out, out.get("error")
+    result = out["result"]
+    assert victim.returncode == -signal.SIGKILL
+    assert_same_image(result, local)
+    assert sum(result.stats["distributed"]["workers"].values()) == local.stats["total_samples"]
+    assert result.stats["partial"] is False
+
+
+def animated_stage(path) -> None:
+    """The box as a USD stage whose lamp grows from frame 1 to frame 3 (time-sampled points)."""
+    from pxr import Usd, UsdGeom
+
+    from polychrome import usd
+
+    usd.write_stage(box_scene(), path, pc.RenderSettings(width=20, height=16))
+    stage = Usd.Stage.Open(str(path))
+    [lamp] = [UsdGeom.Mesh(p) for p in stage.Traverse() if p.IsA(UsdGeom.Mesh) and "lamp" in p.GetName()]
+    points = np.array(lamp.GetPointsAttr().Get(), np.float64)
+    centre = points.mean(axis=0)
+    for frame, scale in ((1, 0.5), (2, 1.0), (3, 1.5)):
+        lamp.GetPointsAttr().Set([tuple(centre + (p - centre) * scale) for p in points], Usd.TimeCode(frame))
+    stage.GetRootLayer().Save()
+
+
+@pytest.mark.parametrize("on_cluster", [False, True])
+def test_frames_are_rendered_and_written_with_blender_numbering(tmp_path, cluster, on_cluster, capsys):
+    from polychrome import cli, imageio, usd
+
+    stage = tmp_path / "anim.usda"
+    animated_stage(stage)
+    flags = ["--samples", "8", "--quality", "FINAL", "--wavelengths", "8", "--seed", "3", "--threads", "1", "--quiet"]
+    if on_cluster:
+        flags += ["--scheduler", cluster[0]]
+    out = tmp_path / "frames" / "shot_###.exr"
+    assert cli.main(["render", str(stage), "-o", str(out), "--frames", "1-3", "--frame-step", "2", *flags]) == 0
+    written = sorted(p.name for p in (tmp_path / "frames").iterdir())
+    assert written == ["shot_001.exr", "shot_003.exr"], written
+    settings = pc.RenderSettings(width=20, height=16, samples=8, quality="FINAL", wavelength_count=8, seed=3, threads=1)
+    means = []
+    for frame in (1, 3):
+        expected = pc.render(usd.read_stage(stage, resolution=(20, 16), time=frame), settings)
+        got = imageio.read_image(tmp_path / "frames" / f"shot_{frame:03d}.exr")
+        assert np.abs(got - expected.rgba).max() <= 1e-5 * np.abs(expected.rgba).max(), frame
+        assert imageio.read_metadata(tmp_path / "frames" / f"shot_{frame:03d}.exr")["polychrome:partial"] == "0"
+        means.append(float(got[..., :3].mean()))
+    assert means[1] > 1.5 * means[0], "the lamp grows: a later frame is brighter"
+
+
+def test_frame_paths_follow_blender():
+    from polychrome.distributed import frame_path, parse_frames
+
+    assert frame_path("/r/shot_####.exr", 42) == "/r/shot_0042.exr"
+    assert frame_path("/r/a#b_##.png", 7) == "/r/a#b_07.png"  # the last run of '#'
+    assert frame_path("/r/out.png", 42) == "/r/out0042.png"
+    assert frame_path("/r/shot_#.exr", 1234) == "/r/shot_1234.exr"  # wider numbers are not cut
+    assert parse_frames("1-7", 3) == [1, 4, 7]
+    assert parse_frames("5") == [5]
+    for bad in ("x", "9-3"):
+        with pytest.raises(ValueError, match="--frames"):
+            parse_frames(bad)
