@@ -278,3 +278,41 @@ def test_frame_paths_follow_blender():
     for bad in ("x", "9-3"):
         with pytest.raises(ValueError, match="--frames"):
             parse_frames(bad)
+
+
+def test_ctrl_c_on_the_cli_writes_the_finished_part_marked_partial(tmp_path, cluster):
+    """SIGINT to `polychrome render --scheduler` once the first task is in: exit status 130,
+    the finished passes written, marked partial in the file's metadata."""
+    import re
+
+    from polychrome import imageio, usd
+
+    stage = tmp_path / "box.usda"
+    usd.write_stage(box_scene(), stage, pc.RenderSettings(width=24, height=18))
+    out = tmp_path / "out.exr"
+    flags = ["--samples", "1024", "--quality", "FINAL", "--wavelengths", "8", "--threads", "1"]
+    cmd = [sys.executable, "-m", "polychrome.cli", "render", str(stage), "-o", str(out), "--scheduler", cluster[0], *flags]
+    proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, stdout=subprocess.PIPE, start_new_session=True)
+    seen = bytearray()
+    started = threading.Event()
+
+    def watch():
+        while chunk := proc.stderr.read1(256):
+            seen.extend(chunk)
+            if re.search(rb"\s[1-9]\d?%\|", seen):  # the bar moved: a task finished
+                started.set()
+
+    reader = threading.Thread(target=watch, daemon=True)
+    reader.start()
+    try:
+        assert started.wait(120), seen.decode(errors="replace")[-2000:]
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(timeout=60) == 130, seen.decode(errors="replace")[-2000:]
+    finally:
+        _stop([proc])
+    reader.join(10)
+    assert b"marked partial" in seen, seen.decode(errors="replace")[-2000:]
+    meta = imageio.read_metadata(out)
+    assert meta["polychrome:partial"] == "1"
+    assert 0 < int(meta["polychrome:samples"]) < 1024
+    assert float(imageio.read_image(out)[..., :3].mean()) > 0

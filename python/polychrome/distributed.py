@@ -160,7 +160,7 @@ def render(
         width, height = merge.size()
         pixels = width * height
         total = merge.sample_passes() * pixels
-        workers = max(1, len(client.scheduler_info().get("workers", {})))
+        workers = max(1, len(client.nthreads()))
         if merge.adaptive():
             # Adaptive: the pass loop's groups in order, each cut into tasks inside its halves.
             groups = [list(merge.halves(*g)) for g in merge.groups()]
@@ -174,6 +174,7 @@ def render(
         limit = merge.time_limit()
         run = uuid.uuid4().hex[:8]
         pending = []
+        group_passes = 0  # passes of the current group added so far
         try:
             for halves in groups:
                 if not merge.any_active():
@@ -213,10 +214,12 @@ def render(
                         client.cancel(pending)
                         break
                 merge.end_group(group_passes)
+                group_passes = 0
                 if cancelled or time_limited:
                     break
         except KeyboardInterrupt:
             client.cancel(pending)
+            merge.end_group(group_passes)  # what finished of the interrupted group counts
             cancelled = True
             result = _result(merge, True, time_limited, start_time, client, per_worker, tasks)
             raise RenderInterrupted(result) from None

@@ -481,7 +481,12 @@ impl PassRenderer {
     fn add(&self, py: Python<'_>, sums: &Bound<'_, PyDict>, first_half: bool) -> PyResult<()> {
         let spectral_len = self.settings.spectral_output.then_some(self.scene.grid.len());
         let buffer = sums_from_dict(sums, self.pixels(), spectral_len)?;
-        py.allow_threads(|| self.with_merge(|_, m| Ok(m.add(&buffer, first_half))))
+        py.allow_threads(|| {
+            self.with_merge(|_, m| {
+                m.add(&buffer, first_half);
+                Ok(())
+            })
+        })
     }
 
     /// A group's two halves as (start, end) ranges (without adaptive sampling the first
@@ -492,7 +497,10 @@ impl PassRenderer {
 
     /// After every task of a group of `passes` passes was added.
     fn end_group(&self, passes: u32) -> PyResult<()> {
-        self.with_merge(|d, m| Ok(m.end_group(d, passes)))
+        self.with_merge(|d, m| {
+            m.end_group(d, passes);
+            Ok(())
+        })
     }
 
     /// Adaptive sampling: the pixels still sampled (bool per pixel, row-major), or None.
