@@ -62,15 +62,16 @@ def uv_sphere(center, radius, rings=24, segments=48):
     return v.astype(np.float32), np.array(t)
 
 
-def room(glass: bool) -> pc.Scene:
-    """Closed room (fig. 12): spectral diffuse walls, a ceiling light, the camera inside;
-    with `glass`, a dispersive N-SF11 ball on the floor (fig. 13)."""
+def room(glass: bool, lamp: spectra.Spectrum | None = None) -> pc.Scene:
+    """Closed room (fig. 12): spectral diffuse walls, a ceiling light (3500 K, or the
+    spectrum `lamp`), the camera inside; with `glass`, a dispersive N-SF11 ball on the
+    floor (fig. 13)."""
     scene = pc.Scene()
     lam = np.arange(360.0, 831.0, 5.0)
     white = scene.add_material(pc.Diffuse(spectra.tabulated(lam, 0.55 + 0.2 / (1 + np.exp(-(lam - 450) / 20))), name="white"))
     red = scene.add_material(pc.Diffuse(spectra.tabulated(lam, 0.05 + 0.6 / (1 + np.exp(-(lam - 600) / 12))), name="red"))
     green = scene.add_material(pc.Diffuse(spectra.tabulated(lam, 0.05 + 0.45 * np.exp(-0.5 * ((lam - 530) / 35) ** 2)), name="green"))
-    lamp = scene.add_material(pc.Emitter(spectra.blackbody(3500.0), strength=2.0, name="lamp"))
+    lamp = scene.add_material(pc.Emitter(lamp or spectra.blackbody(3500.0), strength=2.0, name="lamp"))
     s = 1.0
     scene.add_mesh("floor", *quad((-s, -s, 0), (s, -s, 0), (s, s, 0), (-s, s, 0)), material=white)
     scene.add_mesh("ceiling", *quad((-s, -s, 2), (-s, s, 2), (s, s, 2), (s, -s, 2)), material=white)

@@ -1,4 +1,4 @@
-"""The four methods and three directions (docs/design.md#methods) through the Python API: every
+"""The five methods and three directions (docs/design.md#methods) through the Python API: every
 spectral method and direction converges to the same image as a high-sample
 POLYCHROMATIC BACKWARD reference (mean CIEDE2000 < 0.5), and RGB mode differs from the
 spectral render by a large ΔE00 under a narrow-band light (the paper's figure 2/3)."""
@@ -74,6 +74,8 @@ def box_reference():
         ("MONOCHROMATIC_SCENES", "BACKWARD", 64),
         ("POLYCHROMATIC", "FORWARD", 512),
         ("POLYCHROMATIC", "BIDIRECTIONAL", 512),
+        ("HERO", "BACKWARD", 1024),
+        ("HERO", "FORWARD", 1024),
     ],
 )
 def test_methods_converge_to_the_polychromatic_image(box_reference, method, direction, samples):

@@ -1,4 +1,4 @@
-//! The four methods and three directions (docs/design.md#methods) against closed forms and against
+//! The five methods and three directions (docs/design.md#methods) against closed forms and against
 //! each other: furnaces (L/(1−a), white furnace), a lit box rendered every way, a
 //! test-only dispersive BSDF for the collapse (eq. 9) and splitting logic, determinism.
 
@@ -121,9 +121,9 @@ fn furnace_forward_and_bidirectional_see_emission_over_one_minus_albedo() {
     let (desc, buffers) = furnace_scene(l, a);
     let expected = l as f64 / (1.0 - a as f64);
     for direction in [Direction::Forward, Direction::Bidirectional] {
-        for method in [Method::Polychromatic, Method::MonochromaticRays] {
-            // Monochromatic light paths are not stratified per pixel: more of them.
-            let samples = if method == Method::MonochromaticRays { 64 } else { 16 };
+        for method in [Method::Polychromatic, Method::MonochromaticRays, Method::Hero] {
+            // Monochromatic and hero light paths are not stratified per pixel: more of them.
+            let samples = if method == Method::Polychromatic { 16 } else { 64 };
             let settings = ResolvedSettings {
                 width: 16,
                 height: 16,
@@ -192,6 +192,9 @@ fn every_method_and_direction_agrees_with_polychromatic_backward_on_a_lit_box() 
         (Method::Polychromatic, Direction::Forward, 128),
         (Method::Polychromatic, Direction::Bidirectional, 64),
         (Method::MonochromaticRays, Direction::Forward, 256),
+        (Method::Hero, Direction::Backward, 128),
+        (Method::Hero, Direction::Forward, 256),
+        (Method::Hero, Direction::Bidirectional, 128),
     ];
     for (method, direction, samples) in cases {
         let out = render(
@@ -289,6 +292,8 @@ fn same_seed_gives_identical_images_on_one_and_two_threads_for_every_method() {
         (Method::MonochromaticScenes, Direction::Backward),
         (Method::Polychromatic, Direction::Forward),
         (Method::Rgb, Direction::Bidirectional),
+        (Method::Hero, Direction::Backward),
+        (Method::Hero, Direction::Forward),
     ] {
         let base = ResolvedSettings {
             width: 20,
@@ -399,6 +404,7 @@ fn dispersive_white_sphere_vanishes_in_a_uniform_environment_in_every_method() {
         (Method::MonochromaticRays, false),
         (Method::MonochromaticScenes, false),
         (Method::Rgb, false),
+        (Method::Hero, false),
     ] {
         let g = if method == Method::Rgb {
             WavelengthGrid::rgb_channels(&grid, &RgbSpace::rec709()).unwrap()
@@ -513,6 +519,7 @@ fn dispersive_glass_sphere_vanishes_in_a_uniform_environment() {
         (Method::MonochromaticRays, false, 64),
         (Method::MonochromaticScenes, false, 4),
         (Method::Rgb, false, 64),
+        (Method::Hero, false, 64),
     ] {
         let settings = ResolvedSettings {
             width: 12,
@@ -569,6 +576,8 @@ fn glass_ball_inside_a_furnace_is_invisible_forward_and_backward() {
         (Method::Polychromatic, Direction::Forward, 32),
         (Method::Polychromatic, Direction::Bidirectional, 32),
         (Method::MonochromaticRays, Direction::Backward, 32),
+        (Method::Hero, Direction::Backward, 32),
+        (Method::Hero, Direction::Forward, 64),
     ] {
         let (desc, buffers) =
             if direction == Direction::Forward { (&behind, &behind_buffers) } else { (&desc, &buffers) };
@@ -743,5 +752,68 @@ fn rough_transmission_is_connected_through_in_every_direction() {
     for (direction, samples) in [(Direction::Forward, 512), (Direction::Bidirectional, 128)] {
         let m = mean(direction, samples);
         assert!((m - backward).abs() < 0.03 * backward, "{direction:?}: image mean {m} vs BACKWARD {backward}");
+    }
+}
+
+/// HERO against the whole grid where the wavelengths matter most: the camera looks
+/// through a dispersive N-SF11 prism at the edge of a strip light of CIE F11 (a line
+/// spectrum) and at a white floor the strip lights. Both converge to the grid's
+/// quadrature, so 4×4-pixel block means of HERO (BACKWARD, and BIDIRECTIONAL with the
+/// partition) must match a 512-spp POLYCHROMATIC image within their standard errors.
+#[test]
+fn hero_agrees_with_polychromatic_through_a_prism_under_a_line_spectrum_light() {
+    let mut desc = SceneDesc::default();
+    let mut buffers = Vec::new();
+    desc.materials.push(diffuse("floor", SpectrumDesc::constant(0.8), None));
+    desc.materials.push(diffuse(
+        "panel",
+        SpectrumDesc::constant(0.0),
+        Some(SpectrumDesc { kind: SpectrumKind::Fluorescent { index: 11 }, scale: 4.0 }),
+    ));
+    desc.materials.push(glass("flint"));
+    let quad =
+        |p: [[f32; 3]; 4]| -> (Vec<f32>, Vec<u32>) { (p.iter().flatten().copied().collect(), vec![0, 1, 2, 0, 2, 3]) };
+    let (v, t) = quad([[-3.0, -1.0, -1.0], [3.0, -1.0, -1.0], [3.0, 6.0, -1.0], [-3.0, 6.0, -1.0]]);
+    add_mesh(&mut desc, &mut buffers, "floor", v, t, 0);
+    // An emissive strip across the back, its top edge seen through the prism: each
+    // wavelength sees the edge elsewhere (a rainbow fringe).
+    let (v, t) = quad([[-4.0, 5.0, -1.0], [-4.0, 5.0, 0.3], [4.0, 5.0, 0.3], [4.0, 5.0, -1.0]]);
+    add_mesh(&mut desc, &mut buffers, "panel", v, t, 1);
+    // A 20° prism along x between camera and strip, apex up: it deviates rays down by
+    // about 16° (N-SF11) and spreads them by about 1° over the visible range.
+    let (x0, x1) = (-1.5f32, 1.5f32);
+    let tri = [[1.7f32, -0.6], [2.1, -0.6], [1.9, 0.53]]; // (y, z)
+    let mut pv = Vec::new();
+    for x in [x0, x1] {
+        for [y, z] in tri {
+            pv.extend_from_slice(&[x, y, z]);
+        }
+    }
+    let pt = vec![0, 2, 1, 3, 4, 5, 0, 1, 4, 0, 4, 3, 1, 2, 5, 1, 5, 4, 2, 0, 3, 2, 3, 5];
+    add_mesh(&mut desc, &mut buffers, "prism", pv, pt, 2);
+    desc.camera.to_world = [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, -1.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
+    desc.camera.focal_length = 30.0;
+    let (w, h) = (16usize, 16usize);
+    let base = ResolvedSettings {
+        width: w as u32,
+        height: h as u32,
+        max_bounces: 8,
+        grid: WavelengthGrid::uniform(41, 380.0, 780.0).unwrap(),
+        ..Default::default()
+    };
+    let reference =
+        render(&desc, &buffers, &ResolvedSettings { samples: 512, ..base.clone() }, &RenderControl::new()).unwrap();
+    let reference = block_means(&reference.images.rgba, w, h, 4);
+    assert!(reference.iter().filter(|&&(m, _)| m > 1e-3).count() > 16, "the view is mostly dark");
+    for (direction, samples) in [(Direction::Backward, 256), (Direction::Bidirectional, 256)] {
+        let out = render(
+            &desc,
+            &buffers,
+            &ResolvedSettings { method: Method::Hero, direction, samples, ..base.clone() },
+            &RenderControl::new(),
+        )
+        .unwrap();
+        assert_eq!(out.stats.nonfinite_samples, 0);
+        assert_close(&block_means(&out.images.rgba, w, h, 4), &reference, &format!("HERO {direction:?}"));
     }
 }

@@ -10,7 +10,8 @@
 //!   the path is connected to the pinhole; the splat is `β·f·|cos θx|·importance` (see
 //!   [`crate::camera::CameraConnection`]). A pixel's value is the sum of its splats over
 //!   the number of light paths per pixel.
-//! - Dispersive surfaces collapse the path to one wavelength exactly as camera paths do.
+//! - Dispersive surfaces collapse the path to one wavelength (or end its secondary hero
+//!   wavelengths) exactly as camera paths do.
 //! - Environment lights and orthographic cameras are not reachable this way (their
 //!   light has no `sample_le`, the camera no pinhole to connect to).
 
@@ -166,12 +167,34 @@ pub fn walk_light<T: Throughput, H: PathHooks<T> + PathHooks<super::throughput::
     hooks: &mut H,
     scratch: &mut Scratch,
 ) {
-    if let End::Collapsed { index, state } = walk.run(scene, ctx, start, &mut beta, rng, hooks, scratch) {
-        let Some(mut b) = beta.collapse(index) else { return };
-        // Light paths take Russian roulette at the collapse vertex too.
-        if russian_roulette(&mut b, state.depth, walk.rr_depth, rng) {
-            walk.run(scene, ctx, state, &mut b, rng, hooks, scratch);
+    match walk.run(scene, ctx, start, &mut beta, rng, hooks, scratch) {
+        End::Collapsed { index, state } => {
+            let Some(mut b) = beta.collapse(index) else { return };
+            // Light paths take Russian roulette at the collapse vertex too.
+            if russian_roulette(&mut b, state.depth, walk.rr_depth, rng) {
+                walk.run(scene, ctx, state, &mut b, rng, hooks, scratch);
+            }
         }
+        // Hero wavelengths: the secondary ones end at `v`, the hero scatters there alone.
+        End::Terminated { index, vertex: v, state } => {
+            let Some(mut b) = beta.collapse(index) else { return };
+            ctx.single_wavelength = Some(index);
+            let Some(sc) = b.scatter(&v, ctx, rng, &mut scratch.tp) else { return };
+            if !(b.is_alive() && hooks.scattered(scene, ctx, &v, &state, &sc, &b)) {
+                return;
+            }
+            let st = PathState {
+                ray: sc.ray,
+                specular: sc.sample.specular,
+                prev_pdf: sc.sample.pdf,
+                prev_p: v.si.p,
+                depth: state.depth + 1,
+            };
+            if russian_roulette(&mut b, st.depth, walk.rr_depth, rng) {
+                walk.run(scene, ctx, st, &mut b, rng, hooks, scratch);
+            }
+        }
+        End::Done | End::Split { .. } => {}
     }
 }
 

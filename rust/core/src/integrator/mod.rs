@@ -10,6 +10,7 @@
 
 pub mod bidir;
 pub mod forward;
+pub mod hero;
 pub mod path;
 pub mod throughput;
 pub mod walk;
@@ -197,6 +198,7 @@ pub fn from_settings(scene: &Scene, settings: &ResolvedSettings) -> crate::Resul
         Method::Polychromatic | Method::Rgb => with_policy(settings, AllWavelengths),
         Method::MonochromaticRays => with_policy(settings, OnePerRay::new(scene, settings.seed, settings.samples)),
         Method::MonochromaticScenes => with_policy(settings, OnePerPass::new(scene.grid.len(), settings.samples)),
+        Method::Hero => with_policy(settings, hero::HeroWavelengths::new(&scene.grid, settings.seed)),
     })
 }
 

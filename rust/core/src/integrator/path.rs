@@ -7,7 +7,7 @@
 //! split there continue as single-wavelength paths with the power heuristic.
 
 use super::throughput::{SingleWavelength, Throughput};
-use super::walk::{End, PathHooks, PathState, Vertex, Walk};
+use super::walk::{russian_roulette, End, PathHooks, PathState, Vertex, Walk};
 use super::wavelengths::{WavelengthPolicy, Wavelengths};
 use super::{CameraSample, Scatter, Scratch, Technique};
 use crate::film::PixelSample;
@@ -242,26 +242,55 @@ fn continue_single_wavelength<T: Throughput>(
         // energy, each scattering the vertex at its own wavelength.
         End::Split { vertex: v, state } => {
             for i in 0..scene.grid.len() {
-                let Some(mut b) = beta.collapse(i) else { return };
+                let Some(b) = beta.collapse(i) else { return };
                 if !(b.value > 0.0) {
                     continue;
                 }
-                ctx.single_wavelength = Some(i);
-                let Some(sc) = b.scatter(&v, ctx, rng, &mut scratch.tp) else {
-                    continue;
-                };
-                let st = PathState {
-                    ray: sc.ray,
-                    specular: sc.sample.specular,
-                    prev_pdf: sc.sample.pdf,
-                    prev_p: v.si.p,
-                    depth: state.depth + 1,
-                };
-                let l = trace_single(scene, walk, st, b, rng, scratch);
+                let l = scatter_single(scene, walk, ctx, &v, &state, b, false, rng, scratch);
                 gathered.add_at(i, l);
             }
         }
+        // Hero wavelengths: the secondary ones end here, the hero carries on alone.
+        End::Terminated { index, vertex: v, state } => {
+            if let Some(b) = beta.collapse(index) {
+                let l = scatter_single(scene, walk, ctx, &v, &state, b, true, rng, scratch);
+                gathered.add_at(index, l);
+            }
+        }
     }
+}
+
+/// The radiance gathered by a single-wavelength camera path that scatters at `v` (reached
+/// with `state`) on its wavelength and continues from there; `roulette`: Russian
+/// roulette after that scattering as at every other vertex (not for splitting, which is
+/// deterministic at the split).
+#[allow(clippy::too_many_arguments)]
+fn scatter_single(
+    scene: &Scene,
+    walk: &Walk,
+    ctx: &mut ShadingContext,
+    v: &Vertex,
+    state: &PathState,
+    mut b: SingleWavelength,
+    roulette: bool,
+    rng: &mut Rng,
+    scratch: &mut Scratch,
+) -> f32 {
+    ctx.single_wavelength = Some(b.index);
+    let Some(sc) = b.scatter(v, ctx, rng, &mut scratch.tp) else {
+        return 0.0;
+    };
+    let st = PathState {
+        ray: sc.ray,
+        specular: sc.sample.specular,
+        prev_pdf: sc.sample.pdf,
+        prev_p: v.si.p,
+        depth: state.depth + 1,
+    };
+    if roulette && !russian_roulette(&mut b, st.depth, walk.rr_depth, rng) {
+        return 0.0;
+    }
+    trace_single(scene, walk, st, b, rng, scratch)
 }
 
 /// The radiance a single-wavelength camera path from `st` with throughput `beta`

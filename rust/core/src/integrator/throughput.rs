@@ -2,8 +2,8 @@
 //! for every wavelength policy: the whole grid ([`SampledSpectrum`], the paper's
 //! polychromatic rays and RGB) or one grid wavelength with a scalar throughput
 //! ([`SingleWavelength`]: monochromatic rays and scenes, and every path after it
-//! collapsed at a dispersive surface, eq. 9). A policy with k hero wavelengths adds a
-//! third implementation.
+//! collapsed at a dispersive surface, eq. 9) — and four hero wavelengths
+//! ([`super::hero::Hero`]).
 //!
 //! Materials and lights fill grid-wide spectra either way (the `Bsdf`/`Light` traits are
 //! spectral); a single-wavelength path reads the one component it carries and keeps its
@@ -46,6 +46,12 @@ pub trait Throughput: Clone {
     /// The path carried on at grid wavelength `i` alone, or None if it carries one
     /// wavelength already.
     fn collapse(&self, i: usize) -> Option<SingleWavelength>;
+    /// Hero wavelengths: the grid wavelength that carries on alone at a dispersive
+    /// surface, where the others end (`hero.rs`). None: the BSDF collapses the path
+    /// there (eq. 9), or it carries one wavelength already.
+    fn hero(&self) -> Option<usize> {
+        None
+    }
 }
 
 impl Throughput for SampledSpectrum {

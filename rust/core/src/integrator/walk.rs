@@ -68,6 +68,10 @@ pub enum End<'s> {
     /// Dispersion splitting: the path reached dispersive `vertex` (with `state`, before
     /// sampling there). Continue one single-wavelength sub-path per wavelength.
     Split { vertex: Vertex<'s>, state: PathState },
+    /// Hero wavelengths: the path reached dispersive `vertex` (before sampling there),
+    /// where its secondary wavelengths end. Continue the hero, grid wavelength `index`,
+    /// alone from `vertex` ([`Throughput::collapse`]), scattering it there.
+    Terminated { index: usize, vertex: Vertex<'s>, state: PathState },
 }
 
 /// What a technique does at the steps of a walk. Every method sees the throughput
@@ -174,8 +178,13 @@ impl Walk {
             if st.depth >= self.scatter_below {
                 return End::Done;
             }
-            if self.split_dispersion && v.flags.dispersive && ctx.single_wavelength.is_none() {
-                return End::Split { vertex: v, state: st };
+            if v.flags.dispersive && ctx.single_wavelength.is_none() {
+                if self.split_dispersion {
+                    return End::Split { vertex: v, state: st };
+                }
+                if let Some(index) = beta.hero() {
+                    return End::Terminated { index, vertex: v, state: st };
+                }
             }
             let Some(sc) = beta.scatter(&v, ctx, rng, &mut scratch.tp) else {
                 return End::Done;

@@ -39,6 +39,9 @@ pub enum Method {
     MonochromaticScenes,
     /// The same transport with three channels holding scene RGB (comparison only).
     Rgb,
+    /// Every path carries four stratified hero wavelengths importance-sampled over the
+    /// visible range, with spectral MIS (Wilkie et al. 2014; `integrator/hero.rs`).
+    Hero,
 }
 
 /// Where paths start.

@@ -294,6 +294,7 @@ settings! {
             item(Method::MonochromaticRays, "Monochromatic Rays", "Every ray carries one wavelength"),
             item(Method::MonochromaticScenes, "Monochromatic Scenes", "One render per wavelength, summed"),
             item(Method::Rgb, "RGB", "Three-channel rendering, for comparison with the spectral methods"),
+            item(Method::Hero, "Hero Wavelengths", "Every ray carries four stratified wavelengths sampled over the visible range, with spectral MIS (as pbrt-v4 and Mitsuba 3)"),
         ]},
     ).see("methods.md");
     /// Where paths start.
@@ -606,9 +607,15 @@ mod tests {
             items.into_iter().map(|i| i.name).collect()
         };
         let name = |v: Value| v.as_str().unwrap().to_string();
-        for m in [Method::Polychromatic, Method::MonochromaticRays, Method::MonochromaticScenes, Method::Rgb] {
+        for m in
+            [Method::Polychromatic, Method::MonochromaticRays, Method::MonochromaticScenes, Method::Rgb, Method::Hero]
+        {
             match m {
-                Method::Polychromatic | Method::MonochromaticRays | Method::MonochromaticScenes | Method::Rgb => {}
+                Method::Polychromatic
+                | Method::MonochromaticRays
+                | Method::MonochromaticScenes
+                | Method::Rgb
+                | Method::Hero => {}
             }
             assert!(all("method").contains(&name(json!(m))));
         }
@@ -632,7 +639,7 @@ mod tests {
         }
         assert_eq!(
             (all("method").len(), all("direction").len(), all("quality").len(), all("uplift").len()),
-            (4, 3, 4, 2)
+            (5, 3, 4, 2)
         );
     }
 
