@@ -14,7 +14,7 @@ __version__ = "0.1.0"
 from . import spectra
 from .render import RenderResult, RenderSettings, render
 from .scene import Camera, Diffuse, Emitter, Material, PointLight, Scene, look_at
-from . import ior
+from . import denoise, ior
 from .scene import Conductor, Dielectric, Glossy, SpotLight, SunLight
 from .scene import Add, Fresnel, LayerWeight, Mix, Principled
 from .texture import Texture
@@ -32,6 +32,7 @@ __all__ = [
     "LayerWeight",
     "SpotLight",
     "SunLight",
+    "denoise",
     "ior",
     "Diffuse",
     "Emitter",

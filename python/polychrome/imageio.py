@@ -68,6 +68,7 @@ _SPEED_OF_LIGHT = 299_792_458.0
 _LAYER_SUFFIXES = {
     "Depth": ("Z",),
     "Normal": ("X", "Y", "Z"),
+    "Denoising Normal": ("X", "Y", "Z"),
     "Position": ("X", "Y", "Z"),
     "Vector": ("X", "Y", "Z", "W"),
 }

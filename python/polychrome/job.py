@@ -12,6 +12,9 @@ viewport, notebooks, GUIs).
 The render runs on its own thread without the GIL; every method may be called from any
 Python thread. The core publishes a preview after the first pass, then at most every
 100 ms, and the final image last (``last=True``; its ``rgba`` equals ``result().rgba``).
+With ``denoise_previews`` the previews are denoised (colour only, OIDN's fast quality:
+the core's previews carry no aux images); with ``denoise`` the result is, and so the
+last preview.
 """
 
 from __future__ import annotations
@@ -54,6 +57,10 @@ class RenderJob:
         **overrides: Any,
     ):
         self.settings = replace(settings or RenderSettings(), **overrides)  # validates every setting
+        if self.settings.denoise or self.settings.denoise_previews:
+            from . import denoise
+
+            denoise.require()
         if description is None:
             if scene is None:
                 raise ValueError("RenderJob needs a scene (or a description)")
@@ -91,7 +98,16 @@ class RenderJob:
     def preview(self) -> Preview | None:
         """The newest snapshot, or None before the first pass has ended."""
         p = self._job.preview()
-        return None if p is None else Preview(*p)
+        if p is None:
+            return None
+        p = Preview(*p)
+        if p.last and self.settings.denoise:
+            return p._replace(rgba=self.result().rgba)  # the final image, denoised with its aux
+        if self.settings.denoise_previews and not p.last:
+            from . import denoise
+
+            return p._replace(rgba=denoise.denoise(p.rgba, quality="fast"))
+        return p
 
     def cancel(self) -> None:
         """Asks the render to stop (returns at once; the job ends within a pass's tile row)."""
@@ -128,6 +144,8 @@ class RenderJob:
                 wavelengths=out["wavelengths"],
                 stats=stats,
             )
+            if self.settings.denoise:
+                self._result = self._result.denoised()
         return self._result
 
     def __enter__(self) -> RenderJob:

@@ -40,6 +40,21 @@ class RenderResult:
     spectral: np.ndarray | None
     wavelengths: np.ndarray
     stats: dict[str, Any] = field(default_factory=dict)
+    #: With ``denoise``: the image before denoising (``rgba`` is then the denoised one).
+    noisy: np.ndarray | None = None
+
+    def denoised(self) -> RenderResult:
+        """This result with ``rgba`` denoised by Open Image Denoise (guided by the albedo
+        and normal passes, prefiltered) and the original kept as ``noisy``; spectral
+        passes stay raw. See :mod:`polychrome.denoise`."""
+        from . import denoise
+
+        if self.noisy is not None:
+            return self
+        start = time.perf_counter()
+        rgba = denoise.denoise(self.rgba, self.albedo, self.normal)
+        stats = dict(self.stats, denoise_seconds=time.perf_counter() - start, denoiser=f"Open Image Denoise {denoise.version()}")
+        return replace(self, rgba=rgba, noisy=self.rgba, stats=stats)
 
     @property
     def partial(self) -> bool:
@@ -58,8 +73,9 @@ class RenderResult:
 
     def save(self, path: str | Path, *, passes: bool = False) -> Path:
         """Writes the image by extension: ``.png`` (sRGB 8-bit) or ``.exr`` (float; with
-        ``passes`` also Depth, Normal, Albedo layers; a spectral render also writes the
-        spectrum in the JCGT 2021 spectral-EXR layout beside the RGB). The file is written
+        ``passes`` also Depth, Normal, Albedo layers, and for a denoised render Blender's
+        Noisy Image, Denoising Albedo and Denoising Normal; a spectral render also writes
+        the spectrum in the JCGT 2021 spectral-EXR layout beside the RGB). The file is written
         to a temporary name and renamed over ``path``, so a failed or interrupted write never
         truncates an existing image; :meth:`metadata` goes into the file."""
         from . import imageio
@@ -74,11 +90,10 @@ class RenderResult:
             if self.spectral is not None:
                 imageio.write_spectral_exr(path, self.spectral, self.wavelengths, rgba=self.rgba, metadata=meta)
             elif passes:
-                imageio.write_exr_layers(
-                    path,
-                    {"Combined": self.rgba, "Depth": self.depth[..., None], "Normal": self.normal, "Albedo": self.albedo},
-                    metadata=meta,
-                )
+                layers = {"Combined": self.rgba, "Depth": self.depth[..., None], "Normal": self.normal, "Albedo": self.albedo}
+                if self.noisy is not None:
+                    layers.update({"Noisy Image": self.noisy, "Denoising Albedo": self.albedo, "Denoising Normal": self.normal})
+                imageio.write_exr_layers(path, layers, metadata=meta)
             else:
                 imageio.write_exr(path, self.rgba, metadata=meta)
         else:
@@ -175,6 +190,10 @@ def render(
     if not isinstance(overrides.get("scheduler", ""), str):  # a distributed.Client
         client = overrides.pop("scheduler")
     settings = replace(settings or RenderSettings(), **overrides)  # validates every setting
+    if settings.denoise:
+        from . import denoise
+
+        denoise.require()  # before rendering, not after
     desc, buffers = scene.description()
     close = None
     if progress is True:
@@ -196,7 +215,7 @@ def render(
     stats = json.loads(out["stats"])
     stats["wall_seconds"] = time.perf_counter() - start
     warn_left_out(stats)
-    return RenderResult(
+    result = RenderResult(
         rgba=out["rgba"],
         depth=out["depth"],
         normal=out["normal"],
@@ -205,3 +224,4 @@ def render(
         wavelengths=out["wavelengths"],
         stats=stats,
     )
+    return result.denoised() if settings.denoise else result

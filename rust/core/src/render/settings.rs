@@ -368,6 +368,21 @@ settings! {
         "Keep each pixel's spectrum: .exr output then uses the spectral EXR layout; Blender gets one pass per wavelength",
         Kind::Bool,
     );
+    /// Denoise the final image with Intel Open Image Denoise (done by the Python package,
+    /// `polychrome[denoise]`); the core renders the same samples either way.
+    denoise: copy bool = false => Spec::new(
+        "Denoising",
+        "Denoise",
+        "Denoise the final image with Intel Open Image Denoise, guided by the albedo and normal passes (needs the pyoidn package: pip install polychrome[denoise]); the noisy image is kept as a pass",
+        Kind::Bool,
+    ).see("denoise.md");
+    /// Denoise the progressive previews too (Blender's viewport, `RenderJob` previews).
+    denoise_previews: copy bool = false => Spec::new(
+        "Denoising",
+        "Denoise Previews",
+        "Denoise the progressive previews too (Blender's viewport, RenderJob previews), as Cycles' viewport denoising",
+        Kind::Bool,
+    ).see("denoise.md");
     /// Worker threads; 0 uses every core.
     threads: copy usize = 0 => Spec::new("System", "Threads", "Worker threads (0: every core)", int(0, 1024));
     /// A Dask scheduler to render on (docs/distributed.md); empty renders on this
