@@ -1,5 +1,8 @@
 """Render passes: Combined (RGBA), Depth (Z), Normal (XYZ, world space), Albedo (RGB) and,
-with ``scene.polychrome.spectral_output``, one 1-channel pass per wavelength.
+with ``scene.polychrome.spectral_output``, one 1-channel pass per wavelength. With
+``scene.polychrome.denoise`` Combined is denoised and Cycles' names carry the rest: Noisy
+Image (RGBA) and the Denoising Data passes Denoising Albedo (RGB) and Denoising Normal
+(XYZ), which the compositor's Denoise node takes.
 
 Depth and Normal follow the view layer's ``use_pass_z`` / ``use_pass_normal``; Albedo is
 always written. Polychrome's arrays have row 0 at the top; Blender's at the bottom.
@@ -24,6 +27,10 @@ def register_passes(engine, scene, renderlayer):
     if renderlayer.use_pass_normal:
         engine.register_pass(scene, renderlayer, "Normal", 3, "XYZ", "VECTOR")
     engine.register_pass(scene, renderlayer, "Albedo", 3, "RGB", "COLOR")
+    if scene.polychrome.denoise:
+        engine.register_pass(scene, renderlayer, "Noisy Image", 4, "RGBA", "COLOR")
+        engine.register_pass(scene, renderlayer, "Denoising Normal", 3, "XYZ", "VECTOR")
+        engine.register_pass(scene, renderlayer, "Denoising Albedo", 3, "RGB", "COLOR")
     if scene.polychrome.spectral_output:
         for name in spectral_pass_names(scene.polychrome.wavelength_count):
             engine.register_pass(scene, renderlayer, name, 1, "V", "VALUE")
@@ -49,6 +56,10 @@ def pass_arrays(result, width, height):
         "Normal": np.asarray(result.normal, np.float32).reshape(height, width, 3),
         "Albedo": np.asarray(result.albedo, np.float32).reshape(height, width, 3),
     }
+    if result.noisy is not None:
+        out["Noisy Image"] = np.asarray(result.noisy, np.float32).reshape(height, width, 4)
+        out["Denoising Albedo"] = out["Albedo"]
+        out["Denoising Normal"] = out["Normal"]
     spectral = result.spectral
     if spectral is not None:
         spectral = np.asarray(spectral, np.float32).reshape(height, width, -1)
