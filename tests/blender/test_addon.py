@@ -278,7 +278,7 @@ def test_mesh_export_matches_blender_triangles_and_instances_share_data(tmp_path
     add_camera(sc, (0, -10, 0))
     dg = bpy.context.evaluated_depsgraph_get()
     ev = ob.evaluated_get(dg)
-    v, t, n, uv, slot = mesh_arrays(ev, ob.name)
+    v, t, n, uv, slot = mesh_arrays(ev, ob.name)[:5]
     me = ev.to_mesh(); me.calc_loop_triangles()
     ref_p = np.array([[tuple(me.vertices[i].co) for i in lt.vertices] for lt in me.loop_triangles])
     ref_n = np.array([[tuple(me.corner_normals[l].vector) for l in lt.loops] for lt in me.loop_triangles])
