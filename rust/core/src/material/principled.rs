@@ -785,8 +785,6 @@ mod tests {
     fn sampling_matches_pdf_chi_square() {
         let grid = WavelengthGrid::uniform(4, 400.0, 700.0).unwrap();
         let ctx = ShadingContext::new(&grid);
-        let (nt, np) = (16usize, 16usize);
-        let samples = 100_000usize;
         for &(rho, metallic, transmission, roughness, theta_o) in &[
             (0.8f32, 0.0f32, 0.0f32, 0.5f32, 0.5f32),
             (0.3, 0.4, 0.0, 0.3, 1.2),
@@ -794,70 +792,7 @@ mod tests {
             (0.0, 0.0, 0.0, 0.4, 0.3),
         ] {
             let m = principled(&grid, rho, metallic, transmission, roughness, 1.5, None);
-            let wo = dir(theta_o, 0.0);
-            let bin = |w: Vec3A| -> usize {
-                let c = (w.z * 0.5 + 0.5).clamp(0.0, 0.999_999);
-                let phi = w.y.atan2(w.x).rem_euclid(std::f32::consts::TAU);
-                let i = ((c * nt as f32) as usize).min(nt - 1);
-                let j = ((phi / std::f32::consts::TAU * np as f32) as usize).min(np - 1);
-                i * np + j
-            };
-            let mut hist = vec![0f64; nt * np + 1];
-            let mut rng = Rng::new(99, theta_o.to_bits() as u64);
-            for _ in 0..samples {
-                let mut tp = SampledSpectrum::splat(4, 1.0);
-                match m.sample(&ctx, wo, rng.uniform2(), rng.uniform(), &mut tp) {
-                    Some(s) => {
-                        assert!(!s.specular);
-                        hist[bin(s.wi)] += 1.0;
-                    }
-                    None => hist[nt * np] += 1.0,
-                }
-            }
-            let sub = 24usize;
-            let mut expected = vec![0f64; nt * np + 1];
-            for i in 0..nt {
-                for j in 0..np {
-                    let mut acc = 0.0f64;
-                    for a in 0..sub {
-                        for b in 0..sub {
-                            let c = -1.0 + 2.0 * (i as f64 + (a as f64 + 0.5) / sub as f64) / nt as f64;
-                            let phi = std::f64::consts::TAU * (j as f64 + (b as f64 + 0.5) / sub as f64) / np as f64;
-                            let s = (1.0 - c * c).max(0.0).sqrt();
-                            acc += m.pdf(&ctx, wo, Vec3A::new((s * phi.cos()) as f32, (s * phi.sin()) as f32, c as f32))
-                                as f64;
-                        }
-                    }
-                    let area = (2.0 / nt as f64) * (std::f64::consts::TAU / np as f64);
-                    expected[i * np + j] = acc / (sub * sub) as f64 * area * samples as f64;
-                }
-            }
-            let total: f64 = expected.iter().sum();
-            assert!(total <= samples as f64 * 1.01, "pdf integrates to {}", total / samples as f64);
-            expected[nt * np] = (samples as f64 - total).max(0.0);
-            let (mut chi2, mut dof, mut pool_e, mut pool_o) = (0.0f64, 0usize, 0.0f64, 0.0f64);
-            for k in 0..expected.len() {
-                if expected[k] < 5.0 {
-                    pool_e += expected[k];
-                    pool_o += hist[k];
-                } else {
-                    chi2 += (hist[k] - expected[k]).powi(2) / expected[k];
-                    dof += 1;
-                }
-            }
-            if pool_e >= 5.0 {
-                chi2 += (pool_o - pool_e).powi(2) / pool_e;
-                dof += 1;
-            } else {
-                assert!(pool_o < 20.0, "{pool_o} samples where the pdf expects {pool_e}");
-            }
-            let dof = (dof - 1) as f64;
-            let z = 3.719;
-            let crit = dof * (1.0 - 2.0 / (9.0 * dof) + z * (2.0 / (9.0 * dof)).sqrt()).powi(3);
-            assert!(
-                chi2 < crit,
-                "ρ {rho} m {metallic} t {transmission} r {roughness} θ {theta_o}: χ² {chi2:.1} > {crit:.1} (dof {dof})"
-            );
+            crate::material::testing::chi_square(&m, &ctx, dir(theta_o, 0.0), 100_000, theta_o.to_bits() as u64);
         }
     }
 
