@@ -145,3 +145,25 @@ def test_bad_grids_raise(settings, message):
 def test_grid_sizes_from_4_to_401_work(count):
     lam, w = grid_of(wavelength_count=count)
     assert len(lam) == count and abs(w.sum() - 400.0) < 1e-3
+
+
+@pytest.mark.parametrize("temperature", [2700.0, 4000.0, 6500.0])
+def test_tinted_blackbody_is_tint_times_its_rec709_colour(temperature):
+    """spectra.tinted: the blackbody's linear Rec.709 colour (colour-science: Planck's law,
+    CIE 1931 2°, sRGB matrix) times the tint, per channel."""
+    colour = pytest.importorskip("colour")
+    from polychrome import spectra
+
+    shape = colour.SpectralShape(380, 780, 5)
+    sd = colour.sd_blackbody(temperature, shape)
+    peak = colour.sd_blackbody(temperature, colour.SpectralShape(300, 3000, 1)).values.max()
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape)
+    xyz = np.trapz(cmfs.values * (sd.values / peak)[:, None], axis=0) / np.trapz(cmfs.values[:, 1])
+    want = colour.XYZ_to_RGB(xyz, colour.RGB_COLOURSPACES["sRGB"], apply_cctf_encoding=False)
+    tint = (0.9, 0.5, 0.25)
+    got = spectra.tinted(spectra.blackbody(temperature), *tint)
+    assert got.kind == "rgb"
+    assert np.allclose(got.params["rgb"], np.array(tint) * want, rtol=0.01), (got.params["rgb"], np.array(tint) * want)
+    assert spectra.tinted(spectra.blackbody(temperature), 1.0, 1.0, 1.0) == spectra.blackbody(temperature)
+    with pytest.raises(ValueError, match="tint"):
+        spectra.tinted(spectra.blackbody(temperature), -1.0, 0.0, 0.0)

@@ -91,3 +91,28 @@ def as_spectrum(value: Any) -> Spectrum:
     if seq is not None and len(seq) == 3 and all(isinstance(c, (int, float, np.floating, np.integer)) for c in seq):
         return rgb(*seq)
     raise TypeError(f"cannot use {value!r} as a spectrum: give a number, an (r, g, b) triple or a polychrome.spectra function's result")
+
+
+#: The grid the colour of a spectrum is measured on (5 nm over the visible range).
+_TINT_SETTINGS = '{"wavelength_count": 81}'
+#: CIE XYZ → linear Rec.709 (the inverse of IEC 61966-2-1's matrix, as polychrome.colordiff).
+_XYZ_TO_REC709 = np.linalg.inv(np.array([[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]], dtype=np.float64))
+
+
+def tinted(spectrum: Spectrum, r: float, g: float, b: float) -> Spectrum:
+    """A light of ``spectrum`` whose colour is multiplied by the RGB tint (r, g, b), as
+    Cycles (``intern/cycles/blender/light.cpp``: colour × temperature colour) and UsdLux
+    (``color`` × ``colorTemperature``) define it: the product is taken in linear Rec.709
+    (the spectrum's colour through the CIE 1931 observer, RGB white ↔ D65) and becomes an
+    RGB colour uplifted as an illuminant. A white tint returns ``spectrum`` unchanged."""
+    import json
+
+    from . import _core
+
+    if (r, g, b) == (1.0, 1.0, 1.0):
+        return spectrum
+    if not all(np.isfinite(c) and c >= 0.0 for c in (r, g, b)):
+        raise ValueError(f"tint {(r, g, b)} must be finite and non-negative")
+    xyz = np.array(_core.spectrum_xyz(json.dumps(spectrum.to_dict()), _TINT_SETTINGS), dtype=np.float64)
+    own = _XYZ_TO_REC709 @ xyz
+    return rgb(float(r * own[0]), float(g * own[1]), float(b * own[2]))

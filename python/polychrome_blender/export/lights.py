@@ -1,19 +1,28 @@
-"""Blender lights → polychrome lights, in Blender's (Cycles') units.
+"""Blender lights → polychrome lights, in Cycles' units.
 
-* Point: ``energy`` watts → radiant intensity ``colour × P / 4π`` (``polychrome.PointLight``).
-  The soft-shadow radius is ignored (a true point).
-* Area: Cycles gives a one-sided Lambertian emitter of radiance ``colour × P / (π A)``
-  (checked against Cycles 4.5: irradiance under a small area light matches this to < 1 %,
-  and nothing is emitted behind it). It is exported as an emissive quad/disk (ellipse:
-  a 32-gon) of that radiance, plus a black backing one thousandth of its size behind it,
-  because polychrome's emitters shine from both faces. With *Normalize* off, Cycles
-  gives radiance ``colour × P / π`` whatever the size (measured likewise); so does this.
-* Spot: ``polychrome.SpotLight`` — intensity ``colour × P / 4π`` on the axis, cone
-  ``spot_size`` and ``spot_blend`` as Blender's (the radius is ignored).
-* Sun: ``polychrome.SunLight`` — irradiance ``colour × strength`` W/m² (its angle is ignored).
-* Exposure (Blender 4.4+) multiplies the power by 2^exposure, as in Cycles.
-* Colour from temperature (``use_temperature``, Blender 4.5+): a blackbody spectrum
-  normalised to the luminance of white; an extra colour tint is then ignored (warning).
+Sources: Cycles ``intern/cycles/blender/light.cpp`` (strength = colour × temperature
+colour × energy × 2^exposure; ``normalize`` from ``LA_UNNORMALIZED``) and
+``intern/cycles/scene/light.cpp`` (``Light::area`` and ``device_update_lights``: with
+*Normalize* on, the emission is divided by the light's area; off, it is not).
+
+* Point / spot: ``energy`` P watts → radiant intensity ``colour × P / 4π``. Cycles' area of
+  a point or spot light is 4πr² (r = ``shadow_soft_size``), or 4 when r = 0; with
+  Normalize off the power is therefore multiplied by 4πr² (4 when r = 0). The radius
+  (soft shadows) is otherwise ignored: a true point.
+* Area: a one-sided Lambertian emitter of radiance ``colour × P / (π A)``, A its
+  world-space area (Cycles: |X axis|·size_x × |Y axis|·size_y, × π/4 for disks and
+  ellipses, so object scale counts); with Normalize off ``colour × P / π``. Exported as an
+  emissive quad/disk (ellipse: a 32-gon, its radiance scaled so its power is Cycles') plus a
+  black backing one thousandth of its size behind it, because polychrome's emitters shine
+  from both faces.
+* Spot: ``polychrome.SpotLight``, cone ``spot_size`` and ``spot_blend`` as Blender's.
+* Sun: ``polychrome.SunLight`` of irradiance ``colour × strength`` W/m² (Normalize on);
+  with Normalize off Cycles' sun disk has radiance = strength, so the irradiance is
+  ``strength × π sin²(angle/2)`` (angle 0: strength). The angle is otherwise ignored
+  (sharp shadows, warning).
+* Temperature (``use_temperature``): a blackbody spectrum normalised to the luminance of
+  white, filtered by the colour tint (``polychrome.spectra.tinted``), as Cycles multiplies
+  the colour by the temperature colour.
 """
 
 import math
@@ -45,13 +54,16 @@ def blackbody_white(temperature):
 
 
 def light_colour(ld, name, warnings):
-    """The light's colour as a spectrum: RGB, or a blackbody when ``use_temperature``."""
+    """The light's colour as a spectrum: RGB, or a blackbody filtered by the colour when
+    ``use_temperature`` (Cycles: colour × temperature colour)."""
     col = tuple(float(c) for c in ld.color[:3])
     if getattr(ld, "use_temperature", False):  # Blender 4.5+
-        if col != (1.0, 1.0, 1.0):
-            warnings.add(("tint", name), f"light '{name}': its colour tint on top of the temperature is ignored")
-        return blackbody_white(float(ld.temperature))
+        return pc.spectra.tinted(blackbody_white(float(ld.temperature)), *col)
     return pc.spectra.rgb(*col)
+
+
+def _normalized(ld):
+    return bool(getattr(ld, "normalize", True))  # Blender 4.5+; normalised before
 
 
 def _area_polygon(ld):
@@ -67,7 +79,9 @@ def _area_polygon(ld):
     x, y = pts[:, 0], pts[:, 1]
     area = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
     tris = np.stack([np.zeros(n - 2, np.int64), np.arange(1, n - 1), np.arange(2, n)], axis=1)
-    return pts, tris, area, max(sx, sy)
+    # Cycles' area of the shape (an ellipse is π/4 of its box; the 32-gon is a bit less)
+    exact = sx * sy * (math.pi / 4 if ld.shape in ("DISK", "ELLIPSE") else 1.0)
+    return pts, tris, area, exact, max(sx, sy)
 
 
 def _power(ld, name):
@@ -80,15 +94,20 @@ def _power(ld, name):
 
 def export_area(scene, ld, name, matrix, warnings):
     power = _power(ld, name)
-    pts, tris, area, size = _area_polygon(ld)
-    if not area > 0.0 or power == 0.0:
+    pts, tris, area, exact, size = _area_polygon(ld)
+    # Cycles scales the size by the lengths of the object's X and Y axes (scene/light.cpp).
+    stretch = float(np.linalg.norm(matrix[:3, 0]) * np.linalg.norm(matrix[:3, 1]))
+    if not area * stretch > 0.0 or power == 0.0:
         return
     if ld.spread < math.pi - 1e-4:
         warnings.add(("spread", name), f"light '{name}': area light spread is not supported; rendered as 180°")
     spec = light_colour(ld, name, warnings)
-    # Normalize on (default): P is the power of the whole light; off: P is per unit area
-    per_area = area if getattr(ld, "normalize", True) else 1.0  # absent before Blender 4.x: normalised
-    radiance = spec * (power / (math.pi * per_area))
+    # Normalize on: P is the power of the whole light (radiance P/(πA), A in world space);
+    # off: the radiance is P/π. Either way the polygon emits Cycles' power.
+    if _normalized(ld):
+        radiance = spec * (power / (math.pi * area * stretch))
+    else:
+        radiance = spec * (power * exact / (math.pi * area))
     emitter = pc.Emitter(radiance, name=f"{name} (area light)")
     verts = np.concatenate([pts, np.zeros((len(pts), 1))], axis=1).astype(np.float32)
     back = verts.copy()
@@ -108,6 +127,26 @@ def _axis(m, name):
     return (d / n).tolist()
 
 
+def _point_power(ld, name):
+    """Power of a point or spot light: with Normalize off Cycles does not divide by its
+    area 4πr² (4 when r = 0), which multiplies the normalised power by that area."""
+    p = _power(ld, name)
+    if _normalized(ld):
+        return p
+    r = float(ld.shadow_soft_size)
+    return p * (4.0 * math.pi * r * r if r > 0.0 else 4.0)
+
+
+def _sun_strength(ld, name):
+    """Irradiance of a sun: with Normalize off its disk of angular diameter ``angle`` has
+    radiance = strength, i.e. irradiance strength·π·sin²(angle/2) (Cycles' sun area)."""
+    s = _power(ld, name)
+    half = 0.5 * float(ld.angle)
+    if _normalized(ld) or not half > 0.0:
+        return s
+    return s * math.pi * math.sin(half) ** 2
+
+
 def export_lights(depsgraph, scene, warnings):
     """Adds every visible light to ``scene``; returns how many."""
     count = 0
@@ -123,7 +162,7 @@ def export_lights(depsgraph, scene, warnings):
         pos = m[:3, 3]
         if ld.type == "POINT":
             spec = light_colour(ld, name, warnings)
-            scene.add_light(pc.PointLight(pos.tolist(), _power(ld, name), spec, name=name))
+            scene.add_light(pc.PointLight(pos.tolist(), _point_power(ld, name), spec, name=name))
         elif ld.type == "AREA":
             export_area(scene, ld, name, m, warnings)
         elif ld.type == "SPOT":
@@ -132,7 +171,7 @@ def export_lights(depsgraph, scene, warnings):
                 pc.SpotLight(
                     pos.tolist(),
                     _axis(m, name),
-                    power=_power(ld, name),
+                    power=_point_power(ld, name),
                     color=spec,
                     spot_size=float(ld.spot_size),
                     spot_blend=float(ld.spot_blend),
@@ -143,7 +182,7 @@ def export_lights(depsgraph, scene, warnings):
             spec = light_colour(ld, name, warnings)
             if float(ld.angle) > 1e-3:
                 warnings.add(("sun", name), f"light '{name}': the sun's angular diameter is ignored (sharp shadows)")
-            scene.add_light(pc.SunLight(_axis(m, name), strength=_power(ld, name), color=spec, name=name))
+            scene.add_light(pc.SunLight(_axis(m, name), strength=_sun_strength(ld, name), color=spec, name=name))
         else:
             warnings.add(("light", ld.type), f"light '{name}': {ld.type.lower()} lights are not supported yet and are skipped")
             continue
