@@ -2,7 +2,15 @@
 
 8-bit images in the sRGB colour space stay sRGB bytes; float images and non-colour data
 are passed as linear float. Blender's pixel rows start at the bottom, polychrome's at the
-top. :class:`TextureCache` converts each image once and keeps it until the image changes."""
+top. :class:`TextureCache` converts each image once and keeps it until the image changes.
+
+:func:`graph_texture` is the shading graph's form (docs/shading.md): RGBA, and 8-bit
+images in any other colour space than sRGB, Non-Color and Linear Rec.709 converted to
+scene linear with Blender's own OpenColorIO configuration (Blender already gives float
+images in scene linear)."""
+
+import os
+import sys
 
 import numpy as np
 import polychrome as pc
@@ -43,6 +51,71 @@ def blender_texture(node, owner, warnings):
     return pc.Texture.from_array(px, "srgb" if srgb else "linear", wrap, img.name)
 
 
+#: 8-bit colour spaces whose bytes are used as they are (linear values or data).
+LINEAR_BYTES = ("Linear Rec.709", "Non-Color")
+SRGB_BYTES = ("sRGB", "sRGB EOTF")
+
+
+def _ocio_processor(colorspace):
+    """A CPU processor from ``colorspace`` to scene linear, from the OpenColorIO
+    configuration Blender uses ($OCIO, else the one bpy ships) and the PyOpenColorIO bpy bundles."""
+    import bpy
+
+    local = bpy.utils.resource_path("LOCAL")
+    site = os.path.join(local, "python", "lib", f"python{sys.version_info[0]}.{sys.version_info[1]}", "site-packages")
+    if os.path.isdir(site) and site not in sys.path:
+        sys.path.append(site)
+    import PyOpenColorIO as ocio
+
+    path = os.environ.get("OCIO") or os.path.join(local, "datafiles", "colormanagement", "config.ocio")
+    config = ocio.Config.CreateFromFile(path)
+    return config.getProcessor(colorspace, ocio.ROLE_SCENE_LINEAR).getDefaultCPUProcessor()
+
+
+def graph_rgba(img, owner, warnings):
+    """(H, W, 4) pixels of ``img`` for the shading graph and their encoding ("srgb" bytes
+    or "linear" float), or None (with a warning) when the image has no pixels."""
+    if img.source == "TILED":
+        warnings.add(("udim", img.name), f"{owner}: image '{img.name}' is a UDIM image; only its first tile is used")
+    px = image_pixels(img)
+    if px is None:
+        warnings.add(("img", img.name), f"{owner}: image '{img.name}' has no pixels (missing file?); its node reads black")
+        return None
+    if px.shape[2] != 4:  # grey or RGB: make it RGBA
+        rgb = np.repeat(px[:, :, :1], 3, axis=2) if px.shape[2] < 3 else px[:, :, :3]
+        alpha = px[:, :, 1:2] if px.shape[2] == 2 else np.ones_like(px[:, :, :1])
+        px = np.concatenate([rgb, alpha], axis=2)
+    px = np.nan_to_num(px, nan=0.0, posinf=0.0, neginf=0.0)
+    space = img.colorspace_settings.name
+    if img.is_float or img.colorspace_settings.is_data or space in LINEAR_BYTES:
+        return px, "linear"
+    if space in SRGB_BYTES:
+        return np.rint(np.clip(px, 0.0, 1.0) * 255.0).astype(np.uint8), "srgb"
+    try:
+        proc = _ocio_processor(space)
+    except Exception as e:  # no OpenColorIO or an unknown colour space: read as sRGB
+        warnings.add(("ocio", img.name), f"{owner}: image '{img.name}': colour space '{space}' cannot be converted ({e}); read as sRGB")
+        return np.rint(np.clip(px, 0.0, 1.0) * 255.0).astype(np.uint8), "srgb"
+    buf = np.ascontiguousarray(px, np.float32)
+    proc.applyRGBA(buf)
+    return np.nan_to_num(buf, nan=0.0, posinf=0.0, neginf=0.0), "linear"
+
+
+def graph_texture(node, owner, node_name, warnings, cache, user=None):
+    """The RGBA Texture of an Image or Environment Texture node for the shading graph, or None."""
+    img = node.image
+    extension = getattr(node, "extension", "REPEAT")
+
+    def convert(own):
+        got = graph_rgba(img, owner, own)
+        if got is None:
+            return None
+        px, encoding = got
+        return pc.Texture.from_array(px, encoding, extension if extension in WRAPS else "REPEAT", img.name)
+
+    return cache.texture(node, owner, warnings, user, convert=convert, kind="graph")
+
+
 class TextureCache:
     """Textures by (image, extension), each converted once; a cached texture's warnings
     are added again wherever it is used. Each use names its ``user`` (e.g. the material),
@@ -54,15 +127,17 @@ class TextureCache:
         self._used = {}  # user -> image names it used
         self.converted = 0  # images converted; the Exporter counts per export
 
-    def texture(self, node, owner, warnings, user=None):
+    def texture(self, node, owner, warnings, user=None, convert=None, kind="rgb"):
+        """The node's texture, converted by ``convert(warnings)`` (default: :func:`blender_texture`)."""
         img = node.image
         if img is None:
             return None
-        key = (img.original.name, getattr(node, "extension", "REPEAT"))
+        key = (img.original.name, getattr(node, "extension", "REPEAT"), kind)
         self._used.setdefault(user, set()).add(key[0])
         if key not in self._entries:
             own = Warnings()
-            self._entries[key] = (blender_texture(node, owner, own), own.items)
+            tex = blender_texture(node, owner, own) if convert is None else convert(own)
+            self._entries[key] = (tex, own.items)
             self.converted += 1
         tex, items = self._entries[key]
         warnings.extend(items)
