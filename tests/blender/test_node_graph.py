@@ -349,3 +349,60 @@ def test_image_colour_spaces_become_scene_linear(exported):
         raw[:, :3], colour.RGB_COLOURSPACES["ACEScg"], colour.RGB_COLOURSPACES["sRGB"], chromatic_adaptation_transform="Bradford"
     )
     assert sp["ACEScg"]["encoding"] == "linear" and got[:, :3] == pytest.approx(want, abs=3e-3)
+
+
+def test_mesh_carries_what_graphs_read(tmp_path):
+    """Per-vertex graph data equals Blender's value at every triangle corner (vertices
+    split where corners differ); missing names warn once naming object and material."""
+    proc, res = run_bpy(
+        tmp_path,
+        """
+    from polychrome_blender.export.meshes import mesh_arrays
+    from polychrome_blender.export.warnings import Warnings
+    sc = empty_scene()
+    bpy.ops.mesh.primitive_grid_add(x_subdivisions=4, y_subdivisions=3, size=2.0)
+    ob = bpy.context.object; me = ob.data
+    me.uv_layers.new(name='Second')
+    sec = me.uv_layers['Second'].uv
+    for i, d in enumerate(sec): d.vector = (0.3 * i % 1.0, 0.7 * i % 1.0)   # a seam at every corner
+    col = me.color_attributes.new('Col', 'BYTE_COLOR', 'CORNER')
+    for i, d in enumerate(col.data): d.color = ((i % 5) / 4, (i % 3) / 2, 0.25, 1.0)
+    wet = me.attributes.new('wetness', 'FLOAT', 'POINT')
+    for i, d in enumerate(wet.data): d.value = 0.1 * i
+    face = me.attributes.new('facevec', 'FLOAT_VECTOR', 'FACE')
+    for i, d in enumerate(face.data): d.vector = (i, -i, 2 * i)
+    needs = {('uv', 'Second'): "material 'M' node 'UV Map'", ('color', 'Col'): 'c', ('attribute', 'wetness'): 'a',
+             ('attribute', 'facevec'): 'f', ('attribute', 'Second'): 'uv by name', ('tangent', 'Second'): 't',
+             ('uv', 'Nope'): "material 'M' node 'Lost'", ('color', ''): 'default colour'}
+    dg = bpy.context.evaluated_depsgraph_get(); ev = ob.evaluated_get(dg)
+    w = Warnings()
+    a = mesh_arrays(ev, ob.name, needs, w)
+    em = ev.to_mesh(); em.calc_loop_triangles(); em.calc_tangents(uvmap='Second')
+    tl = [list(t.loops) for t in em.loop_triangles]
+    blender = dict(
+        second=[[list(em.uv_layers['Second'].uv[l].vector) for l in t] for t in tl],
+        col=[[list(em.color_attributes['Col'].data[l].color) for l in t] for t in tl],
+        wet=[[em.attributes['wetness'].data[em.loops[l].vertex_index].value for l in t] for t in tl],
+        face=[[list(em.attributes['facevec'].data[lt.polygon_index].vector) for l in lt.loops] for lt in em.loop_triangles],
+        tangent=[[list(em.loops[l].tangent) + [em.loops[l].bitangent_sign] for l in t] for t in tl],
+    )
+    ev.to_mesh_clear()
+    d = a.data; tri = a.triangles
+    emit(tri=tri.tolist(), second=d['uv_maps']['Second'].tolist(), col=d['colors']['Col'].tolist(), default=d['colors'][''].tolist(),
+         wet=d['attributes']['wetness'].tolist(), face=d['attributes']['facevec'].tolist(), uvname=d['attributes']['Second'].tolist(),
+         tangent=d['tangents'].tolist(), nv=len(a.vertices), uv_maps=sorted(d['uv_maps']), warnings=w.messages, blender=blender)
+    """,
+    )
+    r = check(proc, res)[0]
+    tri = np.array(r["tri"])
+    b = r["blender"]
+    assert np.array(r["second"])[tri] == pytest.approx(np.array(b["second"]), abs=1e-6)
+    assert np.array(r["col"])[tri] == pytest.approx(np.array(b["col"]), abs=1e-6)
+    assert np.array(r["default"]) == pytest.approx(np.array(r["col"]))  # the only colour attribute is the default
+    assert np.array(r["wet"])[tri][..., 0] == pytest.approx(np.array(b["wet"]), abs=1e-6)
+    assert np.array(r["face"])[tri] == pytest.approx(np.array(b["face"]), abs=1e-6)
+    assert np.array(r["uvname"])[tri][..., :2] == pytest.approx(np.array(b["second"]), abs=1e-6)
+    assert np.array(r["tangent"])[tri] == pytest.approx(np.array(b["tangent"]), abs=1e-6)
+    assert r["uv_maps"] == ["Second"]
+    lost = [w for w in r["warnings"] if "'Nope'" in w]
+    assert len(lost) == 1 and "material 'M' node 'Lost'" in lost[0] and "object 'Grid'" in lost[0]

@@ -35,6 +35,7 @@ class _Cached:
 
     value: object
     warnings: list = field(default_factory=list)
+    needs: dict = field(default_factory=dict)  # mesh data its graph reads (export/node_graph.py)
 
 
 @dataclass
@@ -139,30 +140,47 @@ class Exporter:
             cam.rolling_shutter = True
             cam.rolling_shutter_duration = float(cycles.rolling_shutter_duration)
 
+    def _cached_material(self, mat):
+        key = _material_key(mat)
+        cached = self._materials.get(key)
+        if cached is None:
+            own = Warnings()
+            export = MaterialExport(mat, own, self.textures)
+            cached = self._materials[key] = _Cached(export.material(), own.items, export.needs)
+            self.counts["materials"] += 1
+        return cached
+
+    def _slot_material(self, ob, slot):
+        if slot is not None and slot < len(ob.material_slots):
+            return ob.material_slots[slot].material
+        return None
+
+    def _needs(self, ob):
+        """What the graphs of ``ob``'s materials read from its mesh (export/node_graph.py)."""
+        needs = {}
+        for slot in range(len(ob.material_slots)):
+            for k, who in self._cached_material(self._slot_material(ob, slot)).needs.items():
+                needs.setdefault(k, who)
+        return needs
+
     def _material(self, ob, slot, scene, indices, warnings):
         """Scene index of the material in ``ob``'s ``slot`` (None: no slot), exported
         once per Blender material."""
-        mat = None
-        if slot is not None and slot < len(ob.material_slots):
-            mat = ob.material_slots[slot].material
+        mat = self._slot_material(ob, slot)
         key = _material_key(mat)
         if key not in indices:
-            cached = self._materials.get(key)
-            if cached is None:
-                own = Warnings()
-                cached = self._materials[key] = _Cached(MaterialExport(mat, own, self.textures).material(), own.items)
-                self.counts["materials"] += 1
+            cached = self._cached_material(mat)
             warnings.extend(cached.warnings)
             indices[key] = scene.add_material(cached.value)
         return indices[key]
 
-    def _mesh(self, ob, key, name, warnings):
+    def _mesh(self, ob, key, name, warnings, needs):
         """The cached mesh of ``key`` if ``ob`` used it in an earlier export, else read."""
         data_name = ob.original.data.name if ob.original.data is not None else None
         cached = self._meshes.get(key)
         if cached is None or name not in cached.owners:
             own = Warnings()
-            cached = self._meshes[key] = _CachedMesh(read_mesh(ob, name, own), own.items, {name}, {data_name})
+            cached = self._meshes[key] = _CachedMesh(read_mesh(ob, name, own, needs), own.items, {name}, {data_name})
             self.counts["meshes"] += 1
         warnings.extend(cached.warnings)
         return cached
@@ -184,9 +202,14 @@ class Exporter:
                 continue
             # Geometry-node instances of different meshes share the instancer's name, so
             # the evaluated data block is the key (with the materials it is shown with).
-            key = (ob.data.as_pointer(), tuple(s.material.original.name if s.material else "" for s in ob.material_slots))
+            needs = self._needs(ob) if ob.type == "MESH" else {}
+            key = (
+                ob.data.as_pointer(),
+                tuple(s.material.original.name if s.material else "" for s in ob.material_slots),
+                tuple(sorted(needs)),
+            )
             if key not in placed:
-                cached = self._mesh(ob, key, name, warnings)
+                cached = self._mesh(ob, key, name, warnings, needs)
                 used.add(key)
                 placed[key] = None
                 if cached.arrays is not None:
@@ -198,7 +221,15 @@ class Exporter:
                     if self._motion is not None and not inst.is_instance:
                         deform = self._motion.vertex_motion(ob, a.source)
                     placed[key] = scene.add_mesh(
-                        name, a.vertices, a.triangles, normals=a.normals, uvs=a.uvs, material_ids=ids, place=False, motion_vertices=deform
+                        name,
+                        a.vertices,
+                        a.triangles,
+                        normals=a.normals,
+                        uvs=a.uvs,
+                        material_ids=ids,
+                        place=False,
+                        motion_vertices=deform,
+                        **graph_mesh_data(a.data),
                     )
             else:
                 cached = self._meshes[key]
@@ -241,6 +272,16 @@ class Exporter:
                     )
             if placed[key] is not None:
                 scene.add_instance(placed[key], np.array(inst.matrix_world, dtype=np.float64), f"{name}/{ps.name}")
+
+
+def graph_mesh_data(data):
+    """``Scene.add_mesh`` keyword arguments for the graph data of :class:`MeshArrays`."""
+    if not data:
+        return {}
+    kw = {k: data[k] for k in ("uv_maps", "colors", "attributes") if data[k]}
+    if data.get("tangents") is not None:
+        kw["tangents"] = data["tangents"]
+    return kw
 
 
 def export_scene(depsgraph, camera=None, frame_set=None):

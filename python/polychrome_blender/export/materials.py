@@ -85,6 +85,7 @@ class MaterialExport:
         self.mat, self.warnings, self.textures = mat, warnings, textures
         self.name = "default" if mat is None else mat.name
         self.owner = f"material '{self.name}'"
+        self.needs = {}  # mesh data the material's graph reads (export/node_graph.py)
 
     def material(self):
         mat = self.mat

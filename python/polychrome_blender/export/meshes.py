@@ -1,6 +1,12 @@
 """Evaluated meshes → arrays for ``polychrome.Scene.add_mesh``, with numpy ``foreach_get``
 only (no per-triangle Python loops). The core takes per-vertex normals and uvs, so
-vertices are split where their corners disagree (sharp edges, UV seams)."""
+vertices are split where their corners disagree (sharp edges, UV seams).
+
+The default UV map is the one Blender renders with (``active_render``, as Cycles). What a
+shading graph reads besides (docs/shading.md "Mesh data a graph reads": named UV maps,
+colour attributes, generic attributes, MikkTSpace tangents) is exported only when a
+material of the mesh asks for it (``needs``, from export/node_graph.py), per vertex like
+the uvs, vertices being split where the corners of any of them differ."""
 
 from typing import NamedTuple
 
@@ -18,6 +24,9 @@ class MeshArrays(NamedTuple):
     uvs: np.ndarray | None  # (V, 2) float32, from the active UV map
     tri_slot: np.ndarray  # (T,) material slot of each triangle
     source: np.ndarray | None = None  # (V,) the Blender vertex of each vertex (motion blur)
+    data: dict | None = (
+        None  # graph data: {"uv_maps": {name: (V,2)}, "colors": {name: (V,4)}, "attributes": {name: (V,k)}, "tangents": (V,4)}
+    )
 
 
 def _unique_rows(keys):
@@ -28,15 +37,17 @@ def _unique_rows(keys):
     return first, inverse.ravel()
 
 
-def _corner_keys(cv, cn, uv, nv):
-    """Merges corners with equal (vertex, normal, uv) into output vertices.
+def _corner_keys(cv, cn, uv, nv, extra=()):
+    """Merges corners with equal (vertex, normal, uv and every ``extra`` corner array)
+    into output vertices.
 
     Returns (first corner of each output vertex, output vertex of each corner). Fast path:
     a corner equal to its vertex's representative corner maps to that vertex; only the
     others (sharp edges, UV seams, flat faces) go through a sort."""
     cols = [np.ascontiguousarray(cn, np.float32).view(np.int32)]
-    if uv is not None:
-        cols.append(np.ascontiguousarray(uv, np.float32).view(np.int32))
+    for a in (uv, *extra):
+        if a is not None:
+            cols.append(np.ascontiguousarray(a.reshape(len(cv), -1), np.float32).view(np.int32))
     attrs = np.concatenate(cols, axis=1)
     nl = len(cv)
     rep = np.full(nv, -1, np.int64)
@@ -57,8 +68,143 @@ def _corner_keys(cv, cn, uv, nv):
     return first, out
 
 
-def mesh_arrays(ob, name):
-    """The :class:`MeshArrays` of an evaluated object, or None if it has no triangles."""
+def default_uv_layer(me):
+    """The UV map Blender renders with (its ``active_render`` flag, as Cycles), else the active one."""
+    return next((layer for layer in me.uv_layers if layer.active_render), None) or me.uv_layers.active
+
+
+def _uv_corners(me, layer):
+    uv = np.empty(len(me.loops) * 2, np.float32)
+    layer.uv.foreach_get("vector", uv)
+    uv = uv.reshape(-1, 2)
+    uv[~np.isfinite(uv)] = 0.0
+    return uv
+
+
+#: Generic attribute types: (foreach_get field, components, numpy dtype of the buffer).
+_ATTRIBUTE_FIELDS = {
+    "FLOAT": ("value", 1, np.float32),
+    "INT": ("value", 1, np.int32),
+    "INT8": ("value", 1, np.int32),
+    "BOOLEAN": ("value", 1, bool),
+    "FLOAT2": ("vector", 2, np.float32),
+    "INT32_2D": ("value", 2, np.int32),
+    "FLOAT_VECTOR": ("vector", 3, np.float32),
+    "FLOAT_COLOR": ("color", 4, np.float32),
+    "BYTE_COLOR": ("color", 4, np.float32),  # 'color' is scene linear for bytes too
+    "QUATERNION": ("value", 4, np.float32),
+}
+
+
+def _attribute_corners(me, attr, cv, corner_face):
+    """A generic attribute as (corners, k) float32, or None for a domain/type the graph cannot read."""
+    spec = _ATTRIBUTE_FIELDS.get(attr.data_type)
+    if spec is None or attr.domain not in ("POINT", "CORNER", "FACE"):
+        return None
+    field, k, dtype = spec
+    buf = np.empty(len(attr.data) * k, dtype)
+    attr.data.foreach_get(field, buf)
+    buf = buf.reshape(-1, k).astype(np.float32)
+    if attr.domain == "POINT":
+        buf = buf[cv]
+    elif attr.domain == "FACE":
+        buf = buf[corner_face]
+    buf[~np.isfinite(buf)] = 0.0
+    return buf
+
+
+def graph_corners(me, cv, needs, name, warnings):
+    """The corner arrays of what ``needs`` asks for: {"uv_maps": {name: (L,2)}, "colors":
+    {name: (L,4)}, "attributes": {name: (L,k)}, "tangents": (L,4) or None}. ``needs`` maps
+    (kind, name) to who asks ("material 'M' node 'N'"); a missing name reads zero in
+    Blender and gets one warning here."""
+    out = {"uv_maps": {}, "colors": {}, "attributes": {}, "tangents": None}
+    nl = len(cv)
+    corner_face = None
+    if any(kind == "attribute" for kind, _ in needs):
+        starts = np.empty(len(me.polygons), np.int32)
+        me.polygons.foreach_get("loop_start", starts)
+        sizes = np.empty(len(me.polygons), np.int32)
+        me.polygons.foreach_get("loop_total", sizes)
+        corner_face = np.repeat(np.arange(len(starts)), sizes)
+
+    def missing(kind, what, key):
+        warnings.add(
+            ("missing", name, kind, key), f"object '{name}': {needs[(kind, key)]} reads {what} '{key}', which the mesh lacks (zero)"
+        )
+
+    for kind, key in sorted(needs):
+        if kind == "uv" and key:
+            layer = me.uv_layers.get(key)
+            if layer is None:
+                missing(kind, "UV map", key)
+            else:
+                out["uv_maps"][key] = _uv_corners(me, layer)
+        elif kind == "color":
+            ca = me.color_attributes
+            cname = key or ca.default_color_name or ca.active_color_name
+            attr = ca.get(cname) if cname else None
+            if attr is None:
+                if key:
+                    missing(kind, "colour attribute", key)
+                continue
+            buf = np.empty(len(attr.data) * 4, np.float32)
+            attr.data.foreach_get("color", buf)
+            buf = buf.reshape(-1, 4)
+            out["colors"][key] = buf[cv] if attr.domain == "POINT" else buf
+        elif kind == "attribute" and key:
+            layer = me.uv_layers.get(key)
+            if layer is not None:  # a UV map read by name: (u, v, 0), as Cycles
+                uv = _uv_corners(me, layer)
+                out["attributes"][key] = np.concatenate([uv, np.zeros((nl, 1), np.float32)], axis=1)
+                continue
+            attr = me.attributes.get(key)
+            got = None if attr is None or key.startswith(".") else _attribute_corners(me, attr, cv, corner_face)
+            if got is None:
+                missing(kind, "attribute", key)
+            else:
+                out["attributes"][key] = (
+                    got if got.shape[1] in (1, 3, 4) else np.concatenate([got, np.zeros((nl, 3 - got.shape[1]), np.float32)], axis=1)
+                )
+    tangent_maps = sorted(key for kind, key in needs if kind == "tangent")
+    if tangent_maps:
+        uvname = tangent_maps[0]
+        if len(tangent_maps) > 1:
+            warnings.add(
+                ("tangents", name),
+                f"object '{name}': tangents of one UV map are exported ('{uvname or 'default'}'); other maps' normal maps use them",
+            )
+        layer = me.uv_layers.get(uvname) if uvname else default_uv_layer(me)
+        if layer is None:
+            if uvname:
+                missing("tangent", "UV map", uvname)
+        else:
+            try:
+                me.calc_tangents(uvmap=layer.name)
+            except RuntimeError as e:  # e.g. n-gons: MikkTSpace needs triangles and quads
+                warnings.add(("tangents", name), f"object '{name}': no tangents for normal mapping ({e})")
+            else:
+                t = np.empty(nl * 3, np.float32)
+                me.loops.foreach_get("tangent", t)
+                sign = np.empty(nl, np.float32)
+                me.loops.foreach_get("bitangent_sign", sign)
+                tan = np.concatenate([t.reshape(-1, 3), sign[:, None]], axis=1)
+                tan[~np.isfinite(tan)] = 0.0
+                out["tangents"] = tan
+    return out
+
+
+def _corner_arrays(corners):
+    """The corner arrays of :func:`graph_corners` in a fixed order (for the split)."""
+    arrays = [*corners["uv_maps"].values(), *corners["colors"].values(), *corners["attributes"].values()]
+    if corners["tangents"] is not None:
+        arrays.append(corners["tangents"])
+    return arrays
+
+
+def mesh_arrays(ob, name, needs=None, warnings=None):
+    """The :class:`MeshArrays` of an evaluated object, or None if it has no triangles.
+    ``needs`` (see :func:`graph_corners`) adds the data shading graphs read."""
     me = ob.to_mesh()
     try:
         me.calc_loop_triangles()
@@ -86,22 +232,25 @@ def mesh_arrays(ob, name):
         cn = cn.reshape(-1, 3)
         cn[~np.isfinite(cn)] = 0.0
         uv = None
-        if me.uv_layers.active is not None:
-            uv = np.empty(nl * 2, np.float32)
-            me.uv_layers.active.uv.foreach_get("vector", uv)
-            uv = uv.reshape(-1, 2)
-            uv[~np.isfinite(uv)] = 0.0
-        first, inverse = _corner_keys(cv, cn, uv, nv)
+        default_uv = default_uv_layer(me)
+        if default_uv is not None:
+            uv = _uv_corners(me, default_uv)
+        corners = graph_corners(me, cv, needs, name, warnings) if needs else None
+        first, inverse = _corner_keys(cv, cn, uv, nv, _corner_arrays(corners) if corners else ())
         vertices = co[cv[first]]
         normals = cn[first]
         uvs = None if uv is None else uv[first]
         triangles = inverse[tl].reshape(-1, 3).astype(np.uint32)
-        return MeshArrays(vertices, triangles, normals, uvs, tri_slot, cv[first])
+        data = None
+        if corners is not None:
+            data = {k: {n: np.ascontiguousarray(a[first]) for n, a in corners[k].items()} for k in ("uv_maps", "colors", "attributes")}
+            data["tangents"] = None if corners["tangents"] is None else np.ascontiguousarray(corners["tangents"][first])
+        return MeshArrays(vertices, triangles, normals, uvs, tri_slot, cv[first], data)
     finally:
         ob.to_mesh_clear()
 
 
-def read_mesh(ob, name, warnings):
+def read_mesh(ob, name, warnings, needs=None):
     """:func:`mesh_arrays`, where an object that has no mesh to give (e.g. a curve without
     geometry) is skipped with a warning; a mesh object that cannot be read is an error."""
     from . import curves
@@ -111,7 +260,7 @@ def read_mesh(ob, name, warnings):
     if ob.type == "POINTCLOUD":
         return curves.pointcloud_arrays(ob, name)
     try:
-        return mesh_arrays(ob, name)
+        return mesh_arrays(ob, name, needs, warnings)
     except RuntimeError as e:
         if ob.type == "MESH":
             raise ValueError(f"object '{name}': cannot read its mesh ({e})") from e

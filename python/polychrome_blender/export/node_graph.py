@@ -206,16 +206,17 @@ class _Scope:
 
 class GraphExport:
     """The graph of one Blender material: :meth:`export` returns ``(nodes, output)`` (or
-    None when nothing is connected to Surface); ``needs`` the mesh data it reads, as a
-    set of ``("uv", name)``, ``("color", name)``, ``("attribute", name)``,
-    ``("tangent", uv name)`` (name "" = the default UV map / colour attribute)."""
+    None when nothing is connected to Surface); ``needs`` the mesh data it reads: a dict
+    from ``("uv", name)``, ``("color", name)``, ``("attribute", name)``,
+    ``("tangent", uv name)`` (name "" = the default UV map / colour attribute) to who
+    reads it ("material 'M' node 'N'", for messages)."""
 
     def __init__(self, mat, warnings, textures):
         self.mat, self.warnings, self.textures = mat, warnings, textures
         self.name = mat.name
         self.owner = f"material '{mat.name}'"
         self.nodes = []
-        self.needs = set()
+        self.needs = {}
         self._index = {}  # (scope key, node pointer) -> index in nodes
         self._active = []  # nodes being exported (cycle detection), as (key, name)
 
@@ -442,17 +443,20 @@ class GraphExport:
     def _note_needs(self, node, entry, name):
         t = node.bl_idname
         props = entry.get("props", {})
+        who = f"{self.owner} node '{name}'"
+        need = []
         if t == "ShaderNodeUVMap":
-            self.needs.add(("uv", props.get("uv_map", "")))
+            need.append(("uv", props.get("uv_map", "")))
         elif t == "ShaderNodeNormalMap" and props.get("space") == "TANGENT":
-            self.needs.add(("uv", props.get("uv_map", "")))
-            self.needs.add(("tangent", props.get("uv_map", "")))
+            need += [("uv", props.get("uv_map", "")), ("tangent", props.get("uv_map", ""))]
         elif t == "ShaderNodeVertexColor":
-            self.needs.add(("color", props.get("layer_name", "")))
+            need.append(("color", props.get("layer_name", "")))
         elif t == "ShaderNodeAttribute" and props.get("attribute_type", "GEOMETRY") == "GEOMETRY":
-            self.needs.add(("attribute", props.get("attribute_name", "")))
-        elif t in ("ShaderNodeTexImage",) and "Vector" not in entry["inputs"]:
-            self.needs.add(("uv", ""))
+            need.append(("attribute", props.get("attribute_name", "")))
+        elif t == "ShaderNodeTexImage" and "Vector" not in entry["inputs"]:
+            need.append(("uv", ""))
+        for k in need:
+            self.needs.setdefault(k, who)
 
 
 def export_graph(mat, warnings, textures):
