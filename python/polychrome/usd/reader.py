@@ -834,29 +834,45 @@ class _Reader:
                     self.instances.append((key, m, f"{prim.GetPath()}[{int(j)}]{str(sub.GetPath())[len(str(root.GetPath())) :]}"))
 
     # -- lights ---------------------------------------------------------------------------
+    def authored_by_blender(self, prim, attr) -> bool:
+        """Whether ``attr`` (else the prim) is authored in a layer Blender's USD exporter
+        wrote: its ``doc`` starts "Blender v" (io/usd: usd_capi_export.cc). Asked per light,
+        so a Blender asset referenced into another stage keeps Blender's conventions."""
+        specs = attr.GetPropertyStack(self.time) if attr and attr.HasAuthoredValue() else []
+        layer = specs[0].layer if specs else (prim.GetPrimStack()[0].layer if prim.GetPrimStack() else None)
+        return bool(layer is not None and str(layer.documentation).startswith("Blender v"))
+
     def light_rgb(self, prim, light) -> tuple[float, tuple[float, float, float], Any]:
         """(scalar intensity × 2^exposure, rgb colour, blackbody spectrum or None)."""
         intensity = float(self.get(light.GetIntensityAttr(), 1.0))
         exposure = float(self.get(light.GetExposureAttr(), 0.0))
         colour = tuple(float(c) for c in self.get(light.GetColorAttr(), (1.0, 1.0, 1.0)))
         scalar = intensity * 2.0**exposure
-        if not (math.isfinite(scalar) and all(math.isfinite(c) for c in colour)):
-            raise self.error(prim, "its intensity, exposure or colour is not finite")
+        if not (math.isfinite(scalar) and all(math.isfinite(c) and c >= 0.0 for c in colour)):
+            raise self.error(prim, "its intensity, exposure or colour is not finite (or the colour is negative)")
         blackbody = None
         if self.get(light.GetEnableColorTemperatureAttr(), False):
             t = float(self.get(light.GetColorTemperatureAttr(), 6500.0))
             if not (math.isfinite(t) and t > 0):
                 raise self.error(prim, f"colour temperature {t} K must be positive")
             blackbody = _blackbody_white(t)
-            if colour != (1.0, 1.0, 1.0):
-                self.warn(f"tint:{prim.GetPath()}", f"prim {prim.GetPath()}: a colour tint on a colour temperature is ignored")
+        for name, label in (("diffuse", "diffuse"), ("specular", "specular")):
+            attr = prim.GetAttribute(f"inputs:{name}")
+            v = attr.Get(self.time) if attr and attr.HasAuthoredValue() else None
+            if v is not None and float(v) != 1.0:
+                self.warn(
+                    f"{name}:{prim.GetPath()}",
+                    f"prim {prim.GetPath()}: the light's {label} multiplier {float(v):g} is not supported and is ignored",
+                )
         return scalar, colour, blackbody
 
     def emitted(self, scalar, colour, blackbody):
-        from ..spectra import rgb
+        """The emitted spectrum: colour × (colour temperature, when enabled) × scalar, as
+        UsdLux multiplies them (spectra.tinted: in linear Rec.709)."""
+        from ..spectra import rgb, tinted
 
         if blackbody is not None:
-            return blackbody * scalar
+            return tinted(blackbody, *colour) * scalar
         return rgb(*colour) * scalar
 
     def described_light(self, prim, m: np.ndarray) -> bool:
@@ -920,6 +936,8 @@ class _Reader:
             cone = float(self.get(shaping.GetShapingConeAngleAttr(), 90.0))
             softness = float(self.get(shaping.GetShapingConeSoftnessAttr(), 0.0))
             ies = self.get(shaping.GetShapingIesFileAttr())
+            if float(self.get(shaping.GetShapingFocusAttr(), 0.0)) != 0.0:
+                self.warn(f"focus:{prim.GetPath()}", f"prim {prim.GetPath()}: shaping:focus is not supported and is ignored")
             if ies is not None and getattr(ies, "path", ""):
                 self.warn(f"ies:{prim.GetPath()}", f"prim {prim.GetPath()}: IES profiles are not supported and are ignored")
             if not (math.isfinite(cone) and math.isfinite(softness)):
@@ -942,7 +960,11 @@ class _Reader:
 
     def add_emitter_polygon(self, prim, pts2d: np.ndarray, size: float, normalize: bool, scalar, colour, blackbody) -> None:
         """An emissive polygon in the light's local XY plane shining along −Z, with a black
-        backing behind it (polychrome's emitters shine from both faces)."""
+        backing behind it (polychrome's emitters shine from both faces). Normalised, the
+        radiance is divided by the polygon's world-space area (UsdLux: "divide luminance by
+        the world-space surface area", so transform scale counts)."""
+        if prim.HasAPI(self.UsdLux.ShapingAPI):
+            self.warn(f"shaping:{prim.GetPath()}", f"prim {prim.GetPath()}: ShapingAPI on an area light is not supported and is ignored")
         m = self.world_matrix(prim)
         n = len(pts2d)
         verts = np.concatenate([pts2d, np.zeros((n, 1))], axis=1).astype(np.float32)
@@ -1015,6 +1037,12 @@ class _Reader:
         angle = math.radians(float(self.get(light.GetAngleAttr(), 0.53)))
         if not math.isfinite(angle):
             raise self.error(prim, "its angle is not finite")
+        if self.authored_by_blender(prim, light.GetIntensityAttr()):
+            # Blender's exporter writes a sun of strength S and angle θ as intensity S/4 and
+            # angle θ/2, and its importer undoes both (io/usd: usd_writer_light.cc,
+            # usd_reader_light.cc); read back as Blender meant it.
+            scalar *= 4.0
+            angle *= 2.0
         # Normalised, intensity is the irradiance; otherwise it is the radiance of the sun
         # disk of angular diameter `angle`: E = L·π·sin²(angle/2) (zero angle: E = intensity).
         if not self.get(light.GetNormalizeAttr(), False) and angle > 0:
@@ -1063,11 +1091,18 @@ class _Reader:
             raise self.error(prim, f"cannot read dome texture {path}: {e}") from None
         # The latlong image has +Y up in the dome's frame (OpenEXR latlong, centre towards
         # +Z). In Polychrome's Z-up world that frame is W = Rz(φ)·Rx(90°) for a dome turned
-        # by φ about the up axis, which Polychrome's rotation π/2 − φ reproduces.
+        # by φ about the up axis, which Polychrome's rotation π/2 − φ reproduces. A
+        # DomeLight_1 whose poleAxis is Z (or "scene" on a Z-up stage) has its pole on
+        # its local +Z already: as if the Y-pole dome were turned by Rx(90°) inside it.
         w = self.world_matrix(prim)[:3, :3]
         w = w / np.cbrt(abs(np.linalg.det(w)))
         rx = np.array([[1, 0, 0], [0, 0, -1], [0, 1, 0]], dtype=np.float64)
-        wz = w @ rx.T
+        pole = "Y"
+        if prim.GetTypeName() == "DomeLight_1":
+            pole = str(self.get(light.GetPoleAxisAttr(), "scene"))
+            if pole == "scene":
+                pole = "Y" if self.UsdGeom.GetStageUpAxis(self.stage) == self.UsdGeom.Tokens.y else "Z"
+        wz = w if pole == "Z" else w @ rx.T
         if abs(wz[2, 2] - 1.0) > 1e-4:
             self.warn(
                 f"dometilt:{prim.GetPath()}",

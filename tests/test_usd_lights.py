@@ -1,0 +1,288 @@
+"""UsdLux lights read by polychrome.usd against the spec's closed forms.
+
+UsdLux (LightAPI, "Quantities"): the radiance is L = intensity × 2^exposure × colour
+(× the colour temperature's colour when enabled); ``normalize`` divides it by the light's
+world-space surface area (a distant light's intensity is then the irradiance). A sphere of
+radiance L and radius r has radiant intensity L·πr²; a sun disk of angular diameter θ gives
+irradiance L·π·sin²(θ/2). Stages written by Blender (layer doc "Blender v…") store a sun
+of strength S and angle θ as intensity S/4 and angle θ/2, which Blender's importer undoes.
+"""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+pxr = pytest.importorskip("pxr")
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux  # noqa: E402
+
+import polychrome as pc  # noqa: E402
+from polychrome import usd  # noqa: E402
+from conftest import luminance  # noqa: E402
+from test_usd import floor_mesh, new_stage, preview_material, top_camera  # noqa: E402
+
+
+def read(path):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scene = usd.read_stage(path)
+    return scene, [str(w.message) for w in caught]
+
+
+def lights_by_name(scene):
+    return {d["name"]: d for d in (light.to_dict() for light in scene.lights)}
+
+
+@pytest.mark.parametrize(
+    "normalize, radius, scale, want",
+    [
+        (True, 0.5, 1.0, 10.0 * 2.0 / 4.0),  # L = I/(4πr²): πr²L = I/4, any radius
+        (False, 0.5, 1.0, 10.0 * 2.0 * math.pi * 0.25),  # πr²·I
+        (False, 0.0, 1.0, 10.0 * 2.0),  # zero radius: the intensity is the radiant intensity
+        (False, 0.5, 2.0, 10.0 * 2.0 * math.pi * 1.0),  # the transform doubles the radius
+        (True, 0.5, 2.0, 10.0 * 2.0 / 4.0),
+    ],
+)
+def test_sphere_light_radiant_intensity_follows_usdlux(tmp_path, normalize, radius, scale, want):
+    path = tmp_path / "sphere.usda"
+    stage = new_stage(path)
+    light = UsdLux.SphereLight.Define(stage, "/bulb")
+    light.CreateIntensityAttr(10.0)
+    light.CreateExposureAttr(1.0)
+    light.CreateRadiusAttr(radius)
+    light.CreateNormalizeAttr(normalize)
+    light.AddTranslateOp().Set(Gf.Vec3d(0, 0, 2))
+    light.AddScaleOp().Set(Gf.Vec3f(scale, scale, scale))
+    stage.Save()
+    scene, _ = read(path)
+    d = lights_by_name(scene)["/bulb"]
+    assert d["type"] == "point" and d["position"] == pytest.approx([0, 0, 2])
+    assert d["intensity"]["type"] == "rgb" and d["intensity"]["rgb"] == [1.0, 1.0, 1.0]
+    assert d["intensity"]["scale"] == pytest.approx(want, rel=1e-6)
+
+
+def test_colour_temperature_multiplies_the_colour(tmp_path):
+    """enableColorTemperature: colour × the temperature's colour (colour-science: Planck's
+    law through CIE 1931, linear Rec.709, luminance 1), not the temperature alone."""
+    colour = pytest.importorskip("colour")
+    path = tmp_path / "warm.usda"
+    stage = new_stage(path)
+    light = UsdLux.SphereLight.Define(stage, "/warm")
+    light.CreateIntensityAttr(3.0)
+    light.CreateRadiusAttr(0.0)
+    light.CreateColorAttr(Gf.Vec3f(1.0, 0.5, 0.25))
+    light.CreateEnableColorTemperatureAttr(True)
+    light.CreateColorTemperatureAttr(3000.0)
+    stage.Save()
+    scene, warns = read(path)
+    d = lights_by_name(scene)["/warm"]["intensity"]
+    shape = colour.SpectralShape(380, 780, 5)
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape)
+    xyz = np.trapz(cmfs.values * colour.sd_blackbody(3000.0, shape).values[:, None], axis=0)
+    xyz /= xyz[1]  # luminance 1
+    rgb = colour.XYZ_to_RGB(xyz, colour.RGB_COLOURSPACES["sRGB"], apply_cctf_encoding=False)
+    want = 3.0 * np.array([1.0, 0.5, 0.25]) * rgb
+    assert d["type"] == "rgb"
+    assert np.allclose(np.array(d["rgb"]) * d["scale"], want, rtol=0.01), (d, want)
+    assert not [w for w in warns if "tint" in w]
+
+
+def blender_layer(path):
+    """A stage whose root layer says Blender wrote it, as usd_export does."""
+    stage = new_stage(path)
+    stage.GetRootLayer().documentation = "Blender v4.5.15 LTS"
+    return stage
+
+
+@pytest.mark.parametrize(
+    "blender, normalize, intensity, angle, want",
+    [
+        (False, True, 2.0, 10.0, 2.0),  # normalised: the intensity is the irradiance
+        (False, False, 50.0, 10.0, 50.0 * math.pi * math.sin(math.radians(5.0)) ** 2),
+        (False, False, 3.0, 0.0, 3.0),  # zero angle: the intensity is the irradiance
+        (True, True, 0.5, 5.0, 2.0),  # Blender: strength 4·0.5
+        (True, False, 25.0, 5.0, 100.0 * math.pi * math.sin(math.radians(5.0)) ** 2),  # strength 100, angle 10°
+    ],
+)
+def test_distant_light_irradiance_spec_and_blender_conventions(tmp_path, blender, normalize, intensity, angle, want):
+    path = tmp_path / "sun.usda"
+    stage = blender_layer(path) if blender else new_stage(path)
+    sun = UsdLux.DistantLight.Define(stage, "/sun")
+    sun.CreateIntensityAttr(intensity)
+    sun.CreateAngleAttr(angle)
+    sun.CreateNormalizeAttr(normalize)
+    stage.Save()
+    scene, _ = read(path)
+    d = lights_by_name(scene)["/sun"]
+    assert d["type"] == "distant" and d["direction"] == pytest.approx([0, 0, -1])
+    assert d["irradiance"]["scale"] == pytest.approx(want, rel=1e-6)
+
+
+def test_blender_convention_follows_the_layer_of_a_referenced_asset(tmp_path):
+    """A Blender-exported asset referenced into a foreign stage keeps Blender's sun."""
+    asset = tmp_path / "asset.usda"
+    stage = blender_layer(asset)
+    UsdGeom.Xform.Define(stage, "/root")
+    sun = UsdLux.DistantLight.Define(stage, "/root/sun")
+    sun.CreateIntensityAttr(0.5)
+    sun.CreateNormalizeAttr(True)
+    stage.SetDefaultPrim(stage.GetPrimAtPath("/root"))
+    stage.Save()
+    shot = tmp_path / "shot.usda"
+    stage = new_stage(shot)
+    stage.DefinePrim("/asset").GetReferences().AddReference(str(asset))
+    own = UsdLux.DistantLight.Define(stage, "/own")
+    own.CreateIntensityAttr(0.5)
+    own.CreateNormalizeAttr(True)
+    stage.Save()
+    scene, _ = read(shot)
+    lights = {n: d["irradiance"]["scale"] for n, d in lights_by_name(scene).items()}
+    assert lights == {"/asset/sun": pytest.approx(2.0), "/own": pytest.approx(0.5)}
+
+
+def test_unnormalised_sun_disk_renders_its_closed_form_irradiance(tmp_path):
+    """A diffuse floor of albedo ρ under a DistantLight (normalize off, angle θ, straight
+    down): radiance ρ/π · I·π·sin²(θ/2)."""
+    rho, intensity, angle = 0.5, 400.0, 8.0
+    path = tmp_path / "sunfloor.usda"
+    stage = new_stage(path)
+    floor_mesh(stage, "/floor", 5.0, preview_material(stage, "/Looks/grey", (rho, rho, rho)))
+    top_camera(stage, "/cam", 1.0, 0.2)
+    sun = UsdLux.DistantLight.Define(stage, "/sun")
+    sun.CreateIntensityAttr(intensity)
+    sun.CreateAngleAttr(angle)
+    stage.Save()
+    scene, _ = read(path)
+    result = pc.render(scene, width=4, height=4, samples=4, max_bounces=1)
+    want = rho / math.pi * intensity * math.pi * math.sin(math.radians(angle / 2)) ** 2
+    assert luminance(result.rgba[..., :3]).mean() == pytest.approx(want, rel=0.02)
+
+
+def emitter_scales(scene):
+    desc, bufs = scene.description()
+    out = {}
+    for mesh in desc["meshes"]:
+        if "(back)" in mesh["name"]:
+            continue
+        mat = desc["materials"][mesh["material"]]
+        out[mesh["name"]] = mat["emission"]["scale"]
+    return out
+
+
+def test_rect_and_disk_lights_divide_by_their_world_space_area(tmp_path):
+    path = tmp_path / "panels.usda"
+    stage = new_stage(path)
+    rect = UsdLux.RectLight.Define(stage, "/rect")
+    rect.CreateWidthAttr(0.5)
+    rect.CreateHeightAttr(0.25)
+    rect.CreateIntensityAttr(6.0)
+    rect.CreateNormalizeAttr(True)
+    rect.AddScaleOp().Set(Gf.Vec3f(2.0, 3.0, 1.0))
+    disk = UsdLux.DiskLight.Define(stage, "/disk")
+    disk.CreateRadiusAttr(0.5)
+    disk.CreateIntensityAttr(6.0)
+    disk.CreateNormalizeAttr(True)
+    disk.AddTranslateOp().Set(Gf.Vec3d(3, 0, 0))
+    disk.AddScaleOp().Set(Gf.Vec3f(2.0, 2.0, 1.0))
+    plain = UsdLux.RectLight.Define(stage, "/plain")
+    plain.CreateIntensityAttr(6.0)
+    plain.AddScaleOp().Set(Gf.Vec3f(2.0, 3.0, 1.0))
+    stage.Save()
+    scene, _ = read(path)
+    got = emitter_scales(scene)
+    assert got["/rect"] == pytest.approx(6.0 / (0.5 * 2.0 * 0.25 * 3.0), rel=1e-5)
+    assert got["/disk"] == pytest.approx(6.0 / (math.pi * 1.0**2), rel=1e-5)
+    assert got["/plain"] == pytest.approx(6.0)  # not normalised: the intensity is the radiance
+
+
+def test_shaping_cone_becomes_a_spot_and_focus_warns(tmp_path):
+    path = tmp_path / "spot.usda"
+    stage = new_stage(path)
+    light = UsdLux.SphereLight.Define(stage, "/spot")
+    light.CreateRadiusAttr(0.0)
+    light.CreateIntensityAttr(8.0)
+    shaping = UsdLux.ShapingAPI.Apply(light.GetPrim())
+    shaping.CreateShapingConeAngleAttr(30.0)
+    shaping.CreateShapingConeSoftnessAttr(0.2)
+    shaping.CreateShapingFocusAttr(2.0)
+    light.AddTranslateOp().Set(Gf.Vec3d(0, 0, 3))
+    stage.Save()
+    scene, warns = read(path)
+    d = lights_by_name(scene)["/spot"]
+    assert d["type"] == "spot" and d["direction"] == pytest.approx([0, 0, -1])
+    assert d["spot_size"] == pytest.approx(math.radians(60.0)) and d["spot_blend"] == pytest.approx(0.2)
+    assert d["intensity"]["scale"] == pytest.approx(8.0)
+    assert [w for w in warns if "shaping:focus" in w and "/spot" in w]
+
+
+def dome_rotation(tmp_path, name, make):
+    from polychrome import imageio
+
+    path = tmp_path / f"{name}.usda"
+    imageio.write_exr(tmp_path / "sky.exr", np.full((4, 8, 3), 0.5, np.float32))
+    stage = new_stage(path)
+    make(stage)
+    stage.Save()
+    scene, warns = read(path)
+    return scene.description()[0]["world"]["rotation"], warns
+
+
+def test_dome_pole_axis_orients_the_texture(tmp_path):
+    """DomeLight_1 poleAxis Z (or "scene" on a Z-up stage) is the Y-pole DomeLight turned
+    by OrientToStageUpAxis (rotateX 90); a turn about Z adds to both alike."""
+
+    def old(turn):
+        def make(stage):
+            dome = UsdLux.DomeLight.Define(stage, "/sky")
+            dome.CreateTextureFileAttr("./sky.exr")
+            dome.AddRotateZOp().Set(turn)
+            dome.AddRotateXOp().Set(90.0)
+
+        return make
+
+    def new(pole, turn):
+        def make(stage):
+            dome = UsdLux.DomeLight_1.Define(stage, "/sky")
+            dome.CreateTextureFileAttr("./sky.exr")
+            if pole is not None:
+                dome.CreatePoleAxisAttr(pole)
+            dome.AddRotateZOp().Set(turn)
+
+        return make
+
+    for turn in (0.0, 30.0):
+        want, _ = dome_rotation(tmp_path, f"old{turn}", old(turn))
+        for pole in ("Z", "scene", None):
+            got, warns = dome_rotation(tmp_path, f"new{pole}{turn}", new(pole, turn))
+            assert math.remainder(got - want, 2 * math.pi) == pytest.approx(0.0, abs=1e-6), (pole, turn, got, want)
+            assert not [w for w in warns if "tilted" in w]
+    _, warns = dome_rotation(tmp_path, "ypole", new("Y", 0.0))  # pole along world −Y: tilted
+    assert [w for w in warns if "tilted" in w and "/sky" in w]
+
+
+def test_light_diffuse_and_specular_multipliers_warn(tmp_path):
+    path = tmp_path / "mult.usda"
+    stage = new_stage(path)
+    light = UsdLux.SphereLight.Define(stage, "/l")
+    light.CreateDiffuseAttr(0.5)
+    light.CreateSpecularAttr(1.0)
+    stage.Save()
+    _, warns = read(path)
+    assert [w for w in warns if "/l" in w and "diffuse multiplier" in w]
+    assert not [w for w in warns if "specular multiplier" in w]
+
+
+def test_stage_layer_doc_alone_marks_blender(tmp_path):
+    """Only a doc starting "Blender v" switches conventions (not any mention of Blender)."""
+    path = tmp_path / "doc.usda"
+    stage = new_stage(path)
+    stage.GetRootLayer().documentation = "exported from a Blender-like tool"
+    sun = UsdLux.DistantLight.Define(stage, "/sun")
+    sun.CreateIntensityAttr(0.5)
+    sun.CreateNormalizeAttr(True)
+    stage.Save()
+    scene, _ = read(path)
+    assert lights_by_name(scene)["/sun"]["irradiance"]["scale"] == pytest.approx(0.5)
+    assert Sdf.Layer.FindOrOpen(str(path)).documentation.startswith("exported")
+    assert Usd.Stage.Open(str(path))
