@@ -342,8 +342,10 @@ class _Reader:
         if not inp:
             return default
         if inp.HasConnectedSource():
-            if name == "diffuseColor" and self.texture_source(inp) is not None:
-                return default  # read by texture_input
+            tex = self.texture_source(inp) if name == "diffuseColor" else None
+            if tex is not None:
+                # Read by texture_input; this is what a missing file falls back to.
+                return self.texture_fallback(tex, default)
             source = inp.GetConnectedSources()[0]
             src = source[0].source if source else None
             fallback = None
@@ -376,8 +378,19 @@ class _Reader:
             return src
         return None
 
-    def asset_path(self, attr_value, prim, what: str) -> Path:
-        """An SdfAssetPath as a file path (resolved, or relative to the stage's layer)."""
+    def texture_fallback(self, tex, default):
+        """A UsdUVTexture's authored ``fallback`` (its RGB), else ``default``: the value
+        the preview surface input takes when the texture cannot be read."""
+        fb = tex.GetInput("fallback")
+        v = fb.Get(self.time) if fb and fb.GetAttr().HasAuthoredValue() else None
+        if v is None:
+            return default
+        v = tuple(float(x) for x in v)[:3]
+        return v if len(v) == 3 and all(math.isfinite(x) for x in v) else default
+
+    def asset_path(self, attr_value, prim, what: str) -> Path | None:
+        """An SdfAssetPath as a file path (resolved, or relative to the stage's layer);
+        None, after one warning naming the prim and the file, when there is no such file."""
         resolved = getattr(attr_value, "resolvedPath", "") or ""
         raw = getattr(attr_value, "path", "") or str(attr_value or "")
         if resolved:
@@ -386,11 +399,13 @@ class _Reader:
         if not p.is_absolute():
             p = Path(self.stage.GetRootLayer().realPath or self.path).parent / p
         if not p.is_file():
-            raise self.error(prim, f"{what} {raw!r} does not exist")
+            self.warn(f"missing:{prim.GetPath()}:{raw}", f"prim {prim.GetPath()}: {what} {raw!r} does not exist; its fallback is used")
+            return None
         return p
 
     def texture_input(self, shader, name: str, material_prim):
-        """A polychrome.Texture for an input driven by a UsdUVTexture, or None."""
+        """A polychrome.Texture for an input driven by a UsdUVTexture, or None (no file,
+        a missing or unreadable one: the input's fallback is used)."""
         from ..texture import Texture
 
         tex = self.texture_source(shader.GetInput(name))
@@ -399,12 +414,15 @@ class _Reader:
         key = str(tex.GetPath())
         if key in self.textures:
             return self.textures[key]
+        self.textures[key] = None  # warn once, whatever happens below
         file_input = tex.GetInput("file")
         value = file_input.Get(self.time) if file_input else None
         if value is None or not (getattr(value, "path", "") or ""):
             self.warn(f"texfile:{key}", f"prim {tex.GetPath()}: UsdUVTexture without a file; {name} uses its fallback")
             return None
         path = self.asset_path(value, tex.GetPrim(), "texture file")
+        if path is None:
+            return None
         wrap_in = tex.GetInput("wrapS")
         wrap = str(wrap_in.Get(self.time)) if wrap_in and wrap_in.Get(self.time) is not None else "repeat"
         mode = {"repeat": "REPEAT", "black": "CLIP", "clamp": "EXTEND"}.get(wrap, "REPEAT")
@@ -417,7 +435,8 @@ class _Reader:
         try:
             texture = Texture.from_file(path, wrap=mode, name=str(self.custom(tex.GetPrim(), A.NAME, path.name)))
         except (OSError, ValueError) as e:
-            raise self.error(tex.GetPrim(), f"cannot read texture {path}: {e}") from None
+            self.warn(f"unreadable:{key}", f"prim {tex.GetPath()}: cannot read texture {path} ({e}); its fallback is used")
+            return None
         self.textures[key] = texture
         return texture
 
@@ -463,6 +482,14 @@ class _Reader:
                     f"prim {prim.GetPath()}: surface shader '{shader_id}' is not supported; rendered as grey diffuse",
                 )
                 shader = None
+        else:
+            # Only a render context's surface (MaterialX "mtlx", "ri", ...): not readable.
+            others = [o.GetAttr().GetName() for o in self.UsdShade.Material(prim).GetSurfaceOutputs() if o.HasConnectedSource()]
+            if others:
+                self.warn(
+                    f"shader:{self.key_of(prim)}",
+                    f"prim {prim.GetPath()}: its surface is only given for render contexts ({', '.join(others)}), which are not supported; rendered as grey diffuse",
+                )
         if shader is not None:
             diffuse = self.shader_input(shader, "diffuseColor", FALLBACK_GREY, prim)
             emissive = self.shader_input(shader, "emissiveColor", (0.0, 0.0, 0.0), prim)
@@ -1086,9 +1113,13 @@ class _Reader:
             )
         path = self.asset_path(tex, prim, "dome texture")
         try:
-            texture = Texture.from_file(path, name=path.name)
+            texture = Texture.from_file(path, name=path.name) if path is not None else None
         except (OSError, ValueError) as e:
-            raise self.error(prim, f"cannot read dome texture {path}: {e}") from None
+            self.warn(f"unreadable:{prim.GetPath()}", f"prim {prim.GetPath()}: cannot read dome texture {path} ({e}); its fallback is used")
+            texture = None
+        if texture is None:  # the dome's fallback: its uniform colour
+            self.world = self.emitted(scalar, colour, blackbody)
+            return
         # The latlong image has +Y up in the dome's frame (OpenEXR latlong, centre towards
         # +Z). In Polychrome's Z-up world that frame is W = Rz(φ)·Rx(90°) for a dome turned
         # by φ about the up axis, which Polychrome's rotation π/2 − φ reproduces. A
