@@ -1,6 +1,12 @@
 """Blender materials → polychrome materials.
 
-Supported: Principled BSDF → ``polychrome.Principled`` (base colour or image texture,
+Node materials are exported as their node graph (export/node_graph.py →
+``polychrome.NodeMaterial``, docs/shading.md) when the core evaluates graphs; a Principled
+Hair BSDF on the Surface keeps the approximation below (:meth:`MaterialExport.hair`).
+While the core folds only constant graphs (``GRAPHS_PER_HIT`` False), a graph that reads
+anything per hit (textures, coordinates, Fresnel) goes the fixed-pattern way below.
+
+The fixed-pattern export (materials without a graph-capable core): Principled BSDF → ``polychrome.Principled`` (base colour or image texture,
 metallic, roughness, IOR — or a Polychrome Dispersion node linked to IOR —, transmission,
 specular tint, thin film, emission colour × strength), Mix Shader and Add Shader of
 supported shaders → ``polychrome.Mix`` / ``polychrome.Add`` (nested), Diffuse, Glossy,
@@ -16,6 +22,13 @@ import numpy as np
 import polychrome as pc
 
 from .lights import blackbody_white
+from .warnings import Warnings
+from .node_graph import GraphExport
+
+#: The core builds node graphs (``polychrome.NodeMaterial``) ...
+GRAPHS = hasattr(pc, "NodeMaterial")
+#: ... and evaluates those that change from hit to hit.
+GRAPHS_PER_HIT = False
 
 GREY = (0.8, 0.8, 0.8)
 #: Mix/Add shaders nested deeper than this are not followed (a cycle guard).
@@ -96,7 +109,25 @@ class MaterialExport:
             if mat.use_nodes:
                 return pc.Diffuse((0.0, 0.0, 0.0), name=mat.name)  # nothing connected: black, as Cycles
             return pc.Diffuse(_rgb(mat.diffuse_color), name=mat.name)
+        if GRAPHS and node.type not in ("BSDF_HAIR_PRINCIPLED", "BSDF_HAIR"):
+            graph = self.graph()
+            if graph is not None:
+                return graph
         return self.node(node)
+
+    def graph(self):
+        """The material as a ``polychrome.NodeMaterial`` (None: the core cannot evaluate
+        this graph yet, use the fixed patterns)."""
+        own = Warnings()
+        g = GraphExport(self.mat, own, self.textures)
+        got = g.export()
+        if g.per_hit and not GRAPHS_PER_HIT:
+            return None
+        self.warnings.extend(own.items)
+        if got is None:
+            return pc.Diffuse((0.0, 0.0, 0.0), name=self.name)  # e.g. only a muted closure: black
+        self.needs = g.needs
+        return pc.NodeMaterial(self.name, got[0], got[1])
 
     # -- inputs ------------------------------------------------------------------
     def colour(self, node, name, allow_texture=False):

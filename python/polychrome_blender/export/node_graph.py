@@ -86,6 +86,24 @@ SUPPORTED = frozenset(
     }
 )
 
+#: Nodes whose value changes from hit to hit (everything else folds to a constant when
+#: its inputs are constant).
+PER_HIT = frozenset(
+    {
+        "ShaderNodeTexCoord",
+        "ShaderNodeUVMap",
+        "ShaderNodeNewGeometry",
+        "ShaderNodeVertexColor",
+        "ShaderNodeAttribute",
+        "ShaderNodeObjectInfo",
+        "ShaderNodeFresnel",
+        "ShaderNodeLayerWeight",
+        "ShaderNodeNormalMap",
+        "ShaderNodeBump",
+        *(t for t in SUPPORTED if t.startswith("ShaderNodeTex")),
+    }
+)
+
 #: Entries of Cycles' curve and ramp tables (RAMP_TABLE_SIZE, intern/cycles/scene/shader_nodes.h).
 TABLE_SIZE = 256
 #: Blender's default scene-linear luminance coefficients (colour → float conversion).
@@ -217,6 +235,7 @@ class GraphExport:
         self.owner = f"material '{mat.name}'"
         self.nodes = []
         self.needs = {}
+        self.per_hit = False  # some node's value changes from hit to hit
         self._index = {}  # (scope key, node pointer) -> index in nodes
         self._active = []  # nodes being exported (cycle detection), as (key, name)
 
@@ -404,6 +423,7 @@ class GraphExport:
         self.nodes.append(entry)
         self._index[key] = len(self.nodes) - 1
         self._note_needs(node, entry, name)
+        self.per_hit = self.per_hit or node.bl_idname in PER_HIT
         return ("link", self._index[key], out.identifier, out.type)
 
     def props(self, node, name):
@@ -468,4 +488,4 @@ def export_graph(mat, warnings, textures):
     return got[0], got[1], g.needs
 
 
-__all__ = ["GraphExport", "SUPPORTED", "export_graph", "convert_value", "curves_dict", "color_ramp_dict"]
+__all__ = ["GraphExport", "SUPPORTED", "PER_HIT", "export_graph", "convert_value", "curves_dict", "color_ramp_dict"]

@@ -1,0 +1,286 @@
+"""Cases of the emission oracle (test_node_oracle.py), run inside the bpy subprocess after
+oracle_scene.py: each case is (family, label, build(nt) -> the socket shown, tolerance).
+
+Constant-input cases: every node reads only constants, so the core folds the whole graph
+(docs/shading.md) and each tile is one colour."""
+
+import bpy
+from oracle_scene import node, out
+
+TOL = 1e-3
+A3, B3, C3 = (0.2, 0.55, 0.9), (0.65, 0.3, 0.1), (0.4, 0.8, 0.35)
+
+
+def math_cases():
+    cases = []
+    ops = [i.identifier for i in bpy.types.ShaderNodeMath.bl_rna.properties["operation"].enum_items]
+    for op in ops:
+        for tag, (a, b, c) in (("a", (0.7, 0.3, 0.45)), ("b", (-1.3, 2.1, 0.6))):
+
+            def build(nt, op=op, a=a, b=b, c=c):
+                return out(node(nt, "ShaderNodeMath", {"operation": op}, Value=a, Value_001=b, Value_002=c))
+
+            cases.append(("Math", f"{op} {tag}", build, TOL))
+    for op in ("ADD", "SINH", "SUBTRACT"):
+
+        def clamped(nt, op=op):
+            return out(node(nt, "ShaderNodeMath", {"operation": op, "use_clamp": True}, Value=0.8, Value_001=0.6))
+
+        cases.append(("Math", f"{op} clamp", clamped, TOL))
+    return cases
+
+
+def vector_math_cases():
+    cases = []
+    ops = [i.identifier for i in bpy.types.ShaderNodeVectorMath.bl_rna.properties["operation"].enum_items]
+    for op in ops:
+
+        def build(nt, op=op):
+            n = node(nt, "ShaderNodeVectorMath", {"operation": op}, Vector=(0.3, -0.8, 1.7), Vector_001=(0.6, 0.25, -0.4), Scale=1.45)
+            if op in ("MULTIPLY_ADD", "FACEFORWARD", "WRAP"):
+                n.inputs[2].default_value = (0.2, -0.5, 0.9)
+            return out(n)
+
+        cases.append(("Vector Math", op, build, TOL))
+    return cases
+
+
+def mix_cases():
+    cases = []
+    blends = [i.identifier for i in bpy.types.ShaderNodeMix.bl_rna.properties["blend_type"].enum_items]
+    for blend in blends:
+        for clamp in (False, True):
+
+            def build(nt, blend=blend, clamp=clamp):
+                n = node(nt, "ShaderNodeMix", {"data_type": "RGBA", "blend_type": blend, "clamp_result": clamp})
+                n.inputs["Factor"].default_value = 0.65
+                [s for s in n.inputs if s.identifier == "A_Color"][0].default_value = (0.8, 0.35, 0.1, 1.0)
+                [s for s in n.inputs if s.identifier == "B_Color"][0].default_value = (0.3, 0.9, 1.4, 1.0)
+                return out(n, "Result_Color")
+
+            cases.append(("Mix", f"colour {blend}{' clamp' if clamp else ''}", build, TOL))
+
+    def mix_float(nt):
+        n = node(nt, "ShaderNodeMix", {"data_type": "FLOAT", "clamp_factor": False}, Factor_Float=1.3, A_Float=0.2, B_Float=0.9)
+        return out(n, "Result_Float")
+
+    def mix_vec(nt, mode="UNIFORM"):
+        n = node(nt, "ShaderNodeMix", {"data_type": "VECTOR", "factor_mode": mode})
+        [s for s in n.inputs if s.identifier == "Factor_Float"][0].default_value = 0.3
+        [s for s in n.inputs if s.identifier == "Factor_Vector"][0].default_value = (0.1, 0.5, 0.9)
+        [s for s in n.inputs if s.identifier == "A_Vector"][0].default_value = (0.2, -0.4, 0.6)
+        [s for s in n.inputs if s.identifier == "B_Vector"][0].default_value = (0.9, 0.8, -0.7)
+        return out(n, "Result_Vector")
+
+    cases += [
+        ("Mix", "float unclamped factor", mix_float, TOL),
+        ("Mix", "vector uniform", mix_vec, TOL),
+        ("Mix", "vector non-uniform", lambda nt: mix_vec(nt, "NON_UNIFORM"), TOL),
+    ]
+    return cases
+
+
+def map_range_clamp_cases():
+    cases = []
+    for interp in ("LINEAR", "STEPPED", "SMOOTHSTEP", "SMOOTHERSTEP"):
+        for clamp in (True, False):
+
+            def build(nt, interp=interp, clamp=clamp):
+                n = node(nt, "ShaderNodeMapRange", {"data_type": "FLOAT", "interpolation_type": interp, "clamp": clamp})
+                vals = {"Value": 0.37, "From Min": 0.1, "From Max": 0.6, "To Min": -0.5, "To Max": 2.0, "Steps": 3.0}
+                for s in n.inputs:
+                    if s.identifier in vals:
+                        s.default_value = vals[s.identifier]
+                return out(n, "Result")
+
+            cases.append(("Map Range", f"float {interp}{' clamp' if clamp else ''}", build, TOL))
+
+        def vec(nt, interp=interp):
+            n = node(nt, "ShaderNodeMapRange", {"data_type": "FLOAT_VECTOR", "interpolation_type": interp, "clamp": False})
+            vals = {
+                "Vector": (0.37, 0.9, -0.2),
+                "From_Min_FLOAT3": (0.1, 0.0, -1.0),
+                "From_Max_FLOAT3": (0.6, 1.0, 1.0),
+                "To_Min_FLOAT3": (0.0, -1.0, 0.5),
+                "To_Max_FLOAT3": (1.0, 1.0, 2.5),
+                "Steps_FLOAT3": (4.0, 2.0, 5.0),
+            }
+            for s in n.inputs:
+                if s.identifier in vals:
+                    s.default_value = vals[s.identifier]
+            return out(n, "Vector")
+
+        cases.append(("Map Range", f"vector {interp}", vec, TOL))
+    for kind, lo, hi in (("MINMAX", 0.2, 0.5), ("RANGE", 0.5, 0.2), ("MINMAX", 0.5, 0.2)):
+
+        def clamp(nt, kind=kind, lo=lo, hi=hi):
+            return out(node(nt, "ShaderNodeClamp", {"clamp_type": kind}, Value=0.9, Min=lo, Max=hi))
+
+        cases.append(("Clamp", f"{kind} {lo} {hi}", clamp, TOL))
+    return cases
+
+
+def ramp_curve_cases():
+    cases = []
+    modes = [("RGB", "NEAR", i) for i in ("CONSTANT", "LINEAR", "EASE", "CARDINAL", "B_SPLINE")]
+    modes += [(cm, hue, "LINEAR") for cm in ("HSV", "HSL") for hue in ("NEAR", "FAR", "CW", "CCW")]
+    for cm, hue, interp in modes:
+        for fac in (0.15, 0.5, 0.83):
+
+            def build(nt, cm=cm, hue=hue, interp=interp, fac=fac):
+                n = node(nt, "ShaderNodeValToRGB", Fac=fac)
+                r = n.color_ramp
+                r.color_mode, r.hue_interpolation, r.interpolation = cm, hue, interp
+                r.elements[0].position, r.elements[0].color = 0.1, (0.9, 0.2, 0.1, 1.0)
+                e = r.elements.new(0.45)
+                e.color = (0.1, 0.8, 0.3, 0.4)
+                r.elements[2].position, r.elements[2].color = 0.9, (0.2, 0.3, 1.0, 1.0)
+                return out(n, "Color")
+
+            cases.append(("Color Ramp", f"{cm} {hue} {interp} {fac}", build, TOL))
+
+    def ramp_alpha(nt):
+        n = node(nt, "ShaderNodeValToRGB", Fac=0.3)
+        n.color_ramp.elements[0].color = (1, 1, 1, 0.2)
+        return out(n, "Alpha")
+
+    cases.append(("Color Ramp", "alpha", ramp_alpha, TOL))
+
+    def rgb_curves(nt, colour, fac, extend):
+        n = node(nt, "ShaderNodeRGBCurve", Fac=fac, Color=colour)
+        cm = n.mapping
+        cm.curves[3].points.new(0.3, 0.55)
+        cm.curves[0].points[1].location = (0.8, 0.9)
+        cm.curves[1].points.new(0.5, 0.2)
+        cm.curves[2].points[0].location = (0.1, 0.3)
+        cm.extend = extend
+        cm.update()
+        return out(n)
+
+    for colour in ((0.2, 0.5, 0.7), (1.3, -0.2, 0.95)):
+        for extend in ("EXTRAPOLATED", "HORIZONTAL"):
+            cases.append(("RGB Curves", f"{colour} {extend}", lambda nt, c=colour, e=extend: rgb_curves(nt, c, 0.8, e), TOL))
+
+    def float_curve(nt, v):
+        n = node(nt, "ShaderNodeFloatCurve", Factor=1.0, Value=v)
+        c = n.mapping.curves[0]
+        c.points[0].location = (-0.5, 0.2)
+        c.points.new(0.4, 0.9)
+        c.points[-1].location = (1.5, 0.1)
+        n.mapping.update()
+        return out(n)
+
+    for v in (-0.8, 0.1, 0.7, 1.9):
+        cases.append(("Float Curve", f"{v}", lambda nt, v=v: float_curve(nt, v), TOL))
+
+    def vector_curves(nt):
+        n = node(nt, "ShaderNodeVectorCurve", Fac=0.9, Vector=(0.3, -0.6, 0.8))
+        n.mapping.curves[0].points.new(0.2, 0.7)
+        n.mapping.curves[1].points[0].location = (-1.0, 0.5)
+        n.mapping.update()
+        return out(n)
+
+    cases.append(("Vector Curves", "custom", vector_curves, TOL))
+    return cases
+
+
+def colour_cases():
+    cases = []
+    col = (0.8, 0.35, 0.15)
+    for h, s, v, f in ((0.3, 1.2, 0.8, 0.9), (0.5, 1.0, 1.0, 1.0), (0.95, 0.4, 1.5, 0.6)):
+        cases.append(
+            (
+                "Hue/Saturation/Value",
+                f"{h} {s} {v} {f}",
+                lambda nt, h=h, s=s, v=v, f=f: out(node(nt, "ShaderNodeHueSaturation", Hue=h, Saturation=s, Value=v, Fac=f, Color=col)),
+                TOL,
+            )
+        )
+    for fac in (0.7, 1.0):
+        cases.append(("Invert", f"{fac}", lambda nt, fac=fac: out(node(nt, "ShaderNodeInvert", Fac=fac, Color=(0.8, 0.35, 1.3))), TOL))
+    for g in (2.2, 0.45):
+        cases.append(("Gamma", f"{g}", lambda nt, g=g: out(node(nt, "ShaderNodeGamma", Color=col, Gamma=g)), TOL))
+    for b, c in ((0.1, 0.3), (-0.1, -0.4)):
+        cases.append(
+            (
+                "Bright/Contrast",
+                f"{b} {c}",
+                lambda nt, b=b, c=c: out(node(nt, "ShaderNodeBrightContrast", Color=col, Bright=b, Contrast=c)),
+                TOL,
+            )
+        )
+    cases.append(("RGB to BW", "colour", lambda nt: out(node(nt, "ShaderNodeRGBToBW", Color=col)), TOL))
+    for mode in ("RGB", "HSV", "HSL"):
+        for o in ("Red", "Green", "Blue"):
+            cases.append(
+                (
+                    "Separate Color",
+                    f"{mode} {o}",
+                    lambda nt, m=mode, o=o: out(node(nt, "ShaderNodeSeparateColor", {"mode": m}, Color=col), o),
+                    TOL,
+                )
+            )
+        cases.append(
+            (
+                "Combine Color",
+                mode,
+                lambda nt, m=mode: out(node(nt, "ShaderNodeCombineColor", {"mode": m}, Red=0.62, Green=0.7, Blue=0.45)),
+                TOL,
+            )
+        )
+    for o in ("X", "Y", "Z"):
+        cases.append(("Separate XYZ", o, lambda nt, o=o: out(node(nt, "ShaderNodeSeparateXYZ", Vector=(0.3, -0.7, 1.2)), o), TOL))
+    cases.append(("Combine XYZ", "xyz", lambda nt: out(node(nt, "ShaderNodeCombineXYZ", X=0.3, Y=-0.7, Z=1.2)), TOL))
+
+    def value(nt):
+        n = nt.nodes.new("ShaderNodeValue")
+        n.outputs[0].default_value = 0.6180
+        return n.outputs[0]
+
+    def rgb(nt):
+        n = nt.nodes.new("ShaderNodeRGB")
+        n.outputs[0].default_value = (0.25, 0.5, 0.125, 1.0)
+        return n.outputs[0]
+
+    cases += [("Value", "0.618", value, TOL), ("RGB", "colour", rgb, TOL)]
+    for k in (1500.0, 4000.0, 6500.0, 12000.0):
+        cases.append(("Blackbody", f"{k:g} K", lambda nt, k=k: out(node(nt, "ShaderNodeBlackbody", Temperature=k)), TOL))
+    for w in (450.0, 550.0, 650.0):
+        cases.append(("Wavelength", f"{w:g} nm", lambda nt, w=w: out(node(nt, "ShaderNodeWavelength", Wavelength=w)), TOL))
+    return cases
+
+
+def group_cases():
+    """A node group (with a muted node and a reroute) evaluated as Cycles does."""
+
+    def build(nt, linked):
+        g = nt.nodes.new("ShaderNodeGroup")
+        g.node_tree = bpy.data.node_groups.get("OracleInner") or inner_group()
+        if linked:
+            rr = nt.nodes.new("NodeReroute")
+            v = node(nt, "ShaderNodeMath", {"operation": "MULTIPLY"}, Value=0.9, Value_001=0.5)
+            nt.links.new(out(v), rr.inputs[0])
+            nt.links.new(rr.outputs[0], g.inputs["x"])
+        return g.outputs["y"]
+
+    return [("Group", "default input", lambda nt: build(nt, False), TOL), ("Group", "linked input", lambda nt: build(nt, True), TOL)]
+
+
+def inner_group():
+    inner = bpy.data.node_groups.new("OracleInner", "ShaderNodeTree")
+    s = inner.interface.new_socket("x", in_out="INPUT", socket_type="NodeSocketFloat")
+    s.default_value = 0.3
+    inner.interface.new_socket("y", in_out="OUTPUT", socket_type="NodeSocketColor")
+    gi, go = inner.nodes.new("NodeGroupInput"), inner.nodes.new("NodeGroupOutput")
+    ramp = inner.nodes.new("ShaderNodeValToRGB")
+    muted = inner.nodes.new("ShaderNodeMath")
+    muted.operation, muted.mute = "SINE", True
+    inner.links.new(gi.outputs["x"], muted.inputs[0])
+    inner.links.new(muted.outputs[0], ramp.inputs["Fac"])
+    inner.links.new(ramp.outputs["Color"], go.inputs["y"])
+    return inner
+
+
+CONSTANT_CASES = (
+    math_cases() + vector_math_cases() + mix_cases() + map_range_clamp_cases() + ramp_curve_cases() + colour_cases() + group_cases()
+)

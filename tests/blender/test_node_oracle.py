@@ -1,0 +1,97 @@
+"""The emission oracle for the shading graph: node graphs on an Emission shader, rendered
+by Cycles CPU and by Polychrome in one bpy process, compared pixel by pixel (linear
+values, Standard view transform, no dithering). The scene and the cases are
+oracle_scene.py and oracle_cases.py (they run inside the bpy subprocess).
+
+An emitter cannot show a negative value, so where Cycles' pixel is negative Polychrome's
+must be 0 (every result is also shown negated on a second tile, so both signs are
+compared). Each case has its own tolerance (absolute, relative above 1)."""
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import polychrome
+import pytest
+
+from .bhelper import check, run_bpy
+
+pytestmark = [
+    pytest.mark.blender,
+    pytest.mark.skipif(not hasattr(polychrome, "NodeMaterial"), reason="the core has no shading graphs yet (docs/shading.md)"),
+]
+
+HERE = Path(__file__).resolve().parent
+
+
+def run_oracle(tmp_path, cases_name, samples=1):
+    for name in ("oracle_scene.py", "oracle_cases.py"):
+        shutil.copy(HERE / name, tmp_path / name)
+    body = f"""
+    from oracle_cases import {cases_name}
+    from oracle_scene import run
+    run({cases_name}, samples={samples})
+    """
+    proc, res = run_bpy(tmp_path, body, timeout=600)
+    return check(proc, res)[0]
+
+
+def errors(result):
+    """Per case: (family, label, worst error, tolerance, Cycles' value, Polychrome's value)."""
+    worst = {}
+    for t in result["tiles"]:
+        cyc, pc = np.array(t["cycles"]), np.array(t["polychrome"])
+        want = np.maximum(cyc, 0.0)
+        err = np.abs(pc - want) / np.maximum(1.0, np.abs(want))
+        k = int(np.argmax(err.max(-1)))
+        key = (t["family"], t["label"])
+        e = float(err.max())
+        if key not in worst or e > worst[key][2]:
+            worst[key] = (t["family"], t["label"], e, t["tol"], cyc[k].round(5).tolist(), pc[k].round(5).tolist())
+    return list(worst.values())
+
+
+@pytest.fixture(scope="module")
+def constant(tmp_path_factory):
+    return run_oracle(tmp_path_factory.mktemp("oracle_constant"), "CONSTANT_CASES")
+
+
+FAMILIES = [
+    "Math",
+    "Vector Math",
+    "Mix",
+    "Map Range",
+    "Clamp",
+    "Color Ramp",
+    "RGB Curves",
+    "Float Curve",
+    "Vector Curves",
+    "Hue/Saturation/Value",
+    "Invert",
+    "Gamma",
+    "Bright/Contrast",
+    "RGB to BW",
+    "Separate Color",
+    "Combine Color",
+    "Separate XYZ",
+    "Combine XYZ",
+    "Value",
+    "RGB",
+    "Blackbody",
+    "Wavelength",
+    "Group",
+]
+
+
+def test_constant_graphs_render(constant):
+    assert constant["error"] is None, constant["error"]
+    assert constant["cycles_finite"]
+    assert not [w for w in constant["warnings"] if "not supported" in w], constant["warnings"]
+
+
+@pytest.mark.parametrize("family", FAMILIES)
+def test_constant_node_matches_cycles(constant, family):
+    rows = [r for r in errors(constant) if r[0] == family]
+    assert rows, family
+    bad = [f"{f} {label}: error {e:.3g} > {tol:g} (Cycles {c}, Polychrome {p})" for f, label, e, tol, c, p in rows if not e <= tol]
+    assert not bad, f"{len(bad)}/{len(rows)} cases off:\n" + "\n".join(bad)
