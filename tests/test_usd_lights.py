@@ -286,3 +286,23 @@ def test_stage_layer_doc_alone_marks_blender(tmp_path):
     assert lights_by_name(scene)["/sun"]["irradiance"]["scale"] == pytest.approx(0.5)
     assert Sdf.Layer.FindOrOpen(str(path)).documentation.startswith("exported")
     assert Usd.Stage.Open(str(path))
+
+
+def test_blender_layer_without_an_authored_temperature_reads_it_off(tmp_path):
+    """Blender 4.5 writes enableColorTemperature = 1 on every light and colorTemperature
+    only when it is not 6500 K: no authored temperature means the switch was (most
+    likely) off; elsewhere the spec's fallback 6500 K applies."""
+    for blender in (True, False):
+        path = tmp_path / f"t{blender}.usda"
+        stage = blender_layer(path) if blender else new_stage(path)
+        for name, temperature in (("/plain", None), ("/warm", 3000.0)):
+            light = UsdLux.SphereLight.Define(stage, name)
+            light.CreateRadiusAttr(0.0)
+            light.CreateEnableColorTemperatureAttr(True)
+            if temperature is not None:
+                light.CreateColorTemperatureAttr(temperature)
+        stage.Save()
+        lights = lights_by_name(read(path)[0])
+        plain, warm = lights["/plain"]["intensity"], lights["/warm"]["intensity"]
+        assert (plain["type"] == "rgb" and plain["rgb"] == [1.0, 1.0, 1.0]) is blender, (blender, plain)
+        assert warm["type"] == "blackbody" and warm["temperature"] == 3000.0

@@ -878,7 +878,15 @@ class _Reader:
         if not (math.isfinite(scalar) and all(math.isfinite(c) and c >= 0.0 for c in colour)):
             raise self.error(prim, "its intensity, exposure or colour is not finite (or the colour is negative)")
         blackbody = None
-        if self.get(light.GetEnableColorTemperatureAttr(), False):
+        enabled = bool(self.get(light.GetEnableColorTemperatureAttr(), False))
+        if enabled and self.authored_by_blender(prim, light.GetIntensityAttr()):
+            # Blender 4.5's exporter writes enableColorTemperature = 1 on every light and
+            # colorTemperature only when it is not 6500 K, whether or not the light uses
+            # its temperature: without an authored temperature the light had it off (the
+            # default), or on at 6500 K, which cannot be told apart; read it as off.
+            t_attr = light.GetColorTemperatureAttr()
+            enabled = bool(t_attr and t_attr.HasAuthoredValue())
+        if enabled:
             t = float(self.get(light.GetColorTemperatureAttr(), 6500.0))
             if not (math.isfinite(t) and t > 0):
                 raise self.error(prim, f"colour temperature {t} K must be positive")
