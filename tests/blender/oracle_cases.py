@@ -4,7 +4,10 @@ oracle_scene.py: each case is (family, label, build(nt) -> the socket shown, tol
 Constant-input cases: every node reads only constants, so the core folds the whole graph
 (docs/shading.md) and each tile is one colour."""
 
+import os
+
 import bpy
+import numpy as np
 from oracle_scene import node, out
 
 TOL = 1e-3
@@ -284,3 +287,153 @@ def inner_group():
 CONSTANT_CASES = (
     math_cases() + vector_math_cases() + mix_cases() + map_range_clamp_cases() + ramp_curve_cases() + colour_cases() + group_cases()
 )
+
+
+# -- per-hit cases (coordinates, mesh data, textures) -------------------------------------
+# Polychrome averages each pixel over random positions in it, Cycles here takes its centre:
+# these cases are compared on tile means and most vary slowly across a tile (a Mapping
+# with a small scale), so the difference of the two is small where the pattern is smooth.
+COORD_TOL = 3e-3
+
+
+def mapped(nt, coord="Object", scale=0.1, loc=(0.0, 0.0, 0.0), rot=(0.0, 0.0, 0.0), kind="POINT"):
+    tc = nt.nodes.new("ShaderNodeTexCoord")
+    return out(node(nt, "ShaderNodeMapping", {"vector_type": kind}, Vector=out(tc, coord), Location=loc, Rotation=rot, Scale=(scale,) * 3))
+
+
+def coordinate_cases():
+    cases = []
+    for o in ("Generated", "Object", "UV", "Normal"):
+        cases.append(("Texture Coordinate", o, lambda nt, o=o: out(nt.nodes.new("ShaderNodeTexCoord"), o), COORD_TOL))
+    for kind, coord, scale in (("POINT", "Object", 0.6), ("TEXTURE", "Object", 2.0), ("VECTOR", "Normal", 2.0), ("NORMAL", "Normal", 2.0)):
+
+        def mapping(nt, k=kind, c=coord, s=scale):
+            return mapped(nt, c, s, (0.3, 0.6, 0.2), (0.3, -0.5, 0.8), k)
+
+        cases.append(("Mapping", kind, mapping, COORD_TOL))
+    cases.append(("UV Map", "Second", lambda nt: out(node(nt, "ShaderNodeUVMap", {"uv_map": "Second"}), "UV"), COORD_TOL))
+    for o in ("Position", "Normal", "True Normal", "Backfacing", "Incoming"):
+        cases.append(("Geometry", o, lambda nt, o=o: out(nt.nodes.new("ShaderNodeNewGeometry"), o), COORD_TOL))
+    cases.append(("Color Attribute", "Col", lambda nt: out(node(nt, "ShaderNodeVertexColor", {"layer_name": "Col"}), "Color"), COORD_TOL))
+    cases.append(("Attribute", "wet", lambda nt: out(node(nt, "ShaderNodeAttribute", {"attribute_name": "wet"}), "Fac"), COORD_TOL))
+    cases.append(
+        ("Attribute", "Col colour", lambda nt: out(node(nt, "ShaderNodeAttribute", {"attribute_name": "Col"}), "Color"), COORD_TOL)
+    )
+    for o in ("Location", "Object Index", "Random"):
+        cases.append(("Object Info", o, lambda nt, o=o: out(nt.nodes.new("ShaderNodeObjectInfo"), o), COORD_TOL))
+    cases.append(("Fresnel", "1.45", lambda nt: out(node(nt, "ShaderNodeFresnel", IOR=1.45)), COORD_TOL))
+    for o in ("Fresnel", "Facing"):
+        cases.append(("Layer Weight", o, lambda nt, o=o: out(node(nt, "ShaderNodeLayerWeight", Blend=0.3), o), COORD_TOL))
+    for space in ("TANGENT", "OBJECT", "WORLD"):
+        cases.append(
+            (
+                "Normal Map",
+                space,
+                lambda nt, s=space: out(node(nt, "ShaderNodeNormalMap", {"space": s}, Strength=0.8, Color=(0.7, 0.4, 0.9))),
+                COORD_TOL,
+            )
+        )
+    cases.append(
+        (
+            "Bump",
+            "noise height",
+            lambda nt: out(
+                node(nt, "ShaderNodeBump", Strength=0.5, Distance=0.2, Height=out(node(nt, "ShaderNodeTexNoise", Vector=mapped(nt))))
+            ),
+            COORD_TOL,
+        )
+    )
+    return cases
+
+
+def procedural_cases():
+    cases = []
+    textures = [
+        ("ShaderNodeTexNoise", {"noise_dimensions": "3D"}, {"Scale": 2.0, "Detail": 3.0}),
+        ("ShaderNodeTexNoise", {"noise_dimensions": "4D", "noise_type": "RIDGED_MULTIFRACTAL"}, {"W": 0.4}),
+        ("ShaderNodeTexVoronoi", {"feature": "F1"}, {"Scale": 1.5}),
+        ("ShaderNodeTexVoronoi", {"feature": "SMOOTH_F1", "voronoi_dimensions": "2D"}, {}),
+        ("ShaderNodeTexChecker", {}, {"Scale": 0.5, "Color1": (0.9, 0.5, 0.1), "Color2": (0.1, 0.3, 0.7)}),
+        ("ShaderNodeTexGradient", {"gradient_type": "LINEAR"}, {}),
+        ("ShaderNodeTexGradient", {"gradient_type": "RADIAL"}, {}),
+        ("ShaderNodeTexWave", {"wave_type": "RINGS"}, {"Scale": 0.2}),
+        ("ShaderNodeTexMagic", {"turbulence_depth": 3}, {"Scale": 0.2}),
+        ("ShaderNodeTexBrick", {}, {"Scale": 0.4}),
+    ]
+    for k, (kind, props, inputs) in enumerate(textures):
+        cases.append(
+            (
+                kind.replace("ShaderNodeTex", "") + " Texture",
+                f"{props}",
+                lambda nt, t=kind, p=props, i=inputs, k=k: out(
+                    node(nt, t, p, Vector=mapped(nt, loc=(0.4 if "Gradient" in t else 0.37 * k, 1.1, -0.4)), **i)
+                ),
+                COORD_TOL,
+            )
+        )
+
+    def white_noise(nt):
+        # White noise hashes the exact point: the floor of the mapped point gives each tile one value
+        cell = out(node(nt, "ShaderNodeVectorMath", {"operation": "FLOOR"}, Vector=mapped(nt, scale=0.1, loc=(3.5, -2.5, 0.5))), "Vector")
+        return out(node(nt, "ShaderNodeTexWhiteNoise", {"noise_dimensions": "3D"}, Vector=cell), "Color")
+
+    cases.append(("WhiteNoise Texture", "3D floor", white_noise, COORD_TOL))
+    return cases
+
+
+def image(name, float_buffer, colorspace="sRGB"):
+    """A 16×16 smooth RGBA image written by Blender (PNG or EXR) and loaded in ``colorspace``."""
+    img = bpy.data.images.get(name)
+    if img is not None:
+        return img
+    path = os.path.abspath(f"{name}.{'exr' if float_buffer else 'png'}")
+    if not os.path.exists(path):
+        src = bpy.data.images.new(name + " source", 16, 16, alpha=True, float_buffer=float_buffer)
+        y, x = np.mgrid[0:16, 0:16] / 15.0
+        px = np.stack([0.1 + 0.8 * x, 0.2 + 0.6 * y, 0.5 + 0.4 * np.sin(3 * x + 2 * y), 0.5 + 0.5 * x], -1)
+        src.pixels.foreach_set(px.astype(np.float32).ravel())
+        src.colorspace_settings.is_data = True  # write the values as they are
+        src.filepath_raw, src.file_format = path, ("OPEN_EXR" if float_buffer else "PNG")
+        src.save()
+        bpy.data.images.remove(src)
+    img = bpy.data.images.load(path)
+    img.name = name
+    img.colorspace_settings.name = colorspace
+    return img
+
+
+def image_cases():
+    cases = []
+    for name, fb, cs in (
+        ("bytes", False, "sRGB"),
+        ("float", True, "Linear Rec.709"),
+        ("data", False, "Non-Color"),
+        ("acescg", False, "ACEScg"),
+    ):
+        for interp in ("Linear", "Closest", "Cubic"):
+
+            def build(nt, name=name, fb=fb, cs=cs, interp=interp):
+                t = node(nt, "ShaderNodeTexImage", {"interpolation": interp})
+                t.image = image(name, fb, cs)
+                return out(t, "Color")
+
+            cases.append(("Image Texture", f"{name} {interp}", build, COORD_TOL))
+    for ext in ("REPEAT", "EXTEND", "CLIP", "MIRROR"):
+
+        def outside(nt, ext=ext):
+            t = node(nt, "ShaderNodeTexImage", {"extension": ext}, Vector=mapped(nt, "UV", 0.3, (1.2, -0.7, 0.0)))
+            t.image = image("bytes", False)
+            return out(t, "Color")
+
+        cases.append(("Image Texture", f"extension {ext}", outside, COORD_TOL))
+
+    def alpha(nt):
+        t = node(nt, "ShaderNodeTexImage")
+        t.image = image("bytes", False)
+        return out(t, "Alpha")
+
+    cases.append(("Image Texture", "alpha", alpha, COORD_TOL))
+    return cases
+
+
+HIT_CASES = coordinate_cases() + procedural_cases() + image_cases()

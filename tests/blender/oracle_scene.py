@@ -107,8 +107,19 @@ def render(cases, samples=1):
         col, row = k % COLS, k // COLS
         me = bpy.data.meshes.new(f"M{k}")
         me.from_pydata([(-s, -s, 0), (s, -s, 0), (s, s, 0), (-s, s, 0)], [], [(0, 1, 2, 3)])
-        me.uv_layers.new(name="UVMap")
+        corners = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+        uv = me.uv_layers.new(name="UVMap")
+        second = me.uv_layers.new(name="Second")
+        for c, (u, v) in enumerate(corners):
+            uv.uv[c].vector = (u, v)
+            second.uv[c].vector = (0.2 + 0.5 * v, 0.1 + 0.3 * u)
+        me.color_attributes.new("Col", "BYTE_COLOR", "POINT")
+        me.attributes.new("wet", "FLOAT", "POINT")
+        for v in range(4):  # (looked up again: adding a layer moves the others)
+            me.color_attributes["Col"].data[v].color = (0.2 + 0.2 * v, 0.9 - 0.2 * v, 0.5, 1.0)
+            me.attributes["wet"].data[v].value = 0.1 + 0.25 * v
         ob = bpy.data.objects.new(f"O{k}", me)
+        ob.pass_index = k % 7
         sc.collection.objects.link(ob)
         ob.location = (col - (COLS - 1) / 2, (rows - 1) / 2 - row, 0)
         ob.data.materials.append(m)
