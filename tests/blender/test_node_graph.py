@@ -162,6 +162,11 @@ m, nt, mo = new_mat('NaNValue')
 d = nt.nodes.new('ShaderNodeBsdfDiffuse'); d.name = 'Diff'; d.inputs['Roughness'].default_value = float('nan')
 nt.links.new(d.outputs[0], mo.inputs['Surface'])
 out['nan'] = run(m)
+m, nt, mo = new_mat('Hidden')
+mx = nt.nodes.new('ShaderNodeMix'); mx.data_type = 'RGBA'; val = nt.nodes.new('ShaderNodeValue'); val.name = 'Hid'
+nt.links.new(val.outputs[0], [s for s in mx.inputs if s.identifier == 'A_Float'][0])   # hidden in colour mode
+e = nt.nodes.new('ShaderNodeEmission'); nt.links.new(mx.outputs[2], e.inputs['Color']); nt.links.new(e.outputs[0], mo.inputs['Surface'])
+out['hidden'] = run(m)
 m, nt, mo = new_mat('Empty')
 out['empty'] = run(m)
 
@@ -309,6 +314,9 @@ def test_colour_on_surface_nan_and_empty(exported):
     err = exported["nan"]["error"]
     assert "material 'NaNValue'" in err and "'Diff'" in err and "Roughness" in err
     assert exported["empty"].get("none") is True
+    h = exported["hidden"]  # a link to a socket the node's mode hides is ignored, as Cycles does
+    assert [n["type"] for n in h["nodes"]] == ["ShaderNodeMix", "ShaderNodeEmission"]
+    assert "A_Float" not in h["nodes"][0]["inputs"] and h["nodes"][0]["props"]["data_type"] == "RGBA"
 
 
 def test_mesh_data_needs_images_and_implicit_inputs(exported):

@@ -126,7 +126,7 @@ HIT_FAMILIES = [
 
 @pytest.fixture(scope="module")
 def per_hit(tmp_path_factory):
-    return run_oracle(tmp_path_factory.mktemp("oracle_hit"), "HIT_CASES", samples=64)
+    return run_oracle(tmp_path_factory.mktemp("oracle_hit"), "HIT_CASES", samples=256)
 
 
 def test_per_hit_graphs_render(per_hit):

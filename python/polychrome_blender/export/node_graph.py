@@ -255,7 +255,10 @@ class GraphExport:
     def resolve_input(self, scope, sock):
         """What feeds input ``sock``: ("link", index, output identifier, type),
         ("value", value, type), or None (unconnected: the socket's own default)."""
-        links = [lk for lk in sock.links if not lk.is_muted]
+        # Cycles ignores muted links and links from or to sockets the node's mode hides
+        # (intern/cycles/blender/shader.cpp); a link Blender marks invalid because it
+        # closes a cycle is followed, so that the cycle is reported.
+        links = [lk for lk in sock.links if not lk.is_muted and lk.from_socket.enabled and lk.to_socket.enabled]
         if not links:
             return None
         link = links[0]
