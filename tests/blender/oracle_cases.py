@@ -284,8 +284,42 @@ def inner_group():
     return inner
 
 
+def legacy_cases():
+    """Nodes of files from before Blender 3.3/3.4, which 4.5 still loads."""
+    cases = []
+    for blend in ("MIX", "OVERLAY", "SOFT_LIGHT", "HUE", "DIVIDE"):
+        for clamp in (False, True):
+
+            def build(nt, blend=blend, clamp=clamp):
+                n = node(
+                    nt,
+                    "ShaderNodeMixRGB",
+                    {"blend_type": blend, "use_clamp": clamp},
+                    Fac=1.4,
+                    Color1=(0.8, 0.35, 0.1),
+                    Color2=(0.3, 0.9, 1.4),
+                )
+                return out(n)
+
+            cases.append(("MixRGB (legacy)", f"{blend}{' clamp' if clamp else ''}", build, TOL))
+    for o in ("R", "G", "B"):
+        cases.append(("Separate RGB (legacy)", o, lambda nt, o=o: out(node(nt, "ShaderNodeSeparateRGB", Image=(0.8, 0.35, 0.15)), o), TOL))
+    for o in ("H", "S", "V"):
+        cases.append(("Separate HSV (legacy)", o, lambda nt, o=o: out(node(nt, "ShaderNodeSeparateHSV", Color=(0.8, 0.35, 0.15)), o), TOL))
+    cases.append(("Combine RGB (legacy)", "rgb", lambda nt: out(node(nt, "ShaderNodeCombineRGB", R=0.6, G=0.2, B=0.9)), TOL))
+    cases.append(("Combine HSV (legacy)", "hsv", lambda nt: out(node(nt, "ShaderNodeCombineHSV", H=0.6, S=0.7, V=0.9)), TOL))
+    return cases
+
+
 CONSTANT_CASES = (
-    math_cases() + vector_math_cases() + mix_cases() + map_range_clamp_cases() + ramp_curve_cases() + colour_cases() + group_cases()
+    math_cases()
+    + vector_math_cases()
+    + mix_cases()
+    + map_range_clamp_cases()
+    + ramp_curve_cases()
+    + colour_cases()
+    + group_cases()
+    + legacy_cases()
 )
 
 

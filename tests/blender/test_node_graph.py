@@ -414,3 +414,65 @@ def test_mesh_carries_what_graphs_read(tmp_path):
     assert r["uv_maps"] == ["Second"]
     lost = [w for w in r["warnings"] if "'Nope'" in w]
     assert len(lost) == 1 and "material 'M' node 'Lost'" in lost[0] and "object 'Grid'" in lost[0]
+
+
+def test_every_blender_shader_node_exports_or_warns(tmp_path):
+    """Every shader node type Blender 4.5 has, on its own in a material, exports without an
+    exception: supported ones as themselves, any other with one warning naming it."""
+    proc, res = run_bpy(
+        tmp_path,
+        """
+    from polychrome_blender.export.node_graph import SUPPORTED, export_graph
+    from polychrome_blender.export.textures import TextureCache
+    from polychrome_blender.export.warnings import Warnings
+    kinds = sorted(t for t in dir(bpy.types) if t.startswith('ShaderNode') and t not in ('ShaderNodeTree', 'ShaderNodeCustomGroup')
+                   and issubclass(getattr(bpy.types, t), bpy.types.ShaderNode))
+    rows = []
+    for kind in kinds:
+        m = bpy.data.materials.new(kind); m.use_nodes = True; nt = m.node_tree
+        for n in list(nt.nodes):
+            if n.type != 'OUTPUT_MATERIAL': nt.nodes.remove(n)
+        mo = nt.nodes['Material Output']
+        try:
+            n = nt.nodes.new(kind)
+        except RuntimeError:
+            continue  # not allowed in a material tree
+        n.name = 'Probe'
+        outs = [o for o in n.outputs if o.enabled]
+        if not outs:
+            continue
+        if outs[0].type == 'SHADER':
+            nt.links.new(outs[0], mo.inputs['Surface'])
+        else:
+            e = nt.nodes.new('ShaderNodeEmission'); nt.links.new(outs[0], e.inputs['Color']); nt.links.new(e.outputs[0], mo.inputs['Surface'])
+        w = Warnings()
+        try:
+            got = export_graph(m, w, TextureCache())
+            err = None
+        except ValueError as e:
+            got, err = None, str(e)
+        types = [x['type'] for x in got[0]] if got else []
+        rows.append(dict(kind=kind, supported=kind in SUPPORTED, types=types, warnings=w.messages, error=err))
+    emit(rows=rows)
+    """,
+    )
+    # legacy nodes and what they are written as (export/node_graph.py LEGACY)
+    legacy = {
+        "ShaderNodeMixRGB": "ShaderNodeMix",
+        "ShaderNodeSeparateRGB": "ShaderNodeSeparateColor",
+        "ShaderNodeCombineRGB": "ShaderNodeCombineColor",
+        "ShaderNodeSeparateHSV": "ShaderNodeSeparateColor",
+        "ShaderNodeCombineHSV": "ShaderNodeCombineColor",
+    }
+    rows = check(proc, res)[0]["rows"]
+    assert len(rows) > 80, len(rows)
+    for r in rows:
+        assert r["error"] is None, r
+        probe = [w for w in r["warnings"] if "'Probe'" in w]
+        if r["kind"] in legacy:
+            assert legacy[r["kind"]] in r["types"] and not probe, r
+        elif r["supported"]:
+            assert r["kind"] in r["types"] and not probe, r
+        else:
+            assert len(probe) == 1 and r["kind"] in probe[0] and "material '" in probe[0], r
+            assert r["kind"] not in r["types"], r

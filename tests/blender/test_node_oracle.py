@@ -83,6 +83,11 @@ FAMILIES = [
     "Blackbody",
     "Wavelength",
     "Group",
+    "MixRGB (legacy)",
+    "Separate RGB (legacy)",
+    "Separate HSV (legacy)",
+    "Combine RGB (legacy)",
+    "Combine HSV (legacy)",
 ]
 
 

@@ -86,6 +86,22 @@ SUPPORTED = frozenset(
     }
 )
 
+#: Legacy nodes Blender 4.5 still loads from old files, written as their successors (as
+#: Cycles evaluates them): type, fixed props, renamed props, input and output identifiers.
+LEGACY = {
+    "ShaderNodeMixRGB": (
+        "ShaderNodeMix",
+        {"data_type": "RGBA", "clamp_factor": True, "factor_mode": "UNIFORM"},
+        {"use_clamp": "clamp_result", "blend_type": "blend_type"},
+        {"Fac": "Factor_Float", "Color1": "A_Color", "Color2": "B_Color"},
+        {"Color": "Result_Color"},
+    ),
+    "ShaderNodeSeparateRGB": ("ShaderNodeSeparateColor", {"mode": "RGB"}, {}, {"Image": "Color"}, {"R": "Red", "G": "Green", "B": "Blue"}),
+    "ShaderNodeCombineRGB": ("ShaderNodeCombineColor", {"mode": "RGB"}, {}, {"R": "Red", "G": "Green", "B": "Blue"}, {"Image": "Color"}),
+    "ShaderNodeSeparateHSV": ("ShaderNodeSeparateColor", {"mode": "HSV"}, {}, {"Color": "Color"}, {"H": "Red", "S": "Green", "V": "Blue"}),
+    "ShaderNodeCombineHSV": ("ShaderNodeCombineColor", {"mode": "HSV"}, {}, {"H": "Red", "S": "Green", "V": "Blue"}, {"Color": "Color"}),
+}
+
 #: Nodes whose value changes from hit to hit (everything else folds to a constant when
 #: its inputs are constant).
 PER_HIT = frozenset(
@@ -304,7 +320,7 @@ class GraphExport:
             return self._group_output(scope, node, out)
         if node.bl_idname.startswith("Polychrome"):
             return self._polychrome(scope, node, out)
-        if node.bl_idname not in SUPPORTED:
+        if node.bl_idname not in SUPPORTED and node.bl_idname not in LEGACY:
             return self._unsupported(scope, node, out)
         return self._real(scope, node, out)
 
@@ -393,33 +409,38 @@ class GraphExport:
     def _real(self, scope, node, out):
         key = (scope.key, node.as_pointer())
         name = f"{scope.path}{node.name}"
+        legacy = LEGACY.get(node.bl_idname)
+        out_ident = legacy[4].get(out.identifier, out.identifier) if legacy else out.identifier
         if key in self._index:
-            return ("link", self._index[key], out.identifier, out.type)
+            return ("link", self._index[key], out_ident, out.type)
         if any(k == key for k, _ in self._active):
             start = next(i for i, (k, _) in enumerate(self._active) if k == key)
             ring = " → ".join(n for _, n in self._active[start:]) + f" → {name}"
             raise ValueError(f"{self.owner}: the node graph has a cycle ({ring})")
         self._active.append((key, name))
         try:
-            entry = {"type": node.bl_idname, "name": name}
+            entry = {"type": legacy[0] if legacy else node.bl_idname, "name": name}
             props = self.props(node, name)
+            if legacy:
+                props = {**legacy[1], **{legacy[2][k]: v for k, v in props.items() if k in legacy[2]}}
             if props:
                 entry["props"] = props
             inputs = {}
             for sock in node.inputs:
                 if not sock.enabled:
                     continue
+                ident = legacy[3].get(sock.identifier, sock.identifier) if legacy else sock.identifier
                 got = self.resolve_input(scope, sock)
                 if got is None and sock.hide_value:
                     continue  # an implicit input (texture coordinates, normal): absent means Blender's default
                 if got is None:
                     v = socket_value(sock, self.owner, name)
                     if v is not None:
-                        inputs[sock.identifier] = v
+                        inputs[ident] = v
                 elif got[0] == "link":
-                    inputs[sock.identifier] = {"link": [got[1], got[2]]}
+                    inputs[ident] = {"link": [got[1], got[2]]}
                 else:
-                    inputs[sock.identifier] = got[1] if isinstance(got[1], dict) else convert_value(got[1], got[2], sock.type)
+                    inputs[ident] = got[1] if isinstance(got[1], dict) else convert_value(got[1], got[2], sock.type)
             entry["inputs"] = inputs
         finally:
             self._active.pop()
@@ -427,7 +448,7 @@ class GraphExport:
         self._index[key] = len(self.nodes) - 1
         self._note_needs(node, entry, name)
         self.per_hit = self.per_hit or node.bl_idname in PER_HIT
-        return ("link", self._index[key], out.identifier, out.type)
+        return ("link", self._index[key], out_ident, out.type)
 
     def props(self, node, name):
         """The node's own RNA properties under Blender's names, plus the plain forms of
