@@ -7,6 +7,8 @@ An emitter cannot show a negative value, so where Cycles' pixel is negative Poly
 must be 0 (every result is also shown negated on a second tile, so both signs are
 compared). Each case has its own tolerance (absolute, relative above 1)."""
 
+import json
+import os
 import shutil
 from pathlib import Path
 
@@ -33,7 +35,13 @@ def run_oracle(tmp_path, cases_name, samples=1):
     run({cases_name}, samples={samples})
     """
     proc, res = run_bpy(tmp_path, body, timeout=600)
-    return check(proc, res)[0]
+    result = check(proc, res)[0]
+    out = os.environ.get("POLYCHROME_ORACLE_REPORT")  # a directory: one JSON of errors per case list
+    if out:
+        rows = errors(result, tile_means=cases_name != "CONSTANT_CASES")
+        with open(Path(out) / f"{cases_name}.json", "w") as f:
+            json.dump({"rows": rows, "error": result["error"], "warnings": result["warnings"], "seconds": result["seconds"]}, f, indent=1)
+    return result
 
 
 def errors(result, tile_means=False):
