@@ -70,6 +70,18 @@ nt.links.new(e1.outputs[0], mix.inputs[1]); nt.links.new(e2.outputs[0], mix.inpu
 nt.links.new(mix.outputs[0], mo.inputs['Surface'])
 unused = nt.nodes.new('ShaderNodeTexNoise')   # not reachable: not exported
 out['groups'] = run(m)
+# a closure through a group: Shader in -> Add Shader with an inner emission -> Shader out
+sg = bpy.data.node_groups.new('ShaderGroup', 'ShaderNodeTree')
+sg.interface.new_socket('s', in_out='INPUT', socket_type='NodeSocketShader')
+sg.interface.new_socket('o', in_out='OUTPUT', socket_type='NodeSocketShader')
+gi, go = sg.nodes.new('NodeGroupInput'), sg.nodes.new('NodeGroupOutput')
+ad = sg.nodes.new('ShaderNodeAddShader'); ad.name = 'InnerAdd'; ie = sg.nodes.new('ShaderNodeEmission'); ie.name = 'InnerEm'
+sg.links.new(gi.outputs['s'], ad.inputs[0]); sg.links.new(ie.outputs[0], ad.inputs[1]); sg.links.new(ad.outputs[0], go.inputs['o'])
+m, nt, mo = new_mat('ShaderThroughGroup')
+d = nt.nodes.new('ShaderNodeBsdfDiffuse'); d.name = 'Outer'
+g = nt.nodes.new('ShaderNodeGroup'); g.name = 'SG'; g.node_tree = sg
+nt.links.new(d.outputs[0], g.inputs['s']); nt.links.new(g.outputs['o'], mo.inputs['Surface'])
+out['shader_group'] = run(m)
 
 # 2. reroutes, frames, muted nodes
 m, nt, mo = new_mat('Muted')
@@ -239,6 +251,14 @@ def test_nested_groups_are_inlined_with_their_defaults(exported):
     mix = c["nodes"][c["output"]["surface"][0]]
     assert mix["type"] == "ShaderNodeMixShader" and c["output"]["surface"][1] == "Shader"
     assert "ShaderNodeTexNoise" not in types  # unreachable nodes are not exported
+
+
+def test_closures_pass_through_groups(exported):
+    c = exported["shader_group"]
+    add = by_name(c, "SG/InnerAdd")
+    assert c["output"]["surface"] == [index_of(c, "SG/InnerAdd"), "Shader"]
+    assert add["inputs"]["Shader"] == {"link": [index_of(c, "Outer"), "BSDF"]}
+    assert add["inputs"]["Shader_001"] == {"link": [index_of(c, "SG/InnerEm"), "Emission"]}
 
 
 def test_reroutes_frames_and_muted_nodes(exported):
