@@ -316,3 +316,78 @@ def test_ctrl_c_on_the_cli_writes_the_finished_part_marked_partial(tmp_path, clu
     assert meta["polychrome:partial"] == "1"
     assert 0 < int(meta["polychrome:samples"]) < 1024
     assert float(imageio.read_image(out)[..., :3].mean()) > 0
+
+
+def test_a_cancelled_distributed_render_resumes_on_the_cluster_or_here(tmp_path, cluster, monkeypatch):
+    """The checkpoint of a cancelled cluster render holds the finished tasks' passes;
+    resumed on the cluster, or on this machine without Dask, it gives the local image."""
+    from polychrome import checkpoint
+
+    monkeypatch.setattr(checkpoint, "INTERVAL", 0.0)
+    address, _ = cluster
+    scene = box_scene()
+    settings = {**SETTINGS, "samples": 64}
+    local = pc.render(scene, **settings)
+    for where in (address, ""):
+        path = tmp_path / f"box{bool(where)}.npz"
+        partial = pc.render(scene, scheduler=address, checkpoint=str(path), progress=lambda done, total: False, **settings)
+        assert partial.stats["partial"] is True and 0 < partial.stats["samples_per_pixel"] < 64
+        resumed = pc.render(scene, scheduler=where, checkpoint=str(path), resume=True, **settings)
+        assert resumed.stats["partial"] is False
+        assert resumed.stats["checkpoint"]["resumed_samples"] == partial.stats["samples_per_pixel"] * 24 * 18
+        assert_same_image(resumed, local)
+
+
+def render_tiled(scene, address, settings, tile, **kw):
+    from polychrome import distributed as pd
+
+    desc, buffers = scene.description()
+    return pd.render(desc, buffers, pc.RenderSettings(**settings), address, tile=tile, **kw)
+
+
+@pytest.mark.parametrize("adaptive", [False, True])
+def test_image_tiles_merge_exactly(cluster, adaptive):
+    """Tasks of tile × pass range (tiles of 16 pixels on a 40×28 image: 3 × 2 tiles, the
+    last row and column cut short) add up to the local image."""
+    address, _ = cluster
+    scene = box_scene()
+    settings = {**SETTINGS, "width": 40, "height": 28}
+    if adaptive:
+        settings.update(samples=64, noise_threshold=3.0)
+    local = pc.render(scene, **settings)
+    tiled = render_tiled(scene, address, settings, 16)
+    assert_same_image(tiled, local)
+    assert tiled.stats["distributed"]["tasks"] >= 6
+    assert sum(tiled.stats["distributed"]["workers"].values()) == local.stats["total_samples"]
+    if adaptive:
+        assert 0 < local.stats["converged_pixels"] == tiled.stats["converged_pixels"]
+
+
+def test_a_tiled_render_with_a_region_resumes_from_its_checkpoint(tmp_path, cluster, monkeypatch):
+    """A render region (Blender's border) on the cluster, in tiles some of which lie
+    outside it, cancelled and resumed: the local image of that region, black and
+    transparent outside."""
+    from polychrome import checkpoint
+
+    monkeypatch.setattr(checkpoint, "INTERVAL", 0.0)
+    address, _ = cluster
+    scene = box_scene()
+    settings = {**SETTINGS, "width": 40, "height": 28, "samples": 48, "region": [5.0, 3.0, 22.0, 15.0]}
+    local = pc.render(scene, **settings)
+    assert float(np.abs(local.rgba[20:, 30:]).max()) == 0.0 and float(local.rgba[5:14, 6:20, 3].min()) == 1.0
+    assert_same_image(pc.render(scene, scheduler=address, **settings), local)
+    path = tmp_path / "region.npz"
+    ck_settings = {**settings, "checkpoint": str(path)}
+    partial = render_tiled(scene, address, ck_settings, 8, progress=lambda done, total: False)
+    assert partial.stats["partial"] is True
+    # The checkpoint's tiles are kept on resume (asked for none here).
+    resumed = render_tiled(scene, address, {**ck_settings, "resume": True}, 0)
+    assert resumed.stats["checkpoint"]["resumed_samples"] > 0
+    assert_same_image(resumed, local)
+
+
+def test_tiles_with_light_paths_are_refused():
+    scene = box_scene()
+    with distributed.Client(processes=False, n_workers=1, threads_per_worker=1, dashboard_address=":0") as client:
+        with pytest.raises(ValueError, match="light paths.*cannot be cut into image tiles"):
+            render_tiled(scene, client, {**SETTINGS, "direction": "BIDIRECTIONAL"}, 8)

@@ -282,7 +282,11 @@ def cmd_render(args: argparse.Namespace) -> int:
     overrides = _render_overrides(args)
     suffix = Path(args.scene).suffix.lower()
     if args.frames is not None:
+        if overrides.get("checkpoint"):
+            raise ValueError("--checkpoint: not with --frames (each frame is written when done; --resume skips those)")
         return _render_frames(args, out, overrides, suffix)
+    if overrides.get("resume") and not overrides.get("checkpoint"):
+        overrides["checkpoint"] = f"{out}.checkpoint.npz"  # beside the output
     if suffix in USD_SUFFIXES:
         import warnings
 
@@ -312,11 +316,26 @@ def cmd_render(args: argparse.Namespace) -> int:
         )
         return EXIT_INTERRUPTED
     result.save(out, passes=args.passes)
+    if settings.checkpoint and not result.partial:  # the image is written: nothing left to resume
+        Path(settings.checkpoint).unlink(missing_ok=True)
+    resumed = result.stats.get("checkpoint", {}).get("resumed_samples", 0)
+    if resumed:
+        print(f"resumed from {settings.checkpoint} ({resumed} pixel samples)")
     print(
         f"wrote {out} ({settings.width}x{settings.height}, {result.stats.get('samples_per_pixel')} samples, "
         f"{settings.method}, {result.stats.get('wavelengths')} wavelengths, quality {result.stats.get('quality')}, {time.perf_counter() - start:.1f} s)"
     )
     return EXIT_OK
+
+
+def _complete_image(path) -> bool:
+    """An image written by a render that was not cut short."""
+    from .imageio import read_metadata
+
+    try:
+        return read_metadata(path).get("polychrome:partial") == "0"
+    except (OSError, ValueError):
+        return False
 
 
 def _render_frames(args: argparse.Namespace, out, overrides: dict, suffix: str) -> int:
@@ -328,6 +347,11 @@ def _render_frames(args: argparse.Namespace, out, overrides: dict, suffix: str) 
     from .render import render
 
     frames = parse_frames(args.frames, args.frame_step)
+    if overrides.pop("resume", False):  # frames already written whole are not rendered again
+        frames = [f for f in frames if not _complete_image(frame_path(str(out), f))]
+        if not frames:
+            print("rendered 0 frame(s): every frame is written already")
+            return EXIT_OK
     if suffix in USD_SUFFIXES:
 
         def scenes():

@@ -20,7 +20,6 @@ from collections import OrderedDict
 from dataclasses import dataclass, replace
 import hashlib
 import json
-import math
 import threading
 import time
 import uuid
@@ -28,17 +27,10 @@ from typing import Any
 
 import numpy as np
 
-from . import _core
+from . import _core, tasks
+from .tasks import RenderInterrupted
 
-
-class RenderInterrupted(KeyboardInterrupt):
-    """Ctrl-C during a distributed render: ``result`` holds the passes that finished
-    (its stats have ``partial`` true). A KeyboardInterrupt, so code that does not catch
-    it stops as on any Ctrl-C."""
-
-    def __init__(self, result):
-        super().__init__("render interrupted; result holds the finished passes")
-        self.result = result
+__all__ = ["RenderInterrupted", "render", "render_frames", "frame_path", "parse_frames"]
 
 
 @dataclass(frozen=True)
@@ -94,9 +86,10 @@ def _worker_name() -> str:
         return "local"
 
 
-def render_passes_task(inputs: SceneInputs, start: int, end: int, active: np.ndarray | None) -> tuple[dict, str]:
-    """A task: the sums of sample passes ``start..end`` and the worker's address."""
-    return _renderer(inputs).render_passes(start, end, active), _worker_name()
+def render_passes_task(inputs: SceneInputs, start: int, end: int, active: np.ndarray | None, rect=None) -> tuple[dict, str]:
+    """A task: the sums of sample passes ``start..end`` (of the pixels of ``rect``, all
+    when None) and the worker's address."""
+    return _renderer(inputs).render_passes(start, end, active, rect), _worker_name()
 
 
 def connect(scheduler):
@@ -116,13 +109,33 @@ def connect(scheduler):
         raise ValueError(f"scheduler {scheduler}: cannot connect ({e})") from None
 
 
-def _split(r: tuple[int, int], parts: int) -> list[tuple[int, int]]:
-    """``r`` cut into at most ``parts`` contiguous non-empty ranges."""
-    a, b = r
-    n = b - a
-    parts = max(1, min(parts, n))
-    cuts = [a + (n * k) // parts for k in range(parts + 1)]
-    return [(cuts[k], cuts[k + 1]) for k in range(parts) if cuts[k + 1] > cuts[k]]
+class DaskExecutor:
+    """Tasks on the workers of a ``distributed.Client`` (for :func:`polychrome.tasks.run`)."""
+
+    local = False
+
+    def __init__(self, client, inputs):
+        self.client = client
+        self.inputs = inputs
+        self.workers = max(1, len(client.nthreads()))
+        self.run = uuid.uuid4().hex[:8]
+
+    def scatter(self, active):
+        return self.client.scatter(active, hash=False)
+
+    def submit(self, start: int, end: int, active, rect):
+        where = "" if rect is None else "-" + "-".join(map(str, rect))
+        key = f"polychrome-passes-{self.run}-{start}-{end}{where}"
+        return self.client.submit(render_passes_task, self.inputs, start, end, active, rect, key=key, pure=False)
+
+    def as_completed(self, futures):
+        from distributed import as_completed
+
+        return as_completed(futures)
+
+    def cancel(self, futures) -> None:
+        if futures:
+            self.client.cancel(list(futures))
 
 
 def render(
@@ -133,6 +146,7 @@ def render(
     *,
     progress=None,
     tasks_per_worker: int = 4,
+    tile: int | None = None,
 ):
     """Renders a scene description on a Dask cluster; a :class:`~polychrome.RenderResult`
     as :func:`polychrome.render` returns for the same settings, with
@@ -140,10 +154,12 @@ def render(
 
     ``scheduler``: an address or a ``distributed.Client``. ``progress``: a callable
     ``f(done, total)`` (pixel samples) called as tasks finish; returning False cancels.
-    Ctrl-C raises :class:`RenderInterrupted` holding the finished part.
+    ``tile``: image tiles of that many pixels a side (0: none; None: tiles of 512 for
+    images above a megapixel). With the ``checkpoint`` setting the finished passes are
+    saved there (``resume`` continues from it). Ctrl-C raises :class:`RenderInterrupted`
+    holding the finished part.
     """
-    from distributed import as_completed
-
+    from . import checkpoint
     from .render import description_json
 
     client, owned = connect(scheduler)
@@ -151,109 +167,27 @@ def render(
         local = replace(settings, scheduler="")  # the workers render; they need no address
         scene_json = description_json(desc)
         settings_json = local.to_json()
-        start_time = time.perf_counter()
         merge = _core.PassRenderer(scene_json, buffers, settings_json)  # the client's image; checks the scene
         token = _token(scene_json, buffers, settings_json)
         inputs = client.scatter(
             SceneInputs(token, scene_json, tuple(np.ascontiguousarray(b) for b in buffers), settings_json), broadcast=True, hash=False
         )
-        width, height = merge.size()
-        pixels = width * height
-        total = merge.sample_passes() * pixels
-        workers = max(1, len(client.nthreads()))
-        if merge.adaptive():
-            # Adaptive: the pass loop's groups in order, each cut into tasks inside its halves.
-            groups = [list(merge.halves(*g)) for g in merge.groups()]
-        else:
-            # Every pass in one group; tasks small enough to balance and to lose little.
-            groups = [[(0, merge.sample_passes()), (merge.sample_passes(), merge.sample_passes())]]
-        per_worker: dict[str, int] = {}
-        done_samples = 0
-        cancelled = time_limited = False
-        tasks = 0
-        limit = merge.time_limit()
-        run = uuid.uuid4().hex[:8]
-        pending = []
-        group_passes = 0  # passes of the current group added so far
+        executor = DaskExecutor(client, inputs)
+        tok = checkpoint.token(scene_json, buffers, settings)
+
+        def annotate(result):
+            stats = result.stats
+            stats["distributed"] = {"scheduler": client.scheduler.address, "tasks": stats.pop("tasks"), "workers": stats.pop("workers")}
+            return result
+
         try:
-            for halves in groups:
-                if not merge.any_active():
-                    break
-                if limit > 0 and merge.passes() > 0 and time.perf_counter() - start_time >= limit:
-                    time_limited = True
-                    break
-                active = merge.active()
-                if active is not None:
-                    active = client.scatter(active, hash=False)
-                pieces = max(1, workers * tasks_per_worker if len(groups) == 1 else math.ceil(workers / 2))
-                futures = {}
-                for h, half in enumerate(halves):
-                    if half[1] <= half[0]:
-                        continue
-                    for s, e in _split(half, pieces):
-                        f = client.submit(render_passes_task, inputs, s, e, active, key=f"polychrome-passes-{run}-{s}-{e}", pure=False)
-                        futures[f] = (h == 0, s, e)
-                pending = list(futures)
-                group_passes = 0
-                for f in as_completed(pending):
-                    sums, worker = f.result()
-                    first_half, s, e = futures[f]
-                    merge.add(sums, first_half)
-                    pending.remove(f)
-                    f.release()
-                    samples = int(np.asarray(sums["count"]).sum())
-                    per_worker[worker] = per_worker.get(worker, 0) + samples
-                    done_samples += (e - s) * pixels
-                    group_passes += e - s
-                    tasks += 1
-                    if progress is not None and progress(done_samples, total) is False:
-                        cancelled = True
-                    if limit > 0 and time.perf_counter() - start_time >= limit and pending:
-                        time_limited = True
-                    if cancelled or time_limited:
-                        client.cancel(pending)
-                        break
-                merge.end_group(group_passes)
-                group_passes = 0
-                if cancelled or time_limited:
-                    break
-        except KeyboardInterrupt:
-            client.cancel(pending)
-            merge.end_group(group_passes)  # what finished of the interrupted group counts
-            cancelled = True
-            result = _result(merge, True, time_limited, start_time, client, per_worker, tasks)
-            raise RenderInterrupted(result) from None
-        except BaseException:
-            client.cancel(pending)
-            raise
-        return _result(merge, cancelled, time_limited, start_time, client, per_worker, tasks)
+            result = tasks.run(merge, executor, settings, tok, progress=progress, tile=tile, tasks_per_worker=tasks_per_worker)
+        except RenderInterrupted as e:
+            raise RenderInterrupted(annotate(e.result)) from None
+        return annotate(result)
     finally:
         if owned:
             client.close()
-
-
-def _result(merge, cancelled, time_limited, start_time, client, per_worker, tasks):
-    from .render import RenderResult
-
-    seconds = time.perf_counter() - start_time
-    out = merge.output(cancelled, time_limited, seconds)
-    stats = json.loads(out["stats"])
-    stats["wall_seconds"] = seconds
-    stats["partial"] = bool(cancelled or stats.get("cancelled"))
-    stats["distributed"] = {
-        "scheduler": client.scheduler.address,
-        "tasks": tasks,
-        "workers": dict(sorted(per_worker.items())),
-    }
-    return RenderResult(
-        rgba=out["rgba"],
-        depth=out["depth"],
-        normal=out["normal"],
-        albedo=out["albedo"],
-        spectral=out["spectral"],
-        wavelengths=out["wavelengths"],
-        stats=stats,
-    )
 
 
 def render_frame_task(inputs: SceneInputs) -> tuple[dict, str]:

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 import json
+import threading
 import time
 from typing import Any, NamedTuple
 from collections.abc import Callable
@@ -66,7 +67,10 @@ class RenderJob:
                 raise ValueError("RenderJob needs a scene (or a description)")
             description = scene.description()
         desc, buffers = description
-        self._job = _core.RenderJob(description_json(desc), buffers, self.settings.to_json(), previews)
+        if self.settings.checkpoint or self.settings.resume:
+            self._job = _TaskJob(desc, buffers, self.settings, previews)
+        else:
+            self._job = _core.RenderJob(description_json(desc), buffers, self.settings.to_json(), previews)
         self._result: RenderResult | None = None
         self._error: BaseException | None = None
         self._started: float | None = None
@@ -132,6 +136,10 @@ class RenderJob:
             except BaseException as e:
                 self._error = e
                 raise
+            if isinstance(out, RenderResult):  # a render in tasks (_TaskJob)
+                warn_left_out(out.stats)
+                self._result = out.denoised() if self.settings.denoise else out
+                return self._result
             stats = json.loads(out["stats"])
             stats["wall_seconds"] = time.perf_counter() - (self._started or time.perf_counter())
             warn_left_out(stats)
@@ -156,6 +164,91 @@ class RenderJob:
     def __exit__(self, *exc: Any) -> None:
         self.cancel()
         self.wait()
+
+
+class _TaskJob:
+    """The core job's interface over a render in tasks on a thread of this process
+    (:mod:`polychrome.tasks`), for a RenderJob with a ``checkpoint``: the passes are
+    saved as they finish and ``resume`` continues from them. A cancel takes effect when
+    the running piece (at most 16 passes) ends; previews come between pieces."""
+
+    def __init__(self, desc, buffers, settings: RenderSettings, previews: bool):
+        from . import checkpoint
+
+        scene_json = description_json(desc)
+        self._merge = _core.PassRenderer(scene_json, buffers, settings.to_json())
+        self._token = checkpoint.token(scene_json, buffers, settings)
+        self._settings = settings
+        self._previews = previews
+        w, h = self._merge.size()
+        self._progress = (0, self._merge.sample_passes() * w * h)
+        self._cancelled = False
+        self._ended = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._preview: tuple | None = None
+        self._serial = 0
+        self._last_preview = 0.0
+        self._out: RenderResult | None = None
+        self._error: BaseException | None = None
+
+    def start(self) -> None:
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._run, name="polychrome-job", daemon=True)
+            self._thread.start()
+
+    def _run(self) -> None:
+        from . import tasks
+
+        executor = tasks.LocalExecutor(self._merge)
+        try:
+            self._out = tasks.run(self._merge, executor, self._settings, self._token, progress=self._on_progress)
+            self._publish(self._out.rgba, self._out.stats["samples_per_pixel"], True)
+        except BaseException as e:  # handed to result()
+            self._error = e
+        finally:
+            executor.close()
+            self._ended.set()
+
+    def _on_progress(self, done: int, total: int) -> bool:
+        self._progress = (done, total)
+        if self._previews and time.perf_counter() - self._last_preview >= 0.1:
+            w, h = self._merge.size()
+            self._publish(self._merge.output(False, False, 0.0)["rgba"], done // (w * h), False)  # passes so far
+        return not self._cancelled
+
+    def _publish(self, rgba, samples: int, last: bool) -> None:
+        if self._previews:
+            self._serial += 1
+            self._preview = (rgba, samples, self._serial, last)
+            self._last_preview = time.perf_counter()
+
+    def progress(self) -> tuple[int, int]:
+        return self._progress
+
+    def cancel(self) -> None:
+        self._cancelled = True
+
+    def done(self) -> bool:
+        return self._ended.is_set()
+
+    def preview_serial(self) -> int:
+        return self._serial
+
+    def preview(self):
+        return self._preview
+
+    def wait(self, timeout: float | None = None) -> bool:
+        if self._thread is None:
+            return True
+        return self._ended.wait(timeout)
+
+    def result(self) -> RenderResult:
+        self.wait()
+        if self._error is not None:
+            raise self._error
+        if self._out is None:
+            raise RuntimeError("RenderJob.result(): the job was never started")
+        return self._out
 
 
 def render_with_previews(

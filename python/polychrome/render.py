@@ -181,6 +181,10 @@ def render(
     Ctrl-C cancels too (KeyboardInterrupt). Errors in the scene raise ValueError naming
     the object and the problem.
 
+    ``checkpoint``: a file the finished passes are saved to while rendering (in tasks on
+    this machine or the cluster); with ``resume`` the render continues from it and ends
+    with the image of an uninterrupted render (docs/distributed.md).
+
     ``scheduler``: a Dask scheduler address (``tcp://host:8786``) or a
     ``distributed.Client`` renders on that cluster (docs/distributed.md): the same image
     for the same seed; Ctrl-C raises ``polychrome.distributed.RenderInterrupted``, whose
@@ -206,22 +210,27 @@ def render(
         if client is not None or settings.scheduler:
             from . import distributed
 
-            return distributed.render(desc, buffers, settings, client or settings.scheduler, progress=callback)
-        start = time.perf_counter()
-        out = _core.render(description_json(desc), buffers, settings.to_json(), callback)
+            result = distributed.render(desc, buffers, settings, client or settings.scheduler, progress=callback)
+        elif settings.checkpoint or settings.resume:
+            from . import tasks
+
+            result = tasks.render_local(desc, buffers, settings, progress=callback)
+        else:
+            start = time.perf_counter()
+            out = _core.render(description_json(desc), buffers, settings.to_json(), callback)
+            stats = json.loads(out["stats"])
+            stats["wall_seconds"] = time.perf_counter() - start
+            result = RenderResult(
+                rgba=out["rgba"],
+                depth=out["depth"],
+                normal=out["normal"],
+                albedo=out["albedo"],
+                spectral=out["spectral"],
+                wavelengths=out["wavelengths"],
+                stats=stats,
+            )
     finally:
         if close:
             close()
-    stats = json.loads(out["stats"])
-    stats["wall_seconds"] = time.perf_counter() - start
-    warn_left_out(stats)
-    result = RenderResult(
-        rgba=out["rgba"],
-        depth=out["depth"],
-        normal=out["normal"],
-        albedo=out["albedo"],
-        spectral=out["spectral"],
-        wavelengths=out["wavelengths"],
-        stats=stats,
-    )
+    warn_left_out(result.stats)
     return result.denoised() if settings.denoise else result

@@ -10,7 +10,9 @@ use polychrome_core::film::FilmBuffer;
 use polychrome_core::geometry::curves::{self, CurveOptions, Tessellation};
 use polychrome_core::material::catalogue;
 use polychrome_core::material::dispersion::{self, IorDesc};
+use polychrome_core::render::adaptive::AdaptiveState;
 use polychrome_core::render::settings::schema_json;
+use polychrome_core::render::tasks::MergeState;
 use polychrome_core::render::{
     compile, render as core_render, Driver, Merge, RenderControl, RenderOutput, RenderSettings, ResolvedSettings,
     Timing,
@@ -329,6 +331,17 @@ impl PassRenderer {
     fn pixels(&self) -> usize {
         self.settings.width as usize * self.settings.height as usize
     }
+
+    /// A rectangle (x0, y0, x1, y1) non-empty and inside the image.
+    fn check_rect(&self, r: [u32; 4]) -> PyResult<()> {
+        let (w, h) = (self.settings.width, self.settings.height);
+        if !(r[0] < r[2] && r[1] < r[3] && r[2] <= w && r[3] <= h) {
+            return Err(PyValueError::new_err(format!(
+                "rect {r:?}: not a non-empty rectangle inside the {w}×{h} image"
+            )));
+        }
+        Ok(())
+    }
 }
 
 /// The sums of a film buffer as numpy arrays (pixels row-major).
@@ -450,13 +463,17 @@ impl PassRenderer {
     /// (all when None), as numpy arrays: `xyz`, `albedo_xyz`, `normal` (pixels, 3),
     /// `depth`, `count` (pixels,), `spectral` (pixels × wavelengths,) or None, and
     /// `nonfinite`. Renders on this object's thread pool without the GIL.
-    #[pyo3(signature = (start, end, active=None))]
+    ///
+    /// `rect` (x0, y0, x1, y1): only the pixels of that rectangle, its sums row-major in
+    /// it (image tiles; only when `tileable()`).
+    #[pyo3(signature = (start, end, active=None, rect=None))]
     fn render_passes<'py>(
         &self,
         py: Python<'py>,
         start: u32,
         end: u32,
         active: Option<PyReadonlyArray1<'py, bool>>,
+        rect: Option<[u32; 4]>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let driver = self.driver()?;
         let total = driver.sample_passes();
@@ -467,25 +484,103 @@ impl PassRenderer {
         if active.as_ref().is_some_and(|a| a.len() != self.pixels()) {
             return Err(PyValueError::new_err(format!("active: expected {} pixels", self.pixels())));
         }
+        if let Some(r) = rect {
+            self.check_rect(r)?;
+            if !driver.tileable() {
+                return Err(PyValueError::new_err(
+                    "rect: renders with light paths (FORWARD, BIDIRECTIONAL) cannot be cut into tiles",
+                ));
+            }
+        }
         let control = RenderControl::new();
         let sums = py.allow_threads(|| {
             guarded("render_passes", || {
-                Ok(self.pool.install(|| driver.render_passes(start..end, active.as_deref(), &control)))
+                Ok(self.pool.install(|| match rect {
+                    Some(r) => driver.render_rect(start..end, active.as_deref(), r, &control),
+                    None => driver.render_passes(start..end, active.as_deref(), &control),
+                }))
             })
         })?;
         sums_dict(py, sums.expect("never cancelled"))
     }
 
-    /// Adds a task's sums (from `render_passes` of this scene and settings);
-    /// `first_half`: the task lies in its group's first half (see `halves`).
-    fn add(&self, py: Python<'_>, sums: &Bound<'_, PyDict>, first_half: bool) -> PyResult<()> {
+    /// Whether `render_passes` may cover image tiles (camera paths only).
+    fn tileable(&self) -> PyResult<bool> {
+        Ok(self.driver()?.tileable())
+    }
+
+    /// Adds a task's sums (from `render_passes` of this scene and settings, with the same
+    /// `rect`); `first_half`: the task lies in its group's first half (see `halves`).
+    #[pyo3(signature = (sums, first_half, rect=None))]
+    fn add(&self, py: Python<'_>, sums: &Bound<'_, PyDict>, first_half: bool, rect: Option<[u32; 4]>) -> PyResult<()> {
         let spectral_len = self.settings.spectral_output.then_some(self.scene.grid.len());
-        let buffer = sums_from_dict(sums, self.pixels(), spectral_len)?;
+        let pixels = match rect {
+            Some(r) => {
+                self.check_rect(r)?;
+                ((r[2] - r[0]) * (r[3] - r[1])) as usize
+            }
+            None => self.pixels(),
+        };
+        let buffer = sums_from_dict(sums, pixels, spectral_len)?;
         py.allow_threads(|| {
             self.with_merge(|_, m| {
-                m.add(&buffer, first_half);
+                match rect {
+                    Some(r) => m.add_rect(&buffer, r, first_half),
+                    None => m.add(&buffer, first_half),
+                }
                 Ok(())
             })
+        })
+    }
+
+    /// What was added so far, for a checkpoint: the pass sums (as `render_passes`
+    /// returns them), `passes` (of the groups ended) and with adaptive sampling
+    /// `active`, `half_xyz`, `half_count` and `err` per pixel.
+    fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let state = self.with_merge(|_, m| Ok(m.state()))?;
+        let d = sums_dict(py, state.buffer)?;
+        d.set_item("passes", state.passes)?;
+        if let Some(a) = state.adaptive {
+            let n = a.active.len();
+            d.set_item("active", PyArray1::from_vec(py, a.active))?;
+            let flat: Vec<f64> = a.half_xyz.into_iter().flatten().collect();
+            d.set_item("half_xyz", PyArray1::from_vec(py, flat).reshape([n, 3])?)?;
+            d.set_item("half_count", PyArray1::from_vec(py, a.half_count))?;
+            d.set_item("err", PyArray1::from_vec(py, a.err))?;
+        }
+        Ok(d)
+    }
+
+    /// Continues from a dict of `state()` of the same render (ValueError saying what does
+    /// not match).
+    fn restore(&self, py: Python<'_>, state: &Bound<'_, PyDict>) -> PyResult<()> {
+        let spectral_len = self.settings.spectral_output.then_some(self.scene.grid.len());
+        let n = self.pixels();
+        let buffer = sums_from_dict(state, n, spectral_len)?;
+        let get = |name: &str| -> PyResult<Option<Bound<'_, PyAny>>> { state.get_item(name) };
+        let passes: u32 =
+            get("passes")?.ok_or_else(|| PyValueError::new_err("state: 'passes' is missing"))?.extract()?;
+        let adaptive = match get("active")? {
+            None => None,
+            Some(active) => {
+                let need =
+                    |name: &str| get(name)?.ok_or_else(|| PyValueError::new_err(format!("state: '{name}' is missing")));
+                let active: PyReadonlyArray1<bool> = active.extract()?;
+                let half: PyReadonlyArrayDyn<f64> = need("half_xyz")?.extract()?;
+                let half: Vec<f64> = half.as_array().iter().copied().collect();
+                let half_count: PyReadonlyArray1<u32> = need("half_count")?.extract()?;
+                let err: PyReadonlyArray1<f64> = need("err")?.extract()?;
+                Some(AdaptiveState {
+                    active: active.as_array().to_vec(),
+                    half_xyz: half.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+                    half_count: half_count.as_array().to_vec(),
+                    err: err.as_array().to_vec(),
+                })
+            }
+        };
+        let state = MergeState { buffer, passes, adaptive };
+        py.allow_threads(|| {
+            self.with_merge(|_, m| m.restore(state).map_err(|e| PyValueError::new_err(format!("state: {e}"))))
         })
     }
 

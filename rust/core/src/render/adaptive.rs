@@ -16,6 +16,17 @@ pub fn adaptive_supported(method: Method, direction: Direction) -> bool {
     direction == Direction::Backward && method != Method::MonochromaticScenes
 }
 
+/// What [`Adaptive`] keeps between groups of passes, per pixel (row-major): saved in a
+/// checkpoint and restored on resume ([`Adaptive::restore`]).
+#[derive(Clone, Debug)]
+pub struct AdaptiveState {
+    pub active: Vec<bool>,
+    pub half_xyz: Vec<[f64; 3]>,
+    pub half_count: Vec<u32>,
+    /// The last error estimate (kept for stopped pixels: their neighbours' test reads it).
+    pub err: Vec<f64>,
+}
+
 /// The adaptive state of a render: which pixels still take samples, and the sums their
 /// error estimate needs.
 pub struct Adaptive {
@@ -69,6 +80,32 @@ impl Adaptive {
     /// Pixels that reached the target.
     pub fn converged_pixels(&self) -> u64 {
         self.active.iter().filter(|&&a| !a).count() as u64 - self.outside
+    }
+    /// A copy of the per-pixel state (for a checkpoint).
+    pub fn state(&self) -> AdaptiveState {
+        AdaptiveState {
+            active: self.active.clone(),
+            half_xyz: self.half_xyz.clone(),
+            half_count: self.half_count.clone(),
+            err: self.err.clone(),
+        }
+    }
+    /// Replaces the per-pixel state with a saved one of the same image; the error names
+    /// the array whose size does not match.
+    pub fn restore(&mut self, s: AdaptiveState) -> Result<(), String> {
+        let n = self.active.len();
+        for (name, len) in [
+            ("active", s.active.len()),
+            ("half_xyz", s.half_xyz.len()),
+            ("half_count", s.half_count.len()),
+            ("err", s.err.len()),
+        ] {
+            if len != n {
+                return Err(format!("adaptive '{name}' has {len} pixels, expected {n}"));
+            }
+        }
+        (self.active, self.half_xyz, self.half_count, self.err) = (s.active, s.half_xyz, s.half_count, s.err);
+        Ok(())
     }
     /// Adds pixel `i`'s sums of the first half of a pass.
     pub fn add_first_half(&mut self, i: usize, xyz: &[f64; 3], count: u32) {

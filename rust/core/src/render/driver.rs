@@ -164,6 +164,48 @@ impl<'a> Driver<'a> {
         Some(film.buffer)
     }
 
+    /// Whether a task may cover a rectangle of the image ([`Driver::render_rect`]):
+    /// camera paths only, since a light path may land on any pixel.
+    pub fn tileable(&self) -> bool {
+        self.integrator.camera_paths && !self.integrator.light_paths
+    }
+
+    /// Renders sample passes `passes` of the pixels of `rect` (`[x0, y0, x1, y1)`, inside
+    /// the image) that lie in the render region and are `active` (all when None) into
+    /// sums of the rectangle's pixels (row-major in it). Every pixel sample has its own
+    /// random stream, so the sums equal those pixels' sums of [`Driver::render_passes`]
+    /// exactly. Only for [`Driver::tileable`] renders; None when cancelled.
+    pub fn render_rect(
+        &self,
+        passes: Range<u32>,
+        active: Option<&[bool]>,
+        rect: [u32; 4],
+        control: &RenderControl,
+    ) -> Option<FilmBuffer> {
+        assert!(self.tileable(), "render_rect with light paths");
+        let [x0, y0, x1, y1] = rect;
+        let [rx0, ry0, rx1, ry1] = self.settings.region_rect();
+        let (cx0, cy0, cx1, cy1) = (x0.max(rx0), y0.max(ry0), x1.min(rx1), y1.min(ry1));
+        let mut tiles = Vec::new();
+        let mut y = cy0;
+        while y < cy1 {
+            let mut x = cx0;
+            while x < cx1 {
+                tiles.push(Tile { x0: x, y0: y, w: TILE.min(cx1 - x), h: TILE.min(cy1 - y) });
+                x += TILE;
+            }
+            y += TILE;
+        }
+        let bufs: Vec<Option<FilmBuffer>> =
+            tiles.par_iter().map(|&t| self.render_tile(t, passes.clone(), active, control)).collect();
+        let n = self.scene.grid.len();
+        let mut film = Film::new(x1 - x0, y1 - y0, self.settings.spectral_output.then_some(n));
+        for (t, b) in tiles.iter().zip(bufs) {
+            film.merge_tile(t.x0 - x0, t.y0 - y0, t.w, t.h, &b?);
+        }
+        Some(film.buffer)
+    }
+
     /// Camera tiles and light paths of sample passes `passes`; None when cancelled.
     pub fn trace(&self, passes: Range<u32>, active: Option<&[bool]>, control: &RenderControl) -> Option<PassSums> {
         let tiles = if self.integrator.camera_paths {

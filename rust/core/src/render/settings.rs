@@ -394,6 +394,22 @@ settings! {
         "Address of a Dask scheduler (tcp://host:8786) whose workers render the sample passes and frames; empty renders on this machine",
         Kind::String,
     ).see("distributed.md");
+    /// A file that keeps the finished sample passes while rendering, so that an
+    /// interrupted render can continue (`resume`). The core never reads it: the Python
+    /// front end renders in tasks and writes the file (docs/distributed.md).
+    checkpoint: copy String = String::new() => Spec::new(
+        "System",
+        "Checkpoint",
+        "File that keeps the finished sample passes while rendering (rewritten atomically after finished passes, at most every 10 s, and when interrupted), so that Resume can continue an interrupted render; empty: none (the CLI uses OUTPUT.checkpoint.npz)",
+        Kind::String,
+    ).see("distributed.md");
+    /// Continue from the checkpoint file if it exists.
+    resume: copy bool = false => Spec::new(
+        "System",
+        "Resume",
+        "Continue from the Checkpoint file if there is one (it must come from the same scene and settings); the result equals an uninterrupted render",
+        Kind::Bool,
+    ).see("distributed.md");
 }
 
 impl RenderSettings {

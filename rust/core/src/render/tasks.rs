@@ -9,11 +9,22 @@
 //! its tasks are added. So the same seed and settings give the same image as
 //! [`Driver::run`], whatever the number of workers or the order tasks finish in.
 
-use super::adaptive::Adaptive;
+use super::adaptive::{Adaptive, AdaptiveState};
 use super::driver::{Driver, PassesDone, Timing};
 use super::{RenderControl, RenderOutput};
 use crate::film::{Film, FilmBuffer};
 use std::ops::Range;
+
+/// What a [`Merge`] holds between tasks: saved in a checkpoint, restored on resume.
+#[derive(Clone, Debug)]
+pub struct MergeState {
+    /// The sums of every task added so far.
+    pub buffer: FilmBuffer,
+    /// Passes of the groups ended so far.
+    pub passes: u32,
+    /// Adaptive sampling's per-pixel state (None: adaptive off).
+    pub adaptive: Option<AdaptiveState>,
+}
 
 /// The client's image of a render whose passes are rendered elsewhere.
 pub struct Merge {
@@ -49,6 +60,57 @@ impl Merge {
                 a.add_first_half(i, xyz, count);
             }
         }
+    }
+
+    /// Adds a task's sums of the pixels of `rect` (`[x0, y0, x1, y1)`, row-major in it;
+    /// [`Driver::render_rect`]); `first_half` as for [`Merge::add`].
+    pub fn add_rect(&mut self, sums: &FilmBuffer, rect: [u32; 4], first_half: bool) {
+        let [x0, y0, x1, y1] = rect;
+        let w = x1 - x0;
+        self.film.merge_tile(x0, y0, w, y1 - y0, sums);
+        if let (true, Some(a)) = (first_half, &mut self.adaptive) {
+            for (k, (xyz, &count)) in sums.xyz.iter().zip(&sums.count).enumerate() {
+                let (x, y) = (x0 + k as u32 % w, y0 + k as u32 / w);
+                a.add_first_half((y * self.film.width + x) as usize, xyz, count);
+            }
+        }
+    }
+
+    /// A copy of what was added so far (for a checkpoint).
+    pub fn state(&self) -> MergeState {
+        MergeState {
+            buffer: self.film.buffer.clone(),
+            passes: self.done.passes,
+            adaptive: self.adaptive.as_ref().map(|a| a.state()),
+        }
+    }
+
+    /// Continues from a saved state of the same render; the error says what does not
+    /// match (image size, spectral output, adaptive sampling).
+    pub fn restore(&mut self, state: MergeState) -> Result<(), String> {
+        let (have, want) = (state.buffer.count.len(), self.film.buffer.count.len());
+        if have != want {
+            return Err(format!("{have} pixels, expected {want}"));
+        }
+        let sums_len = |b: &FilmBuffer| b.spectral.as_ref().map(|s| s.len());
+        if sums_len(&state.buffer) != sums_len(&self.film.buffer)
+            || [
+                state.buffer.xyz.len(),
+                state.buffer.albedo_xyz.len(),
+                state.buffer.normal.len(),
+                state.buffer.depth.len(),
+            ] != [want; 4]
+        {
+            return Err("the pass sums do not match this render's image (spectral output?)".into());
+        }
+        match (&mut self.adaptive, state.adaptive) {
+            (Some(a), Some(s)) => a.restore(s)?,
+            (None, None) => {}
+            _ => return Err("adaptive sampling differs".into()),
+        }
+        self.film.buffer = state.buffer;
+        self.done.passes = state.passes;
+        Ok(())
     }
 
     /// After every task of a group of `passes` passes was added: counts them and, with
