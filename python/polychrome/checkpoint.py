@@ -79,6 +79,9 @@ def save(path, tok: str, merge, tile: int, finished: dict[int, list[tuple[int, i
     finally:
         if tmp.exists():
             tmp.unlink()
+    # Left by a process killed mid-write (the checkpoint itself was never touched).
+    for stale in path.parent.glob(f".{path.name}.*.tmp"):
+        stale.unlink(missing_ok=True)
 
 
 def load(path, tok: str) -> Progress | None:
