@@ -151,3 +151,64 @@ def test_cli_denoise_flag_writes_the_denoised_image_and_passes(tmp_path):
     ch = imageio._read_exr_channels(out)
     assert {"Noisy Image.R", "Denoising Albedo.R", "Denoising Normal.X"} <= set(ch)
     assert np.isfinite(ch["Combined.R"]).all() and not np.allclose(ch["Combined.R"], ch["Noisy Image.R"])
+
+
+def through_specular_scene(front: str) -> pc.Scene:
+    """An orthographic camera at the origin looking along +y at a wall (y = 2) of one
+    colour; in the middle third of the view a perfect mirror (y = 1, facing the camera)
+    or a glass slab (y = 1 to 1.1). With the mirror, behind the camera (y = −1) a wall of
+    the same colour, which the mirror shows; with the glass nothing there, so light the
+    slab reflects leaves the scene. Every ray meets the surfaces at normal incidence."""
+    scene = pc.Scene()
+    wall = scene.add_material(pc.Diffuse(pc.spectra.rgb(0.7, 0.3, 0.1), name="wall"))
+
+    def quad(name, y, x0, x1, z0, z1, m, facing):  # facing: -1 towards the camera (−y)
+        p = np.array([[x0, y, z0], [x1, y, z0], [x1, y, z1], [x0, y, z1]], np.float32)
+        tris = np.array([[0, 1, 2], [0, 2, 3]]) if facing < 0 else np.array([[0, 2, 1], [0, 3, 2]])
+        scene.add_mesh(name, p, tris, material=m)
+
+    quad("front wall", 2.0, -2, 2, -2, 2, wall, -1)
+    if front == "mirror":
+        quad("back wall", -1.0, -2, 2, -2, 2, wall, +1)
+        mirror = scene.add_material(pc.Conductor(eta=0.2, k=3.0, name="mirror"))
+        quad("mirror", 1.0, -0.15, 0.15, -1, 1, mirror, -1)
+    else:
+        glass = scene.add_material(pc.Dielectric(1.5, name="glass"))
+        x0, x1, y0, y1, z0, z1 = -0.15, 0.15, 1.0, 1.1, -1.0, 1.0
+        v = np.array([[x, y, z] for z in (z0, z1) for y in (y0, y1) for x in (x0, x1)], np.float32)
+        # A closed box, outward faces (vertex k: x bit 0, y bit 1, z bit 2).
+        faces = [[0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5], [0, 2, 3, 1], [4, 5, 7, 6]]
+        tris = np.array([t for a, b, c, d in faces for t in ([a, b, c], [a, c, d])])
+        scene.add_mesh("slab", v, tris, material=glass)
+    scene.camera = pc.Camera.looking_at((0, 0, 0), (0, 1, 0), up=(0, 0, 1), projection="ORTHOGRAPHIC", ortho_scale=0.9)
+    return scene
+
+
+@pytest.mark.parametrize("front", ["mirror", "glass"])
+def test_aux_passes_see_through_mirrors_and_glass(front):
+    """The albedo pass behind a perfect mirror / a glass slab is the wall's albedo times
+    the mirror's normal-incidence reflectance R0 = ((n−1)² + k²)/((n+1)² + k²), or the
+    slab's transmittance with its internal reflections, (1 − F0)/(1 + F0) with
+    F0 = ((n−1)/(n+1))²; the normal pass is the wall's there (through the mirror the
+    wall behind the camera, facing +y), as OIDN expects."""
+    samples = 8 if front == "mirror" else 256
+    r = pc.render(
+        through_specular_scene(front), width=30, height=30, samples=samples, quality="FINAL", max_bounces=16, seed=2, wavelength_count=16
+    )
+    wall = r.albedo[:, 2:8].reshape(-1, 3)  # seen directly at the sides
+    behind = r.albedo[:, 13:17].reshape(-1, 3)  # the middle: through the mirror or the slab
+    assert np.allclose(wall, wall[0], rtol=1e-4) and wall[0, 0] > 2 * wall[0, 2] > 0, wall[0]
+    if front == "mirror":
+        n, k = 0.2, 3.0
+        expected = ((n - 1) ** 2 + k**2) / ((n + 1) ** 2 + k**2)
+        ratio = behind.mean(axis=0) / wall[0]
+        np.testing.assert_allclose(ratio, expected, rtol=2e-3)
+        # The wall behind the camera faces +y; the mirror and the front wall face −y.
+        assert r.normal[15, 15, 1] > 0.99 and r.normal[15, 4, 1] < -0.99, (r.normal[15, 15], r.normal[15, 4])
+    else:
+        f0 = ((1.5 - 1) / (1.5 + 1)) ** 2
+        expected = (1 - f0) / (1 + f0)
+        ratio = behind.mean(axis=0) / wall[0]
+        # 256 spp × 120 pixels of a Bernoulli (reflected paths escape, adding 0): σ ≈ 0.1 %.
+        np.testing.assert_allclose(ratio, expected, rtol=0.01)
+        assert abs(r.normal[15, 15, 1]) > 0.95

@@ -144,7 +144,14 @@ def test_grazing_camera_rays_at_89_99_degrees(material):
         hit = r.depth > 0
         assert hit.mean() > 0.3, key  # the plane is really hit at grazing angles
         n = r.normal[hit]
-        assert np.allclose(np.abs(n[:, 2]), 1.0, atol=1e-4), key
+        # Perfect glass and mirrors pass the normal pass on to what is seen through them
+        # (docs/denoise.md): here nothing, the rays leave the scene (normal 0).
+        seen = np.linalg.norm(n, axis=1) > 0
+        assert np.allclose(np.abs(n[seen, 2]), 1.0, atol=1e-4), key
+        if material.name in ("glass", "silver"):
+            assert not seen.any(), key
+        else:
+            assert seen.all(), key
 
 
 # --- total internal reflection, camera inside glass, index extremes ----------------------

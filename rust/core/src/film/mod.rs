@@ -9,7 +9,8 @@ use glam::Vec3A;
 /// What one camera sample contributes to its pixel.
 pub struct PixelSample {
     pub radiance: SampledSpectrum,
-    /// First-hit auxiliary values (zero where the ray escaped).
+    /// Auxiliary values: depth at the first hit, normal and albedo at the first surface
+    /// that is not a perfect mirror or glass (zero where the ray escaped).
     pub depth: f32,
     pub normal: Vec3A,
     pub albedo: SampledSpectrum,

@@ -288,6 +288,9 @@ impl Throughput for Hero {
         }
         r
     }
+    fn weigh_grid(&self, s: &mut SampledSpectrum) {
+        s.scale(self.values.iter().sum::<f32>() / HERO_LANES as f32);
+    }
     fn scaled(&self, len: usize, s: f32) -> SampledSpectrum {
         let mut r = SampledSpectrum::zeros(len);
         for j in 0..HERO_LANES {

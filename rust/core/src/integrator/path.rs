@@ -81,7 +81,13 @@ impl CameraMis for PowerHeuristic {
     }
 }
 
-/// The first-hit passes of a pixel sample.
+/// The auxiliary passes of a pixel sample: depth at the first hit; normal and albedo at
+/// the first surface that is not a perfect mirror or glass, seen through those with the
+/// albedo weighted by the path's throughput (their Fresnel reflectance/transmittance),
+/// as Open Image Denoise expects and Cycles writes its denoising passes
+/// (intern/cycles/kernel/film/denoising_passes.h). A chain of such surfaces that leaves
+/// the scene gives zero, as an escaped camera ray; one that ends otherwise (bounce limit,
+/// a dispersive surface's single-wavelength continuation) keeps the first hit's values.
 pub struct FirstHit<'a> {
     pub depth: &'a mut f32,
     pub normal: &'a mut Vec3A,
@@ -97,6 +103,11 @@ pub struct CameraPath<'a, T, M> {
 
 impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, T, M> {
     fn escaped(&mut self, scene: &Scene, st: &PathState, beta: &T, scratch: &mut Scratch) {
+        if let Some(out) = self.first_hit.take() {
+            // Out through mirrors and glass: nothing seen, as a ray that escapes at once.
+            out.albedo.fill(0.0);
+            *out.normal = Vec3A::ZERO;
+        }
         if let Some(env) = &scene.environment {
             let w = self.mis.escape(scene, st, env.light);
             let l = env.radiance_along(st.ray.direction, &mut scratch.le);
@@ -113,15 +124,26 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, T, M> {
         beta: &T,
         _scratch: &mut Scratch,
     ) {
-        if st.depth == 0 {
-            if let Some(out) = self.first_hit.take() {
+        if let Some(out) = &mut self.first_hit {
+            if st.depth == 0 {
                 *out.depth = scene.camera.depth(v.si.p);
+            }
+            // The first hit, and after perfect mirrors and glass the first other surface.
+            if st.depth == 0 || v.flags.smooth || !v.flags.specular {
                 *out.normal = v.si.ns;
                 // The albedo pass is grid-wide whatever the path carries.
                 let single = ctx.single_wavelength.take();
                 v.material.bsdf.albedo(ctx, out.albedo);
                 ctx.single_wavelength = single;
+                if st.depth > 0 {
+                    beta.weigh_grid(out.albedo);
+                }
             }
+            if v.flags.smooth || !v.flags.specular {
+                self.first_hit = None;
+            }
+        }
+        if st.depth == 0 {
             self.mis.first_hit(scene, v, st);
         }
         if let Some(emission) = &v.material.emission {

@@ -46,6 +46,10 @@ pub trait Throughput: Clone {
     /// The path carried on at grid wavelength `i` alone, or None if it carries one
     /// wavelength already.
     fn collapse(&self, i: usize) -> Option<SingleWavelength>;
+    /// Multiplies a grid-wide spectrum (the albedo pass seen through mirrors and glass)
+    /// by this throughput: per wavelength when it carries the whole grid, else by the
+    /// mean of what it carries (grey).
+    fn weigh_grid(&self, s: &mut SampledSpectrum);
     /// Hero wavelengths: the grid wavelength that carries on alone at a dispersive
     /// surface, where the others end (`hero.rs`). None: the BSDF collapses the path
     /// there (eq. 9), or it carries one wavelength already.
@@ -108,6 +112,9 @@ impl Throughput for SampledSpectrum {
     }
     fn collapse(&self, i: usize) -> Option<SingleWavelength> {
         Some(SingleWavelength { index: i, value: self.get(i) })
+    }
+    fn weigh_grid(&self, s: &mut SampledSpectrum) {
+        s.mul_assign(self);
     }
 }
 
@@ -175,5 +182,8 @@ impl Throughput for SingleWavelength {
     }
     fn collapse(&self, _i: usize) -> Option<SingleWavelength> {
         None
+    }
+    fn weigh_grid(&self, s: &mut SampledSpectrum) {
+        s.scale(self.value);
     }
 }
