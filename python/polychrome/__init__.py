@@ -16,7 +16,7 @@ from .render import RenderResult, RenderSettings, render
 from .scene import Camera, Diffuse, Emitter, Material, PointLight, Scene, look_at
 from . import denoise, ior
 from .scene import Conductor, Dielectric, Glossy, SpotLight, SunLight
-from .scene import Add, Fresnel, LayerWeight, Mix, Principled
+from .scene import Add, Fresnel, LayerWeight, Mix, NodeMaterial, Principled
 from .texture import Texture
 from .job import Preview, RenderJob
 
@@ -30,6 +30,7 @@ __all__ = [
     "Add",
     "Fresnel",
     "LayerWeight",
+    "NodeMaterial",
     "SpotLight",
     "SunLight",
     "denoise",

@@ -572,6 +572,26 @@ class Add(Material):
         return {"type": "add", "a": self.a.bsdf_dict(), "b": self.b.bsdf_dict()}
 
 
+class NodeMaterial(Material):
+    """A material given as a node graph in Blender's vocabulary (docs/shading.md):
+    ``nodes`` is the flat list of ``{"type", "name", "props", "inputs"}`` dicts and
+    ``output`` names the closure, e.g. ``{"surface": [3, "BSDF"]}``. A
+    :class:`~polychrome.Texture` given as a node's ``props["texture"]`` is added to the
+    scene's textures. The core compiles and checks the graph."""
+
+    def __init__(self, name: str, nodes: Sequence[dict[str, Any]], output: dict[str, Any]):
+        if not isinstance(nodes, (list, tuple)) or not all(isinstance(n, dict) for n in nodes):
+            raise TypeError(f"material '{name}': nodes must be a list of dicts")
+        if not isinstance(output, dict):
+            raise TypeError(f"material '{name}': output must be a dict such as {{'surface': [0, 'BSDF']}}")
+        self.name = name
+        self.nodes = [dict(n) for n in nodes]
+        self.output = dict(output)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"name": self.name, "nodes": self.nodes, "output": self.output}
+
+
 class Scene:
     """A scene description: camera, materials, meshes, instances, lights, world."""
 
@@ -844,4 +864,4 @@ class Scene:
 
 __all__ = ["Camera", "Material", "Diffuse", "Emitter", "PointLight", "Scene", "Texture", "look_at", "spectra"]
 __all__ += ["Dielectric", "Conductor", "Glossy", "SpotLight", "SunLight"]
-__all__ += ["Principled", "Mix", "Add", "Fresnel", "LayerWeight"]
+__all__ += ["Principled", "Mix", "Add", "Fresnel", "LayerWeight", "NodeMaterial"]

@@ -21,6 +21,7 @@ pub mod procedural;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+pub mod shading;
 pub mod spectrum;
 
 pub use error::{Error, Result};

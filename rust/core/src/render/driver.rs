@@ -311,7 +311,7 @@ impl<'a> Driver<'a> {
     /// What this render leaves out of the scene (motion blur with light paths).
     fn warnings(&self) -> Vec<String> {
         let scene = self.scene;
-        let mut out = Vec::new();
+        let mut out = scene.warnings.clone();
         if self.integrator.light_paths && !self.integrator.camera_paths {
             for name in &scene.moving_emitters {
                 out.push(format!(

@@ -64,8 +64,10 @@ fn three() -> u32 {
     3
 }
 
+/// A material: a fixed `bsdf`/`emission` description (docs/materials.md), or a node
+/// graph `nodes` + `output` (docs/shading.md), which is held as [`BsdfDesc::Graph`].
 #[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(try_from = "RawMaterialDesc")]
 pub struct MaterialDesc {
     pub name: String,
     #[serde(default)]
@@ -73,6 +75,45 @@ pub struct MaterialDesc {
     /// Emitted radiance (both faces); makes every triangle using it an area light.
     #[serde(default)]
     pub emission: Option<SpectrumDesc>,
+}
+
+/// A material as written, before checking that it is either fixed or a graph.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMaterialDesc {
+    name: String,
+    #[serde(default)]
+    bsdf: Option<BsdfDesc>,
+    #[serde(default)]
+    emission: Option<SpectrumDesc>,
+    #[serde(default)]
+    nodes: Option<Vec<crate::shading::NodeDesc>>,
+    #[serde(default)]
+    output: Option<crate::shading::OutputDesc>,
+}
+
+impl TryFrom<RawMaterialDesc> for MaterialDesc {
+    type Error = String;
+    fn try_from(r: RawMaterialDesc) -> Result<Self, String> {
+        let name = r.name;
+        match (r.nodes, r.output) {
+            (None, None) => Ok(Self { name, bsdf: r.bsdf.unwrap_or_default(), emission: r.emission }),
+            (Some(nodes), output) => {
+                if r.bsdf.is_some() || r.emission.is_some() {
+                    return Err(format!(
+                        "material '{name}': give either a node graph (nodes, output) or bsdf/emission, not both"
+                    ));
+                }
+                let output = output.ok_or_else(|| format!("material '{name}': nodes without an output"))?;
+                Ok(Self {
+                    name,
+                    bsdf: BsdfDesc::Graph(Box::new(crate::shading::GraphDesc { nodes, output })),
+                    emission: None,
+                })
+            }
+            (None, Some(_)) => Err(format!("material '{name}': an output without nodes")),
+        }
+    }
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -150,6 +191,23 @@ pub enum BsdfDesc {
         a: Box<BsdfDesc>,
         b: Box<BsdfDesc>,
     },
+    /// Blender's Diffuse BSDF with Roughness > 0 (energy-preserving Oren–Nayar).
+    RoughDiffuse {
+        reflectance: SpectrumDesc,
+        roughness: f32,
+    },
+    /// Blender's Translucent BSDF: Lambertian transmission tinted by `color`.
+    Translucent {
+        color: SpectrumDesc,
+    },
+    /// Blender's Sheen BSDF (microfiber LTC).
+    Sheen {
+        color: SpectrumDesc,
+        #[serde(default = "half")]
+        roughness: f32,
+    },
+    /// A node graph (docs/shading.md); written as the material's `nodes` and `output`.
+    Graph(Box<crate::shading::GraphDesc>),
 }
 
 /// A view-dependent Mix Shader factor, as Blender's nodes compute it.

@@ -6,7 +6,9 @@ use super::{BsdfDesc, BuildUplift, MixFactorDesc};
 use crate::color::uplift::Uplift;
 use crate::material::mix::MixFactor;
 use crate::material::principled::{Principled, PrincipledParams};
-use crate::material::{Black, Bsdf, Diffuse, IndexOfRefraction, MixBsdf, SpectralParam, Texture, ThinFilm};
+use crate::material::{
+    Black, Bsdf, Diffuse, IndexOfRefraction, MixBsdf, OrenNayar, Sheen, SpectralParam, Texture, ThinFilm, Translucent,
+};
 use crate::spectrum::named::{SpectrumKind, SpectrumRole};
 use crate::spectrum::{SampledSpectrum, SpectrumDesc, WavelengthGrid};
 use crate::{Error, Result};
@@ -196,7 +198,17 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
         BsdfDesc::Add { a, b: second } => {
             Box::new(MixBsdf::add(build_at(b, material, a, depth + 1)?, build_at(b, material, second, depth + 1)?))
         }
-        #[allow(unreachable_patterns)]
-        _ => return Err(Error::object("material", material, "this BSDF cannot be used inside a mix or add shader")),
+        BsdfDesc::RoughDiffuse { reflectance, roughness } => Box::new(OrenNayar::new(
+            b.reflectance(reflectance, material, "reflectance")?,
+            unit_weight(material, "roughness", *roughness)?,
+        )),
+        BsdfDesc::Translucent { color } => Box::new(Translucent { color: b.reflectance(color, material, "color")? }),
+        BsdfDesc::Sheen { color, roughness } => Box::new(Sheen {
+            color: b.reflectance(color, material, "color")?,
+            roughness: unit_weight(material, "roughness", *roughness)?,
+        }),
+        BsdfDesc::Graph(_) => {
+            return Err(Error::object("material", material, "a node graph cannot be nested inside a mix or add shader"))
+        }
     })
 }

@@ -111,6 +111,9 @@ pub struct Scene {
     /// Instances whose emissive triangles move over the shutter: they are not sampled
     /// as lights (next-event estimation, light paths), only found by paths that hit them.
     pub moving_emitters: Vec<String>,
+    /// What the scene's description asked for and the build left out or approximated
+    /// (unsupported nodes and node options), one line each.
+    pub warnings: Vec<String>,
 }
 
 /// The RGB → spectrum map while building: where the grid has none, the first RGB
@@ -201,11 +204,22 @@ impl Scene {
 
         // Materials.
         let mut materials = Vec::with_capacity(desc.materials.len().max(1));
+        let mut warnings = Vec::new();
         for m in &desc.materials {
             let spectrum = |d, role, what| -> Result<SampledSpectrum> {
                 Ok(SampledSpectrum::from_slice(&rgb.evaluate(d, &grid, role, "material", &m.name, what)?))
             };
-            let bsdf: Box<dyn Bsdf> = match &m.bsdf {
+            // A node graph that folds to constants is built as the fixed material it equals.
+            let compiled;
+            let (bsdf_desc, emission_desc) = match &m.bsdf {
+                BsdfDesc::Graph(g) => {
+                    compiled = crate::shading::compile_material(&m.name, g, &textures)?;
+                    warnings.extend(compiled.warnings.iter().cloned());
+                    (&compiled.surface.bsdf, compiled.surface.emission.as_ref())
+                }
+                d => (d, m.emission.as_ref()),
+            };
+            let bsdf: Box<dyn Bsdf> = match bsdf_desc {
                 BsdfDesc::Diffuse { reflectance } if matches!(reflectance.kind, SpectrumKind::Texture { .. }) => {
                     let SpectrumKind::Texture { texture: t } = reflectance.kind else { unreachable!() };
                     let texture = textures.get(t).ok_or_else(|| {
@@ -253,12 +267,18 @@ impl Scene {
                     spectrum(reflectance, SpectrumRole::Reflectance, "reflectance")?,
                     *roughness,
                 )?,
-                BsdfDesc::Principled { .. } | BsdfDesc::Mix { .. } | BsdfDesc::Add { .. } => {
+                BsdfDesc::Principled { .. }
+                | BsdfDesc::Mix { .. }
+                | BsdfDesc::Add { .. }
+                | BsdfDesc::RoughDiffuse { .. }
+                | BsdfDesc::Translucent { .. }
+                | BsdfDesc::Sheen { .. }
+                | BsdfDesc::Graph(_) => {
                     let b = layered::BsdfBuild { grid: &grid, rgb: &rgb, textures: &textures, uplift: uplift.as_ref() };
-                    layered::build_bsdf(&b, &m.name, &m.bsdf)?
+                    layered::build_bsdf(&b, &m.name, bsdf_desc)?
                 }
             };
-            let emission = match &m.emission {
+            let emission = match emission_desc {
                 Some(e) => Some(spectrum(e, SpectrumRole::Illuminant, "emission")?).filter(|s| !s.is_black()),
                 None => None,
             };
@@ -532,6 +552,7 @@ impl Scene {
             bounds_center,
             bounds_radius,
             moving_emitters,
+            warnings,
         })
     }
 

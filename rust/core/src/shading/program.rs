@@ -1,0 +1,218 @@
+//! A material's compiled program: a flat list of typed ops over one register file (in
+//! the spirit of Cycles' SVM), evaluated once per hit from a [`ShadingPoint`].
+//!
+//! Every register holds a `Vec3`; a float register uses `.x`. Which registers are
+//! floats, colours or vectors is fixed by the compiler (`compile.rs`), so no op ever
+//! converts at run time except through an explicit [`Kernel::Convert`].
+
+use super::{color, input, math, texture, vector};
+use glam::{Mat3, Vec2, Vec3};
+
+pub type Reg = u32;
+
+/// The per-hit inputs a program reads. World-space unless named otherwise.
+#[derive(Clone, Copy, Debug)]
+pub struct ShadingPoint<'a> {
+    pub position: Vec3,
+    /// Object-space position (Texture Coordinate › Object).
+    pub object_position: Vec3,
+    /// Generated coordinates: the object-space position in the mesh's bounding box, 0..1.
+    pub generated: Vec3,
+    /// Shading normal, facing the incoming ray's side as Cycles' `sd->N`.
+    pub normal: Vec3,
+    /// Geometric normal (Geometry › True Normal).
+    pub true_normal: Vec3,
+    /// Unit tangent (MikkTSpace when the mesh has one) and its bitangent sign.
+    pub tangent: Vec3,
+    pub tangent_sign: f32,
+    /// Unit vector from the point towards the ray's origin (Cycles' `sd->I`).
+    pub incoming: Vec3,
+    pub backfacing: bool,
+    /// Default UV map.
+    pub uv: Vec2,
+    /// Barycentrics (Geometry › Parametric).
+    pub parametric: Vec2,
+    /// Camera-space position and window coordinates (Texture Coordinate).
+    pub camera: Vec3,
+    pub window: Vec3,
+    /// Object → world for normals (Normal Map object space, Texture Coordinate › Normal).
+    pub normal_to_world: Mat3,
+    pub object_location: Vec3,
+    pub object_color: [f32; 4],
+    pub object_index: f32,
+    pub material_index: f32,
+    pub object_random: f32,
+    /// The values of the program's attribute slots (`Program::attributes`) at this hit,
+    /// RGBA (UV maps in .xy, scalars in .x).
+    pub attributes: &'a [[f32; 4]],
+}
+
+impl Default for ShadingPoint<'_> {
+    fn default() -> Self {
+        Self {
+            position: Vec3::ZERO,
+            object_position: Vec3::ZERO,
+            generated: Vec3::ZERO,
+            normal: Vec3::Z,
+            true_normal: Vec3::Z,
+            tangent: Vec3::X,
+            tangent_sign: 1.0,
+            incoming: Vec3::Z,
+            backfacing: false,
+            uv: Vec2::ZERO,
+            parametric: Vec2::ZERO,
+            camera: Vec3::ZERO,
+            window: Vec3::ZERO,
+            normal_to_world: Mat3::IDENTITY,
+            object_location: Vec3::ZERO,
+            object_color: [1.0; 4],
+            object_index: 0.0,
+            material_index: 0.0,
+            object_random: 0.0,
+            attributes: &[],
+        }
+    }
+}
+
+/// Which per-vertex data a program reads (slots of `ShadingPoint::attributes`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum AttributeRequest {
+    /// A named UV map (UV Map, Normal Map tangent space).
+    Uv(String),
+    /// A colour attribute (Color Attribute node; "" is the active one).
+    Color(String),
+    /// A generic attribute (Attribute node).
+    Generic(String),
+}
+
+/// Value conversions Blender applies on links between sockets of different types.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Convert {
+    /// Colour → float: Rec.709 luminance.
+    ColorToFloat,
+    /// Vector → float: the mean of the components.
+    VectorToFloat,
+    /// Float → colour or vector: grey.
+    FloatToVec,
+}
+
+/// One node's computation.
+#[derive(Clone, Debug)]
+pub enum Kernel {
+    Convert(Convert),
+    Math(math::Math),
+    VectorMath(math::VectorMath),
+    Clamp(math::Clamp),
+    MapRange(math::MapRange),
+    Mix(color::Mix),
+    Color(color::ColorOp),
+    Ramp(Box<color::ColorRamp>),
+    Curves(Box<color::Curves>),
+    Input(input::Input),
+    Vector(vector::VectorOp),
+    Image(Box<texture::Image>),
+    Procedural(Box<texture::ProceduralNode>),
+}
+
+impl Kernel {
+    /// Reads the shading point (cannot be folded even with constant inputs).
+    pub fn varying(&self) -> bool {
+        match self {
+            Kernel::Input(_) => true,
+            Kernel::Vector(v) => v.varying(),
+            _ => false,
+        }
+    }
+
+    pub fn eval(&self, i: &[Vec3], o: &mut [Vec3], sp: &ShadingPoint) {
+        match self {
+            Kernel::Convert(c) => {
+                o[0] = match c {
+                    Convert::ColorToFloat => Vec3::new(color::gray(i[0]), 0.0, 0.0),
+                    Convert::VectorToFloat => Vec3::new((i[0].x + i[0].y + i[0].z) / 3.0, 0.0, 0.0),
+                    Convert::FloatToVec => Vec3::splat(i[0].x),
+                }
+            }
+            Kernel::Math(k) => k.eval(i, o),
+            Kernel::VectorMath(k) => k.eval(i, o),
+            Kernel::Clamp(k) => k.eval(i, o),
+            Kernel::MapRange(k) => k.eval(i, o),
+            Kernel::Mix(k) => k.eval(i, o),
+            Kernel::Color(k) => k.eval(i, o),
+            Kernel::Ramp(k) => k.eval(i, o),
+            Kernel::Curves(k) => k.eval(i, o),
+            Kernel::Input(k) => k.eval(i, o, sp),
+            Kernel::Vector(k) => k.eval(i, o, sp),
+            Kernel::Image(k) => k.eval(i, o),
+            Kernel::Procedural(k) => k.eval(i, o),
+        }
+    }
+}
+
+/// Most inputs and outputs of any node kernel (Map Range has 12 inputs).
+pub const MAX_SOCKETS: usize = 16;
+
+/// A kernel with its input and output registers (`NONE` for outputs nobody reads).
+#[derive(Clone, Debug)]
+pub struct Instr {
+    pub kernel: Kernel,
+    pub ins: Vec<Reg>,
+    pub outs: Vec<Reg>,
+}
+
+pub const NONE: Reg = Reg::MAX;
+
+/// Runs `kernel` on `ins`, replacing any non-finite result component by 0 (the NaN rule
+/// of docs/shading.md).
+pub fn run_kernel(kernel: &Kernel, ins: &[Vec3], n_out: usize, sp: &ShadingPoint) -> [Vec3; MAX_SOCKETS] {
+    let mut o = [Vec3::ZERO; MAX_SOCKETS];
+    kernel.eval(ins, &mut o[..n_out.max(1)], sp);
+    for v in &mut o[..n_out] {
+        *v = Vec3::new(finite(v.x), finite(v.y), finite(v.z));
+    }
+    o
+}
+
+#[inline]
+fn finite(x: f32) -> f32 {
+    if x.is_finite() {
+        x
+    } else {
+        0.0
+    }
+}
+
+/// The compiled program: the initial register file (constants in place) and the ops.
+#[derive(Clone, Debug, Default)]
+pub struct Program {
+    pub init: Vec<Vec3>,
+    pub ops: Vec<Instr>,
+    /// The mesh data the program reads, by slot.
+    pub attributes: Vec<AttributeRequest>,
+}
+
+impl Program {
+    /// Nothing to run: every parameter is a constant.
+    pub fn is_constant(&self) -> bool {
+        self.ops.is_empty()
+    }
+
+    /// Runs the program at `sp` into `regs` (resized to the register file; reuse it
+    /// between hits so no allocation happens per hit).
+    pub fn run(&self, sp: &ShadingPoint, regs: &mut Vec<Vec3>) {
+        regs.clear();
+        regs.extend_from_slice(&self.init);
+        let mut ins = [Vec3::ZERO; MAX_SOCKETS];
+        for op in &self.ops {
+            for (k, &r) in op.ins.iter().enumerate() {
+                ins[k] = regs[r as usize];
+            }
+            let o = run_kernel(&op.kernel, &ins[..op.ins.len()], op.outs.len(), sp);
+            for (k, &r) in op.outs.iter().enumerate() {
+                if r != NONE {
+                    regs[r as usize] = o[k];
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,241 @@
+//! Graph-level tests: folding, lowering, errors, evaluation at a shading point.
+
+use super::compile::{Compiler, Value};
+use super::*;
+use crate::scene::BsdfDesc;
+use glam::{Vec2, Vec3};
+use serde_json::json;
+
+fn graph(v: serde_json::Value) -> GraphDesc {
+    serde_json::from_value(v).unwrap()
+}
+
+fn compile(v: serde_json::Value) -> Result<CompiledMaterial> {
+    compile_material("M", &graph(v), &[])
+}
+
+#[test]
+fn a_constant_graph_folds_to_the_fixed_principled() {
+    let c = compile(json!({
+        "nodes": [
+            {"type": "ShaderNodeValue", "name": "Rough", "props": {"value": 0.2}},
+            {"type": "ShaderNodeMath", "name": "Twice", "props": {"operation": "MULTIPLY"},
+             "inputs": {"Value": {"link": [0, "Value"]}, "Value_001": 2.0}},
+            {"type": "ShaderNodeCombineColor", "name": "C", "inputs": {"Red": 0.5, "Green": {"link": [1, "Value"]}, "Blue": 1.0}},
+            {"type": "ShaderNodeBsdfPrincipled", "name": "P",
+             "inputs": {"Roughness": {"link": [1, "Value"]}, "Base Color": {"link": [2, "Color"]}, "Metallic": 0.25}}
+        ],
+        "output": {"surface": [3, "BSDF"]}
+    }))
+    .unwrap();
+    assert!(c.program.is_constant());
+    let BsdfDesc::Principled { roughness, metallic, base_color, ior, .. } = &c.surface.bsdf else { panic!() };
+    assert!((roughness - 0.4).abs() < 1e-6 && *metallic == 0.25);
+    assert_eq!(base_color.kind, crate::spectrum::named::SpectrumKind::Rgb { rgb: [0.5, 0.4, 1.0] });
+    assert!(matches!(ior, crate::material::IorDesc::Constant { ior } if (*ior - 1.5).abs() < 1e-6));
+    assert!(c.surface.emission.is_none());
+}
+
+#[test]
+fn mix_and_add_shaders_lower_with_their_emission_weighted() {
+    let c = compile(json!({
+        "nodes": [
+            {"type": "ShaderNodeEmission", "name": "E", "inputs": {"Color": [1.0, 0.5, 0.0, 1.0], "Strength": 4.0}},
+            {"type": "ShaderNodeBsdfDiffuse", "name": "D"},
+            {"type": "ShaderNodeMixShader", "name": "Mix", "inputs": {"Fac": 0.25,
+                "Shader": {"link": [0, "Emission"]}, "Shader_001": {"link": [1, "BSDF"]}}}
+        ],
+        "output": {"surface": [2, "Shader"]}
+    }))
+    .unwrap();
+    let BsdfDesc::Mix { factor, a, b, .. } = &c.surface.bsdf else { panic!() };
+    assert_eq!(*factor, 0.25);
+    assert!(matches!(**a, BsdfDesc::None) && matches!(**b, BsdfDesc::Diffuse { .. }));
+    let e = c.surface.emission.unwrap();
+    assert_eq!(e.kind, crate::spectrum::named::SpectrumKind::Rgb { rgb: [3.0, 1.5, 0.0] });
+}
+
+#[test]
+fn a_fresnel_on_the_mix_factor_becomes_the_view_dependent_factor() {
+    let c = compile(json!({
+        "nodes": [
+            {"type": "ShaderNodeFresnel", "name": "F", "inputs": {"IOR": 1.33}},
+            {"type": "ShaderNodeBsdfDiffuse", "name": "D"},
+            {"type": "ShaderNodeBsdfAnisotropic", "name": "G", "inputs": {"Roughness": 0.1}},
+            {"type": "ShaderNodeMixShader", "name": "Mix", "inputs": {"Fac": {"link": [0, "Fac"]},
+                "Shader": {"link": [1, "BSDF"]}, "Shader_001": {"link": [2, "BSDF"]}}}
+        ],
+        "output": {"surface": [3, "Shader"]}
+    }))
+    .unwrap();
+    let BsdfDesc::Mix { factor_from: Some(crate::scene::MixFactorDesc::Fresnel { ior }), .. } = c.surface.bsdf else {
+        panic!()
+    };
+    assert!((ior - 1.33).abs() < 1e-6);
+}
+
+#[test]
+fn cycles_are_errors_naming_the_nodes() {
+    let e = compile(json!({
+        "nodes": [
+            {"type": "ShaderNodeMath", "name": "A", "inputs": {"Value": {"link": [1, "Value"]}}},
+            {"type": "ShaderNodeMath", "name": "B", "inputs": {"Value": {"link": [0, "Value"]}}},
+            {"type": "ShaderNodeBsdfDiffuse", "name": "D", "inputs": {"Roughness": {"link": [0, "Value"]}}}
+        ],
+        "output": {"surface": [2, "BSDF"]}
+    }))
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(e.contains("cycle") && e.contains("'A'") && e.contains("'B'") && e.contains("'M'"), "{e}");
+}
+
+#[test]
+fn unknown_sockets_outputs_and_nodes_are_reported() {
+    let diffuse_reading = |link: serde_json::Value, extra: serde_json::Value| {
+        json!({
+            "nodes": [extra, {"type": "ShaderNodeBsdfDiffuse", "name": "D", "inputs": {"Roughness": link}}],
+            "output": {"surface": [1, "BSDF"]}
+        })
+    };
+    let e = compile(diffuse_reading(json!({"link": [0, "Nope"]}), json!({"type": "ShaderNodeMath", "name": "A"})))
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("no output 'Nope'") && e.contains("'A'"), "{e}");
+    let e = compile(diffuse_reading(
+        json!({"link": [0, "Value"]}),
+        json!({"type": "ShaderNodeMath", "name": "A", "inputs": {"Valu": 1.0}}),
+    ))
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(e.contains("unknown input socket 'Valu'") && e.contains("'A'"), "{e}");
+    let e = compile(diffuse_reading(json!({"link": [7, "Value"]}), json!({"type": "ShaderNodeMath", "name": "A"})))
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("node 7") && e.contains("'D'"), "{e}");
+    // An unknown node reads 0 and warns once, naming material and node.
+    let c = compile(diffuse_reading(json!({"link": [0, "Whatever"]}), json!({"type": "ShaderNodeFancy", "name": "F"})))
+        .unwrap();
+    assert_eq!(c.warnings.len(), 1);
+    assert!(c.warnings[0].contains("'M'") && c.warnings[0].contains("'F'"), "{:?}", c.warnings);
+    assert!(matches!(c.surface.bsdf, BsdfDesc::Diffuse { .. }));
+}
+
+#[test]
+fn nan_constants_are_errors_and_non_finite_results_become_zero() {
+    let mut g = graph(json!({
+        "nodes": [{"type": "ShaderNodeBsdfDiffuse", "name": "D"}],
+        "output": {"surface": [0, "BSDF"]}
+    }));
+    g.nodes[0].inputs.insert("Roughness".into(), InputDesc::Number(f32::NAN));
+    let e = compile_material("M", &g, &[]).err().unwrap().to_string();
+    assert!(e.contains("'M'") && e.contains("'D'") && e.contains("Roughness"), "{e}");
+    // exp(1000) overflows: the folded result is 0, not infinity.
+    let c = compile(json!({
+        "nodes": [
+            {"type": "ShaderNodeMath", "name": "X", "props": {"operation": "EXPONENT"}, "inputs": {"Value": 1000.0}},
+            {"type": "ShaderNodeEmission", "name": "E", "inputs": {"Strength": {"link": [0, "Value"]}}}
+        ],
+        "output": {"surface": [1, "Emission"]}
+    }))
+    .unwrap();
+    assert!(c.surface.emission.is_none());
+}
+
+#[test]
+fn varying_graphs_are_explicit_errors_until_per_hit_evaluation() {
+    let e = compile(json!({
+        "nodes": [
+            {"type": "ShaderNodeTexCoord", "name": "T"},
+            {"type": "ShaderNodeSeparateXYZ", "name": "S", "inputs": {"Vector": {"link": [0, "UV"]}}},
+            {"type": "ShaderNodeBsdfPrincipled", "name": "P", "inputs": {"Roughness": {"link": [1, "X"]}}}
+        ],
+        "output": {"surface": [2, "BSDF"]}
+    }))
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(e.contains("per-hit") && e.contains("Roughness") && e.contains("'P'"), "{e}");
+}
+
+/// Compiles the value at `link` of the graph and evaluates it at `sp`.
+fn evaluate(v: serde_json::Value, sp: &ShadingPoint) -> Vec3 {
+    let g = graph(v);
+    let mut c = Compiler::new("M", &g.nodes, &[]);
+    let last = g.nodes.len() - 1;
+    let Value::Reg(r) = c.input(last, "Color").unwrap() else { panic!() };
+    let mut regs = Vec::new();
+    c.program.run(sp, &mut regs);
+    regs[r as usize]
+}
+
+#[test]
+fn a_program_evaluated_at_a_hit_equals_the_closed_form() {
+    // Color = (u·2 + 0.1, sin v, u mod 0.3) read through conversions.
+    let g = json!({
+        "nodes": [
+            {"type": "ShaderNodeUVMap", "name": "UV"},
+            {"type": "ShaderNodeSeparateXYZ", "name": "S", "inputs": {"Vector": {"link": [0, "UV"]}}},
+            {"type": "ShaderNodeMath", "name": "A", "props": {"operation": "MULTIPLY_ADD"},
+             "inputs": {"Value": {"link": [1, "X"]}, "Value_001": 2.0, "Value_002": 0.1}},
+            {"type": "ShaderNodeMath", "name": "B", "props": {"operation": "SINE"}, "inputs": {"Value": {"link": [1, "Y"]}}},
+            {"type": "ShaderNodeMath", "name": "C", "props": {"operation": "MODULO"},
+             "inputs": {"Value": {"link": [1, "X"]}, "Value_001": 0.3}},
+            {"type": "ShaderNodeMath", "name": "Unused", "props": {"operation": "COSINE"}, "inputs": {"Value": {"link": [1, "Z"]}}},
+            {"type": "ShaderNodeCombineColor", "name": "Comb",
+             "inputs": {"Red": {"link": [2, "Value"]}, "Green": {"link": [3, "Value"]}, "Blue": {"link": [4, "Value"]}}},
+            {"type": "ShaderNodeBsdfDiffuse", "name": "D", "inputs": {"Color": {"link": [6, "Color"]}}}
+        ],
+        "output": {"surface": [7, "BSDF"]}
+    });
+    for (u, v) in [(0.1f32, 0.7f32), (0.45, 0.2), (0.9, 0.95)] {
+        let sp = ShadingPoint { uv: Vec2::new(u, v), ..Default::default() };
+        let c = evaluate(g.clone(), &sp);
+        let want = Vec3::new(u * 2.0 + 0.1, v.sin(), u % 0.3);
+        assert!((c - want).abs().max_element() < 1e-6, "{c} vs {want}");
+    }
+    // Dead-node elimination: the COSINE nobody reads is not in the program.
+    let gd = graph(g);
+    let mut c = Compiler::new("M", &gd.nodes, &[]);
+    c.input(7, "Color").unwrap();
+    assert!(c
+        .program
+        .ops
+        .iter()
+        .all(|op| !matches!(&op.kernel, program::Kernel::Math(m) if m.op == math::MathOp::Cosine)));
+    assert_eq!(c.program.ops.len(), 6, "{:?}", c.program.ops.iter().map(|o| &o.kernel).collect::<Vec<_>>());
+}
+
+#[test]
+fn colour_to_float_links_use_luminance_and_float_to_colour_is_grey() {
+    let sp = ShadingPoint::default();
+    let c = evaluate(
+        json!({"nodes": [
+            {"type": "ShaderNodeRGB", "name": "RGB", "props": {"color": [1.0, 0.0, 0.0, 1.0]}},
+            {"type": "ShaderNodeMath", "name": "A", "props": {"operation": "ADD"},
+             "inputs": {"Value": {"link": [0, "Color"]}, "Value_001": 0.0}},
+            {"type": "ShaderNodeBsdfDiffuse", "name": "D", "inputs": {"Color": {"link": [1, "Value"]}}}
+        ], "output": {"surface": [2, "BSDF"]}}),
+        &sp,
+    );
+    assert!((c - Vec3::splat(0.2126)).abs().max_element() < 1e-6, "{c}");
+}
+
+#[test]
+fn procedural_nodes_evaluate_through_crate_procedural() {
+    let sp = ShadingPoint { generated: Vec3::new(0.3, 0.6, 0.1), ..Default::default() };
+    let c = evaluate(
+        json!({"nodes": [
+            {"type": "ShaderNodeTexChecker", "name": "K", "inputs": {"Scale": 2.0, "Color1": [1.0, 0.0, 0.0, 1.0]}},
+            {"type": "ShaderNodeBsdfDiffuse", "name": "D", "inputs": {"Color": {"link": [0, "Color"]}}}
+        ], "output": {"surface": [1, "BSDF"]}}),
+        &sp,
+    );
+    let want = crate::procedural::CheckerTexture { scale: 2.0, color1: Vec3::new(1.0, 0.0, 0.0), ..Default::default() }
+        .evaluate(sp.generated)
+        .color;
+    assert_eq!(c, want);
+}
