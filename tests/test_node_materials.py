@@ -32,7 +32,12 @@ def test_constant_principled_graph_renders_as_the_fixed_principled():
     the graph folds at load and the image equals pc.Principled's, pixel for pixel."""
     nodes = [
         {"type": "ShaderNodeValue", "name": "Rough", "props": {"value": 0.2}},
-        {"type": "ShaderNodeMath", "name": "Twice", "props": {"operation": "MULTIPLY"}, "inputs": {"Value": {"link": [0, "Value"]}, "Value_001": 2.0}},
+        {
+            "type": "ShaderNodeMath",
+            "name": "Twice",
+            "props": {"operation": "MULTIPLY"},
+            "inputs": {"Value": {"link": [0, "Value"]}, "Value_001": 2.0},
+        },
         {"type": "ShaderNodeCombineColor", "name": "Colour", "inputs": {"Red": 0.7, "Green": 0.3, "Blue": 0.1}},
         {
             "type": "ShaderNodeBsdfPrincipled",
@@ -50,7 +55,11 @@ def test_constant_mix_of_emission_and_diffuse_renders_as_the_fixed_mix():
     nodes = [
         {"type": "ShaderNodeEmission", "name": "Glow", "inputs": {"Color": [1.0, 0.5, 0.25, 1.0], "Strength": 2.0}},
         {"type": "ShaderNodeBsdfDiffuse", "name": "Matte", "inputs": {"Color": [0.2, 0.6, 0.4, 1.0]}},
-        {"type": "ShaderNodeMixShader", "name": "Mix", "inputs": {"Fac": 0.75, "Shader": {"link": [0, "Emission"]}, "Shader_001": {"link": [1, "BSDF"]}}},
+        {
+            "type": "ShaderNodeMixShader",
+            "name": "Mix",
+            "inputs": {"Fac": 0.75, "Shader": {"link": [0, "Emission"]}, "Shader_001": {"link": [1, "BSDF"]}},
+        },
     ]
     graph = render(pc.NodeMaterial("Graph", nodes, {"surface": [2, "Shader"]}))
     fixed = render(pc.Mix(pc.Emitter((1.0, 0.5, 0.25), strength=2.0), pc.Diffuse((0.2, 0.6, 0.4)), 0.75, emission=(0.5, 0.25, 0.125)))

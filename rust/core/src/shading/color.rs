@@ -527,7 +527,7 @@ fn table_lookup(table: &[f32], f: f32, extrapolate: bool) -> f32 {
     if n == 1 {
         return table[0];
     }
-    if (f < 0.0 || f > 1.0) && extrapolate {
+    if !(0.0..=1.0).contains(&f) && extrapolate {
         let (t0, dy, f) = if f < 0.0 {
             (table[0], table[0] - table[1], -f)
         } else {
