@@ -32,6 +32,8 @@ def settings_from_scene(props, width, height):
         if spec["from_quality"] and not b["always"] and not props.is_property_set(name):
             continue
         values[name] = getattr(props, name)
+    if values.get("checkpoint"):
+        values["checkpoint"] = bpy.path.abspath(values["checkpoint"])  # '//' is beside the .blend
     return pc.RenderSettings(**values)
 
 
@@ -39,8 +41,11 @@ def viewport_settings(props, width=1, height=1):
     """Settings of the interactive viewport render: the scene's, with the viewport's
     sample count, no time limit and no spectral passes."""
     settings = settings_from_scene(props, width, height)
-    # The viewport renders on this machine (a cluster round trip per redraw is no help).
-    return dataclasses.replace(settings, samples=int(props.viewport_samples), time_limit=0.0, spectral_output=False, scheduler="")
+    # The viewport renders on this machine (a cluster round trip per redraw is no help),
+    # and never into the final render's checkpoint.
+    return dataclasses.replace(
+        settings, samples=int(props.viewport_samples), time_limit=0.0, spectral_output=False, scheduler="", checkpoint="", resume=False
+    )
 
 
 def material_preview_settings(props, width, height):
@@ -52,6 +57,8 @@ def material_preview_settings(props, width, height):
         time_limit=viewport.MATERIAL_PREVIEW_TIME_LIMIT,
         spectral_output=False,
         scheduler="",
+        checkpoint="",
+        resume=False,
     )
 
 
