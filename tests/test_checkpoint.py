@@ -216,3 +216,30 @@ def test_ctrl_c_on_the_cli_then_resume_gives_the_uninterrupted_image(tmp_path):
     plain = [sys.executable, "-m", "polychrome.cli", "render", str(stage), "-o", str(reference), "--quiet", *flags]
     subprocess.run(plain, check=True, capture_output=True, timeout=240)
     np.testing.assert_array_equal(imageio.read_image(out), imageio.read_image(reference))
+
+
+def test_frames_resume_skips_the_frames_written_whole(tmp_path, capsys):
+    """`--frames 1-3 --resume` after frame 1 was written whole and frame 2 only partially
+    (marked partial in its metadata): frames 2 and 3 are rendered, frame 1 is left as is."""
+    import os
+
+    from polychrome import cli, imageio
+
+    from test_distributed import animated_stage
+
+    stage = tmp_path / "anim.usda"
+    animated_stage(stage)
+    flags = ["--samples", "4", "--quality", "FINAL", "--wavelengths", "8", "--seed", "3", "--threads", "1", "--quiet"]
+    out = tmp_path / "shot_#.exr"
+    assert cli.main(["render", str(stage), "-o", str(out), "--frames", "1-2", *flags]) == 0
+    partial = imageio.read_image(tmp_path / "shot_2.exr")
+    imageio.write_exr(tmp_path / "shot_2.exr", partial, metadata={"polychrome:partial": "1"})
+    os.utime(tmp_path / "shot_1.exr", (1_000_000, 1_000_000))
+    capsys.readouterr()
+    assert cli.main(["render", str(stage), "-o", str(out), "--frames", "1-3", "--resume", *flags]) == 0
+    printed = capsys.readouterr().out
+    assert "rendered 2 frame(s)" in printed and "shot_1.exr" not in printed, printed
+    assert os.stat(tmp_path / "shot_1.exr").st_mtime == 1_000_000
+    assert all(imageio.read_metadata(tmp_path / f"shot_{f}.exr")["polychrome:partial"] == "0" for f in (1, 2, 3))
+    assert cli.main(["render", str(stage), "-o", str(out), "--frames", "1-3", "--resume", *flags]) == 0
+    assert "every frame is written already" in capsys.readouterr().out
