@@ -1,7 +1,8 @@
 """Denoising inside the speed-for-accuracy trade (issue 18): mean ΔE00 to a converged
-reference against time, noisy and denoised, on the Cornell box at 1, 2, 4, ... 64 spp.
+reference against time, noisy and denoised, on the Cornell box (or the glass room of
+fig. 13, `--scene glass_room`) at 1, 2, 4, ... 64 spp.
 
-    python bench/denoise.py [--size 64] [--ref-samples 2048] [--write docs/BENCHMARKS.md]
+    python bench/denoise.py [--scene cornell|glass_room] [--size 64] [--ref-samples 2048] [--write docs/BENCHMARKS.md]
 
 Times are wall seconds of `pc.render` (scene build included) and of the denoiser
 (`stats["denoise_seconds"]`: OIDN with prefiltered albedo and normal, as `denoise=True`
@@ -40,14 +41,20 @@ def mean_de00(a, b) -> float:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scene", choices=("cornell", "glass_room"), default="cornell")
     ap.add_argument("--size", type=int, default=64)
     ap.add_argument("--ref-samples", type=int, default=2048)
     ap.add_argument("--max-samples", type=int, default=64)
     ap.add_argument("--write", type=Path)
     args = ap.parse_args()
-    from cornell_box import build_scene
+    if args.scene == "cornell":
+        from cornell_box import build_scene
 
-    scene = build_scene()
+        scene, what = build_scene(), "Cornell box (examples/cornell_box.py)"
+    else:
+        from methods import room
+
+        scene, what = room(glass=True), "Glass room of fig. 13 (bench/methods.py: dispersive N-SF11 ball)"
     common = dict(width=args.size, height=args.size, wavelength_count=41, max_bounces=8, noise_threshold=0.0, quality="FINAL")
     reference = pc.render(scene, samples=args.ref_samples, seed=99, **common)
     floor = mean_de00(pc.render(scene, samples=args.ref_samples, seed=98, **common).rgba, reference.rgba)
@@ -62,7 +69,7 @@ def main() -> int:
         )
         spp *= 2
     lines = [
-        f"Cornell box (examples/cornell_box.py), {args.size}×{args.size}, 41 wavelengths, 8 bounces, FINAL; mean ΔE00 "
+        f"{what}, {args.size}×{args.size}, 41 wavelengths, 8 bounces, FINAL; mean ΔE00 "
         f"(colour-science) to a {args.ref_samples}-spp render of another seed, whose own error (a second reference against "
         f"it) is {floor:.2f}. Denoised: OIDN with prefiltered aux (`denoise=True`); time = render + denoise.",
         "",
@@ -82,7 +89,9 @@ def main() -> int:
     body = "\n".join(lines)
     print(body)
     if args.write:
-        write_section(args.write, "Denoising against time", body, "python bench/denoise.py --write docs/BENCHMARKS.md")
+        title = "Denoising against time" + ("" if args.scene == "cornell" else " (glass room)")
+        flags = "" if args.scene == "cornell" else f" --scene {args.scene} --ref-samples {args.ref_samples}"
+        write_section(args.write, title, body, f"python bench/denoise.py{flags} --write docs/BENCHMARKS.md")
     return 0
 
 
