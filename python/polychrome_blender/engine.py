@@ -32,6 +32,9 @@ def settings_from_scene(props, width, height):
         if spec["from_quality"] and not b["always"] and not props.is_property_set(name):
             continue
         values[name] = getattr(props, name)
+    if values.get("resume") and not values.get("checkpoint"):
+        # As the CLI: beside the frame's output file.
+        values["checkpoint"] = props.id_data.render.frame_path() + ".checkpoint.npz"
     if values.get("checkpoint"):
         values["checkpoint"] = bpy.path.abspath(values["checkpoint"])  # '//' is beside the .blend
     return pc.RenderSettings(**values)

@@ -44,6 +44,11 @@ def test_f12_on_a_dask_scheduler_equals_the_local_render(tmp_path):
         sc.polychrome.checkpoint = os.path.abspath('shot.npz')
         sc.polychrome.samples = 64
         from polychrome_blender.engine import viewport_settings, material_preview_settings
+        from polychrome_blender.engine import settings_from_scene
+        sc.polychrome.checkpoint = ''; sc.polychrome.resume = True
+        out['default_checkpoint'] = settings_from_scene(sc.polychrome, 8, 8).checkpoint
+        out['frame_path'] = r.frame_path()
+        sc.polychrome.checkpoint = os.path.abspath('shot.npz'); sc.polychrome.resume = False
         out['viewport_checkpoint'] = [viewport_settings(sc.polychrome).checkpoint, material_preview_settings(sc.polychrome, 8, 8).checkpoint]
         import polychrome as pc
         orig = pc.render
@@ -77,6 +82,7 @@ def test_f12_on_a_dask_scheduler_equals_the_local_render(tmp_path):
         assert r[f"compiles{border}False"] == 0 and r[f"compiles{border}True"] >= 1, r  # the workers rendered
         assert r[f"peak{border}"] > 0.01
         assert r[f"diff{border}"] <= 1e-5 * r[f"peak{border}"], r
+    assert r["default_checkpoint"] == r["frame_path"] + ".checkpoint.npz"  # Resume alone: beside the output, as the CLI
     assert r["viewport_checkpoint"] == ["", ""]  # the viewport and previews never touch the final's checkpoint
     assert r["checkpoint_written"]
     assert r["diff_partial"] > 1e-3 * r["peak64"], "the cancelled render should differ (it has fewer samples)"
