@@ -21,6 +21,7 @@ fn scene_desc() -> (SceneDesc, Vec<Buffer>) {
         name: name.into(),
         bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(a) },
         emission: e.map(SpectrumDesc::constant),
+        volume: None,
     };
     desc.materials.push(diffuse("walls", 0.7, None));
     desc.materials.push(diffuse("lamp", 0.0, Some(4.0)));
@@ -28,6 +29,7 @@ fn scene_desc() -> (SceneDesc, Vec<Buffer>) {
         name: "flint".into(),
         bsdf: BsdfDesc::Dielectric { ior: IorDesc::Named { name: "N-SF11".into() }, roughness: 0.0 },
         emission: None,
+        volume: None,
     });
     let s = 1.0f32;
     let quad =

@@ -57,6 +57,7 @@ fn floor_scene() -> (SceneDesc, Vec<Buffer>) {
         name: "white".into(),
         bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(0.8) },
         emission: None,
+        volume: None,
     });
     let v = vec![-4.0, -4.0, 0.0, 4.0, -4.0, 0.0, 4.0, 4.0, 0.0, -4.0, 4.0, 0.0];
     add_mesh(&mut desc, &mut buffers, "floor", v, vec![0, 1, 2, 0, 2, 3], 0);

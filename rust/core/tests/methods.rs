@@ -17,7 +17,7 @@ use polychrome_core::spectrum::named::{NoRgb, SpectrumKind, SpectrumRole};
 use polychrome_core::spectrum::{SampledSpectrum, SpectrumDesc, WavelengthGrid};
 
 fn diffuse(name: &str, reflectance: SpectrumDesc, emission: Option<SpectrumDesc>) -> MaterialDesc {
-    MaterialDesc { name: name.into(), bsdf: BsdfDesc::Diffuse { reflectance }, emission }
+    MaterialDesc { name: name.into(), bsdf: BsdfDesc::Diffuse { reflectance }, emission, volume: None }
 }
 
 /// A uniform world of `radiance` (through JSON, as every front end builds it).

@@ -32,6 +32,7 @@ fn square_scene() -> (SceneDesc, Vec<Buffer>) {
         name: "glow".into(),
         bsdf: BsdfDesc::None,
         emission: Some(SpectrumDesc::constant(1.0)),
+        volume: None,
     });
     let v = vec![-0.5, -2.0, 0.0, 0.5, -2.0, 0.0, 0.5, 2.0, 0.0, -0.5, 2.0, 0.0];
     add_mesh(&mut desc, &mut buffers, "square", v, vec![0, 1, 2, 0, 2, 3], 0);
@@ -191,6 +192,7 @@ fn light_tracing_through_a_moving_camera_agrees_with_camera_paths() {
         name: "grey".into(),
         bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(0.7) },
         emission: None,
+        volume: None,
     });
     let v = vec![-0.5, -2.0, -5.0, 0.5, -2.0, -5.0, 0.5, 2.0, -5.0, -0.5, 2.0, -5.0];
     add_mesh(&mut desc, &mut buffers, "square", v, vec![0, 1, 2, 0, 2, 3], 0);

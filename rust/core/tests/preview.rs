@@ -19,6 +19,7 @@ fn furnace() -> (SceneDesc, Vec<Buffer>, f64) {
         name: "furnace".into(),
         bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(a) },
         emission: Some(SpectrumDesc::constant(l)),
+        volume: None,
     });
     let (v, t) = uv_sphere([0.0; 3], 2.0, 12, 24);
     add_mesh(&mut desc, &mut buffers, "sphere", v, t, 0);

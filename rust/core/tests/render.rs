@@ -13,6 +13,7 @@ fn diffuse(name: &str, albedo: f32, emission: Option<f32>) -> MaterialDesc {
         name: name.into(),
         bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(albedo) },
         emission: emission.map(SpectrumDesc::constant),
+        volume: None,
     }
 }
 

@@ -120,6 +120,7 @@ fn white_sphere_scene(world: WorldDesc, textures: Option<(u32, u32, Vec<f32>)>) 
         name: "white".into(),
         bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(1.0) },
         emission: None,
+        volume: None,
     });
     if let Some((w, h, rgb)) = textures {
         add_texture(&mut desc, &mut buffers, "env", w, h, rgb);
@@ -196,6 +197,7 @@ fn importance_sampling_a_sun_reduces_variance_without_bias() {
             name: "grey".into(),
             bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(0.5) },
             emission: None,
+            volume: None,
         });
         let s = 50.0;
         add_mesh(
@@ -271,6 +273,7 @@ fn constant_colour_and_one_texel_texture_render_identically() {
             name: "paint".into(),
             bsdf: BsdfDesc::Diffuse { reflectance },
             emission: None,
+            volume: None,
         });
         let (v, t) = uv_sphere([0.0, 0.0, -4.0], 1.0, 12, 24);
         add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
@@ -319,6 +322,7 @@ fn texture_errors_name_the_texture_or_material() {
         name: "Wood".into(),
         bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::new(SpectrumKind::Texture { texture: 2 }) },
         emission: None,
+        volume: None,
     });
     let err = render(&desc, &buffers, &ResolvedSettings::default(), &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("material 'Wood'") && err.contains("texture 2"), "{err}");
@@ -370,6 +374,7 @@ fn extreme_hdri_is_finite_and_description_parses() {
         name: "grey".into(),
         bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(0.5) },
         emission: None,
+        volume: None,
     });
     add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
     let settings = ResolvedSettings { width: 8, height: 8, samples: 4, ..Default::default() };

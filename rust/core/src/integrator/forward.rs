@@ -183,13 +183,7 @@ pub fn walk_light<T: Throughput, H: PathHooks<T> + PathHooks<super::throughput::
             if !(b.is_alive() && hooks.scattered(scene, ctx, &v, &state, &sc, &b)) {
                 return;
             }
-            let st = PathState {
-                ray: sc.ray,
-                specular: sc.sample.specular,
-                prev_pdf: sc.sample.pdf,
-                prev_p: v.si.p,
-                depth: state.depth + 1,
-            };
+            let st = state.after(scene, &v, &sc, ctx.front_face);
             if russian_roulette(&mut b, st.depth, walk.rr_depth, rng) {
                 walk.run(scene, ctx, st, &mut b, rng, hooks, scratch);
             }

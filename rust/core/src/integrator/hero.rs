@@ -308,6 +308,18 @@ impl Throughput for Hero {
     fn hero(&self) -> Option<usize> {
         Some(self.set.index[0] as usize)
     }
+    fn lanes(&self) -> usize {
+        HERO_LANES
+    }
+    fn lane_index(&self, j: usize) -> usize {
+        self.set.index[j] as usize
+    }
+    fn lane(&self, j: usize) -> f32 {
+        self.values[j]
+    }
+    fn set_lane(&mut self, j: usize, v: f32) {
+        self.values[j] = v;
+    }
 }
 
 #[cfg(test)]

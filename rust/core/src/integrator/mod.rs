@@ -13,6 +13,7 @@ pub mod forward;
 pub mod hero;
 pub mod path;
 pub mod throughput;
+pub mod volume;
 pub mod walk;
 pub mod wavelengths;
 
@@ -156,11 +157,29 @@ pub struct Scratch {
     pub le: SampledSpectrum,
     /// A single-wavelength path's throughput spread over the grid for `Bsdf::sample`.
     pub tp: SampledSpectrum,
+    /// The coefficients of the media around the path's current segment.
+    pub medium: crate::scene::media::Coefficients,
+    /// The same along a shadow ray.
+    pub shadow: crate::scene::media::Coefficients,
+    /// A segment's emission, a shadow ray's transmittance, phase weights.
+    pub em: SampledSpectrum,
+    pub tr: SampledSpectrum,
+    pub phase: SampledSpectrum,
 }
 
 impl Scratch {
     pub fn new(n: usize) -> Self {
-        Self { f: SampledSpectrum::zeros(n), le: SampledSpectrum::zeros(n), tp: SampledSpectrum::zeros(n) }
+        let z = || SampledSpectrum::zeros(n);
+        Self {
+            f: z(),
+            le: z(),
+            tp: z(),
+            medium: crate::scene::media::Coefficients::new(n),
+            shadow: crate::scene::media::Coefficients::new(n),
+            em: z(),
+            tr: z(),
+            phase: z(),
+        }
     }
 }
 
@@ -194,6 +213,15 @@ pub fn from_settings(scene: &Scene, settings: &ResolvedSettings) -> crate::Resul
             "FORWARD (light tracing) needs a perspective camera: light paths cannot connect to an orthographic or panoramic one",
         ));
     }
+    if settings.direction != Direction::Backward && scene.has_media() {
+        let m = scene.media.first().map_or("a null surface", |m| m.name.as_str());
+        return Err(Error::setting(
+            "direction",
+            format!(
+                "participating media are rendered by BACKWARD only for now (material '{m}' has a volume or no surface)"
+            ),
+        ));
+    }
     Ok(match settings.method {
         Method::Polychromatic | Method::Rgb => with_policy(settings, AllWavelengths),
         Method::MonochromaticRays => with_policy(settings, OnePerRay::new(scene, settings.seed, settings.samples)),
@@ -204,7 +232,10 @@ pub fn from_settings(scene: &Scene, settings: &ResolvedSettings) -> crate::Resul
 
 /// The direction's technique on wavelengths `policy`.
 fn with_policy<P: WavelengthPolicy>(settings: &ResolvedSettings, policy: P) -> Integrator {
-    let camera = Walk::camera(settings.max_bounces, settings.dispersion_splitting);
+    let camera = Walk {
+        medium_sampling: settings.medium_sampling,
+        ..Walk::camera(settings.max_bounces, settings.dispersion_splitting)
+    };
     let light = Walk::light(settings.max_bounces);
     let rounds = policy.rounds();
     let backward = path::PathTracing { wavelengths: policy.clone(), walk: camera };

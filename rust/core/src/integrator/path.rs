@@ -7,7 +7,7 @@
 //! split there continue as single-wavelength paths with the power heuristic.
 
 use super::throughput::{SingleWavelength, Throughput};
-use super::walk::{russian_roulette, End, PathHooks, PathState, Vertex, Walk};
+use super::walk::{russian_roulette, End, MediumVertex, PathHooks, PathState, Vertex, Walk};
 use super::wavelengths::{WavelengthPolicy, Wavelengths};
 use super::{CameraSample, Scatter, Scratch, Technique};
 use crate::film::PixelSample;
@@ -58,7 +58,8 @@ impl CameraMis for PowerHeuristic {
         }
         match scene.triangle_light(v.si.instance, v.si.triangle) {
             Some(l) => {
-                let pl = scene.light_distribution.pmf(l) * scene.lights[l].pdf_li(st.prev_p, st.ray.direction, v.si.t);
+                let pl = scene.light_distribution.pmf(l)
+                    * scene.lights[l].pdf_li(st.prev_p, st.ray.direction, st.traveled + v.si.t);
                 power_heuristic(st.prev_pdf, pl)
             }
             None => 1.0,
@@ -157,7 +158,7 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, T, M> {
         scene: &Scene,
         ctx: &mut ShadingContext,
         v: &Vertex,
-        _st: &PathState,
+        st: &PathState,
         beta: &T,
         rng: &mut Rng,
         scratch: &mut Scratch,
@@ -189,7 +190,19 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, T, M> {
         // Aimed from the offset origin at the light point, stopping short of it (robust
         // far from the origin: 1e6 units).
         let origin = offset_ray_origin(v.si.p, side);
-        if scene.occluded(&shadow_ray(v.si.p, origin, ls.wi, ls.distance, v.si.time)) {
+        let ray = shadow_ray(v.si.p, origin, ls.wi, ls.distance, v.si.time);
+        if scene.has_media() {
+            // Through media: attenuated per wavelength; a transmitted connection crosses
+            // this vertex's own boundary.
+            let mut media = st.media;
+            if side.dot(v.ng) < 0.0 && scene.material_medium[v.si.material as usize].is_some() {
+                media.cross(v.si.instance, v.si.material, ctx.front_face);
+            }
+            if !scene.shadow_transmittance(&ray, media, &mut scratch.shadow, &mut scratch.tr) {
+                return;
+            }
+            scratch.f.mul_assign(&scratch.tr);
+        } else if scene.occluded(&ray) {
             return;
         }
         let w = self.mis.direct(scene, ctx, v, &DirectSample { light: l, pmf, ls, wi_local, bsdf_pdf });
@@ -207,6 +220,48 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, T, M> {
     ) -> bool {
         self.mis.scattered(ctx, v, st, sc);
         true
+    }
+
+    fn medium_emission(&mut self, _scene: &Scene, _st: &PathState, beta: &T, e: &SampledSpectrum) {
+        self.gathered.add_emitted(beta, e, 1.0);
+    }
+
+    /// Next-event estimation from a medium vertex: the phase function in place of the
+    /// BSDF (f = pdf = phase value), the shadow ray attenuated by the media it crosses,
+    /// the power heuristic against phase sampling.
+    fn connect_medium(
+        &mut self,
+        scene: &Scene,
+        _ctx: &mut ShadingContext,
+        mv: &MediumVertex,
+        st: &PathState,
+        beta: &T,
+        rng: &mut Rng,
+        scratch: &mut Scratch,
+    ) {
+        let Some(l) = scene.light_distribution.sample(rng.uniform()) else {
+            return;
+        };
+        let pmf = scene.light_distribution.pmf(l);
+        let u = rng.uniform2();
+        let Some(ls) = scene.lights[l].sample_li(mv.p, u, &mut scratch.le) else {
+            return;
+        };
+        if !beta.carries(&scratch.le) {
+            return;
+        }
+        let cos = (-mv.wo).dot(ls.wi);
+        let phase_pdf = scene.phase_eval(&st.media, &scratch.medium, cos, &mut scratch.f, 0.0);
+        if !(phase_pdf > 0.0) {
+            return;
+        }
+        let ray = shadow_ray(mv.p, mv.p, ls.wi, ls.distance, mv.time);
+        if !scene.shadow_transmittance(&ray, st.media, &mut scratch.shadow, &mut scratch.tr) {
+            return;
+        }
+        scratch.f.mul_assign(&scratch.tr);
+        let w = if ls.delta { 1.0 } else { power_heuristic(pmf * ls.pdf, phase_pdf) };
+        self.gathered.add_direct(beta, &mut scratch.f, &scratch.le, w, pmf * ls.pdf);
     }
 }
 
@@ -302,13 +357,7 @@ fn scatter_single(
     let Some(sc) = b.scatter(v, ctx, rng, &mut scratch.tp) else {
         return 0.0;
     };
-    let st = PathState {
-        ray: sc.ray,
-        specular: sc.sample.specular,
-        prev_pdf: sc.sample.pdf,
-        prev_p: v.si.p,
-        depth: state.depth + 1,
-    };
+    let st = state.after(scene, v, &sc, ctx.front_face);
     if roulette && !russian_roulette(&mut b, st.depth, walk.rr_depth, rng) {
         return 0.0;
     }

@@ -56,6 +56,12 @@ pub trait Throughput: Clone {
     fn hero(&self) -> Option<usize> {
         None
     }
+    /// The wavelengths carried, as lanes (media weigh each lane by its own extinction):
+    /// how many, lane `j`'s grid index, its throughput, and setting it.
+    fn lanes(&self) -> usize;
+    fn lane_index(&self, j: usize) -> usize;
+    fn lane(&self, j: usize) -> f32;
+    fn set_lane(&mut self, j: usize, v: f32);
 }
 
 impl Throughput for SampledSpectrum {
@@ -115,6 +121,18 @@ impl Throughput for SampledSpectrum {
     }
     fn weigh_grid(&self, s: &mut SampledSpectrum) {
         s.mul_assign(self);
+    }
+    fn lanes(&self) -> usize {
+        self.len()
+    }
+    fn lane_index(&self, j: usize) -> usize {
+        j
+    }
+    fn lane(&self, j: usize) -> f32 {
+        self.get(j)
+    }
+    fn set_lane(&mut self, j: usize, v: f32) {
+        self.set(j, v);
     }
 }
 
@@ -185,5 +203,17 @@ impl Throughput for SingleWavelength {
     }
     fn weigh_grid(&self, s: &mut SampledSpectrum) {
         s.scale(self.value);
+    }
+    fn lanes(&self) -> usize {
+        1
+    }
+    fn lane_index(&self, _j: usize) -> usize {
+        self.index
+    }
+    fn lane(&self, _j: usize) -> f32 {
+        self.value
+    }
+    fn set_lane(&mut self, _j: usize, v: f32) {
+        self.value = v;
     }
 }

@@ -8,15 +8,22 @@
 //! camera and splat, bidirectional MIS records the vertices it weighs. Where a
 //! whole-spectrum path meets a dispersive surface the walk returns to its caller
 //! ([`End::Collapsed`], [`End::Split`]), which carries on with one wavelength per path
-//! (eq. 9) — with the same or other hooks. Participating media would add a medium
-//! interaction between the intersection and the surface.
+//! (eq. 9) — with the same or other hooks. Inside media (docs/media.md) each segment
+//! is a free flight first (`volume.rs`): it may scatter the path in the medium (a
+//! medium vertex, connected by [`PathHooks::connect_medium`]) or collapse it (eq. 9);
+//! null surfaces (a medium's boundary) are passed straight through.
 
 use super::throughput::Throughput;
+use super::volume::{self, Flight};
 use super::{facing, Facing, Scatter, Scratch};
-use crate::geometry::{Frame, Ray};
+use crate::geometry::{offset_ray_origin, Frame, Ray};
 use crate::material::{BsdfFlags, Material, ShadingContext};
+use crate::medium::MediumStack;
+use crate::render::MediumSampling;
 use crate::sampling::Rng;
+use crate::scene::media::VOLUME_BOUNDS_MAX;
 use crate::scene::{Scene, SurfaceInteraction};
+use crate::spectrum::SampledSpectrum;
 use glam::Vec3A;
 
 /// Where a path is: the ray it follows and what MIS needs of the vertex it left.
@@ -32,13 +39,54 @@ pub struct PathState {
     pub prev_p: Vec3A,
     /// Scattering events so far.
     pub depth: u32,
+    /// The media `ray` travels in.
+    pub media: MediumStack,
+    /// Distance from `prev_p` to `ray`'s origin (null surfaces passed on the way), for
+    /// the light pdf of emission that `ray` reaches.
+    pub traveled: f32,
 }
 
 impl PathState {
     /// A path starting along `ray` (from the camera or a light).
     pub fn start(ray: Ray) -> Self {
-        Self { ray, specular: true, prev_pdf: 0.0, prev_p: ray.origin, depth: 0 }
+        Self {
+            ray,
+            specular: true,
+            prev_pdf: 0.0,
+            prev_p: ray.origin,
+            depth: 0,
+            media: MediumStack::default(),
+            traveled: 0.0,
+        }
     }
+
+    /// The state after the BSDF at `v` (reached with `self`) was sampled (`sc`): a
+    /// transmitted path enters or leaves the medium of `v`'s material (`front_face`: it
+    /// arrived from outside).
+    pub fn after(&self, scene: &Scene, v: &Vertex, sc: &Scatter, front_face: bool) -> Self {
+        let mut media = self.media;
+        if sc.transmitted && scene.material_medium.get(v.si.material as usize).is_some_and(|m| m.is_some()) {
+            media.cross(v.si.instance, v.si.material, front_face);
+        }
+        PathState {
+            ray: sc.ray,
+            specular: sc.sample.specular,
+            prev_pdf: sc.sample.pdf,
+            prev_p: v.si.p,
+            depth: self.depth + 1,
+            media,
+            traveled: 0.0,
+        }
+    }
+}
+
+/// A scattering point inside a medium, as the hooks see it.
+#[derive(Clone, Copy, Debug)]
+pub struct MediumVertex {
+    pub p: Vec3A,
+    /// Unit direction back along the arriving ray.
+    pub wo: Vec3A,
+    pub time: f32,
 }
 
 /// A surface vertex as the hooks see it: the hit oriented towards the arriving ray.
@@ -116,6 +164,23 @@ pub trait PathHooks<T: Throughput> {
     ) -> bool {
         true
     }
+    /// The segment `st.ray` travels emits `e` (per grid lane, already integrated over
+    /// the segment's transmittance) towards its start.
+    fn medium_emission(&mut self, _scene: &Scene, _st: &PathState, _beta: &T, _e: &SampledSpectrum) {}
+    /// Connects medium vertex `mv` inside `st.media` to a light (camera paths);
+    /// `scratch.medium` holds the media's coefficients there.
+    #[allow(clippy::too_many_arguments)]
+    fn connect_medium(
+        &mut self,
+        _scene: &Scene,
+        _ctx: &mut ShadingContext,
+        _mv: &MediumVertex,
+        _st: &PathState,
+        _beta: &T,
+        _rng: &mut Rng,
+        _scratch: &mut Scratch,
+    ) {
+    }
 }
 
 /// How far a walk goes.
@@ -132,6 +197,8 @@ pub struct Walk {
     /// Deterministic mode: stop at the first dispersive surface of a whole-spectrum
     /// path ([`End::Split`]) instead of letting the BSDF collapse it.
     pub split_dispersion: bool,
+    /// How whole-spectrum paths sample distances in scattering media.
+    pub medium_sampling: MediumSampling,
 }
 
 /// Bounces before Russian roulette may end a path.
@@ -140,11 +207,23 @@ pub const RR_DEPTH: u32 = 3;
 impl Walk {
     /// Camera paths of `max_bounces` scattering events.
     pub fn camera(max_bounces: u32, split_dispersion: bool) -> Self {
-        Self { max_bounces, rr_depth: RR_DEPTH, scatter_below: max_bounces, split_dispersion }
+        Self {
+            max_bounces,
+            rr_depth: RR_DEPTH,
+            scatter_below: max_bounces,
+            split_dispersion,
+            medium_sampling: MediumSampling::default(),
+        }
     }
     /// Light paths whose camera connections have at most `max_bounces` scattering events.
     pub fn light(max_bounces: u32) -> Self {
-        Self { max_bounces, rr_depth: RR_DEPTH, scatter_below: max_bounces.saturating_sub(1), split_dispersion: false }
+        Self {
+            max_bounces,
+            rr_depth: RR_DEPTH,
+            scatter_below: max_bounces.saturating_sub(1),
+            split_dispersion: false,
+            medium_sampling: MediumSampling::default(),
+        }
     }
 
     /// Walks a path from `st` with throughput `beta` (updated as it goes).
@@ -159,12 +238,84 @@ impl Walk {
         hooks: &mut H,
         scratch: &mut Scratch,
     ) -> End<'s> {
+        let media = scene.has_media();
+        let mut crossings = 0;
         loop {
-            let Some(hit) = scene.intersect(&st.ray) else {
+            let hit = scene.intersect(&st.ray);
+            if media && !st.media.is_empty() && scene.coefficients(&st.media, &mut scratch.medium) {
+                let d = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+                if ctx.single_wavelength.is_none() {
+                    let c = &scratch.medium;
+                    if let Some(index) = volume::collapse(c, beta, self.medium_sampling, scene.grid.weights(), rng) {
+                        ctx.single_wavelength = Some(index);
+                        return End::Collapsed { index, state: st };
+                    }
+                }
+                if scratch.medium.emits {
+                    volume::segment_emission(&scratch.medium, d, &mut scratch.em);
+                    hooks.medium_emission(scene, &st, beta, &scratch.em);
+                }
+                match volume::fly(&scratch.medium, d, beta, rng) {
+                    Flight::Absorbed => return End::Done,
+                    Flight::Through => {}
+                    Flight::Scattered { t } => {
+                        let p = st.ray.at(t);
+                        let mv = MediumVertex { p, wo: -st.ray.direction, time: st.ray.time };
+                        if st.depth >= self.max_bounces {
+                            return End::Done;
+                        }
+                        hooks.connect_medium(scene, ctx, &mv, &st, beta, rng, scratch);
+                        if st.depth >= self.scatter_below {
+                            return End::Done;
+                        }
+                        let (u, uc) = (rng.uniform2(), rng.uniform());
+                        let Some((wi, pdf)) =
+                            scene.sample_phase(&st.media, &scratch.medium, st.ray.direction, u, uc, &mut scratch.phase)
+                        else {
+                            return End::Done;
+                        };
+                        if scratch.medium.scattering_media > 1 {
+                            for j in 0..beta.lanes() {
+                                beta.set_lane(j, beta.lane(j) * scratch.phase.get(beta.lane_index(j)));
+                            }
+                        }
+                        st = PathState {
+                            ray: Ray::new(p, wi).with_time(st.ray.time),
+                            specular: false,
+                            prev_pdf: pdf,
+                            prev_p: p,
+                            depth: st.depth + 1,
+                            media: st.media,
+                            traveled: 0.0,
+                        };
+                        if !beta.is_alive() || !russian_roulette(beta, st.depth, self.rr_depth, rng) {
+                            return End::Done;
+                        }
+                        continue;
+                    }
+                }
+            }
+            let Some(hit) = hit else {
                 hooks.escaped(scene, &st, beta, scratch);
                 return End::Done;
             };
             let si = scene.interaction(&st.ray, &hit);
+            if media && scene.null_surface[si.material as usize] {
+                // A medium's boundary with no surface: pass straight through (no bounce,
+                // as Cycles' volume-only surfaces), entering or leaving the medium.
+                crossings += 1;
+                if crossings > VOLUME_BOUNDS_MAX {
+                    return End::Done;
+                }
+                let front = si.ng.dot(st.ray.direction) < 0.0;
+                if scene.material_medium[si.material as usize].is_some() {
+                    st.media.cross(si.instance, si.material, front);
+                }
+                let origin = offset_ray_origin(si.p, if front { -si.ng } else { si.ng });
+                st.traveled += (origin - st.ray.origin).length();
+                st.ray = Ray { origin, tmin: 0.0, tmax: f32::INFINITY, ..st.ray };
+                continue;
+            }
             // Surfaces are two-sided: shade on the side the ray arrived from.
             let Facing { wo, ng, ns, material } = facing(scene, &st.ray, &si, ctx);
             let frame = Frame::from_normal(ns);
@@ -199,13 +350,7 @@ impl Walk {
             if !hooks.scattered(scene, ctx, &v, &st, &sc, beta) {
                 return End::Done;
             }
-            st = PathState {
-                ray: sc.ray,
-                specular: sc.sample.specular,
-                prev_pdf: sc.sample.pdf,
-                prev_p: si.p,
-                depth: st.depth + 1,
-            };
+            st = st.after(scene, &v, &sc, ctx.front_face);
             if let Some(index) = collapsed {
                 return End::Collapsed { index, state: st };
             }

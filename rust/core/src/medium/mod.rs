@@ -1,9 +1,12 @@
-//! Participating media: what light meets between surfaces. For now the pieces the
-//! subsurface random walk needs (a phase function, the walk in a homogeneous medium
-//! bounded by a mesh); volumes would reuse them.
+//! Participating media: what light meets between surfaces. Homogeneous media inside
+//! closed meshes (`homogeneous.rs`; the path's free flights through them are in
+//! `integrator/volume.rs`), a phase function, and the subsurface random walk in a
+//! homogeneous medium bounded by a mesh.
 
+pub mod homogeneous;
 pub mod phase;
 pub mod random_walk;
 
+pub use homogeneous::{HomogeneousMedium, MediumStack};
 pub use phase::HenyeyGreenstein;
 pub use random_walk::{Boundary, SubsurfaceMedium, WalkExit};

@@ -44,6 +44,21 @@ pub enum Method {
     Hero,
 }
 
+/// How a path that carries several wavelengths samples a free-flight distance in a
+/// scattering medium whose extinction depends on wavelength (docs/media.md).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "SCREAMING_SNAKE_CASE")]
+pub enum MediumSampling {
+    /// Spectral MIS: the distance is sampled with one lane's σt chosen ∝ throughput and
+    /// weighted by the balance heuristic over all lanes (Wilkie et al. 2014); the path
+    /// keeps every wavelength.
+    #[default]
+    SpectralMis,
+    /// The paper's way (eq. 9): the path collapses to one wavelength chosen ∝ its
+    /// energy and flies as a monochromatic path.
+    Collapse,
+}
+
 /// Where paths start.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "SCREAMING_SNAKE_CASE")]

@@ -14,7 +14,7 @@
 //!   generated (see `docs/architecture.md`, "Where a new setting goes").
 
 use super::quality::{self, Quality};
-use super::{Direction, Method};
+use super::{Direction, MediumSampling, Method};
 use crate::color::uplift::UpliftMethod;
 use crate::scene::SceneDesc;
 use crate::spectrum::grid::{LAMBDA_MAX, LAMBDA_MIN, MAX_SAMPLES, MIN_SAMPLES};
@@ -316,6 +316,16 @@ settings! {
         "At the first dispersive surface continue one monochromatic path per wavelength instead of choosing one (the paper's deterministic mode)",
         Kind::Bool,
     ).applies_when("method", "POLYCHROMATIC");
+    /// How whole-spectrum paths sample free-flight distances in scattering media.
+    medium_sampling: copy MediumSampling = MediumSampling::SpectralMis => Spec::new(
+        "Spectrum",
+        "Medium Sampling",
+        "How a path carrying many wavelengths picks a free-flight distance in a scattering medium whose extinction depends on wavelength",
+        Kind::Enum { items: vec![
+            item(MediumSampling::SpectralMis, "Spectral MIS", "Sample the distance with one wavelength's extinction and weight by the average density over all wavelengths; the path keeps its whole spectrum (Wilkie et al. 2014)"),
+            item(MediumSampling::Collapse, "Collapse", "Collapse the path to one wavelength chosen in proportion to its energy and continue monochromatic (the paper's eq. 9)"),
+        ]},
+    ).see("media.md");
     /// Samples of a uniform grid over `wavelength_min..wavelength_max`.
     wavelength_count: grid_preset usize = None => Spec::new(
         "Spectrum",

@@ -75,6 +75,30 @@ pub struct MaterialDesc {
     /// Emitted radiance (both faces); makes every triangle using it an area light.
     #[serde(default)]
     pub emission: Option<SpectrumDesc>,
+    /// A homogeneous medium filling the inside of every closed mesh with this material
+    /// (docs/media.md).
+    #[serde(default)]
+    pub volume: Option<VolumeDesc>,
+}
+
+/// A homogeneous participating medium (Blender's Volume output). Coefficients are per
+/// scene unit of length: a spectrum, or an RGB colour in [0, 1] uplifted as a
+/// reflectance, times its `scale` (the density).
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VolumeDesc {
+    /// Absorption coefficient σa(λ).
+    #[serde(default)]
+    pub absorption: Option<SpectrumDesc>,
+    /// Scattering coefficient σs(λ).
+    #[serde(default)]
+    pub scattering: Option<SpectrumDesc>,
+    /// Henyey–Greenstein asymmetry g in (−1, 1).
+    #[serde(default)]
+    pub anisotropy: f32,
+    /// Emitted radiance per unit length (an RGB colour is uplifted as an illuminant).
+    #[serde(default)]
+    pub emission: Option<SpectrumDesc>,
 }
 
 /// A material as written, before checking that it is either fixed or a graph.
@@ -90,6 +114,8 @@ struct RawMaterialDesc {
     nodes: Option<Vec<crate::shading::NodeDesc>>,
     #[serde(default)]
     output: Option<crate::shading::OutputDesc>,
+    #[serde(default)]
+    volume: Option<VolumeDesc>,
 }
 
 impl TryFrom<RawMaterialDesc> for MaterialDesc {
@@ -97,7 +123,7 @@ impl TryFrom<RawMaterialDesc> for MaterialDesc {
     fn try_from(r: RawMaterialDesc) -> Result<Self, String> {
         let name = r.name;
         match (r.nodes, r.output) {
-            (None, None) => Ok(Self { name, bsdf: r.bsdf.unwrap_or_default(), emission: r.emission }),
+            (None, None) => Ok(Self { name, bsdf: r.bsdf.unwrap_or_default(), emission: r.emission, volume: r.volume }),
             (Some(nodes), output) => {
                 if r.bsdf.is_some() || r.emission.is_some() {
                     return Err(format!(
@@ -109,6 +135,7 @@ impl TryFrom<RawMaterialDesc> for MaterialDesc {
                     name,
                     bsdf: BsdfDesc::Graph(Box::new(crate::shading::GraphDesc { nodes, output })),
                     emission: None,
+                    volume: r.volume,
                 })
             }
             (None, Some(_)) => Err(format!("material '{name}': an output without nodes")),
@@ -124,6 +151,9 @@ pub enum BsdfDesc {
     },
     /// Reflects nothing (an emission-only surface).
     None,
+    /// No surface at all: rays pass straight through without scattering or counting a
+    /// bounce (Blender's material with only a Volume output: a medium's boundary).
+    Null,
     /// Glass: smooth (roughness 0) or GGX-rough; dispersive when the index varies.
     Dielectric {
         #[serde(default)]

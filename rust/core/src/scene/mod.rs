@@ -4,6 +4,7 @@
 
 pub mod desc;
 pub mod layered;
+pub mod media;
 pub mod optics;
 
 use crate::accel::{Accel, Hit};
@@ -114,6 +115,12 @@ pub struct Scene {
     /// What the scene's description asked for and the build left out or approximated
     /// (unsupported nodes and node options), one line each.
     pub warnings: Vec<String>,
+    /// Homogeneous media (docs/media.md), and per material the medium inside closed
+    /// meshes that use it.
+    pub media: Vec<crate::medium::HomogeneousMedium>,
+    pub material_medium: Vec<Option<u32>>,
+    /// Per material: no surface, rays pass straight through (`BsdfDesc::Null`).
+    pub null_surface: Vec<bool>,
 }
 
 /// The RGB → spectrum map while building: where the grid has none, the first RGB
@@ -205,6 +212,7 @@ impl Scene {
         // Materials.
         let mut materials = Vec::with_capacity(desc.materials.len().max(1));
         let mut warnings = Vec::new();
+        let (mut media, mut material_medium, mut null_surface) = (Vec::new(), Vec::new(), Vec::new());
         for m in &desc.materials {
             let spectrum = |d, role, what| -> Result<SampledSpectrum> {
                 Ok(SampledSpectrum::from_slice(&rgb.evaluate(d, &grid, role, "material", &m.name, what)?))
@@ -255,7 +263,7 @@ impl Scene {
                     }
                     Box::new(Diffuse { reflectance: SpectralParam::Constant(r) })
                 }
-                BsdfDesc::None => Box::new(Black),
+                BsdfDesc::None | BsdfDesc::Null => Box::new(Black),
                 BsdfDesc::Dielectric { ior, roughness } => optics::build_dielectric(&m.name, ior, *roughness, &grid)?,
                 BsdfDesc::Conductor { metal, eta, k, roughness } => {
                     let eta = eta.as_ref().map(|d| spectrum(d, SpectrumRole::Unbounded, "eta")).transpose()?;
@@ -283,6 +291,22 @@ impl Scene {
                 None => None,
             };
             materials.push(Material { name: m.name.clone(), bsdf, emission });
+            // A graph with a volume and no surface is volume-only (Cycles' SD_HAS_ONLY_VOLUME).
+            null_surface.push(match &m.bsdf {
+                BsdfDesc::Null => true,
+                BsdfDesc::Graph(g) => g.output.surface.is_none() && m.volume.is_some(),
+                _ => false,
+            });
+            material_medium.push(match &m.volume {
+                Some(v) => media::build_medium(&m.name, v, |d, role, what| {
+                    Ok(SampledSpectrum::from_slice(&rgb.evaluate(d, &grid, role, "material", &m.name, what)?))
+                })?
+                .map(|medium| {
+                    media.push(medium);
+                    media.len() as u32 - 1
+                }),
+                None => None,
+            });
         }
         if materials.is_empty() {
             let grey = SampledSpectrum::splat(n, 0.8);
@@ -291,6 +315,8 @@ impl Scene {
                 bsdf: Box::new(Diffuse { reflectance: SpectralParam::Constant(grey) }),
                 emission: None,
             });
+            material_medium.push(None);
+            null_surface.push(false);
         }
 
         // Meshes.
@@ -553,6 +579,9 @@ impl Scene {
             bounds_radius,
             moving_emitters,
             warnings,
+            media,
+            material_medium,
+            null_surface,
         })
     }
 
