@@ -16,7 +16,7 @@ from .render import RenderResult, RenderSettings, render
 from .scene import Camera, Diffuse, Emitter, Material, PointLight, Scene, look_at
 from . import denoise, ior
 from .scene import Conductor, Dielectric, Glossy, SpotLight, SunLight
-from .scene import Add, Fresnel, LayerWeight, Mix, NodeMaterial, Principled
+from .scene import Add, Fresnel, LayerWeight, Medium, Mix, NodeMaterial, Principled, Volume
 from .texture import Texture
 from .job import Preview, RenderJob
 
@@ -31,6 +31,8 @@ __all__ = [
     "Fresnel",
     "LayerWeight",
     "NodeMaterial",
+    "Medium",
+    "Volume",
     "SpotLight",
     "SunLight",
     "denoise",

@@ -222,11 +222,58 @@ class Camera:
         }
 
 
+class Medium:
+    """A homogeneous participating medium filling closed meshes (docs/media.md).
+
+    ``absorption`` σa and ``scattering`` σs are coefficients per scene unit of length —
+    a spectrum, a number or an RGB triple in [0, 1] (uplifted as a reflectance) — each
+    times ``density``; ``anisotropy`` is Henyey–Greenstein's g; ``emission`` is radiance
+    per unit length. Put it on a material (``volume=``, or ``material.volume = ...``);
+    :class:`Volume` is a material that is only a medium (no surface)."""
+
+    def __init__(
+        self,
+        absorption: Any = None,
+        scattering: Any = None,
+        *,
+        density: float = 1.0,
+        anisotropy: float = 0.0,
+        emission: Any = None,
+    ):
+        self.density = _finite_floats([density], "medium: density")[0]
+        if self.density < 0.0:
+            raise ValueError(f"medium: density {density} must be non-negative")
+        self.anisotropy = _finite_floats([anisotropy], "medium: anisotropy")[0]
+        if not -1.0 < self.anisotropy < 1.0:
+            raise ValueError(f"medium: anisotropy {anisotropy} must be in (-1, 1)")
+        self.absorption = None if absorption is None else as_spectrum(absorption)
+        self.scattering = None if scattering is None else as_spectrum(scattering)
+        self.emission = None if emission is None else as_spectrum(emission)
+
+    def to_dict(self) -> dict[str, Any]:
+        d: dict[str, Any] = {"anisotropy": self.anisotropy}
+        if self.absorption is not None:
+            d["absorption"] = (self.absorption * self.density).to_dict()
+        if self.scattering is not None:
+            d["scattering"] = (self.scattering * self.density).to_dict()
+        if self.emission is not None:
+            d["emission"] = self.emission.to_dict()
+        return d
+
+
+def _medium(volume: Any, name: str) -> Medium | None:
+    if volume is not None and not isinstance(volume, Medium):
+        raise TypeError(f"material '{name}': volume must be a polychrome.Medium, not {type(volume).__name__}")
+    return volume
+
+
 class Material:
-    """Base class of materials: a BSDF and an optional emission."""
+    """Base class of materials: a BSDF, an optional emission and an optional medium
+    inside (``volume``, a :class:`Medium`)."""
 
     name: str = "Material"
     emission: Spectrum | None = None
+    volume: Medium | None = None
 
     def bsdf_dict(self) -> dict[str, Any]:  # pragma: no cover - abstract
         raise NotImplementedError
@@ -235,7 +282,21 @@ class Material:
         d: dict[str, Any] = {"name": self.name, "bsdf": self.bsdf_dict()}
         if self.emission is not None:
             d["emission"] = self.emission.to_dict()
+        if _medium(self.volume, self.name) is not None:
+            d["volume"] = self.volume.to_dict()
         return d
+
+
+class Volume(Material):
+    """A material that is only a medium: its surface lets rays pass straight through
+    (Blender's material with only a Volume output)."""
+
+    def __init__(self, medium: Medium, *, name: str = "Volume"):
+        self.volume = _medium(medium, name)
+        self.name = name
+
+    def bsdf_dict(self) -> dict[str, Any]:
+        return {"type": "null"}
 
 
 class Diffuse(Material):
@@ -297,11 +358,12 @@ class Dielectric(Material):
     and a roughness (0: smooth; otherwise GGX with alpha = roughness²). A glass whose
     index varies over the wavelength grid disperses light."""
 
-    def __init__(self, ior: Any = 1.5, *, roughness: float = 0.0, name: str = "Glass"):
+    def __init__(self, ior: Any = 1.5, *, roughness: float = 0.0, volume: Medium | None = None, name: str = "Glass"):
         from .ior import as_ior
 
         self.ior = as_ior(ior)
         self.roughness = _roughness(roughness, name)
+        self.volume = _medium(volume, name)
         self.name = name
 
     def bsdf_dict(self) -> dict[str, Any]:
@@ -589,7 +651,10 @@ class NodeMaterial(Material):
         self.output = dict(output)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"name": self.name, "nodes": self.nodes, "output": self.output}
+        d = {"name": self.name, "nodes": self.nodes, "output": self.output}
+        if _medium(self.volume, self.name) is not None:
+            d["volume"] = self.volume.to_dict()
+        return d
 
 
 class Scene:

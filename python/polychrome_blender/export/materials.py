@@ -22,6 +22,7 @@ import numpy as np
 import polychrome as pc
 
 from .lights import blackbody_white
+from .volumes import export_volume
 from .warnings import Warnings
 from .node_graph import GraphExport
 
@@ -101,6 +102,17 @@ class MaterialExport:
         self.needs = {}  # mesh data the material's graph reads (export/node_graph.py)
 
     def material(self):
+        """The surface (below) with the medium of the Volume output inside it; a
+        material with only a Volume output is a medium behind no surface."""
+        medium = export_volume(self.mat, self.warnings)
+        if medium is not None and surface_node(self.mat) is None:
+            return pc.Volume(medium, name=self.mat.name)
+        m = self.surface()
+        if medium is not None:
+            m.volume = medium
+        return m
+
+    def surface(self):
         mat = self.mat
         if mat is None:
             return pc.Diffuse(GREY, name="default")

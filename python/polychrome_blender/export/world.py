@@ -4,6 +4,8 @@ or an Environment Texture (equirectangular HDRI, Z rotation of a Mapping node)."
 import numpy as np
 import polychrome as pc
 
+from .volumes import warn_world_volume
+
 
 def _hdri(scene, world, env, strength, warnings, textures):
     """Environment Texture → ``scene.set_world(texture=...)``; False if its image has no pixels."""
@@ -33,6 +35,7 @@ def export_world(depsgraph, scene, warnings, textures):
     world = depsgraph.scene.world
     if world is None:
         return
+    warn_world_volume(world, warnings)
     colour = tuple(float(c) for c in world.color[:3])
     strength = 1.0
     if world.use_nodes and world.node_tree is not None:

@@ -1,0 +1,57 @@
+"""Media through the Python API (docs/media.md): ``pc.Medium`` on a material and as a
+volume-only ``pc.Volume``, checked against Beer–Lambert computed here, and bad input."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import polychrome as pc
+
+from test_materials import luminance, slab_scene
+
+
+def test_grey_absorbing_volume_is_beer_lambert():
+    """A volume-only slab of thickness 0.5 with σa = 0.8 × density 1.5 in front of a
+    uniform emitter: every pixel is exp(−0.6) of the emitter, with no noise (pure
+    absorption samples no distance)."""
+    clear = pc.render(slab_scene(pc.Volume(pc.Medium())), width=8, height=8, samples=2, seed=1)
+    medium = pc.Medium(absorption=0.8, density=1.5)
+    out = pc.render(slab_scene(pc.Volume(medium, name="ink")), width=8, height=8, samples=2, seed=1)
+    ratio = luminance(out.rgba) / luminance(clear.rgba)
+    assert np.allclose(ratio, math.exp(-0.6), rtol=1e-4), ratio.mean()
+
+
+def test_absorbing_glass_has_fresnel_and_beer_lambert():
+    """Glass (n = 1.5) with σa = 1: T = (1 − R)²·τ/(1 − R²·τ²), τ = exp(−0.5)."""
+    glass = pc.Dielectric(1.5, volume=pc.Medium(absorption=1.0))
+    out = pc.render(slab_scene(glass), width=16, height=16, samples=64, max_bounces=64, seed=3)
+    y = luminance(out.rgba)
+    clear = luminance(pc.render(slab_scene(pc.Volume(pc.Medium())), width=4, height=4, samples=1).rgba).mean()
+    r, tau = 0.04, math.exp(-0.5)
+    expected = clear * (1 - r) ** 2 * tau / (1 - r * r * tau * tau)
+    se = y.std(ddof=1) / math.sqrt(y.size)
+    assert abs(y.mean() - expected) < 5 * se + 2e-3, (y.mean(), expected, se)
+
+
+def test_medium_descriptions_and_bad_input():
+    m = pc.Medium(absorption=(0.1, 0.5, 0.9), scattering=0.5, density=2.0, anisotropy=0.3, emission=(1.0, 0.5, 0.0))
+    d = pc.Volume(m, name="smoke").to_dict()
+    assert d["bsdf"] == {"type": "null"}
+    v = d["volume"]
+    assert v["absorption"] == {"type": "rgb", "rgb": [0.1, 0.5, 0.9], "scale": 2.0}
+    assert v["scattering"] == {"type": "constant", "value": 0.5, "scale": 2.0} and v["anisotropy"] == 0.3
+    assert "volume" in pc.Dielectric(1.33, volume=m).to_dict()
+    with pytest.raises(ValueError, match="density"):
+        pc.Medium(absorption=1.0, density=-1.0)
+    with pytest.raises(ValueError, match="anisotropy"):
+        pc.Medium(scattering=1.0, anisotropy=1.0)
+    with pytest.raises(TypeError, match="'tea'"):
+        pc.Dielectric(1.33, volume=0.5, name="tea")
+    # A NaN density reaching the core is an error naming the material, not a NaN image.
+    bad = pc.Medium(absorption=1.0)
+    bad.density = float("nan")
+    with pytest.raises(Exception, match="ink"):
+        pc.render(slab_scene(pc.Volume(bad, name="ink")), width=4, height=4, samples=1)
