@@ -133,8 +133,9 @@ class MaterialExport:
         own = Warnings()
         g = GraphExport(self.mat, own, self.textures)
         got = g.export()
-        if g.per_hit and not GRAPHS_PER_HIT:
+        if (g.per_hit and not GRAPHS_PER_HIT) or g.pending:
             return None
+        g.convert_textures()
         self.warnings.extend(own.items)
         if got is None:
             return pc.Diffuse((0.0, 0.0, 0.0), name=self.name)  # e.g. only a muted closure: black

@@ -120,6 +120,11 @@ PER_HIT = frozenset(
     }
 )
 
+#: Nodes the core lists but does not evaluate yet (it reads their outputs as 0): a graph
+#: with one of them keeps the fixed-pattern export (export/materials.py), which renders a
+#: Blackbody emission.
+CORE_PENDING = frozenset({"ShaderNodeBlackbody", "ShaderNodeWavelength"})
+
 #: Entries of Cycles' curve and ramp tables (RAMP_TABLE_SIZE, intern/cycles/scene/shader_nodes.h).
 TABLE_SIZE = 256
 #: Blender's default scene-linear luminance coefficients (colour → float conversion).
@@ -158,6 +163,15 @@ def convert_value(value, from_type, to_type):
     return value
 
 
+def implicit_input(kind, ident):
+    """Whether an unlinked input reads an implicit value rather than its default (texture
+    coordinates, the shading normal, the tangent: Blender's ``implicit_field``), as the
+    core's sockets.rs ``implicit`` table says."""
+    if ident == "Vector" and kind.startswith("ShaderNodeTex"):
+        return True
+    return ident in ("Normal", "Coat Normal") and kind != "ShaderNodeNormalMap" or ident == "Tangent"
+
+
 def socket_value(sock, owner, node_name):
     """The default value of a socket as JSON (None for sockets without one: closures,
     strings, ...). A non-finite value is an error naming the material, node and socket."""
@@ -190,6 +204,15 @@ def _plain(value):
 
 
 def color_ramp_dict(ramp):
+    """A Color Ramp's elements. B-Spline and Cardinal interpolation and the HSV / HSL
+    colour modes are written as Cycles renders them: the ramp baked to TABLE_SIZE entries
+    with Blender's own ``ColorRamp.evaluate`` (colorramp_to_array,
+    intern/cycles/blender/util.h) and read back linearly between entries (rgb_ramp_lookup,
+    kernel/svm/ramp.h)."""
+    if ramp.interpolation in ("B_SPLINE", "CARDINAL") or ramp.color_mode != "RGB":
+        ts = [i / (TABLE_SIZE - 1) for i in range(TABLE_SIZE)]
+        elements = [[t, [float(c) for c in ramp.evaluate(t)]] for t in ts]
+        return {"interpolation": "LINEAR", "color_mode": "RGB", "hue_interpolation": "NEAR", "elements": elements}
     return {
         "interpolation": ramp.interpolation,
         "color_mode": ramp.color_mode,
@@ -252,8 +275,10 @@ class GraphExport:
         self.nodes = []
         self.needs = {}
         self.per_hit = False  # some node's value changes from hit to hit
+        self.pending = False  # some node is in CORE_PENDING
         self._index = {}  # (scope key, node pointer) -> index in nodes
         self._active = []  # nodes being exported (cycle detection), as (key, name)
+        self._images = []  # (props, image node, name) whose texture convert_textures() sets
 
     # -- entry point ---------------------------------------------------------------
     def export(self):
@@ -266,6 +291,13 @@ class GraphExport:
         if src is None or src[0] != "link":
             return None
         return self.nodes, {"surface": list(src[1:3])}
+
+    def convert_textures(self):
+        """Converts the images the graph reads (after :meth:`export`; separate, so that an
+        export that is not used converts nothing)."""
+        for props, node, name in self._images:
+            props["texture"] = graph_texture(node, self.owner, name, self.warnings, self.textures, user=("MATERIAL", self.name))
+        self._images = []
 
     # -- resolving sockets -----------------------------------------------------------
     def resolve_input(self, scope, sock):
@@ -431,8 +463,8 @@ class GraphExport:
                     continue
                 ident = legacy[3].get(sock.identifier, sock.identifier) if legacy else sock.identifier
                 got = self.resolve_input(scope, sock)
-                if got is None and sock.hide_value:
-                    continue  # an implicit input (texture coordinates, normal): absent means Blender's default
+                if got is None and implicit_input(entry["type"], ident):
+                    continue  # absent: the core gives it Blender's implicit value (UV, normal, ...)
                 if got is None:
                     v = socket_value(sock, self.owner, name)
                     if v is not None:
@@ -448,6 +480,7 @@ class GraphExport:
         self._index[key] = len(self.nodes) - 1
         self._note_needs(node, entry, name)
         self.per_hit = self.per_hit or node.bl_idname in PER_HIT
+        self.pending = self.pending or node.bl_idname in CORE_PENDING
         return ("link", self._index[key], out_ident, out.type)
 
     def props(self, node, name):
@@ -463,19 +496,19 @@ class GraphExport:
                 continue
             props[ident] = _plain(getattr(node, ident))
         t = node.bl_idname
-        if t == "ShaderNodeValToRGB":
+        if t == "ShaderNodeValue":
+            props["value"] = socket_value(node.outputs[0], self.owner, name)
+        elif t == "ShaderNodeRGB":
+            props["color"] = socket_value(node.outputs[0], self.owner, name)
+        elif t == "ShaderNodeValToRGB":
             props["color_ramp"] = color_ramp_dict(node.color_ramp)
         elif t in ("ShaderNodeRGBCurve", "ShaderNodeVectorCurve", "ShaderNodeFloatCurve"):
             props["curves"] = curves_dict(node)
         elif t in ("ShaderNodeTexImage", "ShaderNodeTexEnvironment"):
-            tex = None
+            props["texture"] = None  # set by convert_textures()
             if node.image is not None:
-                tex = graph_texture(node, self.owner, name, self.warnings, self.textures, user=("MATERIAL", self.name))
-            if tex is None:
-                props["texture"] = None
-            else:
-                props["texture"] = tex
                 props["alpha_mode"] = node.image.alpha_mode
+                self._images.append((props, node, name))
         elif t == "ShaderNodeTexCoord" and node.object is not None:
             self.warnings.add(
                 ("texcoord-object", self.name, name),
@@ -509,6 +542,7 @@ def export_graph(mat, warnings, textures):
     got = g.export()
     if got is None:
         return None
+    g.convert_textures()
     return got[0], got[1], g.needs
 
 
