@@ -52,8 +52,10 @@ def out(n, ident=None):
     return sock(n, ident, output=True)
 
 
-def build_tiles(cases):
-    """One material per shown value; returns the tile list [(case index, label, sign)]."""
+def build_tiles(cases, shader="ShaderNodeEmission"):
+    """One material per shown value; returns the tile list [(case index, material, sign)].
+    ``shader``: the Emission (the value is the pixel) or a Diffuse BSDF (the value is the
+    albedo: under a uniform white world the pixel is the albedo, clamped to [0, 1])."""
     tiles = []
     for i, (family, label, build, _tol) in enumerate(cases):
         m = bpy.data.materials.new(f"{family}: {label}")
@@ -63,8 +65,9 @@ def build_tiles(cases):
             nt.nodes.remove(n)
         mo = nt.nodes.new("ShaderNodeOutputMaterial")
         result = build(nt)
-        em = nt.nodes.new("ShaderNodeEmission")
-        em.inputs["Strength"].default_value = 1.0
+        em = nt.nodes.new(shader)
+        if shader == "ShaderNodeEmission":
+            em.inputs["Strength"].default_value = 1.0
         nt.links.new(em.outputs[0], mo.inputs["Surface"])
         if result.type in ("VALUE", "INT", "BOOLEAN"):
             neg = node(nt, "ShaderNodeMath", {"operation": "MULTIPLY"}, Value=result, Value_001=-1.0)
@@ -77,7 +80,7 @@ def build_tiles(cases):
             m2 = m.copy()
             m2.name = m.name + " (negated)"
             nt2 = m2.node_tree
-            em2 = next(n for n in nt2.nodes if n.type == "EMISSION")
+            em2 = next(n for n in nt2.nodes if n.bl_idname == shader)
             src = em2.inputs["Color"].links[0].from_socket
             neg = node(nt2, "ShaderNodeVectorMath", {"operation": "SCALE"}, Vector=src, Scale=-1.0)
             nt2.links.new(out(neg, "Vector"), em2.inputs["Color"])
@@ -85,16 +88,22 @@ def build_tiles(cases):
     return tiles
 
 
-def render(cases, samples=1):
+def render(cases, samples=1, albedo=False):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
-    tiles = build_tiles(cases)
+    tiles = build_tiles(cases, "ShaderNodeBsdfDiffuse" if albedo else "ShaderNodeEmission")
     rows = (len(tiles) + COLS - 1) // COLS
     sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = T * COLS, T * rows, 100
     sc.view_settings.view_transform = "Standard"
     sc.render.dither_intensity = 0.0
     sc.render.use_compositing = False
     sc.world = None
+    if albedo:  # a uniform white world: a lone diffuse plane reflects its albedo
+        sc.world = bpy.data.worlds.new("White")
+        sc.world.use_nodes = True
+        bg = sc.world.node_tree.nodes["Background"]
+        bg.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+        bg.inputs["Strength"].default_value = 1.0
     cd = bpy.data.cameras.new("C")
     cd.type = "ORTHO"
     cd.ortho_scale = max(COLS, rows)
@@ -128,18 +137,19 @@ def render(cases, samples=1):
     images, seconds = {}, {}
     sc.render.engine = "CYCLES"
     sc.cycles.device = "CPU"
-    sc.cycles.samples = 1
     sc.cycles.use_adaptive_sampling = False
     sc.cycles.use_denoising = False
     sc.cycles.pixel_filter_type = "BOX"
     sc.cycles.filter_width = 0.01
-    sc.cycles.max_bounces = 0
+    sc.cycles.max_bounces = 1 if albedo else 0
+    sc.cycles.samples = 64 if albedo else 1
     sc.render.threads_mode = "FIXED"
     sc.render.threads = 2
     for engine in ("CYCLES", "POLYCHROME"):
         sc.render.engine = engine
         if engine == "POLYCHROME":
             sc.polychrome.samples = samples
+            sc.polychrome.max_bounces = 1
         path = os.path.abspath(f"oracle_{engine.lower()}.exr")
         sc.render.filepath = path
         t0 = time.time()
@@ -167,10 +177,10 @@ def tile_values(path, tiles, rows):
     return np.array(vals)
 
 
-def run(cases, samples=1):
+def run(cases, samples=1, albedo=False):
     """Renders ``cases`` [(family, label, build(nt) -> socket, tolerance)] both ways and
     prints the RESULT line the test reads."""
-    tiles, rows, images, seconds, error, warnings = render(cases, samples)
+    tiles, rows, images, seconds, error, warnings = render(cases, samples, albedo)
     cyc = tile_values(images["CYCLES"], tiles, rows)
     pc = tile_values(images["POLYCHROME"], tiles, rows) if images["POLYCHROME"] else np.zeros_like(cyc)
     result = []

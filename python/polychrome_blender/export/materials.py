@@ -18,6 +18,8 @@ One :class:`MaterialExport` exports one Blender material; the :class:`~.exporter
 keeps the result (and its warnings) until the material changes.
 """
 
+import inspect
+
 import numpy as np
 import polychrome as pc
 
@@ -28,8 +30,10 @@ from .node_graph import GraphExport
 
 #: The core builds node graphs (``polychrome.NodeMaterial``) ...
 GRAPHS = hasattr(pc, "NodeMaterial")
-#: ... and evaluates those that change from hit to hit.
-GRAPHS_PER_HIT = False
+#: ... and evaluates those that change from hit to hit (it came with the mesh data they
+#: read: ``Scene.add_mesh(uv_maps=...)``). Per-hit emission is not evaluated yet, so a
+#: graph that varies and emits keeps the fixed patterns.
+GRAPHS_PER_HIT = GRAPHS and "uv_maps" in inspect.signature(pc.Scene.add_mesh).parameters
 
 GREY = (0.8, 0.8, 0.8)
 #: Mix/Add shaders nested deeper than this are not followed (a cycle guard).
@@ -133,7 +137,7 @@ class MaterialExport:
         own = Warnings()
         g = GraphExport(self.mat, own, self.textures)
         got = g.export()
-        if (g.per_hit and not GRAPHS_PER_HIT) or g.pending:
+        if (g.per_hit and not (GRAPHS_PER_HIT and not g.emits)) or g.pending:
             return None
         g.convert_textures()
         self.warnings.extend(own.items)

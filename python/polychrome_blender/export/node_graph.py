@@ -276,6 +276,7 @@ class GraphExport:
         self.needs = {}
         self.per_hit = False  # some node's value changes from hit to hit
         self.pending = False  # some node is in CORE_PENDING
+        self.emits = False  # an Emission, or a Principled BSDF with an emission
         self._index = {}  # (scope key, node pointer) -> index in nodes
         self._active = []  # nodes being exported (cycle detection), as (key, name)
         self._images = []  # (props, image node, name) whose texture convert_textures() sets
@@ -294,9 +295,25 @@ class GraphExport:
 
     def convert_textures(self):
         """Converts the images the graph reads (after :meth:`export`; separate, so that an
-        export that is not used converts nothing)."""
-        for props, node, name in self._images:
-            props["texture"] = graph_texture(node, self.owner, name, self.warnings, self.textures, user=("MATERIAL", self.name))
+        export that is not used converts nothing).
+
+        Cycles associates alpha when it loads an image (colour × alpha, except for
+        Non-Color data and the Channel Packed / None alpha modes) and gives the Color
+        output that way unless the node's Alpha output is linked
+        (ImageTextureNode::compile, intern/cycles/scene/shader_nodes.cpp); the texture
+        holds what Color gives."""
+        alpha_read = {
+            inp["link"][0]
+            for n in self.nodes
+            for inp in n.get("inputs", {}).values()
+            if isinstance(inp, dict) and "link" in inp and inp["link"][1] == "Alpha"
+        }
+        for props, node, name, index in self._images:
+            img = node.image
+            associate = index not in alpha_read and not img.colorspace_settings.is_data and img.alpha_mode not in ("CHANNEL_PACKED", "NONE")
+            props["texture"] = graph_texture(
+                node, self.owner, name, self.warnings, self.textures, user=("MATERIAL", self.name), associate=associate
+            )
         self._images = []
 
     # -- resolving sockets -----------------------------------------------------------
@@ -481,6 +498,10 @@ class GraphExport:
         self._note_needs(node, entry, name)
         self.per_hit = self.per_hit or node.bl_idname in PER_HIT
         self.pending = self.pending or node.bl_idname in CORE_PENDING
+        if entry["type"] == "ShaderNodeEmission" or (
+            entry["type"] == "ShaderNodeBsdfPrincipled" and entry["inputs"].get("Emission Strength", 0.0) != 0.0
+        ):
+            self.emits = True
         return ("link", self._index[key], out_ident, out.type)
 
     def props(self, node, name):
@@ -508,7 +529,7 @@ class GraphExport:
             props["texture"] = None  # set by convert_textures()
             if node.image is not None:
                 props["alpha_mode"] = node.image.alpha_mode
-                self._images.append((props, node, name))
+                self._images.append((props, node, name, len(self.nodes)))  # its index once appended
         elif t == "ShaderNodeTexCoord" and node.object is not None:
             self.warnings.add(
                 ("texcoord-object", self.name, name),

@@ -101,8 +101,10 @@ def graph_rgba(img, owner, warnings):
     return np.nan_to_num(buf, nan=0.0, posinf=0.0, neginf=0.0), "linear"
 
 
-def graph_texture(node, owner, node_name, warnings, cache, user=None):
-    """The RGBA Texture of an Image or Environment Texture node for the shading graph, or None."""
+def graph_texture(node, owner, node_name, warnings, cache, user=None, associate=False):
+    """The RGBA Texture of an Image or Environment Texture node for the shading graph, or
+    None. ``associate``: colour × alpha (in the stored encoding, as Cycles associates 8-bit
+    sRGB bytes before decoding them)."""
     img = node.image
     extension = getattr(node, "extension", "REPEAT")
 
@@ -111,9 +113,15 @@ def graph_texture(node, owner, node_name, warnings, cache, user=None):
         if got is None:
             return None
         px, encoding = got
+        if associate and not img.is_float:  # Blender's float buffers are associated already
+            if px.dtype == np.uint8:
+                a = px[:, :, 3:4].astype(np.float32) / 255.0
+                px = np.concatenate([np.rint(px[:, :, :3] * a).astype(np.uint8), px[:, :, 3:]], axis=2)
+            else:
+                px = np.concatenate([px[:, :, :3] * px[:, :, 3:4], px[:, :, 3:]], axis=2)
         return pc.Texture.from_array(px, encoding, extension if extension in WRAPS else "REPEAT", img.name)
 
-    return cache.texture(node, owner, warnings, user, convert=convert, kind="graph")
+    return cache.texture(node, owner, warnings, user, convert=convert, kind="graph-associated" if associate else "graph")
 
 
 class TextureCache:
