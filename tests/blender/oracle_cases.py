@@ -467,7 +467,19 @@ def image_cases():
         return out(t, "Alpha")
 
     cases.append(("Image Texture", "alpha", alpha, COORD_TOL))
-    return cases
+
+    def environment(nt, linked):
+        t = node(nt, "ShaderNodeTexEnvironment")
+        t.image = image("float", True, "Linear Rec.709")
+        if linked:  # a direction through Mapping instead of the incoming ray
+            nt.links.new(mapped(nt, "Normal", 1.0, (0.0, 0.0, 0.0), (0.4, 0.3, 0.0), "VECTOR"), t.inputs["Vector"])
+        return out(t, "Color")
+
+    return cases, [
+        ("Environment Texture", "incoming", lambda nt: environment(nt, False), COORD_TOL),
+        ("Environment Texture", "mapped normal", lambda nt: environment(nt, True), COORD_TOL),
+    ]
 
 
-HIT_CASES = coordinate_cases() + procedural_cases() + image_cases()
+IMAGE_CASES, ENVIRONMENT_CASES = image_cases()
+HIT_CASES = coordinate_cases() + procedural_cases() + IMAGE_CASES

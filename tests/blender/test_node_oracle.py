@@ -175,3 +175,16 @@ def test_per_hit_node_matches_cycles(per_hit, family):
     assert rows, family
     bad = [f"{f} {label}: error {e:.3g} > {tol:g} (Cycles {c}, Polychrome {p})" for f, label, e, tol, c, p in rows if not e <= tol]
     assert not bad, f"{len(bad)}/{len(rows)} cases off:\n" + "\n".join(bad)
+
+
+@needs_per_hit
+@pytest.mark.xfail(
+    reason="core: an Environment Texture in a material stops the render (internal error: index out of bounds, branch graph a604bdd)"
+)
+def test_environment_texture_in_a_material_matches_cycles(tmp_path):
+    """Kept apart from HIT_CASES: a render error would take every case with it."""
+    r = run_oracle(tmp_path, "ENVIRONMENT_CASES", samples=256, albedo=True)
+    assert r["error"] is None, r["error"]
+    rows = errors(r, tile_means=True)
+    bad = [f"{f} {label}: error {e:.3g} > {tol:g} (Cycles {c}, Polychrome {p})" for f, label, e, tol, c, p in rows if not e <= tol]
+    assert not bad, "\n".join(bad)
