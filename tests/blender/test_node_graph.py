@@ -214,6 +214,12 @@ for cs in ('ACEScg', 'Linear Rec.709', 'Non-Color', 'sRGB'):
     spaces[cs] = [n for n in r['nodes'] if n['type'] == 'ShaderNodeTexImage'][0]['props']['texture']
     buf = np.empty(8, np.float32); im.pixels.foreach_get(buf); spaces[cs]['raw'] = buf.tolist()
 out['spaces'] = spaces
+m, nt, mo = new_mat('Tiles')
+udim = bpy.data.images.new('Udim', 4, 4, tiled=True); udim.tiles.new(1002)
+t = nt.nodes.new('ShaderNodeTexImage'); t.image = udim; t2 = nt.nodes.new('ShaderNodeTexImage'); t2.image = udim
+e = nt.nodes.new('ShaderNodeEmission'); nt.links.new(t.outputs[0], e.inputs['Color']); nt.links.new(t2.outputs[0], e.inputs['Strength'])
+nt.links.new(e.outputs[0], mo.inputs['Surface'])
+out['udim'] = run(m)
 emit(**out)
 """
 
@@ -497,3 +503,10 @@ def test_every_blender_shader_node_exports_or_warns(tmp_path):
         else:
             assert len(probe) == 1 and r["kind"] in probe[0] and "material '" in probe[0], r
             assert r["kind"] not in r["types"], r
+
+
+def test_udim_image_warns_once(exported):
+    c = exported["udim"]
+    udim = [w for w in c["warnings"] if "UDIM" in w]
+    assert len(udim) == 1 and "material 'Tiles'" in udim[0] and "'Udim'" in udim[0], c["warnings"]
+    assert "error" not in c
