@@ -243,3 +243,28 @@ def test_frames_resume_skips_the_frames_written_whole(tmp_path, capsys):
     assert all(imageio.read_metadata(tmp_path / f"shot_{f}.exr")["polychrome:partial"] == "0" for f in (1, 2, 3))
     assert cli.main(["render", str(stage), "-o", str(out), "--frames", "1-3", "--resume", *flags]) == 0
     assert "every frame is written already" in capsys.readouterr().out
+
+
+def test_cancel_ends_a_running_piece_at_once():
+    """PassRenderer.cancel() (what a cancelled checkpointed RenderJob or Ctrl-C calls)
+    ends a running render_passes within a tile row: it returns None long before the range
+    would have finished."""
+    from polychrome import _core
+    from polychrome.render import RenderSettings, description_json
+
+    desc, buffers = box_scene().description()
+    r = _core.PassRenderer(description_json(desc), buffers, RenderSettings(**{**SETTINGS, "samples": 4000}).to_json())
+    t = time.perf_counter()
+    assert r.render_passes(0, 20) is not None
+    per_pass = (time.perf_counter() - t) / 20
+    out = {}
+    worker = threading.Thread(target=lambda: out.update(sums=r.render_passes(20, 4000)))
+    t = time.perf_counter()
+    worker.start()
+    time.sleep(0.1)
+    r.cancel()
+    worker.join(60)
+    took = time.perf_counter() - t
+    assert not worker.is_alive() and out["sums"] is None
+    assert took < 0.25 * 3980 * per_pass, (took, 3980 * per_pass)
+    assert r.render_passes(0, 1) is None  # a cancelled renderer renders nothing more

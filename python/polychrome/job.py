@@ -169,8 +169,8 @@ class RenderJob:
 class _TaskJob:
     """The core job's interface over a render in tasks on a thread of this process
     (:mod:`polychrome.tasks`), for a RenderJob with a ``checkpoint``: the passes are
-    saved as they finish and ``resume`` continues from them. A cancel takes effect when
-    the running piece (at most 16 passes) ends; previews come between pieces."""
+    saved as they finish and ``resume`` continues from them. A cancel ends the running
+    piece within a tile row (its passes are dropped); previews come between pieces."""
 
     def __init__(self, desc, buffers, settings: RenderSettings, previews: bool):
         from . import checkpoint
@@ -227,6 +227,7 @@ class _TaskJob:
 
     def cancel(self) -> None:
         self._cancelled = True
+        self._merge.cancel()  # the running piece ends within a tile row
 
     def done(self) -> bool:
         return self._ended.is_set()

@@ -44,7 +44,8 @@ class LocalExecutor:
     """Tasks rendered one after another on a thread of this process (each on every core
     of the ``threads`` setting), so that the calling thread can take Ctrl-C and write
     checkpoints between them. Pieces follow the local pass loop's groups (1, 1, 1, 1,
-    2, ... up to 16 passes), so progress and checkpoints come as often as there."""
+    2, ... up to 16 passes), so progress and checkpoints come as often as there; a
+    cancel ends the running piece within a tile row."""
 
     workers = 1
     local = True
@@ -63,8 +64,11 @@ class LocalExecutor:
         return concurrent.futures.as_completed(futures)
 
     def cancel(self, futures) -> None:
+        """Stops the run: the queued tasks are dropped and the running one ends within a
+        tile row (its result is None)."""
         for f in futures:
             f.cancel()
+        self._renderer.cancel()
 
     def close(self) -> None:
         self._pool.shutdown(wait=False, cancel_futures=True)
@@ -205,6 +209,10 @@ def run(merge, executor, settings, tok: str, *, progress=None, tile: int | None 
             pending = list(futures)
             for f in executor.as_completed(pending):
                 sums, worker = f.result()
+                if sums is None:  # the renderer was cancelled mid-task (LocalExecutor.cancel)
+                    out.cancelled = True
+                    executor.cancel(pending)
+                    break
                 # Arrays unpickled from a worker's message may be unaligned; the core needs aligned ones.
                 sums = {k: np.require(v, requirements="AC") if isinstance(v, np.ndarray) else v for k, v in sums.items()}
                 first_half, t, s, e = futures[f]

@@ -314,6 +314,8 @@ struct PassRenderer {
     pool: rayon::ThreadPool,
     build_seconds: f64,
     merge: Mutex<Option<Merge>>,
+    /// Shared by every `render_passes` of this object: `cancel()` ends them all.
+    control: RenderControl,
 }
 
 impl PassRenderer {
@@ -424,6 +426,7 @@ impl PassRenderer {
                     pool,
                     build_seconds: start.elapsed().as_secs_f64(),
                     merge: Mutex::new(None),
+                    control: RenderControl::new(),
                 })
             })
         })
@@ -462,7 +465,8 @@ impl PassRenderer {
     /// Sums of sample passes `start..end` over the pixels whose `active` entry is true
     /// (all when None), as numpy arrays: `xyz`, `albedo_xyz`, `normal` (pixels, 3),
     /// `depth`, `count` (pixels,), `spectral` (pixels × wavelengths,) or None, and
-    /// `nonfinite`. Renders on this object's thread pool without the GIL.
+    /// `nonfinite`. Renders on this object's thread pool without the GIL; None once
+    /// `cancel()` was called.
     ///
     /// `rect` (x0, y0, x1, y1): only the pixels of that rectangle, its sums row-major in
     /// it (image tiles; only when `tileable()`).
@@ -474,7 +478,7 @@ impl PassRenderer {
         end: u32,
         active: Option<PyReadonlyArray1<'py, bool>>,
         rect: Option<[u32; 4]>,
-    ) -> PyResult<Bound<'py, PyDict>> {
+    ) -> PyResult<Option<Bound<'py, PyDict>>> {
         let driver = self.driver()?;
         let total = driver.sample_passes();
         if start >= end || end > total {
@@ -492,16 +496,22 @@ impl PassRenderer {
                 ));
             }
         }
-        let control = RenderControl::new();
+        let control = &self.control;
         let sums = py.allow_threads(|| {
             guarded("render_passes", || {
                 Ok(self.pool.install(|| match rect {
-                    Some(r) => driver.render_rect(start..end, active.as_deref(), r, &control),
-                    None => driver.render_passes(start..end, active.as_deref(), &control),
+                    Some(r) => driver.render_rect(start..end, active.as_deref(), r, control),
+                    None => driver.render_passes(start..end, active.as_deref(), control),
                 }))
             })
         })?;
-        sums_dict(py, sums.expect("never cancelled"))
+        sums.map(|s| sums_dict(py, s)).transpose()
+    }
+
+    /// Ends the running `render_passes` calls of this object within a tile row, and
+    /// every later one: they return None (a local render in tasks that was cancelled).
+    fn cancel(&self) {
+        self.control.cancel();
     }
 
     /// Whether `render_passes` may cover image tiles (camera paths only).
