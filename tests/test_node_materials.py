@@ -86,3 +86,102 @@ def test_unsupported_nodes_warn_once_naming_material_and_node():
     ]
     with pytest.warns(UserWarning, match=r"'Odd'.*'Mystery'"):
         render(pc.NodeMaterial("Odd", nodes, {"surface": [1, "BSDF"]}))
+
+
+def halves_scene(material: pc.Material, **mesh) -> pc.Scene:
+    """A unit square filling an orthographic view, u (and the attribute data) running
+    left to right, lit only by a uniform white world: a diffuse pixel is its albedo."""
+    scene = pc.Scene()
+    m = np.eye(4)
+    m[2, 3] = 5.0
+    scene.camera = pc.Camera(to_world=m, projection="ORTHOGRAPHIC", ortho_scale=1.0)
+    v = np.array([[-0.5, -0.5, 0], [0.5, -0.5, 0], [0.5, 0.5, 0], [-0.5, 0.5, 0]], dtype=np.float32)
+    uvs = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=np.float32)
+    scene.add_mesh("square", v, np.array([[0, 1, 2], [0, 2, 3]]), uvs=uvs, material=material, **mesh)
+    scene.set_world(pc.spectra.constant(1.0))
+    return scene
+
+
+def step_colour_graph(vector_node: dict) -> list[dict]:
+    """Colour = red where the vector's x > 0.5, else green (Math GREATER_THAN into Mix)."""
+    return [
+        vector_node,
+        {"type": "ShaderNodeSeparateXYZ", "name": "Split", "inputs": {"Vector": {"link": [0, vector_node.get("out", "UV")]}}},
+        {
+            "type": "ShaderNodeMath",
+            "name": "Step",
+            "props": {"operation": "GREATER_THAN"},
+            "inputs": {"Value": {"link": [1, "X"]}, "Value_001": 0.5},
+        },
+        {
+            "type": "ShaderNodeMix",
+            "name": "Pick",
+            "props": {"data_type": "RGBA"},
+            "inputs": {"Factor_Float": {"link": [2, "Value"]}, "A_Color": [0.1, 0.6, 0.2, 1.0], "B_Color": [0.7, 0.2, 0.1, 1.0]},
+        },
+        {"type": "ShaderNodeBsdfDiffuse", "name": "Matte", "inputs": {"Color": {"link": [3, "Result_Color"]}}},
+    ]
+
+
+HALVES = dict(width=16, height=8, samples=16, max_bounces=2, seed=3)
+
+
+def fixed_render(material: pc.Material) -> np.ndarray:
+    """The same view of a fixed material, same samples and seed."""
+    return pc.render(halves_scene(material), **HALVES).rgba[..., :3]
+
+
+@pytest.mark.parametrize(
+    "vector,mesh",
+    [
+        ({"type": "ShaderNodeUVMap", "name": "UV"}, {}),
+        (
+            {"type": "ShaderNodeUVMap", "name": "UV", "props": {"uv_map": "Second"}},
+            {"uv_maps": {"Second": [[0, 0], [1, 0], [1, 1], [0, 1]]}},
+        ),
+        (
+            {"type": "ShaderNodeAttribute", "name": "A", "out": "Vector", "props": {"attribute_name": "ramp"}},
+            {"attributes": {"ramp": [0.0, 1.0, 1.0, 0.0]}},
+        ),
+    ],
+)
+def test_a_uv_driven_colour_renders_its_two_values_in_the_two_halves(vector, mesh):
+    """Per-hit evaluation: the left half renders as the fixed green diffuse, the right
+    half as the fixed red one (same albedo under a white world), away from the seam."""
+    nodes = step_colour_graph(dict(vector))
+    for n in nodes:
+        n.pop("out", None)
+    out = pc.render(halves_scene(pc.NodeMaterial("Halves", nodes, {"surface": [4, "BSDF"]}), **mesh), **HALVES).rgba[..., :3]
+    green = fixed_render(pc.Diffuse((0.1, 0.6, 0.2)))
+    red = fixed_render(pc.Diffuse((0.7, 0.2, 0.1)))
+    np.testing.assert_allclose(out[:, :7], green[:, :7], rtol=1e-4, atol=1e-6)
+    np.testing.assert_allclose(out[:, 9:], red[:, 9:], rtol=1e-4, atol=1e-6)
+
+
+def test_a_checker_driven_roughness_renders_two_glossy_looks():
+    """Roughness from a Checker's Fac through Map Range (0.2 or 0.6 in alternate cells)
+    on a Glossy BSDF: each cell renders as the fixed Glossy of that roughness."""
+    nodes = [
+        {"type": "ShaderNodeUVMap", "name": "UV"},
+        {"type": "ShaderNodeTexChecker", "name": "Cells", "inputs": {"Vector": {"link": [0, "UV"]}, "Scale": 1.0}},
+        {"type": "ShaderNodeMapRange", "name": "Range", "inputs": {"Value": {"link": [1, "Fac"]}, "To Min": 0.2, "To Max": 0.6}},
+        {
+            "type": "ShaderNodeBsdfAnisotropic",
+            "name": "Gloss",
+            "inputs": {"Roughness": {"link": [2, "Result"]}, "Color": [0.9, 0.9, 0.9, 1.0]},
+        },
+    ]
+    scene = halves_scene(pc.NodeMaterial("Cells", nodes, {"surface": [3, "BSDF"]}))
+    scene.add_light(pc.SunLight(direction=(0.4, 0.1, -1.0), strength=3.0))
+    out = pc.render(scene, **HALVES).rgba[..., :3]
+    refs = {}
+    for r in (0.2, 0.6):
+        s = halves_scene(pc.Glossy((0.9, 0.9, 0.9), roughness=r))
+        s.add_light(pc.SunLight(direction=(0.4, 0.1, -1.0), strength=3.0))
+        refs[r] = pc.render(s, **HALVES).rgba[..., :3]
+    assert not np.allclose(refs[0.2], refs[0.6], rtol=1e-2)
+    # Each pixel away from the cell edge (u = 0.5) equals one of the two references.
+    for half in (np.s_[:, :7], np.s_[:, 9:]):
+        matches = [np.allclose(out[half], refs[r][half], rtol=1e-4, atol=1e-6) for r in (0.2, 0.6)]
+        assert sum(matches) == 1, matches
+    assert not np.allclose(out[:, :7].mean(), out[:, 9:].mean(), rtol=1e-3)

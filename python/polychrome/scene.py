@@ -711,6 +711,10 @@ class Scene:
         motion_vertices: Any = None,
         motion_normals: Any = None,
         motion: Any = None,
+        uv_maps: dict[str, Any] | None = None,
+        colors: dict[str, Any] | None = None,
+        attributes: dict[str, Any] | None = None,
+        tangents: Any = None,
     ) -> int:
         """Adds a triangle mesh from arrays: vertices (V, 3), triangles (T, 3) vertex
         indices, optional per-vertex normals (V, 3) and uvs (V, 2), one material or
@@ -721,7 +725,12 @@ class Scene:
         Motion blur (docs/camera.md): ``motion_vertices`` (K, V, 3), K ≥ 2 positions
         evenly spaced from shutter open to close, makes a deforming mesh (with
         ``motion_normals`` of the same shape, optionally); ``motion`` (K, 4, 4)
-        transforms move the placement made here."""
+        transforms move the placement made here.
+
+        Shading graphs (:class:`NodeMaterial`, docs/shading.md) read named per-vertex
+        data: ``uv_maps`` {name: (V, 2)}, ``colors`` {name: (V, 4) or (V, 3) linear
+        RGBA}, ``attributes`` {name: (V,), (V, 3) or (V, 4)} and ``tangents`` (V, 4):
+        tangent xyz and bitangent sign."""
         v = np.ascontiguousarray(vertices, dtype=np.float32)
         if v.ndim != 2 or v.shape[1] != 3:
             raise ValueError(f"mesh '{name}': vertices must have shape (V, 3), got {v.shape}")
@@ -747,6 +756,22 @@ class Scene:
             if uv.shape != (v.shape[0], 2):
                 raise ValueError(f"mesh '{name}': uvs must have shape ({v.shape[0]}, 2), got {uv.shape}")
             entry["uvs"] = self._buffer(uv.ravel())
+        for key, table, widths in (("uv_maps", uv_maps, (2,)), ("colors", colors, (4, 3)), ("attributes", attributes, (1, 3, 4))):
+            if table is None:
+                continue
+            entry[key] = {}
+            for attr, values in table.items():
+                a = np.ascontiguousarray(values, dtype=np.float32).reshape(v.shape[0], -1)
+                if a.shape[1] not in widths or not np.all(np.isfinite(a)):
+                    raise ValueError(
+                        f"mesh '{name}': {key} '{attr}' must be finite with shape (V, {' or '.join(map(str, widths))}), got {a.shape}"
+                    )
+                entry[key][str(attr)] = self._buffer(a.ravel())
+        if tangents is not None:
+            tg = np.ascontiguousarray(tangents, dtype=np.float32)
+            if tg.shape != (v.shape[0], 4):
+                raise ValueError(f"mesh '{name}': tangents must have shape ({v.shape[0]}, 4), got {tg.shape}")
+            entry["tangents"] = self._buffer(tg.ravel())
         if material_ids is not None:
             ids = np.asarray(material_ids)
             if ids.shape != (t.shape[0],):

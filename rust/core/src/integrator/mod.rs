@@ -101,12 +101,11 @@ pub fn facing<'s>(
     let front = si.ng.dot(wo) >= 0.0;
     ctx.uv = si.uv;
     ctx.front_face = front;
-    Facing {
-        wo,
-        ng: if front { si.ng } else { -si.ng },
-        ns: if front { si.ns } else { -si.ns },
-        material: &scene.materials[si.material as usize],
+    let material = &scene.materials[si.material as usize];
+    if let Some(requests) = &material.hit_attributes {
+        ctx.hit = scene.shading_point(ray, si, requests);
     }
+    Facing { wo, ng: if front { si.ng } else { -si.ng }, ns: if front { si.ns } else { -si.ns }, material }
 }
 
 /// How pixel samples and light paths are estimated: the direction's technique on the

@@ -70,6 +70,8 @@ pub struct ShadingContext<'a> {
     /// What the path carries: radiance (camera paths) or importance (light paths).
     /// Refraction scales radiance by 1/η² but not importance (Veach 1997, §5.2).
     pub mode: TransportMode,
+    /// What a shading graph reads at this hit (set only for materials with one).
+    pub hit: crate::shading::ShadingPoint,
 }
 
 /// Which quantity a path transports, for the non-symmetric scattering of refraction.
@@ -85,7 +87,14 @@ pub enum TransportMode {
 impl<'a> ShadingContext<'a> {
     /// A context for a camera path (radiance, all wavelengths, front face).
     pub fn new(grid: &'a WavelengthGrid) -> Self {
-        Self { uv: Vec2::ZERO, grid, single_wavelength: None, front_face: true, mode: TransportMode::Radiance }
+        Self {
+            uv: Vec2::ZERO,
+            grid,
+            single_wavelength: None,
+            front_face: true,
+            mode: TransportMode::Radiance,
+            hit: Default::default(),
+        }
     }
 }
 
@@ -148,4 +157,7 @@ pub struct Material {
     pub bsdf: Box<dyn Bsdf>,
     /// Emitted radiance per wavelength (both faces), if the surface is a light.
     pub emission: Option<SampledSpectrum>,
+    /// For a material driven by a graph per hit: the mesh data its program reads, by
+    /// slot (the walk fills `ShadingContext::hit` only for these materials).
+    pub hit_attributes: Option<Vec<crate::shading::program::AttributeRequest>>,
 }

@@ -297,6 +297,18 @@ pub struct MeshDesc {
     /// Per-vertex normals at the same keys (optional).
     #[serde(default)]
     pub motion_normals: Vec<usize>,
+    /// Named UV maps (V×2 f32 buffers) for shading graphs (docs/shading.md).
+    #[serde(default)]
+    pub uv_maps: std::collections::BTreeMap<String, usize>,
+    /// Colour attributes (V×4 or V×3 f32 linear RGBA).
+    #[serde(default)]
+    pub colors: std::collections::BTreeMap<String, usize>,
+    /// Generic attributes (V×1, V×3 or V×4 f32).
+    #[serde(default)]
+    pub attributes: std::collections::BTreeMap<String, usize>,
+    /// V×4 f32: tangent xyz and bitangent sign (MikkTSpace).
+    #[serde(default)]
+    pub tangents: Option<usize>,
 }
 
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]

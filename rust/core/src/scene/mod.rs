@@ -3,6 +3,7 @@
 //! distribution ready.
 
 pub mod desc;
+pub mod hit;
 pub mod layered;
 pub mod media;
 pub mod optics;
@@ -41,6 +42,9 @@ pub struct SurfaceInteraction {
     /// Unit shading normal, on the same side as `ng`.
     pub ns: Vec3A,
     pub uv: Vec2,
+    /// Barycentrics of vertices 1 and 2 (per-vertex data for shading graphs).
+    pub b1: f32,
+    pub b2: f32,
     pub material: u32,
     pub instance: u32,
     pub triangle: u32,
@@ -121,6 +125,8 @@ pub struct Scene {
     pub material_medium: Vec<Option<u32>>,
     /// Per material: no surface, rays pass straight through (`BsdfDesc::Null`).
     pub null_surface: Vec<bool>,
+    /// Per mesh: the named vertex data shading graphs read, and its bounds.
+    pub mesh_data: Vec<hit::MeshShadingData>,
 }
 
 /// The RGB → spectrum map while building: where the grid has none, the first RGB
@@ -168,6 +174,30 @@ impl RgbToSpectrum for BuildUplift<'_> {
             }
         }
     }
+}
+
+/// The per-hit BSDF of a graph material whose closure inputs vary.
+fn graph_bsdf(
+    name: &str,
+    compiled: &crate::shading::CompiledMaterial,
+    grid: &WavelengthGrid,
+    uplift: Option<&Arc<Uplift>>,
+    textures: &[Arc<Texture>],
+) -> Result<crate::shading::bsdf::GraphBsdf> {
+    let Some(up) = uplift.cloned() else {
+        return Err(Error::object(
+            "material",
+            name,
+            "its node graph varies over the surface, which needs an RGB → spectrum map this wavelength grid lacks",
+        ));
+    };
+    let (grid, textures, name) = (grid.clone(), textures.to_vec(), name.to_string());
+    let build = move |d: &BsdfDesc| -> Result<Box<dyn Bsdf>> {
+        let rgb = BuildUplift::new(Ok(&up), grid.len());
+        let b = layered::BsdfBuild { grid: &grid, rgb: &rgb, textures: &textures, uplift: Some(&up) };
+        layered::build_bsdf(&b, &name, d)
+    };
+    crate::shading::bsdf::GraphBsdf::new(compiled.program.clone(), compiled.template.clone(), Box::new(build))
 }
 
 fn buffer_f32<'a>(buffers: &'a [Buffer], i: usize, mesh: &str, what: &str) -> Result<&'a [f32]> {
@@ -218,16 +248,24 @@ impl Scene {
                 Ok(SampledSpectrum::from_slice(&rgb.evaluate(d, &grid, role, "material", &m.name, what)?))
             };
             // A node graph that folds to constants is built as the fixed material it equals.
-            let compiled;
+            let (compiled, constant);
+            let mut per_hit = None;
+            let mut hit_attributes = None;
             let (bsdf_desc, emission_desc) = match &m.bsdf {
                 BsdfDesc::Graph(g) => {
                     compiled = crate::shading::compile_material(&m.name, g, &textures)?;
                     warnings.extend(compiled.warnings.iter().cloned());
-                    (&compiled.surface.bsdf, compiled.surface.emission.as_ref())
+                    constant = compiled.constant_surface().unwrap_or(BsdfDesc::None);
+                    if !compiled.template.is_constant() {
+                        per_hit = Some(self::graph_bsdf(&m.name, &compiled, &grid, uplift.as_ref(), &textures)?);
+                        hit_attributes = Some(compiled.program.attributes.clone());
+                    }
+                    (&constant, compiled.emission.as_ref())
                 }
                 d => (d, m.emission.as_ref()),
             };
             let bsdf: Box<dyn Bsdf> = match bsdf_desc {
+                _ if per_hit.is_some() => Box::new(per_hit.take().expect("checked")),
                 BsdfDesc::Diffuse { reflectance } if matches!(reflectance.kind, SpectrumKind::Texture { .. }) => {
                     let SpectrumKind::Texture { texture: t } = reflectance.kind else { unreachable!() };
                     let texture = textures.get(t).ok_or_else(|| {
@@ -290,7 +328,7 @@ impl Scene {
                 Some(e) => Some(spectrum(e, SpectrumRole::Illuminant, "emission")?).filter(|s| !s.is_black()),
                 None => None,
             };
-            materials.push(Material { name: m.name.clone(), bsdf, emission });
+            materials.push(Material { name: m.name.clone(), bsdf, emission, hit_attributes });
             // A graph with a volume and no surface is volume-only (Cycles' SD_HAS_ONLY_VOLUME).
             null_surface.push(match &m.bsdf {
                 BsdfDesc::Null => true,
@@ -314,6 +352,7 @@ impl Scene {
                 name: "default".into(),
                 bsdf: Box::new(Diffuse { reflectance: SpectralParam::Constant(grey) }),
                 emission: None,
+                hit_attributes: None,
             });
             material_medium.push(None);
             null_surface.push(false);
@@ -321,6 +360,7 @@ impl Scene {
 
         // Meshes.
         let mut meshes = Vec::with_capacity(desc.meshes.len());
+        let mut mesh_data = Vec::with_capacity(desc.meshes.len());
         for md in &desc.meshes {
             let name = md.name.as_str();
             let positions = buffer_f32(buffers, md.vertices, name, "vertices")?;
@@ -355,6 +395,7 @@ impl Scene {
             } else if !md.motion_normals.is_empty() {
                 return Err(Error::object("mesh", name, "motion_normals given without motion_vertices"));
             }
+            mesh_data.push(hit::MeshShadingData::new(md, &mesh, buffers)?);
             meshes.push(mesh);
         }
 
@@ -582,6 +623,7 @@ impl Scene {
             media,
             material_medium,
             null_surface,
+            mesh_data,
         })
     }
 
@@ -639,6 +681,8 @@ impl Scene {
             ng,
             ns,
             uv,
+            b1,
+            b2,
             material: mesh.material_ids[hit.triangle as usize],
             instance: hit.instance,
             triangle: hit.triangle,

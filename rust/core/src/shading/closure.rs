@@ -6,6 +6,7 @@
 
 use super::compile::{Compiler, Value};
 use super::desc::InputDesc;
+use super::program::Reg;
 use crate::material::IorDesc;
 use crate::scene::{BsdfDesc, MixFactorDesc};
 use crate::spectrum::named::SpectrumKind;
@@ -41,6 +42,231 @@ pub struct Lowered {
     pub emission: Option<SpectrumDesc>,
 }
 
+/// A float closure parameter: a constant, or a register clamped to `lo..hi` per hit.
+#[derive(Clone, Debug)]
+pub enum F {
+    C(f32),
+    R(Reg, f32, f32),
+}
+
+/// A colour closure parameter: a constant spectrum, or an RGB register (clamped to 0..1).
+#[derive(Clone, Debug)]
+pub enum Col {
+    C(SpectrumDesc),
+    R(Reg),
+}
+
+/// An IOR parameter.
+#[derive(Clone, Debug)]
+pub enum Ior {
+    C(IorDesc),
+    R(Reg),
+}
+
+/// The surface's closures with their parameters: what a hit instantiates into a
+/// fixed description once the program has run.
+#[derive(Clone, Debug)]
+pub enum Template {
+    Fixed(BsdfDesc),
+    Principled {
+        base_color: Col,
+        metallic: F,
+        roughness: F,
+        ior: Ior,
+        transmission: F,
+        specular_tint: Col,
+        thin_film_thickness: F,
+        thin_film_ior: F,
+        specular_ior_level: F,
+    },
+    Diffuse {
+        color: Col,
+        roughness: F,
+    },
+    Glossy {
+        color: Col,
+        roughness: F,
+    },
+    /// White glass: the dielectric; tinted: a transmissive Principled.
+    Glass {
+        color: Col,
+        roughness: F,
+        ior: Ior,
+    },
+    Translucent {
+        color: Col,
+    },
+    Sheen {
+        color: Col,
+        roughness: F,
+    },
+    Mix {
+        factor: F,
+        factor_from: Option<MixFactorDesc>,
+        a: Box<Template>,
+        b: Box<Template>,
+    },
+    Add {
+        a: Box<Template>,
+        b: Box<Template>,
+    },
+}
+
+impl F {
+    fn at(&self, v: &dyn Fn(Reg) -> Vec3) -> f32 {
+        match *self {
+            F::C(x) => x,
+            F::R(r, lo, hi) => v(r).x.clamp(lo, hi),
+        }
+    }
+    fn is_const(&self) -> bool {
+        matches!(self, F::C(_))
+    }
+}
+
+impl Col {
+    fn at(&self, v: &dyn Fn(Reg) -> Vec3) -> SpectrumDesc {
+        match self {
+            Col::C(d) => d.clone(),
+            Col::R(r) => SpectrumDesc::new(SpectrumKind::Rgb { rgb: v(*r).clamp(Vec3::ZERO, Vec3::ONE).to_array() }),
+        }
+    }
+    fn is_const(&self) -> bool {
+        matches!(self, Col::C(_))
+    }
+}
+
+impl Ior {
+    fn at(&self, v: &dyn Fn(Reg) -> Vec3) -> IorDesc {
+        match self {
+            Ior::C(d) => d.clone(),
+            Ior::R(r) => IorDesc::Constant { ior: f64::from(v(*r).x.max(1e-5)) },
+        }
+    }
+}
+
+fn is_white(d: &SpectrumDesc) -> bool {
+    matches!(d.kind, SpectrumKind::Rgb { rgb } if rgb == [1.0; 3]) && d.scale == 1.0
+        || matches!(d.kind, SpectrumKind::Constant { value } if value * d.scale == 1.0)
+}
+
+impl Template {
+    /// Whether every parameter is a constant.
+    pub fn is_constant(&self) -> bool {
+        match self {
+            Template::Fixed(_) => true,
+            Template::Principled {
+                base_color,
+                metallic,
+                roughness,
+                ior,
+                transmission,
+                specular_tint,
+                thin_film_thickness,
+                thin_film_ior,
+                specular_ior_level,
+            } => {
+                base_color.is_const()
+                    && specular_tint.is_const()
+                    && matches!(ior, Ior::C(_))
+                    && [metallic, roughness, transmission, thin_film_thickness, thin_film_ior, specular_ior_level]
+                        .iter()
+                        .all(|f| f.is_const())
+            }
+            Template::Diffuse { color, roughness } | Template::Glossy { color, roughness } => {
+                color.is_const() && roughness.is_const()
+            }
+            Template::Sheen { color, roughness } => color.is_const() && roughness.is_const(),
+            Template::Glass { color, roughness, ior } => {
+                color.is_const() && roughness.is_const() && matches!(ior, Ior::C(_))
+            }
+            Template::Translucent { color } => color.is_const(),
+            Template::Mix { factor, a, b, .. } => factor.is_const() && a.is_constant() && b.is_constant(),
+            Template::Add { a, b } => a.is_constant() && b.is_constant(),
+        }
+    }
+
+    /// Whether some roughness may be zero at a hit (a delta lobe may appear).
+    pub fn may_be_specular(&self) -> bool {
+        match self {
+            Template::Fixed(_) => false,
+            Template::Principled { roughness, transmission, .. } => !roughness.is_const() || !transmission.is_const(),
+            Template::Glossy { roughness, .. } | Template::Glass { roughness, .. } => !roughness.is_const(),
+            Template::Mix { a, b, .. } | Template::Add { a, b } => a.may_be_specular() || b.may_be_specular(),
+            _ => false,
+        }
+    }
+
+    /// The fixed description at register values `v`.
+    pub fn instantiate(&self, v: &dyn Fn(Reg) -> Vec3) -> BsdfDesc {
+        match self {
+            Template::Fixed(d) => d.clone(),
+            Template::Principled {
+                base_color,
+                metallic,
+                roughness,
+                ior,
+                transmission,
+                specular_tint,
+                thin_film_thickness,
+                thin_film_ior,
+                specular_ior_level,
+            } => {
+                let tint = specular_tint.at(v);
+                BsdfDesc::Principled {
+                    base_color: base_color.at(v),
+                    metallic: metallic.at(v),
+                    roughness: roughness.at(v),
+                    ior: ior.at(v),
+                    transmission: transmission.at(v),
+                    specular_tint: (!is_white(&tint)).then_some(tint),
+                    thin_film_thickness: thin_film_thickness.at(v),
+                    thin_film_ior: thin_film_ior.at(v),
+                    specular_ior_level: specular_ior_level.at(v),
+                }
+            }
+            Template::Diffuse { color, roughness } => {
+                let r = roughness.at(v);
+                if r > 0.0 {
+                    BsdfDesc::RoughDiffuse { reflectance: color.at(v), roughness: r }
+                } else {
+                    BsdfDesc::Diffuse { reflectance: color.at(v) }
+                }
+            }
+            Template::Glossy { color, roughness } => {
+                BsdfDesc::Glossy { reflectance: color.at(v), roughness: roughness.at(v) }
+            }
+            Template::Glass { color, roughness, ior } => {
+                let c = color.at(v);
+                if is_white(&c) {
+                    BsdfDesc::Dielectric { ior: ior.at(v), roughness: roughness.at(v) }
+                } else {
+                    BsdfDesc::Principled {
+                        base_color: c,
+                        metallic: 0.0,
+                        roughness: roughness.at(v),
+                        ior: ior.at(v),
+                        transmission: 1.0,
+                        specular_tint: None,
+                        thin_film_thickness: 0.0,
+                        thin_film_ior: 1.33,
+                        specular_ior_level: 0.5,
+                    }
+                }
+            }
+            Template::Translucent { color } => BsdfDesc::Translucent { color: color.at(v) },
+            Template::Sheen { color, roughness } => BsdfDesc::Sheen { color: color.at(v), roughness: roughness.at(v) },
+            Template::Mix { factor, factor_from, a, b } => BsdfDesc::Mix {
+                a: Box::new(a.instantiate(v)),
+                b: Box::new(b.instantiate(v)),
+                factor: factor.at(v),
+                factor_from: factor_from.clone(),
+            },
+            Template::Add { a, b } => BsdfDesc::Add { a: Box::new(a.instantiate(v)), b: Box::new(b.instantiate(v)) },
+        }
+    }
+}
+
 pub struct Lowering<'c, 'a> {
     pub c: &'c mut Compiler<'a>,
     /// Closure nodes on the current path, for cycles through shader links.
@@ -69,53 +295,54 @@ impl<'c, 'a> Lowering<'c, 'a> {
         Self { c, path: Vec::new() }
     }
 
-    fn non_constant(&self, node: usize, id: &str) -> Error {
-        self.c.error(
-            node,
-            format!("input '{id}' varies over the surface: it needs per-hit evaluation (not yet supported)"),
-        )
+    fn per_hit_unsupported(&self, node: usize, id: &str, what: &str) -> Error {
+        self.c.error(node, format!("input '{id}' varies over the surface, and per-hit {what} is not supported yet"))
     }
 
-    /// A constant float input.
-    fn float(&mut self, node: usize, id: &str) -> Result<f32> {
+    /// A float input clamped to lo..hi (Cycles saturates closure weights the same way).
+    fn float(&mut self, node: usize, id: &str, lo: f32, hi: f32) -> Result<F> {
         let r = self.c.input_reg(node, id)?;
-        self.c.const_of(r).map(|v| v.x).ok_or_else(|| self.non_constant(node, id))
+        Ok(match self.c.const_of(r) {
+            Some(v) => F::C(v.x.clamp(lo, hi)),
+            None => F::R(r, lo, hi),
+        })
     }
 
-    /// A constant colour input as a spectrum description, clamped to 0..1 when it is a
-    /// reflectance (Cycles saturates closure colours' weights the same way).
-    fn color(&mut self, node: usize, id: &str, reflectance: bool) -> Result<SpectrumDesc> {
+    /// A float input that must be constant (emission strength, layer weights).
+    fn const_float(&mut self, node: usize, id: &str, what: &str) -> Result<f32> {
+        let r = self.c.input_reg(node, id)?;
+        self.c.const_of(r).map(|v| v.x).ok_or_else(|| self.per_hit_unsupported(node, id, what))
+    }
+
+    /// A colour input: constants become spectrum descriptions (reflectances clamped to 0..1).
+    fn color(&mut self, node: usize, id: &str) -> Result<Col> {
         match self.c.input(node, id)? {
-            Value::Spectrum(s) => Ok(s),
+            Value::Spectrum(s) => Ok(Col::C(s)),
             Value::Ior(_) => Err(self.c.error(node, format!("input '{id}': an IOR model on a colour"))),
-            Value::Reg(r) => {
-                let v = self.c.const_of(r).ok_or_else(|| self.non_constant(node, id))?;
-                let v = if reflectance { v.clamp(Vec3::ZERO, Vec3::ONE) } else { v.max(Vec3::ZERO) };
-                Ok(SpectrumDesc::new(SpectrumKind::Rgb { rgb: v.to_array() }))
-            }
+            Value::Reg(r) => Ok(match self.c.const_of(r) {
+                Some(v) => {
+                    Col::C(SpectrumDesc::new(SpectrumKind::Rgb { rgb: v.clamp(Vec3::ZERO, Vec3::ONE).to_array() }))
+                }
+                None => Col::R(r),
+            }),
         }
     }
 
-    fn is_white(d: &SpectrumDesc) -> bool {
-        matches!(d.kind, SpectrumKind::Rgb { rgb } if rgb == [1.0; 3]) && d.scale == 1.0
-            || matches!(d.kind, SpectrumKind::Constant { value } if value * d.scale == 1.0)
-    }
-
-    fn ior(&mut self, node: usize, id: &str) -> Result<IorDesc> {
+    fn ior(&mut self, node: usize, id: &str) -> Result<Ior> {
         match self.c.input(node, id)? {
-            Value::Ior(d) => Ok(d),
+            Value::Ior(d) => Ok(Ior::C(d)),
             Value::Spectrum(_) => Err(self.c.error(node, format!("input '{id}': a spectrum on an IOR"))),
-            Value::Reg(r) => {
-                let v = self.c.const_of(r).ok_or_else(|| self.non_constant(node, id))?.x;
-                Ok(IorDesc::Constant { ior: f64::from(v.max(1e-5)) })
-            }
+            Value::Reg(r) => Ok(match self.c.const_of(r) {
+                Some(v) => Ior::C(IorDesc::Constant { ior: f64::from(v.x.max(1e-5)) }),
+                None => Ior::R(r),
+            }),
         }
     }
 
-    /// Checks that a Normal/Tangent input is unlinked (the default normal).
+    /// A linked Normal input is not applied yet: warn.
     fn default_normal(&mut self, node: usize, id: &str) -> Result<()> {
         if self.c.linked(node, id).is_some() {
-            return Err(self.non_constant(node, id));
+            self.c.warn(node, format!("a linked {id} is not applied yet (the surface keeps its shading normal)"));
         }
         Ok(())
     }
@@ -135,15 +362,15 @@ impl<'c, 'a> Lowering<'c, 'a> {
     }
 
     /// The closure linked into input `id` of `node` (None: unlinked, nothing).
-    fn shader_input(&mut self, node: usize, id: &str, depth: usize) -> Result<(BsdfDesc, Option<Emission>)> {
+    fn shader_input(&mut self, node: usize, id: &str, depth: usize) -> Result<(Template, Option<Emission>)> {
         match self.c.linked(node, id) {
-            None => Ok((BsdfDesc::None, None)),
+            None => Ok((Template::Fixed(BsdfDesc::None), None)),
             Some((from, out)) => self.closure(from, out, depth + 1),
         }
     }
 
     /// Lowers the closure at output `out` of node `node`.
-    pub fn closure(&mut self, node: usize, out: &str, depth: usize) -> Result<(BsdfDesc, Option<Emission>)> {
+    pub fn closure(&mut self, node: usize, out: &str, depth: usize) -> Result<(Template, Option<Emission>)> {
         let nodes = self.c.nodes;
         if node >= nodes.len() {
             return Err(Error::object(
@@ -173,7 +400,7 @@ impl<'c, 'a> Lowering<'c, 'a> {
             }
             None => {
                 self.c.warn(node, "is not a supported shader; it renders as a grey diffuse");
-                return Ok((BsdfDesc::default(), None));
+                return Ok((Template::Fixed(BsdfDesc::default()), None));
             }
         }
         self.c.check_inputs(node)?;
@@ -183,7 +410,7 @@ impl<'c, 'a> Lowering<'c, 'a> {
         r
     }
 
-    fn closure_node(&mut self, node: usize, kind: &str, depth: usize) -> Result<(BsdfDesc, Option<Emission>)> {
+    fn closure_node(&mut self, node: usize, kind: &str, depth: usize) -> Result<(Template, Option<Emission>)> {
         let material = self.c.material;
         Ok(match kind {
             "ShaderNodeBsdfPrincipled" => {
@@ -199,116 +426,101 @@ impl<'c, 'a> Lowering<'c, 'a> {
                     self.ignored(node, id, default, what)?;
                 }
                 let emission = self.emission(node, "Emission Color", "Emission Strength")?;
-                let level = self.float(node, "Specular IOR Level")?.max(0.0);
-                if level > 1.0 {
-                    self.c.warn(node, format!("Specular IOR Level {level} is clamped to 1"));
+                if let Some(InputDesc::Number(x)) = self.c.nodes[node].inputs.get("Specular IOR Level") {
+                    if *x > 1.0 {
+                        self.c.warn(node, format!("Specular IOR Level {x} is clamped to 1"));
+                    }
                 }
-                let tint = self.color(node, "Specular Tint", true)?;
-                let bsdf = BsdfDesc::Principled {
-                    base_color: self.color(node, "Base Color", true)?,
-                    metallic: self.float(node, "Metallic")?.clamp(0.0, 1.0),
-                    roughness: self.float(node, "Roughness")?.clamp(0.0, 1.0),
+                let t = Template::Principled {
+                    base_color: self.color(node, "Base Color")?,
+                    metallic: self.float(node, "Metallic", 0.0, 1.0)?,
+                    roughness: self.float(node, "Roughness", 0.0, 1.0)?,
                     ior: self.ior(node, "IOR")?,
-                    transmission: self.float(node, "Transmission Weight")?.clamp(0.0, 1.0),
-                    specular_tint: (!Self::is_white(&tint)).then_some(tint),
-                    thin_film_thickness: self.float(node, "Thin Film Thickness")?.clamp(0.0, 100_000.0),
-                    thin_film_ior: self.float(node, "Thin Film IOR")?.clamp(1.0, 10.0),
-                    specular_ior_level: level.min(1.0),
+                    transmission: self.float(node, "Transmission Weight", 0.0, 1.0)?,
+                    specular_tint: self.color(node, "Specular Tint")?,
+                    thin_film_thickness: self.float(node, "Thin Film Thickness", 0.0, 100_000.0)?,
+                    thin_film_ior: self.float(node, "Thin Film IOR", 1.0, 10.0)?,
+                    specular_ior_level: self.float(node, "Specular IOR Level", 0.0, 1.0)?,
                 };
-                (bsdf, emission)
+                (t, emission)
             }
             "ShaderNodeBsdfDiffuse" => {
                 self.default_normal(node, "Normal")?;
-                let reflectance = self.color(node, "Color", true)?;
-                let roughness = self.float(node, "Roughness")?.clamp(0.0, 1.0);
-                let bsdf = if roughness > 0.0 {
-                    BsdfDesc::RoughDiffuse { reflectance, roughness }
-                } else {
-                    BsdfDesc::Diffuse { reflectance }
-                };
-                (bsdf, None)
+                let color = self.color(node, "Color")?;
+                (Template::Diffuse { color, roughness: self.float(node, "Roughness", 0.0, 1.0)? }, None)
             }
             "ShaderNodeBsdfAnisotropic" | "ShaderNodeBsdfGlossy" => {
                 self.default_normal(node, "Normal")?;
                 self.ignored(node, "Anisotropy", 0.0, "no anisotropy yet")?;
-                let reflectance = self.color(node, "Color", true)?;
-                (BsdfDesc::Glossy { reflectance, roughness: self.float(node, "Roughness")?.clamp(0.0, 1.0) }, None)
+                let color = self.color(node, "Color")?;
+                (Template::Glossy { color, roughness: self.float(node, "Roughness", 0.0, 1.0)? }, None)
             }
             "ShaderNodeBsdfGlass" | "ShaderNodeBsdfRefraction" => {
                 self.default_normal(node, "Normal")?;
                 if kind == "ShaderNodeBsdfRefraction" {
                     self.c.warn(node, "Refraction BSDF is rendered as Glass (its reflection is kept)");
                 }
-                let color = self.color(node, "Color", true)?;
-                let roughness = self.float(node, "Roughness")?.clamp(0.0, 1.0);
-                let ior = self.ior(node, "IOR")?;
-                let bsdf = if Self::is_white(&color) {
-                    BsdfDesc::Dielectric { ior, roughness }
-                } else {
+                let color = self.color(node, "Color")?;
+                if !matches!(&color, Col::C(d) if is_white(d)) {
                     self.c.warn(node, "a tinted Glass is rendered as a transmissive Principled (reflection untinted)");
-                    BsdfDesc::Principled {
-                        base_color: color,
-                        metallic: 0.0,
-                        roughness,
-                        ior,
-                        transmission: 1.0,
-                        specular_tint: None,
-                        thin_film_thickness: 0.0,
-                        thin_film_ior: 1.33,
-                        specular_ior_level: 0.5,
-                    }
-                };
-                (bsdf, None)
+                }
+                let roughness = self.float(node, "Roughness", 0.0, 1.0)?;
+                (Template::Glass { color, roughness, ior: self.ior(node, "IOR")? }, None)
             }
             "ShaderNodeBsdfTranslucent" => {
                 self.default_normal(node, "Normal")?;
-                (BsdfDesc::Translucent { color: self.color(node, "Color", true)? }, None)
+                (Template::Translucent { color: self.color(node, "Color")? }, None)
             }
             "ShaderNodeBsdfSheen" => {
                 self.default_normal(node, "Normal")?;
-                let color = self.color(node, "Color", true)?;
-                (BsdfDesc::Sheen { color, roughness: self.float(node, "Roughness")?.clamp(0.0, 1.0) }, None)
+                let color = self.color(node, "Color")?;
+                (Template::Sheen { color, roughness: self.float(node, "Roughness", 0.0, 1.0)? }, None)
             }
-            "ShaderNodeEmission" => (BsdfDesc::None, self.emission(node, "Color", "Strength")?),
+            "ShaderNodeEmission" => (Template::Fixed(BsdfDesc::None), self.emission(node, "Color", "Strength")?),
             "ShaderNodeBsdfTransparent" | "ShaderNodeHoldout" => {
                 self.c.warn(node, "is not supported yet; the surface reflects nothing here");
-                (BsdfDesc::None, None)
+                (Template::Fixed(BsdfDesc::None), None)
             }
             "ShaderNodeAddShader" => {
                 let (a, ea) = self.shader_input(node, "Shader", depth)?;
                 let (b, eb) = self.shader_input(node, "Shader_001", depth)?;
-                (BsdfDesc::Add { a: Box::new(a), b: Box::new(b) }, add_emission(material, ea, eb)?)
+                (Template::Add { a: Box::new(a), b: Box::new(b) }, add_emission(material, ea, eb)?)
             }
             "ShaderNodeMixShader" => {
                 let (factor, factor_from) = self.mix_factor(node)?;
                 let (a, ea) = self.shader_input(node, "Shader", depth)?;
                 let (b, eb) = self.shader_input(node, "Shader_001", depth)?;
-                if factor_from.is_some() && (ea.is_some() || eb.is_some()) {
-                    return Err(self.non_constant(node, "Fac"));
-                }
-                let emission =
-                    add_emission(material, ea.map(|e| e.scaled(1.0 - factor)), eb.map(|e| e.scaled(factor)))?;
-                (BsdfDesc::Mix { a: Box::new(a), b: Box::new(b), factor, factor_from }, emission)
+                let emission = match (&factor, &factor_from) {
+                    (_, _) if ea.is_none() && eb.is_none() => None,
+                    (F::C(f), None) => add_emission(material, ea.map(|e| e.scaled(1.0 - f)), eb.map(|e| e.scaled(*f)))?,
+                    _ => return Err(self.per_hit_unsupported(node, "Fac", "emission")),
+                };
+                (Template::Mix { a: Box::new(a), b: Box::new(b), factor, factor_from }, emission)
             }
             _ => {
                 self.c.warn(node, "is not a supported shader; it renders as a grey diffuse");
-                (BsdfDesc::default(), None)
+                (Template::Fixed(BsdfDesc::default()), None)
             }
         })
     }
 
     fn emission(&mut self, node: usize, color: &str, strength: &str) -> Result<Option<Emission>> {
-        let s = self.float(node, strength)?;
-        let e = match self.color(node, color, false)? {
-            SpectrumDesc { kind: SpectrumKind::Rgb { rgb }, scale } => Emission::Rgb(Vec3::from(rgb) * scale),
-            d => Emission::Spectrum(d),
+        let s = self.const_float(node, strength, "emission")?;
+        let e = match self.c.input(node, color)? {
+            Value::Spectrum(d) => Emission::Spectrum(d),
+            Value::Ior(_) => return Err(self.c.error(node, format!("input '{color}': an IOR model on a colour"))),
+            Value::Reg(r) => match self.c.const_of(r) {
+                Some(v) => Emission::Rgb(v.max(Vec3::ZERO)),
+                None if s == 0.0 => Emission::Rgb(Vec3::ZERO),
+                None => return Err(self.per_hit_unsupported(node, color, "emission")),
+            },
         };
         Ok((s > 0.0).then(|| e.scaled(s)).filter(|e| !matches!(e, Emission::Rgb(c) if *c == Vec3::ZERO)))
     }
 
-    /// A Mix Shader's Fac: a constant, or a Fresnel / Layer Weight node the fixed
-    /// material already evaluates per hit (`MixFactor`).
-    fn mix_factor(&mut self, node: usize) -> Result<(f32, Option<MixFactorDesc>)> {
+    /// A Mix Shader's Fac: a constant or register, or a Fresnel / Layer Weight node the
+    /// fixed material already evaluates per hit (`MixFactor`).
+    fn mix_factor(&mut self, node: usize) -> Result<(F, Option<MixFactorDesc>)> {
         if let Some((from, out)) = self.c.linked(node, "Fac") {
             let kind = self.c.nodes.get(from).map(|n| n.kind.as_str());
             let view = match (kind, out) {
@@ -326,23 +538,23 @@ impl<'c, 'a> Lowering<'c, 'a> {
                             "Fresnel" => MixFactorDesc::LayerWeightFresnel { blend: v.x.clamp(0.0, 1.0) },
                             _ => MixFactorDesc::LayerWeightFacing { blend: v.x.clamp(0.0, 1.0) },
                         };
-                        return Ok((0.5, Some(d)));
+                        return Ok((F::C(0.5), Some(d)));
                     }
                 }
             }
         }
-        Ok((self.float(node, "Fac")?.clamp(0.0, 1.0), None))
+        Ok((self.float(node, "Fac", 0.0, 1.0)?, None))
     }
 }
 
-/// The surface of a graph as a fixed material, if every parameter is constant.
-pub fn lower_surface(c: &mut Compiler, surface: Option<&(usize, String)>) -> Result<Lowered> {
-    let Some((node, out)) = surface else { return Ok(Lowered { bsdf: BsdfDesc::None, emission: None }) };
+/// The surface of a graph: its closures' template and constant emission.
+pub fn lower_surface(c: &mut Compiler, surface: Option<&(usize, String)>) -> Result<(Template, Option<SpectrumDesc>)> {
+    let Some((node, out)) = surface else { return Ok((Template::Fixed(BsdfDesc::None), None)) };
     let mut l = Lowering::new(c);
-    let (bsdf, emission) = l.closure(*node, out, 0)?;
+    let (t, emission) = l.closure(*node, out, 0)?;
     let emission = emission.map(|e| match e {
         Emission::Rgb(c) => SpectrumDesc::new(SpectrumKind::Rgb { rgb: c.to_array() }),
         Emission::Spectrum(d) => d,
     });
-    Ok(Lowered { bsdf, emission })
+    Ok((t, emission))
 }

@@ -106,12 +106,17 @@ impl<'a> Compiler<'a> {
     }
 
     /// The slot of a per-vertex attribute in the shading point.
-    fn attribute(&mut self, a: AttributeRequest) -> usize {
+    fn attribute(&mut self, node: usize, a: AttributeRequest) -> Result<usize> {
         if let Some(k) = self.program.attributes.iter().position(|x| *x == a) {
-            return k;
+            return Ok(k);
+        }
+        if self.program.attributes.len() >= super::program::MAX_ATTRIBUTES {
+            return Err(
+                self.error(node, format!("reads more than {} UV maps and attributes", super::program::MAX_ATTRIBUTES))
+            );
         }
         self.program.attributes.push(a);
-        self.program.attributes.len() - 1
+        Ok(self.program.attributes.len() - 1)
     }
 
     /// Checks that every input the node names exists on it.
@@ -336,7 +341,7 @@ impl<'a> Compiler<'a> {
             "ShaderNodeUVMap" => {
                 let slot = match p.string("uv_map")? {
                     None | Some("") => None,
-                    Some(name) => Some(self.attribute(AttributeRequest::Uv(name.to_string()))),
+                    Some(name) => Some(self.attribute(node, AttributeRequest::Uv(name.to_string()))?),
                 };
                 Kernel::Input(Input::UvMap(slot))
             }
@@ -346,7 +351,7 @@ impl<'a> Compiler<'a> {
             }
             "ShaderNodeVertexColor" => {
                 let name = p.string("layer_name")?.unwrap_or("").to_string();
-                Kernel::Input(Input::ColorAttribute(self.attribute(AttributeRequest::Color(name))))
+                Kernel::Input(Input::ColorAttribute(self.attribute(node, AttributeRequest::Color(name))?))
             }
             "ShaderNodeAttribute" => {
                 let ty = p.string("attribute_type")?.unwrap_or("GEOMETRY");
@@ -354,7 +359,7 @@ impl<'a> Compiler<'a> {
                     self.warn(node, format!("attribute_type {ty} is not supported; reads 0"));
                 }
                 let name = p.string("attribute_name")?.unwrap_or("").to_string();
-                Kernel::Input(Input::Attribute(self.attribute(AttributeRequest::Generic(name))))
+                Kernel::Input(Input::Attribute(self.attribute(node, AttributeRequest::Generic(name))?))
             }
             "ShaderNodeObjectInfo" => Kernel::Input(Input::ObjectInfo),
             "ShaderNodeFresnel" => Kernel::Input(Input::Fresnel),

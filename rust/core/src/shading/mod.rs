@@ -3,6 +3,7 @@
 //! typed ops ([`program`]); constants fold away ([`fold`]), so a graph that is constant
 //! becomes the same fixed material a `BsdfDesc` describes ([`closure`]).
 
+pub mod bsdf;
 pub mod closure;
 pub mod color;
 pub mod compile;
@@ -23,12 +24,21 @@ use crate::material::Texture;
 use crate::Result;
 use std::sync::Arc;
 
-/// A compiled material graph: its surface as a fixed description (when constant) and
-/// the warnings compiling it produced.
+/// A compiled material graph: its closures' template, the program that feeds them,
+/// its (constant) emission and the warnings compiling it produced.
 pub struct CompiledMaterial {
-    pub surface: closure::Lowered,
+    pub template: closure::Template,
+    pub emission: Option<crate::spectrum::SpectrumDesc>,
     pub program: Program,
     pub warnings: Vec<String>,
+}
+
+impl CompiledMaterial {
+    /// The fixed description the graph equals, when every closure input is constant.
+    pub fn constant_surface(&self) -> Option<crate::scene::BsdfDesc> {
+        let init = &self.program.init;
+        self.template.is_constant().then(|| self.template.instantiate(&|r| init[r as usize]))
+    }
 }
 
 /// Compiles material `name`'s graph against the scene's textures.
@@ -37,8 +47,8 @@ pub fn compile_material(name: &str, graph: &GraphDesc, textures: &[Arc<Texture>]
     if graph.output.volume.is_some() || graph.output.displacement.is_some() {
         c.warnings.push(format!("material '{name}': volume and displacement outputs are not supported yet (ignored)"));
     }
-    let surface = closure::lower_surface(&mut c, graph.output.surface.as_ref())?;
-    Ok(CompiledMaterial { surface, program: c.program, warnings: c.warnings })
+    let (template, emission) = closure::lower_surface(&mut c, graph.output.surface.as_ref())?;
+    Ok(CompiledMaterial { template, emission, program: c.program, warnings: c.warnings })
 }
 
 #[cfg(test)]

@@ -12,7 +12,7 @@ pub type Reg = u32;
 
 /// The per-hit inputs a program reads. World-space unless named otherwise.
 #[derive(Clone, Copy, Debug)]
-pub struct ShadingPoint<'a> {
+pub struct ShadingPoint {
     pub position: Vec3,
     /// Object-space position (Texture Coordinate › Object).
     pub object_position: Vec3,
@@ -44,10 +44,13 @@ pub struct ShadingPoint<'a> {
     pub object_random: f32,
     /// The values of the program's attribute slots (`Program::attributes`) at this hit,
     /// RGBA (UV maps in .xy, scalars in .x).
-    pub attributes: &'a [[f32; 4]],
+    pub attributes: [[f32; 4]; MAX_ATTRIBUTES],
 }
 
-impl Default for ShadingPoint<'_> {
+/// Most per-vertex attributes one material reads.
+pub const MAX_ATTRIBUTES: usize = 8;
+
+impl Default for ShadingPoint {
     fn default() -> Self {
         Self {
             position: Vec3::ZERO,
@@ -69,7 +72,7 @@ impl Default for ShadingPoint<'_> {
             object_index: 0.0,
             material_index: 0.0,
             object_random: 0.0,
-            attributes: &[],
+            attributes: [[0.0; 4]; MAX_ATTRIBUTES],
         }
     }
 }

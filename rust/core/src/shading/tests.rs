@@ -28,12 +28,14 @@ fn a_constant_graph_folds_to_the_fixed_principled() {
         "output": {"surface": [3, "BSDF"]}
     }))
     .unwrap();
-    assert!(c.program.is_constant());
-    let BsdfDesc::Principled { roughness, metallic, base_color, ior, .. } = &c.surface.bsdf else { panic!() };
+    assert!(c.program.is_constant() && c.template.is_constant());
+    let BsdfDesc::Principled { roughness, metallic, base_color, ior, .. } = &c.constant_surface().unwrap() else {
+        panic!()
+    };
     assert!((roughness - 0.4).abs() < 1e-6 && *metallic == 0.25);
     assert_eq!(base_color.kind, crate::spectrum::named::SpectrumKind::Rgb { rgb: [0.5, 0.4, 1.0] });
     assert!(matches!(ior, crate::material::IorDesc::Constant { ior } if (*ior - 1.5).abs() < 1e-6));
-    assert!(c.surface.emission.is_none());
+    assert!(c.emission.is_none());
 }
 
 #[test]
@@ -48,10 +50,10 @@ fn mix_and_add_shaders_lower_with_their_emission_weighted() {
         "output": {"surface": [2, "Shader"]}
     }))
     .unwrap();
-    let BsdfDesc::Mix { factor, a, b, .. } = &c.surface.bsdf else { panic!() };
+    let BsdfDesc::Mix { factor, a, b, .. } = &c.constant_surface().unwrap() else { panic!() };
     assert_eq!(*factor, 0.25);
     assert!(matches!(**a, BsdfDesc::None) && matches!(**b, BsdfDesc::Diffuse { .. }));
-    let e = c.surface.emission.unwrap();
+    let e = c.emission.unwrap();
     assert_eq!(e.kind, crate::spectrum::named::SpectrumKind::Rgb { rgb: [3.0, 1.5, 0.0] });
 }
 
@@ -68,7 +70,9 @@ fn a_fresnel_on_the_mix_factor_becomes_the_view_dependent_factor() {
         "output": {"surface": [3, "Shader"]}
     }))
     .unwrap();
-    let BsdfDesc::Mix { factor_from: Some(crate::scene::MixFactorDesc::Fresnel { ior }), .. } = c.surface.bsdf else {
+    let BsdfDesc::Mix { factor_from: Some(crate::scene::MixFactorDesc::Fresnel { ior }), .. } =
+        c.constant_surface().unwrap()
+    else {
         panic!()
     };
     assert!((ior - 1.33).abs() < 1e-6);
@@ -121,7 +125,7 @@ fn unknown_sockets_outputs_and_nodes_are_reported() {
         .unwrap();
     assert_eq!(c.warnings.len(), 1);
     assert!(c.warnings[0].contains("'M'") && c.warnings[0].contains("'F'"), "{:?}", c.warnings);
-    assert!(matches!(c.surface.bsdf, BsdfDesc::Diffuse { .. }));
+    assert!(matches!(c.constant_surface(), Some(BsdfDesc::Diffuse { .. })));
 }
 
 #[test]
@@ -142,23 +146,41 @@ fn nan_constants_are_errors_and_non_finite_results_become_zero() {
         "output": {"surface": [1, "Emission"]}
     }))
     .unwrap();
-    assert!(c.surface.emission.is_none());
+    assert!(c.emission.is_none());
 }
 
 #[test]
-fn varying_graphs_are_explicit_errors_until_per_hit_evaluation() {
-    let e = compile(json!({
+fn a_varying_graph_keeps_its_program_and_builds_each_hit_from_it() {
+    use crate::material::{Bsdf, Diffuse, SpectralParam};
+    let c = compile(json!({
         "nodes": [
             {"type": "ShaderNodeTexCoord", "name": "T"},
             {"type": "ShaderNodeSeparateXYZ", "name": "S", "inputs": {"Vector": {"link": [0, "UV"]}}},
-            {"type": "ShaderNodeBsdfPrincipled", "name": "P", "inputs": {"Roughness": {"link": [1, "X"]}}}
+            {"type": "ShaderNodeCombineColor", "name": "C", "inputs": {"Red": {"link": [1, "X"]}, "Green": 0.5, "Blue": 0.5}},
+            {"type": "ShaderNodeBsdfDiffuse", "name": "D", "inputs": {"Color": {"link": [2, "Color"]}}}
         ],
-        "output": {"surface": [2, "BSDF"]}
+        "output": {"surface": [3, "BSDF"]}
     }))
-    .err()
-    .unwrap()
-    .to_string();
-    assert!(e.contains("per-hit") && e.contains("Roughness") && e.contains("'P'"), "{e}");
+    .unwrap();
+    assert!(!c.template.is_constant() && c.constant_surface().is_none());
+    // Build the hit's diffuse with a grey spectrum of the colour's red, to check the
+    // plumbing without an RGB → spectrum map.
+    let build = Box::new(|d: &BsdfDesc| -> crate::Result<Box<dyn Bsdf>> {
+        let BsdfDesc::Diffuse { reflectance } = d else { panic!("{d:?}") };
+        let crate::spectrum::named::SpectrumKind::Rgb { rgb } = reflectance.kind else { panic!() };
+        Ok(Box::new(Diffuse {
+            reflectance: SpectralParam::Constant(crate::spectrum::SampledSpectrum::splat(4, rgb[0])),
+        }))
+    });
+    let g = bsdf::GraphBsdf::new(c.program, c.template, build).unwrap();
+    let grid = crate::spectrum::WavelengthGrid::uniform(4, 400.0, 700.0).unwrap();
+    let mut ctx = crate::material::ShadingContext::new(&grid);
+    let mut out = crate::spectrum::SampledSpectrum::zeros(4);
+    for u in [0.1f32, 0.8, 0.35, 0.8] {
+        ctx.hit = ShadingPoint { uv: Vec2::new(u, 0.5), position: Vec3::splat(u), ..Default::default() };
+        g.albedo(&ctx, &mut out);
+        assert!(out.values().iter().all(|&v| (v - u).abs() < 1e-6), "{u}: {:?}", out.values());
+    }
 }
 
 /// Compiles the value at `link` of the graph and evaluates it at `sp`.
