@@ -91,7 +91,7 @@ FAMILIES = [
     "RGB",
     pytest.param("Blackbody", marks=pytest.mark.xfail(reason="core: Blackbody is not evaluated yet (outputs read 0; measured error 1.0)")),
     pytest.param(
-        "Wavelength", marks=pytest.mark.xfail(reason="core: Wavelength is not evaluated yet (outputs read 0; measured error 0.75)")
+        "Wavelength", marks=pytest.mark.xfail(reason="core: Wavelength is not evaluated yet (outputs read 0; measured error 0.75-1.0)")
     ),
     "Group",
     "MixRGB (legacy)",
