@@ -178,9 +178,6 @@ def test_per_hit_node_matches_cycles(per_hit, family):
 
 
 @needs_per_hit
-@pytest.mark.xfail(
-    reason="core: an Environment Texture in a material stops the render (internal error: index out of bounds, branch graph a604bdd)"
-)
 def test_environment_texture_in_a_material_matches_cycles(tmp_path):
     """Kept apart from HIT_CASES: a render error would take every case with it."""
     r = run_oracle(tmp_path, "ENVIRONMENT_CASES", samples=256, albedo=True)

@@ -58,7 +58,10 @@ impl Image {
     pub fn eval(&self, i: &[Vec3], o: &mut [Vec3]) {
         let c = self.lookup(i[0]);
         o[0] = Vec3::from(c);
-        o[1] = Vec3::new(1.0, 0.0, 0.0);
+        // Environment Texture has no Alpha output: only Image Texture's second slot exists.
+        if let Some(alpha) = o.get_mut(1) {
+            *alpha = Vec3::new(1.0, 0.0, 0.0);
+        }
     }
 }
 
