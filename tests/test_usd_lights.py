@@ -306,3 +306,30 @@ def test_blender_layer_without_an_authored_temperature_reads_it_off(tmp_path):
         plain, warm = lights["/plain"]["intensity"], lights["/warm"]["intensity"]
         assert (plain["type"] == "rgb" and plain["rgb"] == [1.0, 1.0, 1.0]) is blender, (blender, plain)
         assert warm["type"] == "blackbody" and warm["temperature"] == 3000.0
+
+
+def test_rect_light_in_front_of_the_camera_is_not_seen_but_lights_the_floor(tmp_path):
+    """Camera rays pass through a UsdLux light (as Cycles and Karma treat lights): the
+    camera looking down through a panel of radiance L sees the floor under it lit with
+    ρ/π · L · 4·corner(a, a) (a square of half-width a at height h)."""
+    rho, radiance, a, h = 0.5, 3.0, 1.0, 1.0
+    path = tmp_path / "panel.usda"
+    stage = new_stage(path)
+    floor_mesh(stage, "/floor", 5.0, preview_material(stage, "/Looks/grey", (rho, rho, rho)))
+    rect = UsdLux.RectLight.Define(stage, "/panel")
+    rect.CreateWidthAttr(2 * a)
+    rect.CreateHeightAttr(2 * a)
+    rect.CreateIntensityAttr(radiance)
+    rect.AddTranslateOp().Set(Gf.Vec3d(0, 0, h))
+    top_camera(stage, "/cam", 3.0, 0.1)
+    stage.Save()
+    scene, _ = read(path)
+    vis = {i["name"]: i.get("visibility") for i in scene.description()[0]["instances"]}
+    assert vis["/panel"] == vis["/panel (back)"] == {"camera": False} and vis["/floor"] is None
+
+    def corner(x, y):
+        return 0.5 * (x / math.hypot(x, h) * math.atan(y / math.hypot(x, h)) + y / math.hypot(y, h) * math.atan(x / math.hypot(y, h)))
+
+    want = rho / math.pi * radiance * 4 * corner(a, a)
+    got = luminance(pc.render(scene, width=4, height=4, samples=64, max_bounces=1).rgba[..., :3]).mean()
+    assert got == pytest.approx(want, rel=0.03)

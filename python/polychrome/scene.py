@@ -657,6 +657,10 @@ class NodeMaterial(Material):
         return d
 
 
+#: The kinds of rays an instance's ``visibility`` names (Cycles' ray visibility).
+RAY_KINDS = ("camera", "shadow", "diffuse", "glossy", "transmission")
+
+
 class Scene:
     """A scene description: camera, materials, meshes, instances, lights, world."""
 
@@ -857,17 +861,28 @@ class Scene:
             ids = per_point[tri_point]
         return self.add_mesh(name, v, t, normals=n, uvs=uv, material=material, material_ids=ids, transform=transform, place=place)
 
-    def add_instance(self, mesh: int, transform: Any, name: str = "", *, motion: Any = None) -> None:
+    def add_instance(self, mesh: int, transform: Any, name: str = "", *, motion: Any = None, visibility: Any = None) -> None:
         """Places mesh ``mesh`` again with ``transform``; instances share the mesh's data.
         ``motion``: object → world transforms (K ≥ 2, 4×4 each) evenly spaced from
         shutter open to close, for motion blur; ``transform`` is then its placement at
-        the frame (docs/camera.md)."""
+        the frame (docs/camera.md). ``visibility``: the kinds of rays that see it, a dict
+        of ``camera``, ``shadow``, ``diffuse``, ``glossy``, ``transmission`` booleans
+        (missing ones True), as Cycles' ray visibility (docs/blender.md)."""
         if not 0 <= mesh < len(self._meshes):
             raise ValueError(f"instance '{name}': mesh {mesh} does not exist")
         label = name or self._meshes[mesh]["name"]
         entry = {"name": label, "mesh": int(mesh), "transform": _matrix(transform, f"instance '{label}'")}
         if motion is not None:
             entry["motion"] = _motion_matrices(motion, f"instance '{label}'")
+        if visibility is not None:
+            vis = dict(visibility)
+            unknown = sorted(set(vis) - set(RAY_KINDS))
+            if unknown:
+                raise ValueError(f"instance '{label}': unknown ray visibility {unknown} (known: {', '.join(RAY_KINDS)})")
+            if not all(isinstance(v, (bool, np.bool_)) for v in vis.values()):
+                raise ValueError(f"instance '{label}': ray visibility values must be True or False")
+            if not all(vis.values()):  # all visible is the default: leave the description as it was
+                entry["visibility"] = {k: bool(v) for k, v in vis.items()}
         self._instances.append(entry)
 
     def add_light(self, light: Any) -> None:

@@ -1015,6 +1015,12 @@ class _Reader:
         name = str(self.custom(prim, A.NAME, str(prim.GetPath())))
         exact = self.spectrum_attr(prim, A.EMISSION)  # the radiance Polychrome wrote, if it did
         radiance = exact if exact is not None else self.emitted(scalar, colour, blackbody)
+        # A UsdLux light is no geometry the camera sees: camera rays pass through it (as
+        # in Cycles with Blender's default, and Karma). Shadow rays do not: the backing
+        # keeps the two-sided emitter from lighting what is behind it. What Polychrome
+        # wrote from an emissive mesh stays a mesh every ray sees.
+        ours = exact is not None or self.custom(prim, A.HAS_BACKING, False)
+        vis = None if ours else {"camera": False}
         emitter = self.add_material(Emitter(radiance, name=str(self.custom(prim, A.MATERIAL_NAME, name))))
         key = f"light:{prim.GetPath()}"
         self.meshes[key] = {
@@ -1027,7 +1033,7 @@ class _Reader:
             "material_ids": None,
             "material": emitter,
         }
-        self.instances.append((key, m, name))
+        self.instances.append((key, m, name, vis))
         if self.custom(prim, A.HAS_BACKING, False):
             return  # the stage holds the backing as a mesh already
         if self.black_backing is None:
@@ -1035,7 +1041,7 @@ class _Reader:
         back = verts.copy()
         back[:, 2] = 1e-3 * size
         self.meshes[key + " (back)"] = {**self.meshes[key], "name": name + " (back)", "vertices": back, "material": self.black_backing}
-        self.instances.append((key + " (back)", m, name + " (back)"))
+        self.instances.append((key + " (back)", m, name + " (back)", vis))
 
     def read_rect_light(self, prim) -> None:
         light = self.UsdLux.RectLight(prim)
@@ -1319,8 +1325,8 @@ class _Reader:
                 material_ids=m["material_ids"],
                 place=False,
             )
-        for key, matrix, name in self.instances:
-            scene.add_instance(index[key], matrix, name)
+        for key, matrix, name, *visibility in self.instances:
+            scene.add_instance(index[key], matrix, name, visibility=visibility[0] if visibility else None)
         for light in self.lights:
             scene.add_light(light)
         if self.world_texture is not None:

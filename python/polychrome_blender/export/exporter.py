@@ -25,6 +25,7 @@ from .curves import hair_systems, particle_hair_arrays
 from .meshes import GEOMETRY_TYPES, MeshArrays, read_mesh
 from . import motion as motion_blur
 from .textures import TextureCache
+from .visibility import object_visibility
 from .warnings import Warnings
 from .world import export_world
 
@@ -243,7 +244,7 @@ class Exporter:
             if not np.all(np.isfinite(m)):
                 raise ValueError(f"object '{name}': its transform is not finite")
             moves = None if self._motion is None else self._motion.instance_motion(inst)
-            scene.add_instance(mesh, m, name, motion=moves)
+            scene.add_instance(mesh, m, name, motion=moves, visibility=object_visibility(ob, name, warnings))
         # what no object shows any more (deleted, hidden, re-evaluated) is dropped
         self._meshes = {k: v for k, v in self._meshes.items() if k in used}
         self._materials = {k: v for k, v in self._materials.items() if k in materials}
@@ -271,7 +272,8 @@ class Exporter:
                         f"{name}/{ps.name}", a.vertices, a.triangles, normals=a.normals, uvs=a.uvs, material_ids=ids, place=False
                     )
             if placed[key] is not None:
-                scene.add_instance(placed[key], np.array(inst.matrix_world, dtype=np.float64), f"{name}/{ps.name}")
+                vis = object_visibility(ob, name, warnings)
+                scene.add_instance(placed[key], np.array(inst.matrix_world, dtype=np.float64), f"{name}/{ps.name}", visibility=vis)
 
 
 def graph_mesh_data(data):

@@ -14,7 +14,8 @@ colour × energy × 2^exposure; ``normalize`` from ``LA_UNNORMALIZED``) and
   ellipses, so object scale counts); with Normalize off ``colour × P / π``. Exported as an
   emissive quad/disk (ellipse: a 32-gon, its radiance scaled so its power is Cycles') plus a
   black backing one thousandth of its size behind it, because polychrome's emitters shine
-  from both faces.
+  from both faces. Both are seen by the camera only with the object's ``visible_camera``
+  (off by default), as in Cycles (``visibility.py``).
 * Spot: ``polychrome.SpotLight``, cone ``spot_size`` and ``spot_blend`` as Blender's.
 * Sun: ``polychrome.SunLight`` of irradiance ``colour × strength`` W/m² (Normalize on);
   with Normalize off Cycles' sun disk has radiance = strength, so the irradiance is
@@ -29,6 +30,8 @@ import math
 
 import numpy as np
 import polychrome as pc
+
+from .visibility import light_visibility
 
 DISK_SEGMENTS = 32
 
@@ -92,7 +95,7 @@ def _power(ld, name):
     return p
 
 
-def export_area(scene, ld, name, matrix, warnings):
+def export_area(scene, ld, name, matrix, warnings, visibility=None):
     power = _power(ld, name)
     pts, tris, area, exact, size = _area_polygon(ld)
     # Cycles scales the size by the lengths of the object's X and Y axes (scene/light.cpp).
@@ -113,9 +116,9 @@ def export_area(scene, ld, name, matrix, warnings):
     back = verts.copy()
     back[:, 2] = 1e-3 * size  # behind: the light shines along local −Z
     m = scene.add_mesh(f"{name}", verts, tris, material=emitter, place=False)
-    scene.add_instance(m, matrix, name)
+    scene.add_instance(m, matrix, name, visibility=visibility)
     b = scene.add_mesh(f"{name} (back)", back, tris, material=pc.Diffuse(0.0, name=f"{name} (back)"), place=False)
-    scene.add_instance(b, matrix, f"{name} (back)")
+    scene.add_instance(b, matrix, f"{name} (back)", visibility=visibility)
 
 
 def _axis(m, name):
@@ -164,7 +167,7 @@ def export_lights(depsgraph, scene, warnings):
             spec = light_colour(ld, name, warnings)
             scene.add_light(pc.PointLight(pos.tolist(), _point_power(ld, name), spec, name=name))
         elif ld.type == "AREA":
-            export_area(scene, ld, name, m, warnings)
+            export_area(scene, ld, name, m, warnings, light_visibility(ob, name, warnings))
         elif ld.type == "SPOT":
             spec = light_colour(ld, name, warnings)
             scene.add_light(

@@ -9,6 +9,7 @@
 
 use crate::geometry::motion::key_span;
 use crate::geometry::triangle::WatertightRay;
+use crate::geometry::visibility;
 use crate::geometry::{Instance, Mesh, Ray};
 use glam::Vec3A;
 use obvhs::aabb::Aabb;
@@ -137,6 +138,9 @@ impl Accel {
         tlas.ray_traverse(world_ray, &mut hit, |r, slot| {
             let inst_id = self.tlas_instances[slot];
             let inst = &instances[inst_id as usize];
+            if !visibility::sees(inst.visibility, ray.kind) {
+                return f32::INFINITY; // the ray goes on through instances its kind does not see
+            }
             let mb = self.meshes[inst.mesh as usize].as_ref().expect("tlas holds meshes with triangles");
             // Object space: the direction is not renormalised, so t is the same in both spaces.
             let to_object = inst.to_object_at(ray.time);
@@ -179,6 +183,9 @@ impl Accel {
         let world_ray = bvh_ray(ray.origin, ray.direction, ray.tmin, ray.tmax);
         !tlas.ray_traverse_miss(world_ray, |r, slot| {
             let inst = &instances[self.tlas_instances[slot] as usize];
+            if !visibility::sees(inst.visibility, ray.kind) {
+                return f32::INFINITY;
+            }
             let mb = self.meshes[inst.mesh as usize].as_ref().expect("tlas holds meshes with triangles");
             let to_object = inst.to_object_at(ray.time);
             let o = to_object.transform_point3a(r.origin);

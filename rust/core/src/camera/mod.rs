@@ -491,7 +491,14 @@ impl Camera {
         if !(scale.is_finite() && scale > 0.0) {
             return None;
         }
-        Some(Ray { origin, direction: dw / len, tmin: self.clip_start * scale, tmax: self.clip_end * scale, time })
+        Some(Ray {
+            origin,
+            direction: dw / len,
+            tmin: self.clip_start * scale,
+            tmax: self.clip_end * scale,
+            time,
+            kind: crate::geometry::visibility::CAMERA,
+        })
     }
 }
 

@@ -177,6 +177,8 @@ pub struct Instance {
     /// Object → world over the shutter, when the instance moves (then `to_world` is its
     /// transform at the frame itself, for what needs one placement).
     pub motion: Option<TransformMotion>,
+    /// The kinds of rays that see it (`visibility::ALL` unless the scene says otherwise).
+    pub visibility: u8,
 }
 
 impl Instance {
@@ -197,6 +199,7 @@ impl Instance {
             to_object,
             normal_to_world: to_object.matrix3.transpose(),
             motion: None,
+            visibility: super::visibility::ALL,
         })
     }
 

@@ -13,14 +13,23 @@ pub struct Ray {
     /// intersected where it is then (geometry/motion.rs). One time per path, shared by
     /// all its rays and wavelengths.
     pub time: f32,
+    /// What kind of ray this is (`visibility::CAMERA`, ...): instances it does not see
+    /// are passed through. `visibility::ALL` unless set.
+    pub kind: u8,
 }
 
 impl Ray {
     pub fn new(origin: Vec3A, direction: Vec3A) -> Self {
-        Self { origin, direction, tmin: 0.0, tmax: f32::INFINITY, time: 0.5 }
+        Self { origin, direction, tmin: 0.0, tmax: f32::INFINITY, time: 0.5, kind: super::visibility::ALL }
     }
     pub fn segment(origin: Vec3A, direction: Vec3A, tmax: f32) -> Self {
-        Self { origin, direction, tmin: 0.0, tmax, time: 0.5 }
+        Self { origin, direction, tmin: 0.0, tmax, time: 0.5, kind: super::visibility::ALL }
+    }
+    /// The same ray as a ray of `kind` (`visibility::CAMERA`, ...).
+    #[inline]
+    pub fn with_kind(mut self, kind: u8) -> Self {
+        self.kind = kind;
+        self
     }
     /// The same ray at shutter time `time`.
     #[inline]
@@ -63,17 +72,20 @@ pub fn offset_ray_origin(p: Vec3A, n: Vec3A) -> Vec3A {
 /// relative 1e-4. Infinitely distant lights keep `wi` and an unbounded ray.
 /// `time` is the path's shutter time.
 pub fn shadow_ray(p: Vec3A, origin: Vec3A, wi: Vec3A, distance: f32, time: f32) -> Ray {
+    let shadow = super::visibility::SHADOW;
     if !distance.is_finite() {
-        return Ray::new(origin, wi).with_time(time);
+        return Ray::new(origin, wi).with_time(time).with_kind(shadow);
     }
     let end = p + wi * distance;
     let d = end - origin;
     let len = d.length();
     if !(len > 0.0 && len.is_finite()) {
-        return Ray::segment(origin, wi, 0.0).with_time(time);
+        return Ray::segment(origin, wi, 0.0).with_time(time).with_kind(shadow);
     }
     let magnitude = origin.abs().max_element().max(end.abs().max_element());
-    Ray::segment(origin, d / len, (len * (1.0 - 1e-4) - magnitude * (16.0 * f32::EPSILON)).max(0.0)).with_time(time)
+    Ray::segment(origin, d / len, (len * (1.0 - 1e-4) - magnitude * (16.0 * f32::EPSILON)).max(0.0))
+        .with_time(time)
+        .with_kind(shadow)
 }
 
 #[cfg(test)]

@@ -399,7 +399,7 @@ impl<P: WavelengthPolicy> Technique for Bidirectional<P> {
         let (es, pmf) = (start.es, start.pmf);
         let light = scene.lights[start.light].as_ref();
         // The light vertex itself seen by the camera (area lights): k = 1.
-        if let Some((c, cos)) = light_seen_by_camera(scene, &es, start.state.ray.time, rng) {
+        if let Some((c, cos)) = light_seen_by_camera(scene, start.light, &es, start.state.ray.time, rng) {
             let end = LightEnd {
                 p: es.origin,
                 pmf,

@@ -20,7 +20,7 @@ use super::walk::{russian_roulette, End, PathHooks, PathState, Vertex, Walk};
 use super::wavelengths::{WavelengthPolicy, Wavelengths};
 use super::{Scatter, Scratch, Technique};
 use crate::camera::CameraConnection;
-use crate::geometry::{offset_ray_origin, Ray};
+use crate::geometry::{offset_ray_origin, visibility, Ray};
 use crate::light::EmissionSample;
 use crate::material::{ShadingContext, TransportMode};
 use crate::sampling::Rng;
@@ -63,6 +63,10 @@ pub fn connect_to_camera(
     f: &mut SampledSpectrum,
     rng: &mut Rng,
 ) -> Option<CameraConnection> {
+    // What camera rays pass through, the camera does not see (nor is seen past).
+    if !visibility::sees(scene.instances[v.si.instance as usize].visibility, visibility::CAMERA) {
+        return None;
+    }
     let c = scene.camera.connect(v.si.p, v.si.time, rng)?;
     let wi_local = v.frame.to_local(c.wi);
     let side = super::connection_side(v.ng, v.wo_local, wi_local, c.wi)?;
@@ -70,7 +74,8 @@ pub fn connect_to_camera(
     // Aimed from the offset origin at the camera: along c.wi from the unshifted point it
     // missed by the offset (16 units at 1e6) and hit walls behind it.
     let origin = offset_ray_origin(v.si.p, side);
-    if f.is_black() || scene.occluded(&crate::geometry::shadow_ray(v.si.p, origin, c.wi, c.distance, v.si.time)) {
+    let ray = crate::geometry::shadow_ray(v.si.p, origin, c.wi, c.distance, v.si.time).with_kind(visibility::CAMERA);
+    if f.is_black() || scene.occluded(&ray) {
         return None;
     }
     Some(c)
@@ -127,11 +132,12 @@ pub fn start_light_path<W: Wavelengths>(scene: &Scene, wl: &W, rng: &mut Rng) ->
 /// `time`: the light path's shutter time.
 pub fn light_seen_by_camera(
     scene: &Scene,
+    light: usize,
     es: &EmissionSample,
     time: f32,
     rng: &mut Rng,
 ) -> Option<(CameraConnection, f32)> {
-    if es.delta_position {
+    if es.delta_position || !visibility::sees(scene.light_visibility[light], visibility::CAMERA) {
         return None;
     }
     let c = scene.camera.connect(es.origin, time, rng);
@@ -140,7 +146,8 @@ pub fn light_seen_by_camera(
     let origin = offset_ray_origin(es.origin, if nl.dot(c.wi) > 0.0 { nl } else { -nl });
     // Aimed from the offset origin at the camera: along c.wi from the unshifted point it
     // missed by the offset (16 units at 1e6) and hit walls behind it.
-    if cos > 0.0 && !scene.occluded(&crate::geometry::shadow_ray(es.origin, origin, c.wi, c.distance, time)) {
+    let ray = crate::geometry::shadow_ray(es.origin, origin, c.wi, c.distance, time).with_kind(visibility::CAMERA);
+    if cos > 0.0 && !scene.occluded(&ray) {
         Some((c, cos))
     } else {
         None
@@ -246,7 +253,7 @@ impl<P: WavelengthPolicy> Technique for LightTracing<P> {
         let wl = self.wavelengths.light(pass, rng);
         let Some(start) = start_light_path(scene, &wl, rng) else { return };
         if self.part == ForwardPart::All {
-            if let Some((c, cos)) = light_seen_by_camera(scene, &start.es, start.state.ray.time, rng) {
+            if let Some((c, cos)) = light_seen_by_camera(scene, start.light, &start.es, start.state.ray.time, rng) {
                 let radiance = start.le.scaled(scene.grid.len(), cos * c.importance / (start.pmf * start.es.pdf_pos));
                 splats.push(Splat { pixel: pixel_of(scene, &c), radiance });
             }

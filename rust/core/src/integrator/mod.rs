@@ -56,7 +56,9 @@ pub fn scatter(
         return None;
     }
     let origin = crate::geometry::offset_ray_origin(v.si.p, if transmitted { -v.ng } else { v.ng });
-    Some(Scatter { sample, wi, transmitted, ray: crate::geometry::Ray::new(origin, wi).with_time(v.si.time) })
+    let kind = crate::geometry::visibility::of_bsdf_ray(transmitted, sample.specular);
+    let ray = crate::geometry::Ray::new(origin, wi).with_time(v.si.time).with_kind(kind);
+    Some(Scatter { sample, wi, transmitted, ray })
 }
 
 /// The side of the surface a connection along world direction `wi` (`wi_local` in the

@@ -323,6 +323,9 @@ pub struct InstanceDesc {
     /// close (at least 2; empty: the instance stands still at `transform`).
     #[serde(default)]
     pub motion: Vec<[[f32; 4]; 4]>,
+    /// The kinds of rays that see it (Cycles' ray visibility; all when absent).
+    #[serde(default)]
+    pub visibility: crate::geometry::visibility::VisibilityDesc,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]

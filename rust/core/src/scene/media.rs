@@ -226,7 +226,7 @@ impl Scene {
             }
             let origin = offset_ray_origin(si.p, if front { -si.ng } else { si.ng });
             let left = ray.tmax - h.t;
-            ray = Ray { origin, direction: ray.direction, tmin: 0.0, tmax: left, time: ray.time };
+            ray = Ray { origin, tmin: 0.0, tmax: left, ..ray };
         }
         false
     }

@@ -127,6 +127,10 @@ pub struct Scene {
     pub null_surface: Vec<bool>,
     /// Per mesh: the named vertex data shading graphs read, and its bounds.
     pub mesh_data: Vec<hit::MeshShadingData>,
+    /// Per light: the ray visibility of the instance it lies on (`visibility::ALL` for
+    /// lights that are no geometry), so light paths do not show the camera an emitter
+    /// camera rays pass through.
+    pub light_visibility: Vec<u8>,
 }
 
 /// The RGB → spectrum map while building: where the grid has none, the first RGB
@@ -415,12 +419,14 @@ impl Scene {
                         ));
                     }
                     let to_world = affine_from_rows(&i.transform);
-                    if i.motion.is_empty() {
-                        Instance::new(&i.name, i.mesh, to_world)
+                    let mut inst = if i.motion.is_empty() {
+                        Instance::new(&i.name, i.mesh, to_world)?
                     } else {
                         let keys: Vec<glam::Affine3A> = i.motion.iter().map(affine_from_rows).collect();
-                        Instance::with_motion(&i.name, i.mesh, to_world, &keys)
-                    }
+                        Instance::with_motion(&i.name, i.mesh, to_world, &keys)?
+                    };
+                    inst.visibility = i.visibility.mask();
+                    Ok(inst)
                 })
                 .collect::<Result<_>>()?,
         };
@@ -472,6 +478,7 @@ impl Scene {
         let mut lights: Vec<Box<dyn Light>> = Vec::new();
         let mut triangle_lights = vec![None; instances.len()];
         let mut moving_emitters = Vec::new();
+        let mut light_visibility = Vec::new();
         for (k, inst) in instances.iter().enumerate() {
             let mesh = &meshes[inst.mesh as usize];
             if !mesh.material_ids.iter().any(|&m| materials[m as usize].emission.is_some()) {
@@ -491,6 +498,7 @@ impl Scene {
                 if let Some(tri) = AreaTriangle::new(p, e.clone()) {
                     map[t] = lights.len() as u32;
                     lights.push(Box::new(tri));
+                    light_visibility.push(inst.visibility);
                 }
             }
             triangle_lights[k] = Some(map);
@@ -596,6 +604,7 @@ impl Scene {
                 }
             },
         };
+        light_visibility.resize(lights.len(), crate::geometry::visibility::ALL);
         let texture_bytes = textures.iter().map(|t| t.bytes()).sum::<usize>()
             + environment.as_ref().and_then(|e| e.image.as_ref()).map_or(0, |i| i.bytes() - i.texture.bytes());
         let powers: Vec<f64> = lights.iter().map(|l| l.power(grid.weights())).collect();
@@ -624,6 +633,7 @@ impl Scene {
             material_medium,
             null_surface,
             mesh_data,
+            light_visibility,
         })
     }
 

@@ -1,0 +1,96 @@
+//! Ray visibility, as Cycles' object *Visibility > Ray Visibility* (`visible_camera`,
+//! `visible_shadow`, `visible_diffuse`, `visible_glossy`, `visible_transmission`;
+//! intern/cycles/blender/object.cpp `object_ray_visibility`): an instance carries the
+//! kinds of rays that see it and every ray says which kind it is; the acceleration
+//! structure skips instances a ray's kind does not see (the ray goes on through them).
+//!
+//! Which kind a ray is: camera rays (and light paths' connections to the camera, the
+//! same segment traced the other way); shadow rays of next-event estimation; rays a BSDF
+//! sampled: transmission when they leave through the surface, glossy for a specular
+//! reflection and diffuse *or* glossy for any other reflection (the BSDF sample does not
+//! say which lobe it came from, so such a ray sees what either kind sees). Rays leaving
+//! lights (light paths) see everything visible to any kind.
+
+use serde::{Deserialize, Serialize};
+
+pub const CAMERA: u8 = 1;
+pub const SHADOW: u8 = 2;
+pub const DIFFUSE: u8 = 4;
+pub const GLOSSY: u8 = 8;
+pub const TRANSMISSION: u8 = 16;
+/// Every kind: what instances and rays are unless told otherwise.
+pub const ALL: u8 = CAMERA | SHADOW | DIFFUSE | GLOSSY | TRANSMISSION;
+
+/// The kinds of rays that see an instance (all by default), as a scene describes it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct VisibilityDesc {
+    pub camera: bool,
+    pub shadow: bool,
+    pub diffuse: bool,
+    pub glossy: bool,
+    pub transmission: bool,
+}
+
+impl Default for VisibilityDesc {
+    fn default() -> Self {
+        Self { camera: true, shadow: true, diffuse: true, glossy: true, transmission: true }
+    }
+}
+
+impl VisibilityDesc {
+    pub fn mask(&self) -> u8 {
+        [
+            (self.camera, CAMERA),
+            (self.shadow, SHADOW),
+            (self.diffuse, DIFFUSE),
+            (self.glossy, GLOSSY),
+            (self.transmission, TRANSMISSION),
+        ]
+        .iter()
+        .filter(|(on, _)| *on)
+        .fold(0, |m, (_, bit)| m | bit)
+    }
+}
+
+/// The kind of a ray a BSDF sampled (see the module docs).
+#[inline]
+pub fn of_bsdf_ray(transmitted: bool, specular: bool) -> u8 {
+    if transmitted {
+        TRANSMISSION
+    } else if specular {
+        GLOSSY
+    } else {
+        DIFFUSE | GLOSSY
+    }
+}
+
+/// Whether an instance of visibility `mask` is seen by a ray of kind `kind`.
+#[inline]
+pub fn sees(mask: u8, kind: u8) -> bool {
+    mask & kind != 0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn masks_and_ray_kinds() {
+        assert_eq!(VisibilityDesc::default().mask(), ALL);
+        let light = VisibilityDesc { camera: false, ..Default::default() };
+        assert_eq!(light.mask(), ALL & !CAMERA);
+        assert!(!sees(light.mask(), CAMERA) && sees(light.mask(), SHADOW));
+        assert_eq!(of_bsdf_ray(true, false), TRANSMISSION);
+        assert_eq!(of_bsdf_ray(false, true), GLOSSY);
+        let no_diffuse = VisibilityDesc { diffuse: false, ..Default::default() }.mask();
+        assert!(sees(no_diffuse, of_bsdf_ray(false, false)), "a rough reflection may be glossy");
+        assert!(!sees(
+            VisibilityDesc { diffuse: false, glossy: false, ..Default::default() }.mask(),
+            of_bsdf_ray(false, false)
+        ));
+        let parsed: VisibilityDesc = serde_json::from_str(r#"{"camera": false}"#).unwrap();
+        assert_eq!(parsed, light);
+        assert!(serde_json::from_str::<VisibilityDesc>(r#"{"camra": false}"#).is_err());
+    }
+}

@@ -1,0 +1,72 @@
+"""Ray visibility against Cycles in the same bpy process: an area light between the
+camera and the scene (lights are invisible to camera rays by default), a wall in front of the camera that camera rays do not see, and a
+card over the floor that shadow rays do not see. Polychrome and Cycles CPU render the
+same scene; the mean CIEDE2000 on 2 × 2 blocks must stay below 2 (colour-science), and
+the same scene with every ray seeing every object must differ from Cycles by far more."""
+
+import pytest
+
+from .bhelper import check, run_bpy
+
+pytestmark = pytest.mark.blender
+
+
+def test_ray_visibility_matches_cycles(tmp_path):
+    proc, res = run_bpy(
+        tmp_path,
+        """
+    from mathutils import Vector
+    sc = empty_scene(32, 24); sc.world = None
+    bpy.ops.mesh.primitive_plane_add(size=10)
+    bpy.context.object.data.materials.append(diffuse_material('Floor', (0.7, 0.6, 0.5)))
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0, 0, 0.5))
+    bpy.context.object.data.materials.append(diffuse_material('Cube', (0.2, 0.5, 0.7)))
+    # a wall right in front of the camera, invisible to camera rays
+    bpy.ops.mesh.primitive_plane_add(size=1.5, location=(3.0, -3.3, 2.3), rotation=(math.radians(60), 0, math.radians(45)))
+    wall = bpy.context.object; wall.data.materials.append(diffuse_material('Wall', (0.9, 0.1, 0.1)))
+    wall.visible_camera = False
+    # a card over the floor, invisible to shadow rays
+    bpy.ops.mesh.primitive_plane_add(size=1.2, location=(-1.5, 1.0, 1.5))
+    card = bpy.context.object; card.data.materials.append(diffuse_material('Card', (0.8, 0.8, 0.8)))
+    card.visible_shadow = False
+    sun = bpy.data.lights.new('Sun', 'SUN'); sun.energy = 3.0; sun.angle = 0.0
+    so = bpy.data.objects.new('Sun', sun); sc.collection.objects.link(so); so.rotation_euler = (math.radians(20), 0, math.radians(30))
+    # an area light between the camera and the cube, facing the cube (camera rays pass through it)
+    ld = bpy.data.lights.new('Panel', 'AREA'); ld.energy = 60.0; ld.size = 1.0
+    lo = bpy.data.objects.new('Panel', ld); sc.collection.objects.link(lo); lo.location = (1.8, -1.8, 1.2)
+    lo.rotation_euler = (Vector((0, 0, 0.5)) - lo.location).to_track_quat('-Z', 'Y').to_euler()
+    add_camera(sc, (4.0, -4.0, 3.0), (0, 0, 0.4), lens=35)
+    sc.render.image_settings.file_format = 'OPEN_EXR'
+    c = sc.cycles; c.device = 'CPU'; c.samples = 64; c.use_denoising = False; c.use_adaptive_sampling = False
+    c.filter_width = 0.01; c.max_bounces = 4; c.diffuse_bounces = 4
+    c.sample_clamp_indirect = 0.0; c.sample_clamp_direct = 0.0
+    sc.polychrome.samples = 64; sc.polychrome.max_bounces = 4
+    import colour
+    rec709 = colour.RGB_COLOURSPACES['ITU-R BT.709']
+    def render(engine, tag):
+        sc.render.engine = engine
+        sc.render.filepath = os.path.abspath(tag + '.exr'); bpy.ops.render.render(write_still=True)
+        ch = exr_channels(tag + '.exr')
+        return np.stack([ch[k] for k in 'RGB'], -1).reshape(24, 32, 3)
+    def de(a, b):
+        blocks = [x.reshape(12, 2, 16, 2, 3).mean(axis=(1, 3)) for x in (a, b)]
+        xyz = [colour.RGB_to_XYZ(x, rec709, apply_cctf_decoding=False) for x in blocks]
+        w = max(float(np.percentile(xyz[0][..., 1], 99)), 1e-6)
+        lab = [colour.XYZ_to_Lab(x / w, rec709.whitepoint) for x in xyz]
+        return float(np.mean(colour.delta_E(lab[0], lab[1], method='CIE 2000')))
+    cycles = render('CYCLES', 'cycles')
+    poly = render('POLYCHROME', 'poly')
+    out = dict(de=de(cycles, poly), err=Engine.last_error, warn=Engine.last_warnings)
+    # every ray sees everything: the panel, its backing and the wall block the view
+    for ob in (wall, card, lo):
+        for k in ('camera', 'shadow'):
+            setattr(ob, 'visible_' + k, True)
+    out['de_all_visible'] = de(cycles, render('POLYCHROME', 'poly_all'))
+    emit(**out)
+    """,
+        timeout=400,
+    )
+    r = check(proc, res)[0]
+    assert r["err"] is None and r["warn"] == [], r
+    assert r["de"] < 2.0, r
+    assert r["de_all_visible"] > 3.0 * max(r["de"], 1.0), r

@@ -1,0 +1,115 @@
+"""Ray visibility of instances (Cycles' Object > Visibility > Ray Visibility) against
+closed forms: what camera rays do not see, the camera sees through; what shadow rays do
+not see casts no shadow; an instance no ray sees changes nothing at all."""
+
+import math
+
+import numpy as np
+import pytest
+
+import polychrome as pc
+from conftest import luminance
+
+RHO, E = 0.5, 2.0
+
+
+def quad(half, z):
+    v = np.array([[-half, -half, z], [half, -half, z], [half, half, z], [-half, half, z]], np.float32)
+    return v, np.array([[0, 1, 2], [0, 2, 3]], np.uint32)
+
+
+def floor_scene(card_visibility=None, card_material=None, sun=True):
+    """A grey floor seen from above (orthographic), a sun straight down, and a card
+    between them that covers the whole view."""
+    scene = pc.Scene()
+    grey = scene.add_material(pc.Diffuse(RHO, name="grey"))
+    v, t = quad(10.0, 0.0)
+    scene.add_mesh("floor", v, t, material=grey)
+    card = scene.add_material(card_material or pc.Diffuse(0.0, name="black card"))
+    v, t = quad(1.0, 0.0)
+    m = scene.add_mesh("card", v, t, material=card, place=False)
+    placed = np.eye(4)
+    placed[2, 3] = 1.0
+    scene.add_instance(m, placed, "card", visibility=card_visibility)
+    if sun:
+        scene.add_light(pc.SunLight((0, 0, -1), strength=E, name="sun"))
+    scene.camera = pc.Camera.looking_at((0, 0, 3), (0, 0, 0), projection="ORTHOGRAPHIC", ortho_scale=0.5, name="top")
+    return scene
+
+
+def mean_luminance(scene, **kw):
+    kw = {"width": 6, "height": 6, "samples": 16, "max_bounces": 2, "seed": 5, **kw}
+    return float(luminance(pc.render(scene, **kw).rgba[..., :3]).mean())
+
+
+LIT = RHO * E / math.pi  # the floor under the sun, nothing in the way
+
+
+def test_card_hides_and_shadows_the_floor_by_default():
+    assert mean_luminance(floor_scene()) == pytest.approx(0.0, abs=1e-6)
+
+
+def test_camera_invisible_card_still_shadows():
+    assert mean_luminance(floor_scene({"camera": False})) == pytest.approx(0.0, abs=1e-6)
+
+
+def test_camera_and_shadow_invisible_card_lets_the_lit_floor_through():
+    got = mean_luminance(floor_scene({"camera": False, "shadow": False}))
+    assert got == pytest.approx(LIT, rel=0.01)
+
+
+def test_shadow_invisible_card_hides_the_floor_but_casts_no_shadow_on_it():
+    """Seen by the camera (black) but not by shadow rays: looking past it at an angle
+    would show a lit floor; straight on, only the card (black)."""
+    assert mean_luminance(floor_scene({"shadow": False})) == pytest.approx(0.0, abs=1e-6)
+    scene = floor_scene({"shadow": False})
+    scene.camera = pc.Camera.looking_at((2.5, 0, 1.5), (2.5, 0, 0), projection="ORTHOGRAPHIC", ortho_scale=0.5, name="beside")
+    assert mean_luminance(scene) == pytest.approx(LIT, rel=0.01)  # next to it: not shadowed
+
+
+@pytest.mark.parametrize("direction", ["BACKWARD", "FORWARD", "BIDIRECTIONAL"])
+def test_camera_invisible_emitter_lights_the_floor_but_is_not_seen(direction):
+    """A downward-facing emissive card of radiance L right in front of the camera:
+    camera rays (and light paths' camera connections) pass through it, and the floor
+    under it gets the irradiance of a square of half-width a at height h (sum of four
+    corner rectangles), averaged over the pixel centres."""
+    L, a, h, f, n = 3.0, 1.0, 1.0, 150.0, 6
+    scene = floor_scene({"camera": False, "shadow": False}, pc.Emitter(L, name="panel"), sun=False)
+    # light tracing needs a perspective camera: straight down from 3 units, 36 mm sensor
+    lens = pc.Camera.looking_at((0, 0, 3), (0, 0, 0), focal_length=f, sensor_width=36.0, name="lens")
+    scene.camera = lens
+
+    def corner(x, y):  # E of an x×y rectangle with a corner above the point, radiance 1
+        return 0.5 * (x / math.hypot(x, h) * math.atan(y / math.hypot(x, h)) + y / math.hypot(y, h) * math.atan(x / math.hypot(y, h)))
+
+    half = 3.0 * 18.0 / f
+    centres = ((np.arange(n) + 0.5) / n * 2 - 1) * half
+    irradiance = np.mean([L * sum(corner(a + sx * x, a + sy * y) for sx in (1, -1) for sy in (1, -1)) for x in centres for y in centres])
+    want = RHO / math.pi * irradiance
+    samples = {"BACKWARD": 64, "FORWARD": 8192, "BIDIRECTIONAL": 256}[direction]
+    got = mean_luminance(scene, direction=direction, samples=samples, max_bounces=1)
+    assert got == pytest.approx(want, rel=0.04), (direction, got, want)
+    # the camera would see the emitter itself (both faces emit) if it could
+    visible = floor_scene(None, pc.Emitter(L, name="panel"), sun=False)
+    visible.camera = lens
+    assert mean_luminance(visible, direction=direction, max_bounces=1, samples=samples) == pytest.approx(L, rel=0.02)
+
+
+def test_instance_no_ray_sees_changes_nothing():
+    none = {k: False for k in pc.scene.RAY_KINDS}
+    with_card = pc.render(floor_scene(none), width=6, height=6, samples=8, seed=3).rgba
+    scene = floor_scene(none)
+    scene._instances = [i for i in scene._instances if i["name"] != "card"]
+    without = pc.render(scene, width=6, height=6, samples=8, seed=3).rgba
+    assert np.array_equal(with_card, without)
+
+
+def test_bad_visibility_raises_naming_the_instance():
+    scene = pc.Scene()
+    m = scene.add_mesh("m", *quad(1.0, 0.0), material=scene.add_material(pc.Diffuse(0.5)), place=False)
+    with pytest.raises(ValueError, match="instance 'x'.*camra"):
+        scene.add_instance(m, np.eye(4), "x", visibility={"camra": False})
+    with pytest.raises(ValueError, match="instance 'x'.*True or False"):
+        scene.add_instance(m, np.eye(4), "x", visibility={"camera": "no"})
+    scene.add_instance(m, np.eye(4), "x", visibility={"camera": True})
+    assert "visibility" not in scene.description()[0]["instances"][0]  # the default is left out
