@@ -32,7 +32,12 @@ NEUTRAL = ("scheduler", "checkpoint", "resume", "threads", "denoise", "denoise_p
 def token(scene_json: str, buffers, settings) -> str:
     """The hash that ties a checkpoint to a scene and the settings that change pixels."""
     defaults = {f.name: f.default for f in dataclasses.fields(settings) if f.name in NEUTRAL}
-    settings_json = dataclasses.replace(settings, **defaults).to_json()
+    return content_hash(scene_json, buffers, dataclasses.replace(settings, **defaults).to_json())
+
+
+def content_hash(scene_json: str, buffers, settings_json: str) -> str:
+    """SHA-256 of a scene description, its buffers (dtype, shape and bytes) and settings:
+    what a checkpoint and a worker's scene cache are keyed by."""
     h = hashlib.sha256()
     h.update(scene_json.encode())
     for b in buffers:

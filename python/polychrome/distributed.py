@@ -18,7 +18,6 @@ from __future__ import annotations
 
 from collections import OrderedDict
 from dataclasses import dataclass, replace
-import hashlib
 import json
 import threading
 import time
@@ -28,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from . import _core, tasks
+from .checkpoint import content_hash
 from .tasks import RenderInterrupted
 
 __all__ = ["RenderInterrupted", "render", "render_frames", "frame_path", "parse_frames"]
@@ -41,17 +41,6 @@ class SceneInputs:
     scene_json: str
     buffers: tuple[np.ndarray, ...]
     settings_json: str
-
-
-def _token(scene_json: str, buffers: list[np.ndarray], settings_json: str) -> str:
-    h = hashlib.sha256()
-    h.update(scene_json.encode())
-    for b in buffers:
-        a = np.ascontiguousarray(b)
-        h.update(f"{a.dtype.str}{a.shape}".encode())
-        h.update(a.data)
-    h.update(settings_json.encode())
-    return h.hexdigest()
 
 
 # Compiled scenes of this process (a worker's), newest last; a few are kept so the
@@ -168,7 +157,7 @@ def render(
         scene_json = description_json(desc)
         settings_json = local.to_json()
         merge = _core.PassRenderer(scene_json, buffers, settings_json)  # the client's image; checks the scene
-        token = _token(scene_json, buffers, settings_json)
+        token = content_hash(scene_json, buffers, settings_json)
         inputs = client.scatter(
             SceneInputs(token, scene_json, tuple(np.ascontiguousarray(b) for b in buffers), settings_json), broadcast=True, hash=False
         )
@@ -237,7 +226,7 @@ def render_frames(frames, describe, scheduler, *, on_frame, progress=None) -> li
             scene_json = description_json(desc)
             settings_json = replace(settings, scheduler="").to_json()
             inputs = SceneInputs(
-                _token(scene_json, buffers, settings_json), scene_json, tuple(np.ascontiguousarray(b) for b in buffers), settings_json
+                content_hash(scene_json, buffers, settings_json), scene_json, tuple(np.ascontiguousarray(b) for b in buffers), settings_json
             )
             [scattered] = client.scatter([inputs], hash=False)
             f = client.submit(render_frame_task, scattered, key=f"polychrome-frame-{run}-{frame}", pure=False)
