@@ -56,10 +56,8 @@ impl GraphBsdf {
     /// `build` turns an instantiated description into a BSDF; the flags are those of
     /// the material at a default hit, plus a delta lobe where a roughness may reach 0.
     pub fn new(program: Program, template: Template, build: Box<BuildFn>) -> crate::Result<Self> {
-        let init = program.init.clone();
         let mut regs = Vec::new();
         program.run(&ShadingPoint::default(), &mut regs);
-        let _ = init;
         let mut flags = build(&template.instantiate(&|r| regs[r as usize]))?.flags();
         flags.smooth = true;
         flags.specular |= template.may_be_specular();
