@@ -13,15 +13,11 @@ import shutil
 from pathlib import Path
 
 import numpy as np
-import polychrome
 import pytest
 
 from .bhelper import check, run_bpy
 
-pytestmark = [
-    pytest.mark.blender,
-    pytest.mark.skipif(not hasattr(polychrome, "NodeMaterial"), reason="the core has no shading graphs yet (docs/shading.md)"),
-]
+pytestmark = pytest.mark.blender
 
 HERE = Path(__file__).resolve().parent
 
@@ -145,15 +141,6 @@ HIT_FAMILIES = [
 ]
 
 
-def _per_hit_export():
-    from polychrome_blender.export import materials  # no bpy at import
-
-    return materials.GRAPHS and materials.GRAPHS_PER_HIT
-
-
-needs_per_hit = pytest.mark.skipif(not _per_hit_export(), reason="the add-on exports per-hit graphs only once the core evaluates them")
-
-
 @pytest.fixture(scope="module")
 def per_hit(tmp_path_factory):
     """Per-hit cases on a Diffuse BSDF under a uniform white world (the core does not yet
@@ -162,13 +149,11 @@ def per_hit(tmp_path_factory):
     return run_oracle(tmp_path_factory.mktemp("oracle_hit"), "HIT_CASES", samples=256, albedo=True)
 
 
-@needs_per_hit
 def test_per_hit_graphs_render(per_hit):
     assert per_hit["error"] is None, per_hit["error"]
     assert not [w for w in per_hit["warnings"] if "not supported" in w], per_hit["warnings"]
 
 
-@needs_per_hit
 @pytest.mark.parametrize("family", HIT_FAMILIES)
 def test_per_hit_node_matches_cycles(per_hit, family):
     rows = [r for r in errors(per_hit, tile_means=True) if r[0] == family]
@@ -177,7 +162,6 @@ def test_per_hit_node_matches_cycles(per_hit, family):
     assert not bad, f"{len(bad)}/{len(rows)} cases off:\n" + "\n".join(bad)
 
 
-@needs_per_hit
 def test_environment_texture_in_a_material_matches_cycles(tmp_path):
     """Kept apart from HIT_CASES: a render error would take every case with it."""
     r = run_oracle(tmp_path, "ENVIRONMENT_CASES", samples=256, albedo=True)

@@ -1,12 +1,11 @@
 """Blender materials → polychrome materials.
 
 Node materials are exported as their node graph (export/node_graph.py →
-``polychrome.NodeMaterial``, docs/shading.md) when the core evaluates graphs; a Principled
-Hair BSDF on the Surface keeps the approximation below (:meth:`MaterialExport.hair`).
-While the core folds only constant graphs (``GRAPHS_PER_HIT`` False), a graph that reads
-anything per hit (textures, coordinates, Fresnel) goes the fixed-pattern way below.
+``polychrome.NodeMaterial``, docs/shading.md); a Principled Hair BSDF on the Surface keeps
+the approximation below (:meth:`MaterialExport.hair`). The core does not evaluate emission
+per hit yet, so a graph that varies over the surface and emits goes the fixed-pattern way.
 
-The fixed-pattern export (materials without a graph-capable core): Principled BSDF → ``polychrome.Principled`` (base colour or image texture,
+The fixed-pattern export: Principled BSDF → ``polychrome.Principled`` (base colour or image texture,
 metallic, roughness, IOR — or a Polychrome Dispersion node linked to IOR —, transmission,
 specular tint, thin film, emission colour × strength), Mix Shader and Add Shader of
 supported shaders → ``polychrome.Mix`` / ``polychrome.Add`` (nested), Diffuse, Glossy,
@@ -18,8 +17,6 @@ One :class:`MaterialExport` exports one Blender material; the :class:`~.exporter
 keeps the result (and its warnings) until the material changes.
 """
 
-import inspect
-
 import numpy as np
 import polychrome as pc
 
@@ -28,12 +25,8 @@ from .volumes import export_volume
 from .warnings import Warnings
 from .node_graph import GraphExport
 
-#: The core builds node graphs (``polychrome.NodeMaterial``) ...
-GRAPHS = hasattr(pc, "NodeMaterial")
-#: ... and evaluates those that change from hit to hit (it came with the mesh data they
-#: read: ``Scene.add_mesh(uv_maps=...)``). Per-hit emission is not evaluated yet, so a
-#: graph that varies and emits keeps the fixed patterns.
-GRAPHS_PER_HIT = GRAPHS and "uv_maps" in inspect.signature(pc.Scene.add_mesh).parameters
+#: Export node materials as graphs (tests set it False to exercise the fixed patterns).
+GRAPHS = True
 
 GREY = (0.8, 0.8, 0.8)
 #: Mix/Add shaders nested deeper than this are not followed (a cycle guard).
@@ -133,11 +126,11 @@ class MaterialExport:
 
     def graph(self):
         """The material as a ``polychrome.NodeMaterial`` (None: the core cannot evaluate
-        this graph yet, use the fixed patterns)."""
+        this graph yet — per-hit emission —, use the fixed patterns)."""
         own = Warnings()
         g = GraphExport(self.mat, own, self.textures)
         got = g.export()
-        if (g.per_hit and not (GRAPHS_PER_HIT and not g.emits)) or g.pending:
+        if (g.per_hit and g.emits) or g.pending:
             return None
         g.convert_textures()
         self.warnings.extend(own.items)
