@@ -303,7 +303,8 @@ def test_diff_files_matches_function(exr_pair, tmp_path):
     pa, pb, a, b = exr_pair
     heat = tmp_path / "heat.png"
     stats = diff_files(pa, pb, heatmap=heat)
-    assert stats == delta_e_stats(image_delta_e(a, b))
+    # To float rounding: numpy's vectorised loops may round 1 ulp apart between two calls (see test_alpha_is_ignored).
+    assert stats == pytest.approx(delta_e_stats(image_delta_e(a, b)), rel=1e-12)
     assert heat.is_file()
 
 
