@@ -1,0 +1,165 @@
+"""Every Blender BSDF feature against Cycles CPU (issue 14): a grid of spheres, one shading
+feature each, under a uniform white world and a sun, seen by an orthographic camera from
+above, rendered by Cycles CPU and by Polychrome through the add-on in the same bpy
+process (one subprocess for the whole grid). Each sphere is compared on 4×4-pixel blocks
+(blocks whose centre lies well inside the sphere's disc) by mean CIEDE2000; the bar is
+1.5. Features Polychrome does not match yet are xfail with the measured number."""
+
+import pytest
+
+from .bhelper import check, run_bpy
+
+pytestmark = pytest.mark.blender
+
+CELL = 24  # pixels per grid cell; the sphere's diameter is 0.8 of it
+COLS = 5
+SPP = 128
+BAR = 1.5
+
+# name: (node type, {input: value}); Principled spheres start from Blender's default node.
+FEATURES = {
+    "principled_default": ("ShaderNodeBsdfPrincipled", {}),
+    "coat": (
+        "ShaderNodeBsdfPrincipled",
+        {
+            "Base Color": (0.1, 0.3, 0.7),
+            "Roughness": 0.6,
+            "Coat Weight": 1.0,
+            "Coat Roughness": 0.05,
+            "Coat IOR": 1.5,
+            "Coat Tint": (0.9, 0.7, 0.4),
+        },
+    ),
+    "sheen": (
+        "ShaderNodeBsdfPrincipled",
+        {"Base Color": (0.2, 0.05, 0.05), "Sheen Weight": 1.0, "Sheen Roughness": 0.5, "Sheen Tint": (1.0, 1.0, 1.0)},
+    ),
+    "anisotropic_metal": (
+        "ShaderNodeBsdfPrincipled",
+        {"Base Color": (0.9, 0.9, 0.9), "Metallic": 1.0, "Roughness": 0.4, "Anisotropic": 0.8},
+    ),
+    "alpha": ("ShaderNodeBsdfPrincipled", {"Base Color": (0.8, 0.2, 0.2), "Alpha": 0.35}),
+    "rough_glass": ("ShaderNodeBsdfPrincipled", {"Transmission Weight": 1.0, "Roughness": 0.5}),
+    "diffuse_roughness": ("ShaderNodeBsdfPrincipled", {"Diffuse Roughness": 1.0}),
+    "specular_tint": (
+        "ShaderNodeBsdfPrincipled",
+        {"Base Color": (0.02, 0.02, 0.02), "Roughness": 0.2, "Specular Tint": (1.0, 0.3, 0.1)},
+    ),
+    "subsurface": (
+        "ShaderNodeBsdfPrincipled",
+        {"Base Color": (0.8, 0.5, 0.4), "Subsurface Weight": 1.0, "Subsurface Scale": 0.1},
+    ),
+    "translucent_bsdf": ("ShaderNodeBsdfTranslucent", {"Color": (0.8, 0.8, 0.3)}),
+    "transparent_bsdf": ("ShaderNodeBsdfTransparent", {"Color": (0.9, 0.5, 0.2)}),
+    "transparent_white": ("ShaderNodeBsdfTransparent", {"Color": (1.0, 1.0, 1.0)}),
+    "sheen_bsdf": ("ShaderNodeBsdfSheen", {"Color": (0.8, 0.3, 0.3), "Roughness": 0.5}),
+    "tinted_glass": ("ShaderNodeBsdfGlass", {"Color": (0.9, 0.5, 0.2), "Roughness": 0.0}),
+    "refraction_bsdf": ("ShaderNodeBsdfRefraction", {"Roughness": 0.1}),
+    "holdout": ("ShaderNodeHoldout", {}),
+}
+
+# Measured mean ΔE00 (128 spp each) of the features that do not match Cycles yet.
+XFAIL = {
+    "coat": "Principled Coat not supported yet (warned): dE00 19.1",
+    "sheen": "Principled Sheen not supported yet (warned): dE00 7.6",
+    "anisotropic_metal": "Principled Anisotropic not supported yet (warned): dE00 2.8",
+    "alpha": "Principled Alpha not supported yet (warned): dE00 12.4",
+    "rough_glass": "rough glass loses energy (no multiple-scattering compensation): dE00 8.0",
+    "diffuse_roughness": "Principled Diffuse Roughness not supported yet (warned): dE00 1.6",
+    "specular_tint": "Specular Tint on a dark dielectric: dE00 10.0",
+    "subsurface": "no subsurface scattering yet (warned): dE00 2.7",
+    "translucent_bsdf": "Translucent BSDF: dE00 1.52",
+    "transparent_bsdf": "Transparent BSDF not supported yet (warned): dE00 59.2",
+    "transparent_white": "Transparent BSDF not supported yet (warned): dE00 100",
+    "tinted_glass": "tinted Glass as a transmissive Principled (warned): dE00 5.7",
+    "refraction_bsdf": "Refraction BSDF rendered as Glass (warned), dE00 0.43",
+    "holdout": "Holdout not supported (warned, grey diffuse): dE00 100.8",
+}
+
+SCRIPT = """
+features = json.loads(FEATURES_JSON)
+CELL, COLS, SPP = {cell}, {cols}, {spp}
+names = list(features)
+rows = (len(names) + COLS - 1) // COLS
+sc = empty_scene(CELL * COLS, CELL * rows)
+sc.render.dither_intensity = 0.0
+sc.render.use_compositing = False
+w = bpy.data.worlds.new('White'); w.use_nodes = True; sc.world = w
+bg = w.node_tree.nodes['Background']; bg.inputs['Color'].default_value = (1, 1, 1, 1); bg.inputs['Strength'].default_value = 1.0
+sd = bpy.data.lights.new('Sun', 'SUN'); sd.energy = 2.0; sd.angle = math.radians(2.0)
+so = bpy.data.objects.new('Sun', sd); sc.collection.objects.link(so); so.rotation_euler = (math.radians(35), 0, math.radians(30))
+cd = bpy.data.cameras.new('Camera'); cd.type = 'ORTHO'; cd.ortho_scale = float(COLS)
+co = bpy.data.objects.new('Camera', cd); sc.collection.objects.link(co); sc.camera = co; co.location = (0, 0, 10)
+for k, name in enumerate(names):
+    kind, inputs = features[name]
+    m = bpy.data.materials.new(name); m.use_nodes = True; nt = m.node_tree
+    for n in list(nt.nodes):
+        if n.type != 'OUTPUT_MATERIAL': nt.nodes.remove(n)
+    node = nt.nodes.new(kind)
+    for key, v in inputs.items():
+        s = node.inputs[key]
+        s.default_value = (*v, 1.0) if isinstance(v, list) and s.type == 'RGBA' else v
+    nt.links.new(node.outputs[0], nt.nodes['Material Output'].inputs['Surface'])
+    col, row = k % COLS, k // COLS
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=0.4, location=(col - (COLS - 1) / 2, (rows - 1) / 2 - row, 0), segments=48, ring_count=24)
+    bpy.ops.object.shade_smooth()
+    bpy.context.object.data.materials.append(m)
+sc.render.image_settings.file_format = 'OPEN_EXR'; sc.render.image_settings.color_depth = '32'
+sc.render.engine = 'CYCLES'
+c = sc.cycles; c.device = 'CPU'; c.samples = SPP; c.use_denoising = False; c.use_adaptive_sampling = False
+c.filter_width = 0.01; c.max_bounces = 16; c.diffuse_bounces = 16; c.glossy_bounces = 16; c.transmission_bounces = 16
+c.transparent_max_bounces = 16; c.blur_glossy = 0.0; c.sample_clamp_indirect = 0.0; c.sample_clamp_direct = 0.0
+c.caustics_reflective = True; c.caustics_refractive = True
+sc.render.threads_mode = 'FIXED'; sc.render.threads = 2
+sc.render.filepath = os.path.abspath('cycles.exr'); bpy.ops.render.render(write_still=True)
+sc.render.engine = 'POLYCHROME'
+sc.polychrome.samples = SPP; sc.polychrome.max_bounces = 16
+sc.render.filepath = os.path.abspath('poly.exr'); bpy.ops.render.render(write_still=True)
+import polychrome.colordiff as cdiff
+def load(p):
+    ch = exr_channels(p)
+    h = sc.render.resolution_y
+    return np.stack([ch[k] for k in 'RGBA'], -1).reshape(h, -1, 4)   # row 0 = top (EXR order)
+A, B = load('cycles.exr'), load('poly.exr')
+out = {{}}
+nb = CELL // 4
+yy, xx = np.mgrid[0:nb, 0:nb]
+inside = np.hypot((yy + 0.5) * 4 - CELL / 2, (xx + 0.5) * 4 - CELL / 2) < 0.8 * 0.4 * CELL
+for k, name in enumerate(names):
+    col, row = k % COLS, k // COLS
+    a = A[row * CELL:(row + 1) * CELL, col * CELL:(col + 1) * CELL]
+    b = B[row * CELL:(row + 1) * CELL, col * CELL:(col + 1) * CELL]
+    a = a.reshape(nb, 4, nb, 4, 4).mean(axis=(1, 3))[inside]; b = b.reshape(nb, 4, nb, 4, 4).mean(axis=(1, 3))[inside]
+    de = cdiff.image_delta_e(a[None, :, :3], b[None, :, :3], white_luminance=1.0)
+    out[name] = dict(de=float(de.mean()), cycles=a[:, :4].mean(axis=0).tolist(), polychrome=b[:, :4].mean(axis=0).tolist())
+emit(spheres=out, err=Engine.last_error, warn=list(Engine.last_warnings or []))
+"""
+
+
+@pytest.fixture(scope="module")
+def grid(tmp_path_factory):
+    import json
+
+    tmp = tmp_path_factory.mktemp("bsdf_grid")
+    body = f"FEATURES_JSON = {json.dumps(json.dumps(FEATURES))!s}\n" + SCRIPT.format(cell=CELL, cols=COLS, spp=SPP)
+    proc, res = run_bpy(tmp, body, timeout=900)
+    r = check(proc, res)[0]
+    print("BSDF grid vs Cycles:")
+    for k, v in r["spheres"].items():
+        print(f"  {k:20s} dE00 {v['de']:6.2f}  cycles {v['cycles']}  polychrome {v['polychrome']}")
+    print("warnings:", r["warn"])
+    return r
+
+
+@pytest.mark.parametrize(
+    "feature",
+    [pytest.param(f, marks=pytest.mark.xfail(reason=XFAIL[f], strict=False)) if f in XFAIL else f for f in FEATURES],
+)
+def test_sphere_matches_cycles(grid, feature):
+    assert grid["err"] is None, grid["err"]
+    s = grid["spheres"][feature]
+    assert s["de"] < BAR, s
+    if feature == "holdout":  # Combined alpha 0 where the holdout is
+        assert s["polychrome"][3] == pytest.approx(s["cycles"][3], abs=0.05), s
+    ours = [w for w in grid["warn"] if f"'{feature}'" in w]
+    assert ours == [], ours
