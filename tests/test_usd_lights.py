@@ -159,6 +159,41 @@ def test_unnormalised_sun_disk_renders_its_closed_form_irradiance(tmp_path):
     assert luminance(result.rgba[..., :3]).mean() == pytest.approx(want, rel=0.02)
 
 
+def test_sphere_light_radius_renders_its_closed_form_irradiance(tmp_path):
+    """A SphereLight of radiance L (normalize off) and radius r (doubled by its transform)
+    straight above a diffuse floor of albedo ρ at height d: the floor below it receives
+    E = π L (r/d)² and has radiance ρ/π · E; treatAsPoint drops the radius."""
+    rho, intensity, radius, d = 0.5, 10.0, 0.25, 2.0
+    path = tmp_path / "spherefloor.usda"
+    stage = new_stage(path)
+    floor_mesh(stage, "/floor", 5.0, preview_material(stage, "/Looks/grey", (rho, rho, rho)))
+    top_camera(stage, "/cam", 1.0, 0.05)
+    light = UsdLux.SphereLight.Define(stage, "/bulb")
+    light.CreateIntensityAttr(intensity)
+    light.CreateRadiusAttr(radius)
+    light.AddTranslateOp().Set(Gf.Vec3d(0, 0, d))
+    light.AddScaleOp().Set(Gf.Vec3f(2, 2, 2))
+    point = UsdLux.SphereLight.Define(stage, "/point")
+    point.CreateIntensityAttr(0.0)
+    point.CreateRadiusAttr(0.3)
+    point.CreateTreatAsPointAttr(True)
+    stage.Save()
+    scene, caught = read(path)
+    lights = lights_by_name(scene)
+    assert lights["/bulb"]["radius"] == pytest.approx(2 * radius)
+    assert "radius" not in lights["/point"]
+    assert not any("/bulb" in w for w in caught), caught
+    result = pc.render(scene, width=4, height=4, samples=64, max_bounces=1)
+    want = rho / math.pi * math.pi * intensity * (2 * radius / d) ** 2
+    assert luminance(result.rgba[..., :3]).mean() == pytest.approx(want, rel=0.02)
+
+
+def test_point_sphere_and_sun_angle_bad_values_are_errors():
+    for light in (pc.PointLight((0, 0, 1), radius=-1.0), pc.SpotLight((0, 0, 1), radius=float("nan")), pc.SunLight(angle=4.0)):
+        with pytest.raises(ValueError, match="radius|angle"):
+            light.to_dict()
+
+
 def emitter_scales(scene):
     desc, bufs = scene.description()
     out = {}

@@ -328,13 +328,17 @@ class PointLight:
     """An isotropic point light of ``power`` watts (as Blender gives it) and ``color``.
 
     The radiant intensity is ``color × power / 4π`` per wavelength; ``color`` may be
-    any spectrum (RGB white gives a D65-shaped spectrum of luminance 1).
+    any spectrum (RGB white gives a D65-shaped spectrum of luminance 1). With
+    ``radius`` > 0 it is a sphere light (soft shadows) of uniform radiance
+    intensity / (π r²), as Cycles' point light of that radius: camera and BSDF rays do
+    not hit the sphere itself.
     """
 
     position: Sequence[float]
     power: float = 100.0
     color: Any = (1.0, 1.0, 1.0)
     name: str = "PointLight"
+    radius: float = 0.0
 
     def to_dict(self) -> dict[str, Any]:
         pos = _finite_floats(self.position, f"light '{self.name}': position")
@@ -342,7 +346,17 @@ class PointLight:
             raise ValueError(f"light '{self.name}': position must have 3 coordinates")
         _finite_floats([self.power], f"light '{self.name}': power")
         intensity = as_spectrum(self.color) * (float(self.power) / (4.0 * math.pi))
-        return {"type": "point", "name": self.name, "position": pos, "intensity": intensity.to_dict()}
+        d = {"type": "point", "name": self.name, "position": pos, "intensity": intensity.to_dict()}
+        return _with_radius(d, self.radius, self.name)
+
+
+def _with_radius(d: dict[str, Any], radius: float, name: str) -> dict[str, Any]:
+    r = float(radius)
+    if not (math.isfinite(r) and r >= 0.0):
+        raise ValueError(f"light '{name}': radius {radius} must be finite and non-negative")
+    if r > 0.0:
+        d["radius"] = r
+    return d
 
 
 def _roughness(value: Any, name: str) -> float:
@@ -413,7 +427,9 @@ class Glossy(Material):
 class SpotLight:
     """Blender's spot light: ``power`` watts and ``color`` as for a point light
     (intensity ``color × power / 4π`` on the axis), shining along ``direction`` within a
-    cone of full angle ``spot_size`` radians, its edge softened over ``spot_blend``."""
+    cone of full angle ``spot_size`` radians, its edge softened over ``spot_blend``.
+    ``radius`` > 0: a sphere light as :class:`PointLight`'s, the spot falloff seen
+    from its centre."""
 
     position: Sequence[float]
     direction: Sequence[float] = (0.0, 0.0, -1.0)
@@ -422,6 +438,7 @@ class SpotLight:
     spot_size: float = math.radians(45.0)
     spot_blend: float = 0.15
     name: str = "SpotLight"
+    radius: float = 0.0
 
     def to_dict(self) -> dict[str, Any]:
         pos = _finite_floats(self.position, f"light '{self.name}': position")
@@ -430,7 +447,7 @@ class SpotLight:
         if len(pos) != 3 or len(d) != 3:
             raise ValueError(f"light '{self.name}': position and direction must have 3 coordinates")
         intensity = as_spectrum(self.color) * (float(self.power) / (4.0 * math.pi))
-        return {
+        out = {
             "type": "spot",
             "name": self.name,
             "position": pos,
@@ -439,17 +456,22 @@ class SpotLight:
             "spot_size": float(self.spot_size),
             "spot_blend": float(self.spot_blend),
         }
+        return _with_radius(out, self.radius, self.name)
 
 
 @dataclass
 class SunLight:
     """Blender's sun: parallel light travelling along ``direction`` (the lamp's −Z) with
-    irradiance ``strength`` W/m² times ``color`` on a surface facing it."""
+    irradiance ``strength`` W/m² times ``color`` on a surface facing it. ``angle``:
+    the sun's angular diameter in radians (Blender's sun angle; 0..π): a disk of
+    directions of uniform radiance, soft shadows, the same irradiance on a surface
+    facing it (camera and BSDF rays do not see the disk)."""
 
     direction: Sequence[float] = (0.0, 0.0, -1.0)
     strength: float = 1.0
     color: Any = (1.0, 1.0, 1.0)
     name: str = "Sun"
+    angle: float = 0.0
 
     def to_dict(self) -> dict[str, Any]:
         d = _finite_floats(self.direction, f"light '{self.name}': direction")
@@ -457,7 +479,13 @@ class SunLight:
             raise ValueError(f"light '{self.name}': direction must have 3 coordinates")
         _finite_floats([self.strength], f"light '{self.name}': strength")
         irradiance = as_spectrum(self.color) * float(self.strength)
-        return {"type": "distant", "name": self.name, "direction": d, "irradiance": irradiance.to_dict()}
+        out = {"type": "distant", "name": self.name, "direction": d, "irradiance": irradiance.to_dict()}
+        a = float(self.angle)
+        if not (math.isfinite(a) and 0.0 <= a <= math.pi):
+            raise ValueError(f"light '{self.name}': angle {self.angle} rad must be in [0, π]")
+        if a > 0.0:
+            out["angle"] = a
+        return out
 
 
 def _unit(value: Any, what: str, name: str) -> float:

@@ -152,7 +152,7 @@ def light_from_description(d: dict[str, Any], power=None, colour=None):
             else:
                 p, c = 4.0 * math.pi, _spectrum_from_dict(d["intensity"])
             if kind == "point":
-                light = PointLight(list(d["position"]), power=p, color=c, name=name)
+                light = PointLight(list(d["position"]), power=p, color=c, name=name, radius=d.get("radius", 0.0))
             else:
                 light = SpotLight(
                     list(d["position"]),
@@ -162,9 +162,11 @@ def light_from_description(d: dict[str, Any], power=None, colour=None):
                     spot_size=d["spot_size"],
                     spot_blend=d["spot_blend"],
                     name=name,
+                    radius=d.get("radius", 0.0),
                 )
         elif kind == "distant":
-            light = SunLight(list(d["direction"]), strength=1.0, color=_spectrum_from_dict(d["irradiance"]), name=name)
+            irradiance = _spectrum_from_dict(d["irradiance"])
+            light = SunLight(list(d["direction"]), strength=1.0, color=irradiance, name=name, angle=d.get("angle", 0.0))
         else:
             light = None
         if light is not None and light.to_dict() == d:
@@ -960,11 +962,9 @@ class _Reader:
             factor = math.pi * r * r
         else:
             factor = 1.0
-        if not treat_as_point and r > 0:
-            self.warn(
-                f"sphere:{prim.GetPath()}",
-                f"prim {prim.GetPath()}: sphere light of radius {r:g} m is rendered as a point light of the same power",
-            )
+        # A sphere of that radius (soft shadows) unless treatAsPoint; its radiance is
+        # I/(πr²), the spec's (intensity, or intensity/(4πr²) normalised).
+        sphere = 0.0 if treat_as_point else r
         spectrum = self.emitted(scalar * factor, colour, blackbody)
         if prim.HasAPI(self.UsdLux.ShapingAPI):
             shaping = self.UsdLux.ShapingAPI(prim)
@@ -988,10 +988,11 @@ class _Reader:
                         spot_size=2.0 * math.radians(max(cone, 0.0)),
                         spot_blend=min(max(softness, 0.0), 1.0),
                         name=name,
+                        radius=sphere,
                     )
                 )
                 return
-        self.lights.append(PointLight(pos, power=4.0 * math.pi, color=spectrum, name=name))
+        self.lights.append(PointLight(pos, power=4.0 * math.pi, color=spectrum, name=name, radius=sphere))
 
     def add_emitter_polygon(self, prim, pts2d: np.ndarray, size: float, normalize: bool, scalar, colour, blackbody) -> None:
         """An emissive polygon in the light's local XY plane shining along −Z, with a black
@@ -1088,17 +1089,16 @@ class _Reader:
         # disk of angular diameter `angle`: E = L·π·sin²(angle/2) (zero angle: E = intensity).
         if not self.get(light.GetNormalizeAttr(), False) and angle > 0:
             scalar *= math.pi * math.sin(angle / 2) ** 2
-        if angle > math.radians(1.0):
-            self.warn(
-                f"angle:{prim.GetPath()}",
-                f"prim {prim.GetPath()}: the sun's angular size is not supported; it is rendered as a parallel light",
-            )
+        if not 0.0 <= angle <= math.pi:
+            self.warn(f"angle:{prim.GetPath()}", f"prim {prim.GetPath()}: angle {math.degrees(angle):g}° is clamped to 0..180")
+            angle = min(max(angle, 0.0), math.pi)
         self.lights.append(
             SunLight(
                 axis.tolist(),
                 strength=1.0,
                 color=self.emitted(scalar, colour, blackbody),
                 name=str(self.custom(prim, A.NAME, str(prim.GetPath()))),
+                angle=angle,
             )
         )
 

@@ -605,8 +605,9 @@ def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path
         kind = ld.get("type")
         if kind in ("point", "spot") or ("position" in ld and kind != "distant"):
             lt = UsdLux.SphereLight.Define(stage, lp)
-            lt.CreateTreatAsPointAttr(True)
-            lt.CreateRadiusAttr(POINT_LIGHT_RADIUS)
+            # A sphere light keeps its radius; a point is a tiny sphere treated as a point.
+            lt.CreateTreatAsPointAttr(not float(ld.get("radius", 0.0)) > 0.0)
+            lt.CreateRadiusAttr(float(ld.get("radius", 0.0)) or POINT_LIGHT_RADIUS)
             # Normalised sphere of radius r: radiance intensity/(4πr²), radiant intensity
             # L·πr² = intensity/4, whatever the radius (docs/usd.md, "Lights").
             lt.CreateNormalizeAttr(True)
@@ -625,7 +626,7 @@ def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path
         elif "direction" in ld:
             lt = UsdLux.DistantLight.Define(stage, lp)
             lt.AddTransformOp().Set(_matrix_to_usd(Gf, _aim(ld["direction"], (0.0, 0.0, 0.0))))
-            lt.CreateAngleAttr(0.0)
+            lt.CreateAngleAttr(math.degrees(float(ld.get("angle", 0.0))))  # the angular diameter
             lt.CreateNormalizeAttr(True)  # normalised: intensity × colour is the irradiance
             if isinstance(ld.get("irradiance"), dict):
                 peak, colour = _intensity_colour(rgb.emission(ld["irradiance"]))

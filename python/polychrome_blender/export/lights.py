@@ -19,8 +19,8 @@ colour × energy × 2^exposure; ``normalize`` from ``LA_UNNORMALIZED``) and
 * Spot: ``polychrome.SpotLight``, cone ``spot_size`` and ``spot_blend`` as Blender's.
 * Sun: ``polychrome.SunLight`` of irradiance ``colour × strength`` W/m² (Normalize on);
   with Normalize off Cycles' sun disk has radiance = strength, so the irradiance is
-  ``strength × π sin²(angle/2)`` (angle 0: strength). The angle is otherwise ignored
-  (sharp shadows, warning).
+  ``strength × π sin²(angle/2)`` (angle 0: strength). The angle is the sun disk's
+  angular diameter (soft shadows, as Cycles'; the disk itself is not seen in mirrors).
 * Temperature (``use_temperature``): a blackbody spectrum normalised to the luminance of
   white, filtered by the colour tint (``polychrome.spectra.tinted``), as Cycles multiplies
   the colour by the temperature colour.
@@ -140,6 +140,19 @@ def _point_power(ld, name):
     return p * (4.0 * math.pi * r * r if r > 0.0 else 4.0)
 
 
+def _radius(ld, name, warnings):
+    """The sphere radius of a point or spot light (``shadow_soft_size``)."""
+    r = float(ld.shadow_soft_size)
+    if not (math.isfinite(r) and r >= 0.0):
+        raise ValueError(f"light '{name}': radius {r} must be finite and non-negative")
+    if r > 0.0 and getattr(ld, "use_soft_falloff", False):  # Blender 4.0+
+        warnings.add(
+            ("soft_falloff", name),
+            f"light '{name}': Soft Falloff is not supported (it changes the light only near the sphere); rendered as a sphere light",
+        )
+    return r
+
+
 def _sun_strength(ld, name):
     """Irradiance of a sun: with Normalize off its disk of angular diameter ``angle`` has
     radiance = strength, i.e. irradiance strength·π·sin²(angle/2) (Cycles' sun area)."""
@@ -165,7 +178,8 @@ def export_lights(depsgraph, scene, warnings):
         pos = m[:3, 3]
         if ld.type == "POINT":
             spec = light_colour(ld, name, warnings)
-            scene.add_light(pc.PointLight(pos.tolist(), _point_power(ld, name), spec, name=name))
+            radius = _radius(ld, name, warnings)
+            scene.add_light(pc.PointLight(pos.tolist(), _point_power(ld, name), spec, name=name, radius=radius))
         elif ld.type == "AREA":
             export_area(scene, ld, name, m, warnings, light_visibility(ob, name, warnings))
         elif ld.type == "SPOT":
@@ -179,13 +193,13 @@ def export_lights(depsgraph, scene, warnings):
                     spot_size=float(ld.spot_size),
                     spot_blend=float(ld.spot_blend),
                     name=name,
+                    radius=_radius(ld, name, warnings),
                 )
             )
         elif ld.type == "SUN":
             spec = light_colour(ld, name, warnings)
-            if float(ld.angle) > 1e-3:
-                warnings.add(("sun", name), f"light '{name}': the sun's angular diameter is ignored (sharp shadows)")
-            scene.add_light(pc.SunLight(_axis(m, name), strength=_sun_strength(ld, name), color=spec, name=name))
+            angle = min(max(float(ld.angle), 0.0), math.pi)
+            scene.add_light(pc.SunLight(_axis(m, name), strength=_sun_strength(ld, name), color=spec, name=name, angle=angle))
         else:
             warnings.add(("light", ld.type), f"light '{name}': {ld.type.lower()} lights are not supported yet and are skipped")
             continue

@@ -290,6 +290,7 @@ fn spot_light_on_a_plane_is_inverse_square_inside_and_black_outside() {
         intensity: SpectrumDesc::constant(intensity),
         spot_size: 60f32.to_radians(),
         spot_blend: 0.0,
+        radius: 0.0,
     });
     desc.camera = CameraDesc {
         projection: Projection::Orthographic,
@@ -347,6 +348,7 @@ fn sun_on_a_plane_gives_irradiance_times_cosine() {
         name: "sun".into(),
         direction: [theta.sin(), 0.0, -theta.cos()],
         irradiance: SpectrumDesc::constant(e),
+        angle: 0.0,
     });
     desc.camera = CameraDesc {
         projection: Projection::Orthographic,
@@ -426,6 +428,7 @@ fn sun_through_a_glass_slab_is_found_by_forward_tracing() {
         name: "sun".into(),
         direction: [0.0, 0.0, -1.0],
         irradiance: SpectrumDesc::constant(e),
+        angle: 0.0,
     });
     // Perspective camera at (4, 0, 2) looking at the origin, +z up: its line of sight to
     // the floor near the origin passes beside the slab.

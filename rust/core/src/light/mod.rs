@@ -83,3 +83,48 @@ pub trait Light: Send + Sync {
         None
     }
 }
+
+/// 1 − cos θ from sin²θ (θ ≤ π/2) without cancellation: s² / (1 + √(1 − s²)).
+#[inline]
+pub fn one_minus_cos_from_sin2(sin2: f32) -> f32 {
+    let s2 = sin2.clamp(0.0, 1.0);
+    s2 / (1.0 + (1.0 - s2).sqrt())
+}
+
+/// A direction uniform in the cone of half-angle θmax about +z, given 1 − cos θmax,
+/// and its solid-angle pdf 1 / (2π (1 − cos θmax)) (pbrt-v4 `SampleUniformCone`;
+/// Cycles `sample_uniform_cone`).
+#[inline]
+pub fn sample_uniform_cone(u: Vec2, one_minus_cos_max: f32) -> (Vec3A, f32) {
+    let omc = u.x * one_minus_cos_max;
+    let cos = 1.0 - omc;
+    let sin = (omc * (2.0 - omc)).max(0.0).sqrt();
+    let phi = 2.0 * std::f32::consts::PI * u.y;
+    (Vec3A::new(sin * phi.cos(), sin * phi.sin(), cos), 1.0 / (2.0 * std::f32::consts::PI * one_minus_cos_max))
+}
+
+/// Samples the cone a sphere (`center`, `radius` > 0) subtends at `p`, uniformly in
+/// solid angle, as pbrt-v4's `Sphere::Sample(ctx, u)` and Cycles' sphere lights
+/// (intern/cycles/kernel/light/point.h, `point_light_sample`, Blender 4.x) do: the unit
+/// direction, the distance to the sphere's near surface along it and the pdf. None
+/// when `p` is inside the sphere.
+pub fn sample_sphere_cone(center: Vec3A, radius: f32, p: Vec3A, u: Vec2) -> Option<(Vec3A, f32, f32)> {
+    let d = center - p;
+    let d2 = d.length_squared();
+    let r2 = radius * radius;
+    if !(d2 > r2 && d2.is_finite()) {
+        return None;
+    }
+    let dist = d2.sqrt();
+    let omc_max = one_minus_cos_from_sin2(r2 / d2);
+    if !(omc_max > 0.0) {
+        return None;
+    }
+    let (local, pdf) = sample_uniform_cone(u, omc_max);
+    let wi = crate::geometry::Frame::from_normal(d / dist).to_world(local);
+    // Nearest intersection of the ray p + t·wi with the sphere.
+    let cos = local.z;
+    let sin2 = (local.x * local.x + local.y * local.y).min(1.0);
+    let t = dist * cos - (r2 - d2 * sin2).max(0.0).sqrt();
+    Some((wi, t.max(0.0), pdf))
+}

@@ -1,7 +1,17 @@
-//! An isotropic point light.
+//! A point light, or with a radius a sphere light (Blender's point light
+//! `shadow_soft_size`, UsdLux SphereLight `radius`): soft shadows.
+//!
+//! A sphere of radius r emits the uniform radiance L = I / (π r²), I the radiant
+//! intensity, as Cycles' sphere lights do (scene/light.cpp: `invarea` = 1/(π r²) for
+//! point lights): far away it is the point light of intensity I, and a point facing it
+//! at distance d receives E = π L (r/d)² = I/d². Next-event estimation samples the
+//! cone the sphere subtends uniformly ([`super::sample_sphere_cone`]). The sphere is
+//! not geometry: camera and BSDF rays do not hit it (no highlight of its disk in a
+//! mirror; a light ray reaches it only through light sampling, with MIS weight 1).
 
 use super::{EmissionSample, Light, LightSample};
-use crate::sampling::uniform_sphere;
+use crate::geometry::Frame;
+use crate::sampling::{cosine_hemisphere, uniform_sphere};
 use crate::spectrum::SampledSpectrum;
 use glam::{Vec2, Vec3A};
 use std::f32::consts::PI;
@@ -10,24 +20,84 @@ pub struct PointLight {
     pub position: Vec3A,
     /// Radiant intensity per wavelength (W·sr⁻¹·nm⁻¹ in scene units).
     pub intensity: SampledSpectrum,
+    /// Radius of the emitting sphere (0: a point).
+    pub radius: f32,
+}
+
+/// Light sampling of a point (radius 0) or sphere light at `center`, whose radiant
+/// intensity towards `p` is `intensity × scale`: `le` receives the incident radiance
+/// (intensity/d² for a point). Shared with spot lights.
+pub(crate) fn sample_point_or_sphere(
+    center: Vec3A,
+    radius: f32,
+    intensity: &SampledSpectrum,
+    scale: f32,
+    p: Vec3A,
+    u: Vec2,
+    le: &mut SampledSpectrum,
+) -> Option<LightSample> {
+    if radius > 0.0 {
+        let (wi, distance, pdf) = super::sample_sphere_cone(center, radius, p, u)?;
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return None;
+        }
+        le.copy_from(intensity);
+        le.scale(scale / (PI * radius * radius));
+        // Not hittable by BSDF rays: weight 1 (delta), the pdf still divides.
+        return Some(LightSample { wi, distance, pdf, delta: true });
+    }
+    let d = center - p;
+    let d2 = d.length_squared();
+    if d2 <= 0.0 || !d2.is_finite() {
+        return None;
+    }
+    let distance = d2.sqrt();
+    le.copy_from(intensity);
+    le.scale(scale / d2);
+    Some(LightSample { wi: d / distance, distance, pdf: 1.0, delta: true })
+}
+
+/// A ray leaving a sphere light: a uniform point of the sphere and a cosine-weighted
+/// direction about its outward normal; `le` receives the radiance I / (π r²).
+pub(crate) fn sphere_le(
+    center: Vec3A,
+    radius: f32,
+    intensity: &SampledSpectrum,
+    u_pos: Vec2,
+    u_dir: Vec2,
+    le: &mut SampledSpectrum,
+) -> Option<EmissionSample> {
+    let n = uniform_sphere(u_pos);
+    let local = cosine_hemisphere(Vec2::new(u_dir.x.min(0.999_999_9), u_dir.y));
+    let pdf_dir = local.z / PI;
+    if !(pdf_dir > 0.0) {
+        return None;
+    }
+    le.copy_from(intensity);
+    le.scale(1.0 / (PI * radius * radius));
+    Some(EmissionSample {
+        origin: center + n * radius,
+        direction: Frame::from_normal(n).to_world(local),
+        normal: Some(n),
+        pdf_pos: 1.0 / (4.0 * PI * radius * radius),
+        pdf_dir,
+        // No camera or BSDF ray can reach the sphere (it is not geometry): for the
+        // integrators' partitions it is as unreachable as a point.
+        delta_position: true,
+    })
 }
 
 impl Light for PointLight {
     fn power(&self, weights: &[f32]) -> f64 {
         4.0 * PI as f64 * self.intensity.dot(weights) as f64
     }
-    fn sample_li(&self, p: Vec3A, _u: Vec2, le: &mut SampledSpectrum) -> Option<LightSample> {
-        let d = self.position - p;
-        let d2 = d.length_squared();
-        if d2 <= 0.0 || !d2.is_finite() {
-            return None;
-        }
-        let distance = d2.sqrt();
-        le.copy_from(&self.intensity);
-        le.scale(1.0 / d2);
-        Some(LightSample { wi: d / distance, distance, pdf: 1.0, delta: true })
+    fn sample_li(&self, p: Vec3A, u: Vec2, le: &mut SampledSpectrum) -> Option<LightSample> {
+        sample_point_or_sphere(self.position, self.radius, &self.intensity, 1.0, p, u, le)
     }
-    fn sample_le(&self, _u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
+    fn sample_le(&self, u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
+        if self.radius > 0.0 {
+            return sphere_le(self.position, self.radius, &self.intensity, u_pos, u_dir, le);
+        }
         le.copy_from(&self.intensity);
         Some(EmissionSample {
             origin: self.position,
@@ -39,6 +109,60 @@ impl Light for PointLight {
         })
     }
     fn pdf_le(&self, _origin: Vec3A, _dir: Vec3A) -> Option<super::LeDensity> {
-        Some(super::LeDensity { pos: 1.0, dir: 1.0 / (4.0 * PI), cos: 1.0, directional: false })
+        // A sphere's light paths are no strategy of the bidirectional MIS (None): its
+        // light reaches camera paths only through light sampling, weighted 1.
+        (self.radius <= 0.0).then_some(super::LeDensity {
+            pos: 1.0,
+            dir: 1.0 / (4.0 * PI),
+            cos: 1.0,
+            directional: false,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Rng;
+
+    /// Irradiance at a point facing a sphere light, estimated with its own light samples
+    /// (E ≈ mean of L·cos/pdf), against the closed form π L (r/d)² for radiance L.
+    #[test]
+    fn sphere_irradiance_is_pi_l_r2_over_d2() {
+        for &(r, d) in &[(0.25f32, 2.0f32), (1.0, 1.5), (0.01, 3.0), (2.0, 2.2)] {
+            let light =
+                PointLight { position: Vec3A::new(0.0, 0.0, d), intensity: SampledSpectrum::splat(1, 3.0), radius: r };
+            let radiance = 3.0 / (PI * r * r);
+            let mut rng = Rng::new(7, 1);
+            let mut le = SampledSpectrum::zeros(1);
+            let n = 200_000;
+            let mut sum = 0.0f64;
+            for _ in 0..n {
+                let ls = light.sample_li(Vec3A::ZERO, rng.uniform2(), &mut le).unwrap();
+                assert!((le.get(0) - radiance).abs() <= 1e-4 * radiance);
+                // The shadow ray ends on the sphere.
+                let q = ls.wi * ls.distance - light.position;
+                assert!((q.length() - r).abs() < 1e-3 * d.max(1.0), "{} vs {r}", q.length());
+                sum += (le.get(0) * ls.wi.z.max(0.0) / ls.pdf) as f64;
+            }
+            let e = sum / n as f64;
+            let closed = (PI * radiance * (r / d).powi(2)) as f64;
+            assert!((e / closed - 1.0).abs() < 3e-3, "r {r} d {d}: {e} vs {closed}");
+            // ... which is the point light's I/d² (Cycles' normalisation).
+            assert!((closed - 3.0 / (d * d) as f64).abs() < 1e-4 * closed);
+        }
+    }
+
+    #[test]
+    fn inside_the_sphere_no_sample_and_power_is_the_points() {
+        let light = PointLight { position: Vec3A::ZERO, intensity: SampledSpectrum::splat(1, 1.0), radius: 1.0 };
+        let mut le = SampledSpectrum::zeros(1);
+        assert!(light.sample_li(Vec3A::new(0.5, 0.0, 0.0), Vec2::splat(0.5), &mut le).is_none());
+        // Emitted rays carry the point light's power: Le·cos/(pdf_pos·pdf_dir) = 4π I.
+        let es = light.sample_le(Vec2::new(0.3, 0.6), Vec2::new(0.2, 0.7), &mut le).unwrap();
+        let cos = es.normal.unwrap().dot(es.direction);
+        let flux = le.get(0) * cos / (es.pdf_pos * es.pdf_dir);
+        assert!((flux - 4.0 * PI).abs() < 1e-3, "{flux}");
+        assert!(light.pdf_le(es.origin, es.direction).is_none());
     }
 }

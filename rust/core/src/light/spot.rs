@@ -2,6 +2,9 @@
 //! within a cone of full angle `spot_size`, with the edge softened over the fraction
 //! `spot_blend` by a smoothstep (Cycles' `spot_attenuation`). Inside the cone's hard
 //! core the radiant intensity is the full spectral intensity I(λ); no cosine falloff.
+//! With a radius (Blender's `shadow_soft_size`) it is a sphere light as
+//! [`super::point`] describes, its radiance scaled by the falloff towards the shading
+//! point seen from the centre (Cycles' spot lights are spheres too, Blender 4.x).
 
 use super::{EmissionSample, Light, LightSample};
 use crate::geometry::Frame;
@@ -19,6 +22,8 @@ pub struct SpotLight {
     pub cos_half_angle: f32,
     /// Width in cosine of the blended edge: (1 − cos_half_angle) · spot_blend.
     pub smooth: f32,
+    /// Radius of the emitting sphere (0: a point).
+    pub radius: f32,
 }
 
 impl SpotLight {
@@ -27,7 +32,13 @@ impl SpotLight {
     pub fn new(position: Vec3A, direction: Vec3A, intensity: SampledSpectrum, spot_size: f32, spot_blend: f32) -> Self {
         let cos_half_angle = (0.5 * spot_size.clamp(0.0, PI)).cos();
         let smooth = (1.0 - cos_half_angle) * spot_blend.clamp(0.0, 1.0);
-        Self { position, direction: direction.normalize(), intensity, cos_half_angle, smooth }
+        Self { position, direction: direction.normalize(), intensity, cos_half_angle, smooth, radius: 0.0 }
+    }
+
+    /// The same spot as a sphere light of `radius` (≥ 0).
+    pub fn with_radius(mut self, radius: f32) -> Self {
+        self.radius = radius.max(0.0);
+        self
     }
 
     /// Fraction of the axis intensity emitted along unit direction `w` (from the light).
@@ -50,23 +61,26 @@ impl Light for SpotLight {
         // that is only used to choose lights).
         2.0 * PI as f64 * (1.0 - self.cos_half_angle as f64) * self.intensity.dot(weights) as f64
     }
-    fn sample_li(&self, p: Vec3A, _u: Vec2, le: &mut SampledSpectrum) -> Option<LightSample> {
+    fn sample_li(&self, p: Vec3A, u: Vec2, le: &mut SampledSpectrum) -> Option<LightSample> {
         let d = self.position - p;
         let d2 = d.length_squared();
         if d2 <= 0.0 || !d2.is_finite() {
             return None;
         }
-        let distance = d2.sqrt();
-        let wi = d / distance;
-        let fall = self.falloff(-wi);
+        let fall = self.falloff(-d / d2.sqrt());
         if fall <= 0.0 {
             return None;
         }
-        le.copy_from(&self.intensity);
-        le.scale(fall / d2);
-        Some(LightSample { wi, distance, pdf: 1.0, delta: true })
+        super::point::sample_point_or_sphere(self.position, self.radius, &self.intensity, fall, p, u, le)
     }
-    fn sample_le(&self, _u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
+    fn sample_le(&self, u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
+        if self.radius > 0.0 {
+            // From the sphere, the falloff of the emitted direction.
+            let mut es = super::point::sphere_le(self.position, self.radius, &self.intensity, u_pos, u_dir, le)?;
+            le.scale(self.falloff(es.direction));
+            es.delta_position = true;
+            return Some(es);
+        }
         // Uniform in the cone.
         let one_minus = 1.0 - self.cos_half_angle;
         if one_minus <= 0.0 {
@@ -91,12 +105,8 @@ impl Light for SpotLight {
     fn pdf_le(&self, _origin: Vec3A, dir: Vec3A) -> Option<super::LeDensity> {
         // Uniform in the cone (sample_le).
         let one_minus = 1.0 - self.cos_half_angle;
-        (one_minus > 0.0 && self.direction.dot(dir) >= self.cos_half_angle).then(|| super::LeDensity {
-            pos: 1.0,
-            dir: 1.0 / (2.0 * PI * one_minus),
-            cos: 1.0,
-            directional: false,
-        })
+        (self.radius <= 0.0 && one_minus > 0.0 && self.direction.dot(dir) >= self.cos_half_angle)
+            .then(|| super::LeDensity { pos: 1.0, dir: 1.0 / (2.0 * PI * one_minus), cos: 1.0, directional: false })
     }
 }
 

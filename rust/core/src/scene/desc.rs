@@ -331,8 +331,16 @@ pub struct InstanceDesc {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum LightDesc {
-    /// Radiant intensity per wavelength (W·sr⁻¹·nm⁻¹ in scene units) from a point.
-    Point { name: String, position: [f32; 3], intensity: SpectrumDesc },
+    /// Radiant intensity per wavelength (W·sr⁻¹·nm⁻¹ in scene units) from a point, or
+    /// with `radius` > 0 from a sphere of uniform radiance intensity / (π r²) (soft
+    /// shadows; Blender's point light radius, UsdLux SphereLight).
+    Point {
+        name: String,
+        position: [f32; 3],
+        intensity: SpectrumDesc,
+        #[serde(default)]
+        radius: f32,
+    },
     /// Blender's spot light: radiant intensity on the axis, cone of full angle
     /// `spot_size` (radians, default 45°), edge softened over `spot_blend` (default 0.15).
     Spot {
@@ -345,9 +353,20 @@ pub enum LightDesc {
         spot_size: f32,
         #[serde(default = "default_spot_blend")]
         spot_blend: f32,
+        /// Radius of the emitting sphere (0: a point), as for `Point`.
+        #[serde(default)]
+        radius: f32,
     },
-    /// A sun: parallel light travelling along `direction` with spectral irradiance.
-    Distant { name: String, direction: [f32; 3], irradiance: SpectrumDesc },
+    /// A sun: light travelling along `direction` with spectral irradiance on a surface
+    /// facing it, from a disk of directions of angular diameter `angle` (radians, 0:
+    /// parallel rays; Blender's sun angle).
+    Distant {
+        name: String,
+        direction: [f32; 3],
+        irradiance: SpectrumDesc,
+        #[serde(default)]
+        angle: f32,
+    },
 }
 
 fn default_spot_size() -> f32 {

@@ -505,16 +505,21 @@ impl Scene {
         }
         for l in &desc.lights {
             match l {
-                LightDesc::Point { name, position, intensity } => {
+                LightDesc::Point { name, position, intensity, radius } => {
                     let position = Vec3A::from(*position);
                     if !position.is_finite() {
                         return Err(Error::object("light", name, "position is not finite"));
                     }
+                    let radius = optics::light_radius(name, *radius)?;
                     let intensity =
                         rgb.evaluate(intensity, &grid, SpectrumRole::Illuminant, "light", name, "intensity")?;
-                    lights.push(Box::new(PointLight { position, intensity: SampledSpectrum::from_slice(&intensity) }));
+                    lights.push(Box::new(PointLight {
+                        position,
+                        intensity: SampledSpectrum::from_slice(&intensity),
+                        radius,
+                    }));
                 }
-                LightDesc::Spot { name, position, direction, intensity, spot_size, spot_blend } => {
+                LightDesc::Spot { name, position, direction, intensity, spot_size, spot_blend, radius } => {
                     let intensity =
                         rgb.evaluate(intensity, &grid, SpectrumRole::Illuminant, "light", name, "intensity")?;
                     lights.push(optics::build_spot(
@@ -524,9 +529,10 @@ impl Scene {
                         SampledSpectrum::from_slice(&intensity),
                         *spot_size,
                         *spot_blend,
+                        *radius,
                     )?);
                 }
-                LightDesc::Distant { name, direction, irradiance } => {
+                LightDesc::Distant { name, direction, irradiance, angle } => {
                     let irradiance =
                         rgb.evaluate(irradiance, &grid, SpectrumRole::Illuminant, "light", name, "irradiance")?;
                     lights.push(optics::build_distant(
@@ -535,6 +541,7 @@ impl Scene {
                         SampledSpectrum::from_slice(&irradiance),
                         bounds_center,
                         bounds_radius,
+                        *angle,
                     )?);
                 }
             }

@@ -121,7 +121,9 @@ pub fn build_spot(
     intensity: SampledSpectrum,
     spot_size: f32,
     spot_blend: f32,
+    radius: f32,
 ) -> Result<Box<dyn Light>> {
+    let radius = light_radius(name, radius)?;
     let p = Vec3A::from(position);
     if !p.is_finite() {
         return Err(Error::object("light", name, "position is not finite"));
@@ -133,7 +135,7 @@ pub fn build_spot(
     if !(spot_blend.is_finite() && (0.0..=1.0).contains(&spot_blend)) {
         return Err(Error::object("light", name, format!("spot_blend {spot_blend} must be in 0..1")));
     }
-    Ok(Box::new(SpotLight::new(p, d, intensity, spot_size, spot_blend)))
+    Ok(Box::new(SpotLight::new(p, d, intensity, spot_size, spot_blend).with_radius(radius)))
 }
 
 /// A distant (sun) light; `irradiance` already evaluated on the grid.
@@ -143,7 +145,20 @@ pub fn build_distant(
     irradiance: SampledSpectrum,
     scene_center: Vec3A,
     scene_radius: f32,
+    angle: f32,
 ) -> Result<Box<dyn Light>> {
     let direction = unit_direction(name, direction)?;
-    Ok(Box::new(DistantLight { direction, irradiance, scene_center, scene_radius }))
+    if !(angle.is_finite() && (0.0..=std::f32::consts::PI + 1e-6).contains(&angle)) {
+        return Err(Error::object("light", name, format!("angle {angle} rad must be in [0, π]")));
+    }
+    let half_angle = (0.5 * angle).min(std::f32::consts::FRAC_PI_2);
+    Ok(Box::new(DistantLight { direction, irradiance, scene_center, scene_radius, half_angle }))
+}
+
+/// A point or spot light's sphere radius: finite and ≥ 0.
+pub fn light_radius(name: &str, radius: f32) -> Result<f32> {
+    if !(radius.is_finite() && radius >= 0.0) {
+        return Err(Error::object("light", name, format!("radius {radius} must be finite and non-negative")));
+    }
+    Ok(radius)
 }
