@@ -185,3 +185,38 @@ def test_a_checker_driven_roughness_renders_two_glossy_looks():
         matches = [np.allclose(out[half], refs[r][half], rtol=1e-4, atol=1e-6) for r in (0.2, 0.6)]
         assert sum(matches) == 1, matches
     assert not np.allclose(out[:, :7].mean(), out[:, 9:].mean(), rtol=1e-3)
+
+
+def test_transparent_and_alpha_pass_the_world_through_stochastically():
+    """Under a uniform white world (radiance 1) with nothing behind the square: a
+    Transparent BSDF of colour c shows what a Diffuse of albedo c shows (both are the
+    uplifted reflectance c(λ) times the world), and a Mix Shader of a
+    Transparent (weight 1 − Fac) and a black Diffuse passes 1 − Fac of the world, as does
+    a black, non-specular Principled with Alpha 0.35 (Cycles' stochastic transparency)."""
+    tinted = [{"type": "ShaderNodeBsdfTransparent", "name": "T", "inputs": {"Color": [0.9, 0.5, 0.2, 1.0]}}]
+    out = pc.render(halves_scene(pc.NodeMaterial("Tinted", tinted, {"surface": [0, "BSDF"]})), **HALVES).rgba[..., :3]
+    diffuse = fixed_render(pc.Diffuse((0.9, 0.5, 0.2)))
+    assert np.allclose(out.mean(axis=(0, 1)), diffuse.mean(axis=(0, 1)), atol=0.01), (out.mean(axis=(0, 1)), diffuse.mean(axis=(0, 1)))
+    mix = [
+        {"type": "ShaderNodeBsdfTransparent", "name": "T"},
+        {"type": "ShaderNodeBsdfDiffuse", "name": "D", "inputs": {"Color": [0.0, 0.0, 0.0, 1.0]}},
+        {
+            "type": "ShaderNodeMixShader",
+            "name": "Mix",
+            "inputs": {"Fac": 0.3, "Shader": {"link": [0, "BSDF"]}, "Shader_001": {"link": [1, "BSDF"]}},
+        },
+    ]
+    alpha = [
+        {
+            "type": "ShaderNodeBsdfPrincipled",
+            "name": "P",
+            "inputs": {"Base Color": [0.0, 0.0, 0.0, 1.0], "Specular IOR Level": 0.0, "Alpha": 0.35},
+        }
+    ]
+    clear = [{"type": "ShaderNodeBsdfTransparent", "name": "T"}]
+    world = pc.render(halves_scene(pc.NodeMaterial("Clear", clear, {"surface": [0, "BSDF"]})), **HALVES).rgba[..., :3]
+    world = world.mean(axis=(0, 1))  # the world's colour (constant 1 is not RGB white)
+    for name, nodes, out_id, passed in (("Mix", mix, [2, "Shader"], 0.7), ("Alpha", alpha, [0, "BSDF"], 0.65)):
+        settings = dict(HALVES, samples=256)
+        img = pc.render(halves_scene(pc.NodeMaterial(name, nodes, {"surface": out_id})), **settings).rgba[..., :3]
+        assert np.allclose(img.mean(axis=(0, 1)), passed * world, atol=0.01), (name, img.mean(axis=(0, 1)), world)

@@ -316,6 +316,29 @@ impl Walk {
                 st.ray = Ray { origin, tmin: 0.0, tmax: f32::INFINITY, ..st.ray };
                 continue;
             }
+            if let Some(pt) = scene.pass_through[si.material as usize].as_ref().filter(|_| media) {
+                // Stochastic transparency (Cycles' transparent closure): pass straight on
+                // with the Transparent BSDF's weight, tinted; else shade the opaque rest,
+                // whose weight 1 − p this choice cancels.
+                if pt.probability >= 1.0 || rng.uniform() < pt.probability {
+                    crossings += 1;
+                    if crossings > VOLUME_BOUNDS_MAX {
+                        return End::Done;
+                    }
+                    for j in 0..beta.lanes() {
+                        let v = beta.lane(j) * pt.tint.get(beta.lane_index(j));
+                        beta.set_lane(j, v);
+                    }
+                    if !beta.is_alive() {
+                        return End::Done;
+                    }
+                    let front = si.ng.dot(st.ray.direction) < 0.0;
+                    let origin = offset_ray_origin(si.p, if front { -si.ng } else { si.ng });
+                    st.traveled += (origin - st.ray.origin).length();
+                    st.ray = Ray { origin, tmin: 0.0, tmax: f32::INFINITY, ..st.ray };
+                    continue;
+                }
+            }
             // Surfaces are two-sided: shade on the side the ray arrived from.
             let Facing { wo, ng, ns, material } = facing(scene, &st.ray, &si, ctx);
             let frame = Frame::from_normal(ns);

@@ -230,6 +230,14 @@ pub enum BsdfDesc {
     Translucent {
         color: SpectrumDesc,
     },
+    /// Blender's Transparent BSDF: the ray passes straight on, tinted by `color`
+    /// (Cycles' `bsdf_transparent_setup`). At the top of a material, alone or as one
+    /// side of a constant Mix (Principled Alpha), it is stochastic transparency:
+    /// paths pass with the Mix's weight, shadow rays are attenuated by weight × colour.
+    /// Nested deeper it reflects nothing (warned).
+    Transparent {
+        color: SpectrumDesc,
+    },
     /// Blender's Sheen BSDF (microfiber LTC).
     Sheen {
         color: SpectrumDesc,
@@ -238,6 +246,32 @@ pub enum BsdfDesc {
     },
     /// A node graph (docs/shading.md); written as the material's `nodes` and `output`.
     Graph(Box<crate::shading::GraphDesc>),
+}
+
+impl BsdfDesc {
+    /// Splits a top-level Transparent BSDF off: `(probability a path passes, its tint)`
+    /// and the opaque rest, weighted 1 (it is shaded with probability 1 − p, which
+    /// cancels its Mix weight 1 − p). A Transparent alone passes always.
+    pub fn split_transparent(&self) -> Option<(f32, SpectrumDesc, BsdfDesc)> {
+        match self {
+            BsdfDesc::Transparent { color } => Some((1.0, color.clone(), BsdfDesc::None)),
+            BsdfDesc::Mix { a, b, factor, factor_from: None } => match (a.as_ref(), b.as_ref()) {
+                (BsdfDesc::Transparent { color }, rest) => Some((1.0 - factor, color.clone(), rest.clone())),
+                (rest, BsdfDesc::Transparent { color }) => Some((*factor, color.clone(), rest.clone())),
+                _ => None,
+            },
+            _ => None,
+        }
+    }
+
+    /// Whether a Transparent BSDF is anywhere in this description.
+    pub fn has_transparent(&self) -> bool {
+        match self {
+            BsdfDesc::Transparent { .. } => true,
+            BsdfDesc::Mix { a, b, .. } | BsdfDesc::Add { a, b } => a.has_transparent() || b.has_transparent(),
+            _ => false,
+        }
+    }
 }
 
 /// A view-dependent Mix Shader factor, as Blender's nodes compute it.

@@ -96,7 +96,7 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
         BsdfDesc::Diffuse { reflectance } => {
             Box::new(Diffuse { reflectance: b.reflectance(reflectance, material, "reflectance")? })
         }
-        BsdfDesc::None | BsdfDesc::Null => Box::new(Black),
+        BsdfDesc::None | BsdfDesc::Null | BsdfDesc::Transparent { .. } => Box::new(Black),
         BsdfDesc::Dielectric { ior, roughness } => super::optics::build_dielectric(material, ior, *roughness, b.grid)?,
         BsdfDesc::Conductor { metal, eta, k, roughness } => {
             let eta = eta.as_ref().map(|d| b.spectrum(d, SpectrumRole::Unbounded, material, "eta")).transpose()?;

@@ -85,7 +85,7 @@ impl Scene {
     /// Any material has a medium or no surface: paths track media and shadow rays pass
     /// null surfaces.
     pub fn has_media(&self) -> bool {
-        !self.media.is_empty() || self.null_surface.iter().any(|&b| b)
+        !self.media.is_empty() || self.null_surface.iter().any(|&b| b) || self.pass_through.iter().any(Option::is_some)
     }
 
     /// The medium of stack entry (instance, material).
@@ -217,11 +217,18 @@ impl Scene {
             let Some(h) = hit else { return true };
             let si = self.interaction(&ray, &h);
             let m = si.material as usize;
-            if !self.null_surface[m] {
-                return false;
-            }
             let front = si.ng.dot(ray.direction) < 0.0;
-            if self.material_medium[m].is_some() {
+            if let Some(pt) = &self.pass_through[m] {
+                // Stochastic transparency, in expectation: × probability × tint.
+                for i in 0..tr.len() {
+                    tr.set(i, tr.get(i) * pt.probability * pt.tint.get(i));
+                }
+                if tr.is_black() {
+                    return false;
+                }
+            } else if !self.null_surface[m] {
+                return false;
+            } else if self.material_medium[m].is_some() {
                 stack.cross(si.instance, si.material, front);
             }
             let origin = offset_ray_origin(si.p, if front { -si.ng } else { si.ng });

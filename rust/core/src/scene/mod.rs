@@ -90,6 +90,17 @@ impl EnvironmentRef {
     }
 }
 
+/// Stochastic transparency (Cycles' transparent closure, `bsdf_transparent_setup` in
+/// intern/cycles/kernel/closure/bsdf_transparent.h, and the Principled BSDF's Alpha,
+/// which mixes a transparent closure of weight 1 − alpha in, svm_closure.h): a path
+/// passes straight through with `probability` (its throughput × `tint`), else the
+/// surface is shaded; shadow rays are attenuated by `probability × tint`.
+#[derive(Clone, Debug)]
+pub struct PassThrough {
+    pub probability: f32,
+    pub tint: SampledSpectrum,
+}
+
 pub struct Scene {
     pub grid: WavelengthGrid,
     pub observer: Observer,
@@ -125,6 +136,9 @@ pub struct Scene {
     pub material_medium: Vec<Option<u32>>,
     /// Per material: no surface, rays pass straight through (`BsdfDesc::Null`).
     pub null_surface: Vec<bool>,
+    /// Per material: stochastic transparency (a top-level Transparent BSDF, Principled
+    /// Alpha), see [`PassThrough`].
+    pub pass_through: Vec<Option<PassThrough>>,
     /// Per mesh: the named vertex data shading graphs read, and its bounds.
     pub mesh_data: Vec<hit::MeshShadingData>,
     /// Per light: the ray visibility of the instance it lies on (`visibility::ALL` for
@@ -247,6 +261,7 @@ impl Scene {
         let mut materials = Vec::with_capacity(desc.materials.len().max(1));
         let mut warnings = Vec::new();
         let (mut media, mut material_medium, mut null_surface) = (Vec::new(), Vec::new(), Vec::new());
+        let mut pass_through = Vec::new();
         for m in &desc.materials {
             let spectrum = |d, role, what| -> Result<SampledSpectrum> {
                 Ok(SampledSpectrum::from_slice(&rgb.evaluate(d, &grid, role, "material", &m.name, what)?))
@@ -255,6 +270,8 @@ impl Scene {
             let (compiled, constant);
             let mut per_hit = None;
             let mut hit_attributes = None;
+            let mut transparency = None;
+            let opaque_rest;
             let (bsdf_desc, emission_desc) = match &m.bsdf {
                 BsdfDesc::Graph(g) => {
                     compiled = crate::shading::compile_material(&m.name, g, &textures)?;
@@ -264,10 +281,45 @@ impl Scene {
                         per_hit = Some(self::graph_bsdf(&m.name, &compiled, &grid, uplift.as_ref(), &textures)?);
                         hit_attributes = Some(compiled.program.attributes.clone());
                     }
+                    transparency = compiled.transparency.clone();
                     (&constant, compiled.emission.as_ref())
                 }
-                d => (d, m.emission.as_ref()),
+                d => match d.split_transparent() {
+                    Some((p, color, rest)) => {
+                        transparency = Some((p, color));
+                        opaque_rest = rest;
+                        (&opaque_rest, m.emission.as_ref())
+                    }
+                    None => (d, m.emission.as_ref()),
+                },
             };
+            if bsdf_desc.has_transparent() {
+                warnings.push(format!(
+                    "material '{}': a Transparent BSDF that is not the material's top closure (or one side of a \
+                     constant Mix Shader there) is not supported yet; it reflects nothing",
+                    m.name
+                ));
+            }
+            pass_through.push(match transparency {
+                Some((p, color)) if p > 0.0 => Some(PassThrough {
+                    probability: p.min(1.0),
+                    tint: {
+                        let mut t = SampledSpectrum::from_slice(&rgb.evaluate(
+                            &color,
+                            &grid,
+                            SpectrumRole::Reflectance,
+                            "material",
+                            &m.name,
+                            "transparent colour",
+                        )?);
+                        t.values_mut()
+                            .iter_mut()
+                            .for_each(|x| *x = if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 });
+                        t
+                    },
+                }),
+                _ => None,
+            });
             let bsdf: Box<dyn Bsdf> = match bsdf_desc {
                 _ if per_hit.is_some() => Box::new(per_hit.take().expect("checked")),
                 BsdfDesc::Diffuse { reflectance } if matches!(reflectance.kind, SpectrumKind::Texture { .. }) => {
@@ -305,7 +357,7 @@ impl Scene {
                     }
                     Box::new(Diffuse { reflectance: SpectralParam::Constant(r) })
                 }
-                BsdfDesc::None | BsdfDesc::Null => Box::new(Black),
+                BsdfDesc::None | BsdfDesc::Null | BsdfDesc::Transparent { .. } => Box::new(Black),
                 BsdfDesc::Dielectric { ior, roughness } => optics::build_dielectric(&m.name, ior, *roughness, &grid)?,
                 BsdfDesc::Conductor { metal, eta, k, roughness } => {
                     let eta = eta.as_ref().map(|d| spectrum(d, SpectrumRole::Unbounded, "eta")).transpose()?;
@@ -360,6 +412,7 @@ impl Scene {
             });
             material_medium.push(None);
             null_surface.push(false);
+            pass_through.push(None);
         }
 
         // Meshes.
@@ -639,6 +692,7 @@ impl Scene {
             media,
             material_medium,
             null_surface,
+            pass_through,
             mesh_data,
             light_visibility,
         })

@@ -151,6 +151,36 @@ fn is_white(d: &SpectrumDesc) -> bool {
 }
 
 impl Template {
+    /// Splits a top-level Transparent BSDF off (alone, or one side of a Mix with a
+    /// constant factor): the probability a path passes, its tint, and the opaque rest
+    /// (see `BsdfDesc::split_transparent`).
+    pub fn split_transparent(&self) -> Option<(f32, SpectrumDesc, Template)> {
+        let color_of = |t: &Template| match t {
+            Template::Fixed(BsdfDesc::Transparent { color }) => Some(color.clone()),
+            _ => None,
+        };
+        if let Some(c) = color_of(self) {
+            return Some((1.0, c, Template::Fixed(BsdfDesc::None)));
+        }
+        match self {
+            Template::Mix { factor: F::C(f), factor_from: None, a, b } => match (color_of(a), color_of(b)) {
+                (Some(c), _) => Some((1.0 - f, c, (**b).clone())),
+                (None, Some(c)) => Some((*f, c, (**a).clone())),
+                _ => None,
+            },
+            _ => None,
+        }
+    }
+
+    /// Whether a Transparent BSDF is anywhere in the template.
+    pub fn has_transparent(&self) -> bool {
+        match self {
+            Template::Fixed(d) => d.has_transparent(),
+            Template::Mix { a, b, .. } | Template::Add { a, b } => a.has_transparent() || b.has_transparent(),
+            _ => false,
+        }
+    }
+
     /// Whether every parameter is a constant.
     pub fn is_constant(&self) -> bool {
         match self {
@@ -415,8 +445,14 @@ impl<'c, 'a> Lowering<'c, 'a> {
         Ok(match kind {
             "ShaderNodeBsdfPrincipled" => {
                 self.default_normal(node, "Normal")?;
+                let alpha = match self.float(node, "Alpha", 0.0, 1.0)? {
+                    F::C(a) => a,
+                    F::R(..) => {
+                        self.c.warn(node, "a varying Alpha is not supported yet (per-hit transparency); using 1");
+                        1.0
+                    }
+                };
                 for (id, default, what) in [
-                    ("Alpha", 1.0, "no transparency yet"),
                     ("Diffuse Roughness", 0.0, "Principled diffuse is Lambertian"),
                     ("Subsurface Weight", 0.0, "no subsurface scattering yet"),
                     ("Anisotropic", 0.0, "no anisotropy yet"),
@@ -441,6 +477,20 @@ impl<'c, 'a> Lowering<'c, 'a> {
                     thin_film_thickness: self.float(node, "Thin Film Thickness", 0.0, 100_000.0)?,
                     thin_film_ior: self.float(node, "Thin Film IOR", 1.0, 10.0)?,
                     specular_ior_level: self.float(node, "Specular IOR Level", 0.0, 1.0)?,
+                };
+                // Alpha: a transparent closure of weight 1 − alpha mixed in (Cycles'
+                // svm_node_closure_bsdf, CLOSURE_BSDF_PRINCIPLED_ID: bsdf_transparent_setup
+                // with weight·(1 − alpha), the other closures × alpha).
+                let t = if alpha < 1.0 {
+                    let white = SpectrumDesc::new(SpectrumKind::Rgb { rgb: [1.0; 3] });
+                    Template::Mix {
+                        factor: F::C(alpha),
+                        factor_from: None,
+                        a: Box::new(Template::Fixed(BsdfDesc::Transparent { color: white })),
+                        b: Box::new(t),
+                    }
+                } else {
+                    t
                 };
                 (t, emission)
             }
@@ -477,7 +527,17 @@ impl<'c, 'a> Lowering<'c, 'a> {
                 (Template::Sheen { color, roughness: self.float(node, "Roughness", 0.0, 1.0)? }, None)
             }
             "ShaderNodeEmission" => (Template::Fixed(BsdfDesc::None), self.emission(node, "Color", "Strength")?),
-            "ShaderNodeBsdfTransparent" | "ShaderNodeHoldout" => {
+            "ShaderNodeBsdfTransparent" => {
+                let color = match self.color(node, "Color")? {
+                    Col::C(d) => d,
+                    Col::R(_) => {
+                        self.c.warn(node, "a varying Color is not supported yet; the Transparent BSDF is white");
+                        SpectrumDesc::new(SpectrumKind::Rgb { rgb: [1.0; 3] })
+                    }
+                };
+                (Template::Fixed(BsdfDesc::Transparent { color }), None)
+            }
+            "ShaderNodeHoldout" => {
                 self.c.warn(node, "is not supported yet; the surface reflects nothing here");
                 (Template::Fixed(BsdfDesc::None), None)
             }

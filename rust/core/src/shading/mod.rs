@@ -29,6 +29,8 @@ use std::sync::Arc;
 pub struct CompiledMaterial {
     pub template: closure::Template,
     pub emission: Option<crate::spectrum::SpectrumDesc>,
+    /// A top-level Transparent BSDF split off the template: (pass probability, tint).
+    pub transparency: Option<(f32, crate::spectrum::SpectrumDesc)>,
     pub program: Program,
     pub warnings: Vec<String>,
 }
@@ -47,8 +49,19 @@ pub fn compile_material(name: &str, graph: &GraphDesc, textures: &[Arc<Texture>]
     if graph.output.volume.is_some() || graph.output.displacement.is_some() {
         c.warnings.push(format!("material '{name}': volume and displacement outputs are not supported yet (ignored)"));
     }
-    let (template, emission) = closure::lower_surface(&mut c, graph.output.surface.as_ref())?;
-    Ok(CompiledMaterial { template, emission, program: c.program, warnings: c.warnings })
+    let (mut template, emission) = closure::lower_surface(&mut c, graph.output.surface.as_ref())?;
+    let mut transparency = None;
+    if let Some((p, color, rest)) = template.split_transparent() {
+        transparency = Some((p, color));
+        template = rest;
+    }
+    if template.has_transparent() {
+        c.warnings.push(format!(
+            "material '{name}': a Transparent BSDF that is not the material's top closure (or one side of a \
+             constant Mix Shader there) is not supported yet; it reflects nothing"
+        ));
+    }
+    Ok(CompiledMaterial { template, emission, transparency, program: c.program, warnings: c.warnings })
 }
 
 #[cfg(test)]

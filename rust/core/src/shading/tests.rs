@@ -261,3 +261,44 @@ fn procedural_nodes_evaluate_through_crate_procedural() {
         .color;
     assert_eq!(c, want);
 }
+
+#[test]
+fn principled_alpha_and_a_transparent_mix_split_into_a_pass_probability() {
+    let c = compile(json!({
+        "nodes": [{"type": "ShaderNodeBsdfPrincipled", "name": "P", "inputs": {"Alpha": 0.35}}],
+        "output": {"surface": [0, "BSDF"]}
+    }))
+    .unwrap();
+    let (p, tint) = c.transparency.clone().unwrap();
+    assert!((p - 0.65).abs() < 1e-6);
+    assert_eq!(tint.kind, crate::spectrum::named::SpectrumKind::Rgb { rgb: [1.0; 3] });
+    assert!(matches!(c.constant_surface().unwrap(), BsdfDesc::Principled { .. }));
+    assert!(c.warnings.is_empty(), "{:?}", c.warnings);
+    let c = compile(json!({
+        "nodes": [
+            {"type": "ShaderNodeBsdfDiffuse", "name": "D"},
+            {"type": "ShaderNodeBsdfTransparent", "name": "T", "inputs": {"Color": [0.5, 0.25, 1.0, 1.0]}},
+            {"type": "ShaderNodeMixShader", "name": "Mix", "inputs": {"Fac": 0.2,
+                "Shader": {"link": [0, "BSDF"]}, "Shader_001": {"link": [1, "BSDF"]}}}
+        ],
+        "output": {"surface": [2, "Shader"]}
+    }))
+    .unwrap();
+    let (p, tint) = c.transparency.clone().unwrap();
+    assert!((p - 0.2).abs() < 1e-6);
+    assert_eq!(tint.kind, crate::spectrum::named::SpectrumKind::Rgb { rgb: [0.5, 0.25, 1.0] });
+    assert!(matches!(c.constant_surface().unwrap(), BsdfDesc::Diffuse { .. }));
+    // Below an Add Shader it cannot be split: warned, it reflects nothing.
+    let c = compile(json!({
+        "nodes": [
+            {"type": "ShaderNodeBsdfDiffuse", "name": "D"},
+            {"type": "ShaderNodeBsdfTransparent", "name": "T"},
+            {"type": "ShaderNodeAddShader", "name": "Add", "inputs": {
+                "Shader": {"link": [0, "BSDF"]}, "Shader_001": {"link": [1, "BSDF"]}}}
+        ],
+        "output": {"surface": [2, "Shader"]}
+    }))
+    .unwrap();
+    assert!(c.transparency.is_none());
+    assert!(c.warnings.iter().any(|w| w.contains("'M'") && w.contains("Transparent")), "{:?}", c.warnings);
+}
