@@ -25,6 +25,7 @@ pub mod sheen_ltc;
 pub mod testing;
 pub mod texture;
 pub mod thinfilm;
+pub mod tinted;
 pub mod translucent;
 
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
@@ -42,6 +43,7 @@ pub use principled::{Principled, PrincipledParams};
 pub use sheen::Sheen;
 pub use texture::{Texture, Wrap};
 pub use thinfilm::ThinFilm;
+pub use tinted::Tinted;
 pub use translucent::Translucent;
 
 /// What an integrator needs to know about a BSDF without evaluating it.

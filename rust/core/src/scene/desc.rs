@@ -238,6 +238,12 @@ pub enum BsdfDesc {
     Transparent {
         color: SpectrumDesc,
     },
+    /// `bsdf` scaled per wavelength by `color` (a reflectance): Blender's Glass BSDF
+    /// Color, which Cycles applies as the closure weight (reflection and transmission).
+    Tint {
+        color: SpectrumDesc,
+        bsdf: Box<BsdfDesc>,
+    },
     /// Blender's Sheen BSDF (microfiber LTC).
     Sheen {
         color: SpectrumDesc,
@@ -269,6 +275,7 @@ impl BsdfDesc {
         match self {
             BsdfDesc::Transparent { .. } => true,
             BsdfDesc::Mix { a, b, .. } | BsdfDesc::Add { a, b } => a.has_transparent() || b.has_transparent(),
+            BsdfDesc::Tint { bsdf, .. } => bsdf.has_transparent(),
             _ => false,
         }
     }

@@ -7,7 +7,8 @@ use crate::color::uplift::Uplift;
 use crate::material::mix::MixFactor;
 use crate::material::principled::{Principled, PrincipledParams};
 use crate::material::{
-    Black, Bsdf, Diffuse, IndexOfRefraction, MixBsdf, OrenNayar, Sheen, SpectralParam, Texture, ThinFilm, Translucent,
+    Black, Bsdf, Diffuse, IndexOfRefraction, MixBsdf, OrenNayar, Sheen, SpectralParam, Texture, ThinFilm, Tinted,
+    Translucent,
 };
 use crate::spectrum::named::{SpectrumKind, SpectrumRole};
 use crate::spectrum::{SampledSpectrum, SpectrumDesc, WavelengthGrid};
@@ -202,6 +203,10 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
             b.reflectance(reflectance, material, "reflectance")?,
             unit_weight(material, "roughness", *roughness)?,
         )),
+        BsdfDesc::Tint { color, bsdf } => Box::new(Tinted {
+            color: b.reflectance(color, material, "color")?,
+            inner: build_at(b, material, bsdf, depth + 1)?,
+        }),
         BsdfDesc::Translucent { color } => Box::new(Translucent { color: b.reflectance(color, material, "color")? }),
         BsdfDesc::Sheen { color, roughness } => Box::new(Sheen {
             color: b.reflectance(color, material, "color")?,

@@ -374,6 +374,7 @@ impl Scene {
                 | BsdfDesc::Add { .. }
                 | BsdfDesc::RoughDiffuse { .. }
                 | BsdfDesc::Translucent { .. }
+                | BsdfDesc::Tint { .. }
                 | BsdfDesc::Sheen { .. }
                 | BsdfDesc::Graph(_) => {
                     let b = layered::BsdfBuild { grid: &grid, rgb: &rgb, textures: &textures, uplift: uplift.as_ref() };

@@ -268,20 +268,13 @@ impl Template {
             }
             Template::Glass { color, roughness, ior } => {
                 let c = color.at(v);
+                let glass = BsdfDesc::Dielectric { ior: ior.at(v), roughness: roughness.at(v) };
                 if is_white(&c) {
-                    BsdfDesc::Dielectric { ior: ior.at(v), roughness: roughness.at(v) }
+                    glass
                 } else {
-                    BsdfDesc::Principled {
-                        base_color: c,
-                        metallic: 0.0,
-                        roughness: roughness.at(v),
-                        ior: ior.at(v),
-                        transmission: 1.0,
-                        specular_tint: None,
-                        thin_film_thickness: 0.0,
-                        thin_film_ior: 1.33,
-                        specular_ior_level: 0.5,
-                    }
+                    // Cycles: the Glass colour is the closure weight (reflection and
+                    // transmission alike).
+                    BsdfDesc::Tint { color: c, bsdf: Box::new(glass) }
                 }
             }
             Template::Translucent { color } => BsdfDesc::Translucent { color: color.at(v) },
@@ -511,9 +504,6 @@ impl<'c, 'a> Lowering<'c, 'a> {
                     self.c.warn(node, "Refraction BSDF is rendered as Glass (its reflection is kept)");
                 }
                 let color = self.color(node, "Color")?;
-                if !matches!(&color, Col::C(d) if is_white(d)) {
-                    self.c.warn(node, "a tinted Glass is rendered as a transmissive Principled (reflection untinted)");
-                }
                 let roughness = self.float(node, "Roughness", 0.0, 1.0)?;
                 (Template::Glass { color, roughness, ior: self.ior(node, "IOR")? }, None)
             }
