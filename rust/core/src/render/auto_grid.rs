@@ -7,7 +7,8 @@
 use crate::color::delta_e::{de2000, lab};
 use crate::color::uplift::{Uplift, UpliftMethod};
 use crate::color::{Observer, RgbSpace};
-use crate::scene::SceneDesc;
+use crate::material::IorDesc;
+use crate::scene::{SceneDesc, SpectralItem, SpectrumUse};
 use crate::spectrum::named::{RgbToSpectrum, SpectrumKind, SpectrumRole};
 use crate::spectrum::{SpectrumDesc, WavelengthGrid};
 use crate::Result;
@@ -19,6 +20,7 @@ pub const GRID_TOLERANCE: f64 = 0.3;
 const CANDIDATES: [usize; 8] = [8, 12, 16, 24, 32, 41, 61, 81];
 
 /// A spectrum of the scene and whether it emits.
+#[derive(Clone)]
 struct Found {
     spectrum: SpectrumDesc,
     emitter: bool,
@@ -34,7 +36,31 @@ struct Holds {
     dispersive: bool,
 }
 
-fn collect(v: &serde_json::Value, key: &str, out: &mut Vec<Found>, holds: &mut Holds) {
+/// The scene's spectra that decide the grid, from the typed walk
+/// [`SceneDesc::for_each_spectrum`]: emitters and other curves (reflectances, medium
+/// coefficients); RGB and texture spectra mark RGB data instead; conductor indices are
+/// not judged; a dielectric whose index is not constant marks dispersion.
+fn collect(desc: &SceneDesc) -> (Vec<Found>, Holds) {
+    let mut out = Vec::new();
+    let mut holds = Holds::default();
+    desc.for_each_spectrum(&mut |item| match item {
+        SpectralItem::Spectrum(SpectrumUse::Index, _) => {}
+        SpectralItem::Spectrum(u, sd) => {
+            if matches!(sd.kind, SpectrumKind::Texture { .. } | SpectrumKind::Rgb { .. }) {
+                holds.rgb = true;
+            } else {
+                out.push(Found { spectrum: sd.clone(), emitter: u == SpectrumUse::Emitter });
+            }
+        }
+        SpectralItem::DielectricIor(ior) => holds.dispersive |= !matches!(ior, IorDesc::Constant { .. }),
+    });
+    (out, holds)
+}
+
+/// The former walk over the serialised description by key names, kept while the typed
+/// walk is compared against it.
+#[cfg(test)]
+fn collect_json(v: &serde_json::Value, key: &str, out: &mut Vec<Found>, holds: &mut Holds) {
     match v {
         serde_json::Value::Object(m) => {
             if m.contains_key("type") {
@@ -59,10 +85,10 @@ fn collect(v: &serde_json::Value, key: &str, out: &mut Vec<Found>, holds: &mut H
                 holds.dispersive |= !constant;
             }
             for (k, x) in m {
-                collect(x, k, out, holds);
+                collect_json(x, k, out, holds);
             }
         }
-        serde_json::Value::Array(a) => a.iter().for_each(|x| collect(x, key, out, holds)),
+        serde_json::Value::Array(a) => a.iter().for_each(|x| collect_json(x, key, out, holds)),
         _ => {}
     }
 }
@@ -176,11 +202,18 @@ fn refined(n: usize, min: f32, max: f32, bands: &[(f32, f32)]) -> Vec<f32> {
 /// AUTO's grid for a scene: the coarsest candidate within [`GRID_TOLERANCE`], refined
 /// around narrow-band emitters, and the reasons.
 pub fn auto_grid(desc: &SceneDesc, min: f32, max: f32, uplift: UpliftMethod) -> Result<(Vec<f32>, Vec<String>)> {
-    let v =
-        serde_json::to_value(desc).map_err(|e| crate::Error::setting("quality", format!("scene description: {e}")))?;
-    let mut found = Vec::new();
-    let mut holds = Holds::default();
-    collect(&v, "", &mut found, &mut holds);
+    let (found, holds) = collect(desc);
+    grid_for(&found, &holds, min, max, uplift)
+}
+
+fn grid_for(
+    found: &[Found],
+    holds: &Holds,
+    min: f32,
+    max: f32,
+    uplift: UpliftMethod,
+) -> Result<(Vec<f32>, Vec<String>)> {
+    let found = found.to_vec();
     // RGB data stands for arbitrary RGB: judge a few saturated colours.
     let rgb_samples: Vec<[f32; 3]> =
         if holds.rgb { vec![[0.8, 0.1, 0.1], [0.1, 0.8, 0.1], [0.1, 0.1, 0.8], [0.8, 0.8, 0.1]] } else { Vec::new() };
@@ -241,6 +274,7 @@ pub fn auto_grid(desc: &SceneDesc, min: f32, max: f32, uplift: UpliftMethod) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::{BsdfDesc, LightDesc, MaterialDesc, VolumeDesc, WorldDesc};
 
     #[test]
     fn refinement_brackets_a_narrow_band() {
@@ -252,5 +286,139 @@ mod tests {
         assert!(l.windows(2).all(|w| w[0] < w[1]));
         // A band wider than two grid steps needs no refinement.
         assert_eq!(refined(41, 380.0, 780.0, &[(589.0, 10.0)]).len(), 41);
+    }
+
+    fn point(intensity: SpectrumDesc) -> LightDesc {
+        LightDesc::Point { name: "lamp".into(), position: [0.0, 0.0, 1.0], intensity, radius: 0.0 }
+    }
+
+    fn material(bsdf: BsdfDesc) -> MaterialDesc {
+        MaterialDesc { name: "m".into(), bsdf, emission: None, volume: None }
+    }
+
+    fn diffuse(kind: SpectrumKind) -> BsdfDesc {
+        BsdfDesc::Diffuse { reflectance: SpectrumDesc::new(kind) }
+    }
+
+    /// A smooth reflectance: a ramp from 0.1 at 400 nm to 0.9 at 700 nm.
+    fn ramp() -> SpectrumKind {
+        SpectrumKind::Tabulated { wavelengths: vec![400.0, 700.0], values: vec![0.1, 0.9] }
+    }
+
+    fn scene(materials: Vec<MaterialDesc>, lights: Vec<LightDesc>) -> SceneDesc {
+        SceneDesc { materials, lights, ..Default::default() }
+    }
+
+    /// Scenes covering every kind of spectrum the walk meets.
+    fn scenes() -> Vec<(&'static str, SceneDesc)> {
+        let led = SpectrumDesc::new(SpectrumKind::NarrowBand { center: 589.0, width: 2.0 });
+        let f11 = SpectrumDesc::new(SpectrumKind::Fluorescent { index: 11 });
+        let rgb = SpectrumKind::Rgb { rgb: [0.8, 0.2, 0.1] };
+        let glass = BsdfDesc::Dielectric { ior: IorDesc::Named { name: "N-BK7".into() }, roughness: 0.0 };
+        let metal = BsdfDesc::Conductor {
+            metal: None,
+            eta: Some(SpectrumDesc::new(SpectrumKind::Rgb { rgb: [0.2, 0.4, 1.1] })),
+            k: Some(SpectrumDesc::constant(3.0)),
+            roughness: 0.1,
+        };
+        let mix = BsdfDesc::Mix { a: Box::new(metal), b: Box::new(diffuse(ramp())), factor: 0.5, factor_from: None };
+        let mut emissive = material(BsdfDesc::None);
+        emissive.emission = Some(led.clone());
+        let mut medium = material(BsdfDesc::Null);
+        medium.volume = Some(VolumeDesc {
+            absorption: Some(SpectrumDesc::new(ramp())),
+            scattering: Some(SpectrumDesc::constant(0.5)),
+            anisotropy: 0.0,
+            emission: None,
+        });
+        let graph = crate::shading::GraphDesc {
+            nodes: vec![crate::shading::NodeDesc {
+                kind: "ShaderNodeBsdfDiffuse".into(),
+                name: "d".into(),
+                props: Default::default(),
+                inputs: [(
+                    "Color".to_string(),
+                    crate::shading::InputDesc::Spectrum { spectrum: SpectrumDesc::new(ramp()) },
+                )]
+                .into(),
+            }],
+            output: crate::shading::OutputDesc { surface: Some((0, "BSDF".into())), ..Default::default() },
+        };
+        let world = WorldDesc {
+            radiance: Some(SpectrumDesc::new(SpectrumKind::D65)),
+            texture: None,
+            strength: 1.0,
+            rotation: 0.0,
+            importance_sampling: true,
+        };
+        vec![
+            ("F11 × smooth", scene(vec![material(diffuse(ramp()))], vec![point(f11.clone())])),
+            ("LED × smooth", scene(vec![material(diffuse(ramp()))], vec![point(led.clone())])),
+            (
+                "RGB only",
+                scene(
+                    vec![material(diffuse(rgb.clone()))],
+                    vec![point(SpectrumDesc::new(SpectrumKind::Rgb { rgb: [1.0; 3] }))],
+                ),
+            ),
+            ("glass under A", scene(vec![material(glass)], vec![point(SpectrumDesc::new(SpectrumKind::A))])),
+            (
+                "metal mix, emissive LED, medium, graph",
+                SceneDesc {
+                    world: Some(world),
+                    ..scene(
+                        vec![material(mix), emissive, medium, material(BsdfDesc::Graph(Box::new(graph)))],
+                        vec![point(f11)],
+                    )
+                },
+            ),
+        ]
+    }
+
+    /// The typed walk gives the grid the former walk over serialised JSON gave.
+    #[test]
+    fn typed_walk_keeps_the_former_grid() {
+        for (name, d) in scenes() {
+            let v = serde_json::to_value(&d).unwrap();
+            let (mut found, mut holds) = (Vec::new(), Holds::default());
+            collect_json(&v, "", &mut found, &mut holds);
+            let old = grid_for(&found, &holds, 380.0, 780.0, UpliftMethod::default()).unwrap();
+            let new = auto_grid(&d, 380.0, 780.0, UpliftMethod::default()).unwrap();
+            assert_eq!(old, new, "{name}");
+        }
+    }
+
+    /// Properties of AUTO's grid against independent expectations.
+    #[test]
+    fn grid_properties() {
+        for (name, d) in scenes() {
+            let (l, _) = auto_grid(&d, 380.0, 780.0, UpliftMethod::default()).unwrap();
+            assert!(l.windows(2).all(|w| w[0] < w[1]), "{name}: ascending");
+            assert!(l[0] == 380.0 && *l.last().unwrap() == 780.0, "{name}: spans the range");
+            // 8..81 uniform samples, plus 7 around a narrow band.
+            assert!((8..=81 + 7).contains(&l.len()), "{name}: {} samples", l.len());
+        }
+        let grid = |i: usize| auto_grid(&scenes()[i].1, 380.0, 780.0, UpliftMethod::default()).unwrap().0;
+        // A 2 nm LED at 589 nm (σ = 2/2.3548 = 0.85 nm): a sample at the centre and at ±σ.
+        let led = grid(1);
+        let sigma = 2.0 / (8.0 * std::f32::consts::LN_2).sqrt();
+        for k in [-1.0, 0.0, 1.0] {
+            assert!(led.iter().any(|x| (x - (589.0 + k * sigma)).abs() < 0.01), "LED: no sample at 589 + {k}σ");
+        }
+        // CIE F11's mercury lines (435.8, 546.1 nm) and its 611 nm europium band sit in
+        // 5 nm bins: a grid keeping its colour within 0.3 ΔE00 samples within 10 nm of each.
+        let f11 = grid(0);
+        for line in [435.8f32, 546.1, 611.0] {
+            assert!(f11.iter().any(|x| (x - line).abs() <= 10.0), "F11: nothing near {line} nm");
+        }
+        // RGB data: the uplift must accept the grid.
+        assert!(Uplift::new(
+            &WavelengthGrid::from_wavelengths(grid(2)).unwrap(),
+            &RgbSpace::rec709(),
+            UpliftMethod::default()
+        )
+        .is_ok());
+        // Dispersive glass: at least 41 wavelengths (no banding in the spread).
+        assert!(grid(3).len() >= 41);
     }
 }

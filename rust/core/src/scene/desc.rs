@@ -456,3 +456,141 @@ fn one_f32() -> f32 {
 fn yes() -> bool {
     true
 }
+
+/// How a spectrum of the scene description is used, for walks over all of them
+/// ([`SceneDesc::for_each_spectrum`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SpectrumUse {
+    /// Emitted: a light's intensity or irradiance, a material's or medium's emission,
+    /// the world's radiance.
+    Emitter,
+    /// A surface colour (reflectance, tint, base colour) or a colour input of a node graph.
+    Surface,
+    /// A medium's absorption or scattering coefficient.
+    Coefficient,
+    /// A conductor's complex index η or k.
+    Index,
+}
+
+/// One item of a walk over a scene description's spectral data.
+#[derive(Clone, Copy, Debug)]
+pub enum SpectralItem<'a> {
+    Spectrum(SpectrumUse, &'a SpectrumDesc),
+    /// The index of refraction of a `dielectric` BSDF.
+    DielectricIor(&'a crate::material::IorDesc),
+}
+
+impl SceneDesc {
+    /// Calls `f` on every spectrum (and dielectric index) of the scene: materials, lights,
+    /// world. Every variant is matched exhaustively, so a new one must say what it holds.
+    pub fn for_each_spectrum(&self, f: &mut dyn FnMut(SpectralItem)) {
+        let SceneDesc { camera: _, materials, meshes: _, instances: _, lights, world, textures: _ } = self;
+        for m in materials {
+            m.for_each_spectrum(f);
+        }
+        for l in lights {
+            l.for_each_spectrum(f);
+        }
+        if let Some(w) = world {
+            w.for_each_spectrum(f);
+        }
+    }
+}
+
+impl MaterialDesc {
+    pub fn for_each_spectrum(&self, f: &mut dyn FnMut(SpectralItem)) {
+        let MaterialDesc { name: _, bsdf, emission, volume } = self;
+        bsdf.for_each_spectrum(f);
+        if let Some(e) = emission {
+            f(SpectralItem::Spectrum(SpectrumUse::Emitter, e));
+        }
+        if let Some(v) = volume {
+            v.for_each_spectrum(f);
+        }
+    }
+}
+
+impl VolumeDesc {
+    pub fn for_each_spectrum(&self, f: &mut dyn FnMut(SpectralItem)) {
+        let VolumeDesc { absorption, scattering, anisotropy: _, emission } = self;
+        for s in [absorption, scattering].into_iter().flatten() {
+            f(SpectralItem::Spectrum(SpectrumUse::Coefficient, s));
+        }
+        if let Some(e) = emission {
+            f(SpectralItem::Spectrum(SpectrumUse::Emitter, e));
+        }
+    }
+}
+
+impl BsdfDesc {
+    pub fn for_each_spectrum(&self, f: &mut dyn FnMut(SpectralItem)) {
+        use SpectralItem::Spectrum;
+        use SpectrumUse::{Index, Surface};
+        match self {
+            BsdfDesc::Diffuse { reflectance }
+            | BsdfDesc::Glossy { reflectance, roughness: _ }
+            | BsdfDesc::RoughDiffuse { reflectance, roughness: _ } => f(Spectrum(Surface, reflectance)),
+            BsdfDesc::Translucent { color }
+            | BsdfDesc::Transparent { color }
+            | BsdfDesc::Sheen { color, roughness: _ } => f(Spectrum(Surface, color)),
+            BsdfDesc::Tint { color, bsdf } => {
+                f(Spectrum(Surface, color));
+                bsdf.for_each_spectrum(f);
+            }
+            BsdfDesc::None | BsdfDesc::Null => {}
+            BsdfDesc::Dielectric { ior, roughness: _ } => f(SpectralItem::DielectricIor(ior)),
+            BsdfDesc::Conductor { metal: _, eta, k, roughness: _ } => {
+                for s in [eta, k].into_iter().flatten() {
+                    f(Spectrum(Index, s));
+                }
+            }
+            BsdfDesc::Principled { base_color, specular_tint, .. } => {
+                f(Spectrum(Surface, base_color));
+                if let Some(t) = specular_tint {
+                    f(Spectrum(Surface, t));
+                }
+            }
+            BsdfDesc::Mix { a, b, .. } | BsdfDesc::Add { a, b } => {
+                a.for_each_spectrum(f);
+                b.for_each_spectrum(f);
+            }
+            BsdfDesc::Graph(g) => g.for_each_spectrum(f),
+        }
+    }
+}
+
+impl crate::shading::GraphDesc {
+    /// The spectra on the graph's colour inputs, as [`SpectrumUse::Surface`] (whatever
+    /// node they feed, an Emission node's colour included).
+    pub fn for_each_spectrum(&self, f: &mut dyn FnMut(SpectralItem)) {
+        use crate::shading::InputDesc;
+        for n in &self.nodes {
+            for input in n.inputs.values() {
+                match input {
+                    InputDesc::Spectrum { spectrum } => f(SpectralItem::Spectrum(SpectrumUse::Surface, spectrum)),
+                    InputDesc::Number(_) | InputDesc::Array(_) | InputDesc::Link { .. } | InputDesc::Ior { .. } => {}
+                }
+            }
+        }
+    }
+}
+
+impl LightDesc {
+    pub fn for_each_spectrum(&self, f: &mut dyn FnMut(SpectralItem)) {
+        let s = match self {
+            LightDesc::Point { intensity, .. } | LightDesc::Spot { intensity, .. } => intensity,
+            LightDesc::Distant { irradiance, .. } => irradiance,
+        };
+        f(SpectralItem::Spectrum(SpectrumUse::Emitter, s));
+    }
+}
+
+impl WorldDesc {
+    /// The world's radiance; its image (`texture`) is not a spectrum and is not visited.
+    pub fn for_each_spectrum(&self, f: &mut dyn FnMut(SpectralItem)) {
+        let WorldDesc { radiance, texture: _, strength: _, rotation: _, importance_sampling: _ } = self;
+        if let Some(r) = radiance {
+            f(SpectralItem::Spectrum(SpectrumUse::Emitter, r));
+        }
+    }
+}
