@@ -12,8 +12,12 @@ pub struct AreaTriangle {
     pub p: [Vec3A; 3],
     pub normal: Vec3A,
     pub area: f32,
-    /// Emitted radiance per wavelength.
+    /// Emitted radiance per wavelength (for a varying emitter: its mean, the
+    /// light-selection estimate).
     pub radiance: SampledSpectrum,
+    /// An emission that varies over the triangle (a node graph), evaluated at each
+    /// sampled point.
+    pub varying: Option<std::sync::Arc<crate::shading::emission::TriangleEmitter>>,
 }
 
 impl AreaTriangle {
@@ -25,7 +29,7 @@ impl AreaTriangle {
         if !(area > 0.0 && area.is_finite()) {
             return None;
         }
-        Some(Self { p, normal: c / len, area, radiance })
+        Some(Self { p, normal: c / len, area, radiance, varying: None })
     }
 
     /// Solid-angle pdf of choosing the point at `distance` along `wi` from the shading
@@ -58,7 +62,10 @@ impl Light for AreaTriangle {
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }
-        le.copy_from(&self.radiance);
+        match &self.varying {
+            Some(v) => v.radiance(b1, b2, glam::Vec3::from(-wi), le),
+            None => le.copy_from(&self.radiance),
+        }
         Some(LightSample { wi, distance, pdf, delta: false })
     }
     fn pdf_li(&self, _p: Vec3A, wi: Vec3A, distance: f32) -> f32 {
@@ -75,10 +82,14 @@ impl Light for AreaTriangle {
         if !(pdf_dir > 0.0) {
             return None;
         }
-        le.copy_from(&self.radiance);
+        let direction = Frame::from_normal(n).to_world(local);
+        match &self.varying {
+            Some(v) => v.radiance(b1, b2, glam::Vec3::from(direction), le),
+            None => le.copy_from(&self.radiance),
+        }
         Some(EmissionSample {
             origin,
-            direction: Frame::from_normal(n).to_world(local),
+            direction,
             normal: Some(n),
             pdf_pos: 1.0 / self.area,
             pdf_dir,
