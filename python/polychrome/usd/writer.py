@@ -27,6 +27,7 @@ import warnings
 
 import numpy as np
 
+from ..ior import LAMBDA_D
 from . import attributes as A
 
 # Linear Rec.709 from CIE XYZ (D65 white), IEC 61966-2-1.
@@ -133,9 +134,9 @@ def _intensity_colour(rgb) -> tuple[float, tuple[float, float, float]]:
 
 
 def _ior_nd(ior: dict[str, Any]) -> float:
-    """The index at 587.56 nm, for UsdPreviewSurface's ``ior`` input."""
+    """The index at the d line (:data:`polychrome.ior.LAMBDA_D`), for UsdPreviewSurface's ``ior`` input."""
     kind = ior.get("type")
-    lam = 0.58756
+    lam = LAMBDA_D / 1000.0  # coefficients are in micrometres
     try:
         if kind == "constant":
             return float(ior["ior"])

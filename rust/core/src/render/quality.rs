@@ -137,7 +137,7 @@ pub fn resolve(settings: &RenderSettings, desc: Option<&SceneDesc>) -> Result<Re
                 uniform(PAPER_WAVELENGTH_COUNT)?
             }
             (None, None) => {
-                why.push("prebuilt scene: its grid is kept".into());
+                why.push("no scene description to fit the grid to: 41 uniform wavelengths".into());
                 uniform(PAPER_WAVELENGTH_COUNT)?
             }
         },
