@@ -123,7 +123,7 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, T, M> {
         v: &Vertex,
         st: &PathState,
         beta: &T,
-        scratch: &mut Scratch,
+        _scratch: &mut Scratch,
     ) {
         if let Some(out) = &mut self.first_hit {
             if st.depth == 0 {
@@ -150,10 +150,6 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, T, M> {
         if let Some(emission) = &v.material.emission {
             let w = self.mis.emission(scene, v, st);
             self.gathered.add_emitted(beta, emission, w);
-        } else if let Some(g) = &v.material.graph_emission {
-            g.radiance(&ctx.hit, &mut scratch.le);
-            let w = self.mis.emission(scene, v, st);
-            self.gathered.add_emitted(beta, &scratch.le, w);
         }
     }
 

@@ -12,12 +12,8 @@ pub struct AreaTriangle {
     pub p: [Vec3A; 3],
     pub normal: Vec3A,
     pub area: f32,
-    /// Emitted radiance per wavelength (for a varying emitter: its mean, the
-    /// light-selection estimate).
+    /// Emitted radiance per wavelength.
     pub radiance: SampledSpectrum,
-    /// An emission that varies over the triangle (a node graph), evaluated at each
-    /// sampled point.
-    pub varying: Option<std::sync::Arc<crate::shading::emission::TriangleEmitter>>,
 }
 
 impl AreaTriangle {
@@ -29,7 +25,7 @@ impl AreaTriangle {
         if !(area > 0.0 && area.is_finite()) {
             return None;
         }
-        Some(Self { p, normal: c / len, area, radiance, varying: None })
+        Some(Self { p, normal: c / len, area, radiance })
     }
 
     /// Solid-angle pdf of choosing the point at `distance` along `wi` from the shading
@@ -62,10 +58,7 @@ impl Light for AreaTriangle {
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }
-        match &self.varying {
-            Some(v) => v.radiance(b1, b2, glam::Vec3::from(-wi), le),
-            None => le.copy_from(&self.radiance),
-        }
+        le.copy_from(&self.radiance);
         Some(LightSample { wi, distance, pdf, delta: false })
     }
     fn pdf_li(&self, _p: Vec3A, wi: Vec3A, distance: f32) -> f32 {
@@ -82,14 +75,10 @@ impl Light for AreaTriangle {
         if !(pdf_dir > 0.0) {
             return None;
         }
-        let direction = Frame::from_normal(n).to_world(local);
-        match &self.varying {
-            Some(v) => v.radiance(b1, b2, glam::Vec3::from(direction), le),
-            None => le.copy_from(&self.radiance),
-        }
+        le.copy_from(&self.radiance);
         Some(EmissionSample {
             origin,
-            direction,
+            direction: Frame::from_normal(n).to_world(local),
             normal: Some(n),
             pdf_pos: 1.0 / self.area,
             pdf_dir,

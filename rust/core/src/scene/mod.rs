@@ -194,26 +194,6 @@ impl RgbToSpectrum for BuildUplift<'_> {
     }
 }
 
-/// Triangle `t` of instance `k` as a varying emitter: the shading points at its corners.
-fn triangle_emitter(
-    instances: &[Instance],
-    meshes: &[Mesh],
-    mesh_data: &[hit::MeshShadingData],
-    k: usize,
-    t: usize,
-    emission: &Arc<crate::shading::emission::GraphEmission>,
-) -> crate::shading::emission::TriangleEmitter {
-    let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)].map(|(b1, b2)| {
-        let h = Hit { t: 1.0, instance: k as u32, triangle: t as u32, b1, b2 };
-        let probe = Ray::new(Vec3A::ZERO, Vec3A::Z);
-        let mut si = interaction_in(instances, meshes, &probe, &h);
-        let ray = Ray::new(si.p + si.ng, -si.ng);
-        si.t = 1.0;
-        hit::shading_point_in(instances, meshes, mesh_data, &ray, &si, emission.requests())
-    });
-    crate::shading::emission::TriangleEmitter { emission: emission.clone(), corners }
-}
-
 /// The per-hit BSDF of a graph material whose closure inputs vary.
 fn graph_bsdf(
     name: &str,
@@ -292,26 +272,10 @@ impl Scene {
             let mut hit_attributes = None;
             let mut transparency = None;
             let opaque_rest;
-            let mut graph_emission = None;
             let (bsdf_desc, emission_desc) = match &m.bsdf {
                 BsdfDesc::Graph(g) => {
                     compiled = crate::shading::compile_material(&m.name, g, &textures)?;
                     warnings.extend(compiled.warnings.iter().cloned());
-                    if let Some(terms) = &compiled.varying_emission {
-                        let Some(up) = &uplift else {
-                            return Err(Error::object(
-                                "material",
-                                &m.name,
-                                "its emission varies over the surface, which needs an RGB → spectrum map this wavelength grid lacks",
-                            ));
-                        };
-                        graph_emission = Some(Arc::new(crate::shading::emission::GraphEmission {
-                            program: compiled.program.clone(),
-                            terms: terms.clone(),
-                            uplift: up.clone(),
-                        }));
-                        hit_attributes = Some(compiled.program.attributes.clone());
-                    }
                     constant = compiled.constant_surface().unwrap_or(BsdfDesc::None);
                     if !compiled.template.is_constant() {
                         per_hit = Some(self::graph_bsdf(&m.name, &compiled, &grid, uplift.as_ref(), &textures)?);
@@ -421,7 +385,7 @@ impl Scene {
                 Some(e) => Some(spectrum(e, SpectrumRole::Illuminant, "emission")?).filter(|s| !s.is_black()),
                 None => None,
             };
-            materials.push(Material { name: m.name.clone(), bsdf, emission, hit_attributes, graph_emission });
+            materials.push(Material { name: m.name.clone(), bsdf, emission, hit_attributes });
             // A graph with a volume and no surface is volume-only (Cycles' SD_HAS_ONLY_VOLUME).
             null_surface.push(match &m.bsdf {
                 BsdfDesc::Null => true,
@@ -446,7 +410,6 @@ impl Scene {
                 bsdf: Box::new(Diffuse { reflectance: SpectralParam::Constant(grey) }),
                 emission: None,
                 hit_attributes: None,
-                graph_emission: None,
             });
             material_medium.push(None);
             null_surface.push(false);
@@ -572,9 +535,7 @@ impl Scene {
         let mut light_visibility = Vec::new();
         for (k, inst) in instances.iter().enumerate() {
             let mesh = &meshes[inst.mesh as usize];
-            let emits =
-                |m: u32| materials[m as usize].emission.is_some() || materials[m as usize].graph_emission.is_some();
-            if !mesh.material_ids.iter().any(|&m| emits(m)) {
+            if !mesh.material_ids.iter().any(|&m| materials[m as usize].emission.is_some()) {
                 continue;
             }
             // A moving emitter is no light to sample: its triangles are elsewhere at
@@ -585,23 +546,10 @@ impl Scene {
                 continue;
             }
             let mut map = vec![u32::MAX; mesh.indices.len()];
-            // Varying emitters: stratified points per triangle for the selection
-            // estimate, fewer on big meshes (docs/shading.md).
-            let strata = ((4096 / mesh.indices.len().max(1)) as f64).sqrt().clamp(2.0, 8.0) as usize;
             for (t, &m) in mesh.material_ids.iter().enumerate() {
-                let material = &materials[m as usize];
+                let Some(e) = &materials[m as usize].emission else { continue };
                 let p = mesh.triangle(t).map(|v| inst.to_world.transform_point3a(v));
-                let tri = match (&material.emission, &material.graph_emission) {
-                    (Some(e), _) => AreaTriangle::new(p, e.clone()),
-                    (None, Some(g)) => AreaTriangle::new(p, SampledSpectrum::splat(n, 0.0)).map(|mut tri| {
-                        let emitter = self::triangle_emitter(&instances, &meshes, &mesh_data, k, t, g);
-                        emitter.mean_radiance(strata, &mut tri.radiance);
-                        tri.varying = Some(Arc::new(emitter));
-                        tri
-                    }),
-                    (None, None) => continue,
-                };
-                if let Some(tri) = tri {
+                if let Some(tri) = AreaTriangle::new(p, e.clone()) {
                     map[t] = lights.len() as u32;
                     lights.push(Box::new(tri));
                     light_visibility.push(inst.visibility);
@@ -765,7 +713,54 @@ impl Scene {
 
     /// World-space geometry at a hit.
     pub fn interaction(&self, ray: &Ray, hit: &Hit) -> SurfaceInteraction {
-        interaction_in(&self.instances, &self.meshes, ray, hit)
+        let inst = &self.instances[hit.instance as usize];
+        let mesh = &self.meshes[inst.mesh as usize];
+        let [i0, i1, i2] = mesh.indices[hit.triangle as usize].map(|i| i as usize);
+        let (b1, b2) = (hit.b1, hit.b2);
+        let b0 = 1.0 - b1 - b2;
+        // Where the geometry is at the ray's time (motion blur).
+        let (to_world, _, normal_to_world) = inst.transforms_at(ray.time);
+        let [p0, p1, p2] = mesh.triangle_at(hit.triangle as usize, ray.time);
+        let p_obj = p0 * b0 + p1 * b1 + p2 * b2;
+        let p = to_world.transform_point3a(p_obj);
+        let ng = (normal_to_world * (p1 - p0).cross(p2 - p0)).normalize_or_zero();
+        let motion_normals = mesh.motion.as_ref().filter(|m| m.normals.is_some());
+        let normal = |i: usize| match motion_normals {
+            Some(m) => m.normal(i, ray.time).unwrap_or(Vec3A::ZERO),
+            None => mesh.normals.as_ref().map_or(Vec3A::ZERO, |n| n[i]),
+        };
+        let ns = match &mesh.normals {
+            Some(_) => {
+                let s = (normal_to_world * (normal(i0) * b0 + normal(i1) * b1 + normal(i2) * b2)).normalize_or_zero();
+                if s == Vec3A::ZERO {
+                    ng
+                } else if s.dot(ng) < 0.0 {
+                    -s
+                } else {
+                    s
+                }
+            }
+            None => ng,
+        };
+        let uv = match &mesh.uvs {
+            Some(uv) => uv[i0] * b0 + uv[i1] * b1 + uv[i2] * b2,
+            None => Vec2::new(b1, b2),
+        };
+        // Fall back to the ray's position if the barycentric point lost precision.
+        let p = if p.is_finite() { p } else { ray.at(hit.t) };
+        SurfaceInteraction {
+            p,
+            ng,
+            ns,
+            uv,
+            b1,
+            b2,
+            material: mesh.material_ids[hit.triangle as usize],
+            instance: hit.instance,
+            triangle: hit.triangle,
+            t: hit.t,
+            time: ray.time,
+        }
     }
 
     /// The light index of an emissive triangle, if it is one.
@@ -773,57 +768,5 @@ impl Scene {
         let map = self.triangle_lights[instance as usize].as_ref()?;
         let l = map[triangle as usize];
         (l != u32::MAX).then_some(l as usize)
-    }
-}
-
-/// World-space geometry at a hit.
-pub(crate) fn interaction_in(instances: &[Instance], meshes: &[Mesh], ray: &Ray, hit: &Hit) -> SurfaceInteraction {
-    let inst = &instances[hit.instance as usize];
-    let mesh = &meshes[inst.mesh as usize];
-    let [i0, i1, i2] = mesh.indices[hit.triangle as usize].map(|i| i as usize);
-    let (b1, b2) = (hit.b1, hit.b2);
-    let b0 = 1.0 - b1 - b2;
-    // Where the geometry is at the ray's time (motion blur).
-    let (to_world, _, normal_to_world) = inst.transforms_at(ray.time);
-    let [p0, p1, p2] = mesh.triangle_at(hit.triangle as usize, ray.time);
-    let p_obj = p0 * b0 + p1 * b1 + p2 * b2;
-    let p = to_world.transform_point3a(p_obj);
-    let ng = (normal_to_world * (p1 - p0).cross(p2 - p0)).normalize_or_zero();
-    let motion_normals = mesh.motion.as_ref().filter(|m| m.normals.is_some());
-    let normal = |i: usize| match motion_normals {
-        Some(m) => m.normal(i, ray.time).unwrap_or(Vec3A::ZERO),
-        None => mesh.normals.as_ref().map_or(Vec3A::ZERO, |n| n[i]),
-    };
-    let ns = match &mesh.normals {
-        Some(_) => {
-            let s = (normal_to_world * (normal(i0) * b0 + normal(i1) * b1 + normal(i2) * b2)).normalize_or_zero();
-            if s == Vec3A::ZERO {
-                ng
-            } else if s.dot(ng) < 0.0 {
-                -s
-            } else {
-                s
-            }
-        }
-        None => ng,
-    };
-    let uv = match &mesh.uvs {
-        Some(uv) => uv[i0] * b0 + uv[i1] * b1 + uv[i2] * b2,
-        None => Vec2::new(b1, b2),
-    };
-    // Fall back to the ray's position if the barycentric point lost precision.
-    let p = if p.is_finite() { p } else { ray.at(hit.t) };
-    SurfaceInteraction {
-        p,
-        ng,
-        ns,
-        uv,
-        b1,
-        b2,
-        material: mesh.material_ids[hit.triangle as usize],
-        instance: hit.instance,
-        triangle: hit.triangle,
-        t: hit.t,
-        time: ray.time,
     }
 }
