@@ -38,8 +38,9 @@ struct Holds {
 
 /// The scene's spectra that decide the grid, from the typed walk
 /// [`SceneDesc::for_each_spectrum`]: emitters and other curves (reflectances, medium
-/// coefficients); RGB and texture spectra mark RGB data instead; conductor indices are
-/// not judged; a dielectric whose index is not constant marks dispersion.
+/// coefficients); RGB and texture spectra, images and a graph's RGB colours mark RGB data
+/// instead; conductor indices are not judged; a refracting surface whose index is not
+/// constant marks dispersion.
 fn collect(desc: &SceneDesc) -> (Vec<Found>, Holds) {
     let mut out = Vec::new();
     let mut holds = Holds::default();
@@ -53,44 +54,9 @@ fn collect(desc: &SceneDesc) -> (Vec<Found>, Holds) {
             }
         }
         SpectralItem::DielectricIor(ior) => holds.dispersive |= !matches!(ior, IorDesc::Constant { .. }),
+        SpectralItem::RgbData => holds.rgb = true,
     });
     (out, holds)
-}
-
-/// The former walk over the serialised description by key names, kept while the typed
-/// walk is compared against it.
-#[cfg(test)]
-fn collect_json(v: &serde_json::Value, key: &str, out: &mut Vec<Found>, holds: &mut Holds) {
-    match v {
-        serde_json::Value::Object(m) => {
-            if m.contains_key("type") {
-                if let Ok(sd) = serde_json::from_value::<SpectrumDesc>(v.clone()) {
-                    let emitter = matches!(key, "emission" | "intensity" | "irradiance" | "radiance");
-                    let ignored = matches!(key, "eta" | "k" | "ior" | "index");
-                    if matches!(sd.kind, SpectrumKind::Texture { .. } | SpectrumKind::Rgb { .. }) {
-                        holds.rgb |= !ignored;
-                    } else if !ignored {
-                        out.push(Found { spectrum: sd, emitter });
-                    }
-                    return;
-                }
-            }
-            if m.get("type").and_then(|t| t.as_str()) == Some("dielectric") {
-                let constant = match m.get("ior") {
-                    None => true,
-                    Some(serde_json::Value::Number(_)) => true,
-                    Some(serde_json::Value::Object(o)) => o.get("type").and_then(|t| t.as_str()) == Some("constant"),
-                    Some(_) => false,
-                };
-                holds.dispersive |= !constant;
-            }
-            for (k, x) in m {
-                collect_json(x, k, out, holds);
-            }
-        }
-        serde_json::Value::Array(a) => a.iter().for_each(|x| collect_json(x, key, out, holds)),
-        _ => {}
-    }
 }
 
 struct Flat;
@@ -375,17 +341,111 @@ mod tests {
         ]
     }
 
-    /// The typed walk gives the grid the former walk over serialised JSON gave.
-    #[test]
-    fn typed_walk_keeps_the_former_grid() {
-        for (name, d) in scenes() {
-            let v = serde_json::to_value(&d).unwrap();
-            let (mut found, mut holds) = (Vec::new(), Holds::default());
-            collect_json(&v, "", &mut found, &mut holds);
-            let old = grid_for(&found, &holds, 380.0, 780.0, UpliftMethod::default()).unwrap();
-            let new = auto_grid(&d, 380.0, 780.0, UpliftMethod::default()).unwrap();
-            assert_eq!(old, new, "{name}");
+    fn grid_of(d: &SceneDesc) -> Vec<f32> {
+        auto_grid(d, 380.0, 780.0, UpliftMethod::default()).unwrap().0
+    }
+
+    fn node(kind: &str, inputs: Vec<(&str, crate::shading::InputDesc)>) -> crate::shading::NodeDesc {
+        crate::shading::NodeDesc {
+            kind: kind.into(),
+            name: kind.into(),
+            props: Default::default(),
+            inputs: inputs.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
         }
+    }
+
+    fn graph_material(nodes: Vec<crate::shading::NodeDesc>, out: usize) -> MaterialDesc {
+        let g = crate::shading::GraphDesc {
+            nodes,
+            output: crate::shading::OutputDesc { surface: Some((out, "BSDF".into())), ..Default::default() },
+        };
+        material(BsdfDesc::Graph(Box::new(g)))
+    }
+
+    /// A graph gets the grid of the same scene written without a graph: its emission
+    /// spectrum counts as an emitter (the LED's line is sampled), its RGB colours as RGB
+    /// data, a dispersive index on its Glass node as dispersion.
+    #[test]
+    fn graph_spectra_count_as_their_fixed_twins() {
+        use crate::shading::InputDesc;
+        let led = SpectrumDesc::new(SpectrumKind::NarrowBand { center: 589.0, width: 2.0 });
+        let smooth = || InputDesc::Spectrum { spectrum: SpectrumDesc::new(ramp()) };
+        // Narrow-band emission through an Emission node, a smooth diffuse lit by it.
+        let emissive = graph_material(
+            vec![node("ShaderNodeEmission", vec![("Color", InputDesc::Spectrum { spectrum: led.clone() })])],
+            0,
+        );
+        let diffuse_graph = graph_material(vec![node("ShaderNodeBsdfDiffuse", vec![("Color", smooth())])], 0);
+        let mut fixed_emitter = material(BsdfDesc::None);
+        fixed_emitter.emission = Some(led.clone());
+        let twin = scene(vec![material(diffuse(ramp())), fixed_emitter], vec![]);
+        let g = grid_of(&scene(vec![diffuse_graph.clone(), emissive], vec![]));
+        assert_eq!(g, grid_of(&twin));
+        assert!(g.iter().any(|x| (x - 589.0).abs() < 0.01), "the LED line is sampled: {g:?}");
+
+        // An RGB constant on a graph: the grid an RGB diffuse gets.
+        let rgb = InputDesc::Array(vec![0.8, 0.1, 0.1, 1.0]);
+        let f11 = || point(SpectrumDesc::new(SpectrumKind::Fluorescent { index: 11 }));
+        let rgb_graph = graph_material(vec![node("ShaderNodeBsdfDiffuse", vec![("Color", rgb)])], 0);
+        let rgb_twin = scene(vec![material(diffuse(SpectrumKind::Rgb { rgb: [0.8, 0.1, 0.1] }))], vec![f11()]);
+        assert_eq!(grid_of(&scene(vec![rgb_graph], vec![f11()])), grid_of(&rgb_twin));
+        // A spectral-only graph is not RGB data: the grid of its fixed twin.
+        assert_eq!(
+            grid_of(&scene(vec![diffuse_graph], vec![f11()])),
+            grid_of(&scene(vec![material(diffuse(ramp()))], vec![f11()]))
+        );
+
+        // Dispersion: a Glass node or a transmissive Principled with N-BK7.
+        let bk7 = || InputDesc::Ior { ior: IorDesc::Named { name: "N-BK7".into() } };
+        let glass = graph_material(vec![node("ShaderNodeBsdfGlass", vec![("Color", smooth()), ("IOR", bk7())])], 0);
+        assert!(grid_of(&scene(vec![glass], vec![f11()])).len() >= 41);
+        let clear = |w: f32| {
+            graph_material(
+                vec![node(
+                    "ShaderNodeBsdfPrincipled",
+                    vec![("IOR", bk7()), ("Transmission Weight", InputDesc::Number(w))],
+                )],
+                0,
+            )
+        };
+        assert!(grid_of(&scene(vec![clear(1.0)], vec![f11()])).len() >= 41);
+        // Without transmission nothing refracts: the grid of an RGB diffuse (Base Color
+        // is Blender's RGB default).
+        assert_eq!(grid_of(&scene(vec![clear(0.0)], vec![f11()])), grid_of(&rgb_twin));
+        // The fixed Principled too.
+        let principled = |t: f32| BsdfDesc::Principled {
+            base_color: SpectrumDesc::new(ramp()),
+            metallic: 0.0,
+            roughness: 0.0,
+            ior: IorDesc::Named { name: "N-BK7".into() },
+            transmission: t,
+            specular_tint: None,
+            thin_film_thickness: 0.0,
+            thin_film_ior: 1.33,
+            specular_ior_level: 0.5,
+        };
+        assert!(grid_of(&scene(vec![material(principled(1.0))], vec![f11()])).len() >= 41);
+        assert_eq!(
+            grid_of(&scene(vec![material(principled(0.0))], vec![f11()])),
+            grid_of(&scene(vec![material(diffuse(ramp()))], vec![f11()]))
+        );
+    }
+
+    /// An HDRI world is RGB data: its grid is the one an RGB surface gets under D65.
+    #[test]
+    fn hdri_world_is_rgb_data() {
+        let world =
+            WorldDesc { radiance: None, texture: Some(0), strength: 1.0, rotation: 0.0, importance_sampling: true };
+        let hdri = SceneDesc { world: Some(world), ..scene(vec![material(diffuse(ramp()))], vec![]) };
+        let twin =
+            scene(vec![material(diffuse(ramp())), material(diffuse(SpectrumKind::Rgb { rgb: [0.5; 3] }))], vec![]);
+        assert_eq!(grid_of(&hdri), grid_of(&twin));
+        assert!(Uplift::new(
+            &WavelengthGrid::from_wavelengths(grid_of(&hdri)).unwrap(),
+            &RgbSpace::rec709(),
+            UpliftMethod::default()
+        )
+        .is_ok());
     }
 
     /// Properties of AUTO's grid against independent expectations.

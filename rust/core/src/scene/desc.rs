@@ -476,8 +476,12 @@ pub enum SpectrumUse {
 #[derive(Clone, Copy, Debug)]
 pub enum SpectralItem<'a> {
     Spectrum(SpectrumUse, &'a SpectrumDesc),
-    /// The index of refraction of a `dielectric` BSDF.
+    /// The index of refraction of a surface that refracts (a `dielectric`, a Principled
+    /// with transmission, a graph's Glass or Refraction node).
     DielectricIor(&'a crate::material::IorDesc),
+    /// RGB data that is not a spectrum of the description: an image (the world's HDRI),
+    /// or a node graph's RGB colours (constants, Blender's defaults, computed values).
+    RgbData,
 }
 
 impl SceneDesc {
@@ -544,10 +548,13 @@ impl BsdfDesc {
                     f(Spectrum(Index, s));
                 }
             }
-            BsdfDesc::Principled { base_color, specular_tint, .. } => {
+            BsdfDesc::Principled { base_color, specular_tint, ior, transmission, .. } => {
                 f(Spectrum(Surface, base_color));
                 if let Some(t) = specular_tint {
                     f(Spectrum(Surface, t));
+                }
+                if *transmission > 0.0 {
+                    f(SpectralItem::DielectricIor(ior));
                 }
             }
             BsdfDesc::Mix { a, b, .. } | BsdfDesc::Add { a, b } => {
@@ -560,18 +567,61 @@ impl BsdfDesc {
 }
 
 impl crate::shading::GraphDesc {
-    /// The spectra on the graph's colour inputs, as [`SpectrumUse::Surface`] (whatever
-    /// node they feed, an Emission node's colour included).
+    /// The graph's spectra (the compiler takes them on closure inputs only): as
+    /// [`SpectrumUse::Emitter`] on an emission colour (Emission, Background, Principled
+    /// Emission Color), as [`SpectrumUse::Surface`] elsewhere; the index of a refracting
+    /// node (Glass, Refraction, Principled with transmission); and
+    /// [`SpectralItem::RgbData`] once if any colour input is RGB (a constant, Blender's
+    /// default, or a link: computed colours are RGB until the hit uplifts them) or a node
+    /// is unknown.
     pub fn for_each_spectrum(&self, f: &mut dyn FnMut(SpectralItem)) {
+        use crate::shading::sockets::{spec, SocketType};
         use crate::shading::InputDesc;
+        let mut rgb = false;
         for n in &self.nodes {
-            for input in n.inputs.values() {
+            match spec(&n.kind) {
+                None => rgb = true,
+                Some(ns) => {
+                    for s in ns.inputs.iter().filter(|s| s.ty == SocketType::Color) {
+                        rgb |= !matches!(n.inputs.get(s.id), Some(InputDesc::Spectrum { .. }));
+                    }
+                }
+            }
+            for (id, input) in &n.inputs {
                 match input {
-                    InputDesc::Spectrum { spectrum } => f(SpectralItem::Spectrum(SpectrumUse::Surface, spectrum)),
-                    InputDesc::Number(_) | InputDesc::Array(_) | InputDesc::Link { .. } | InputDesc::Ior { .. } => {}
+                    InputDesc::Spectrum { spectrum } => {
+                        let emits = matches!(
+                            (n.kind.as_str(), id.as_str()),
+                            ("ShaderNodeEmission", "Color")
+                                | ("ShaderNodeBackground", "Color")
+                                | ("ShaderNodeBsdfPrincipled", "Emission Color")
+                        );
+                        let usage = if emits { SpectrumUse::Emitter } else { SpectrumUse::Surface };
+                        f(SpectralItem::Spectrum(usage, spectrum));
+                    }
+                    InputDesc::Ior { ior } if refracts(n) => f(SpectralItem::DielectricIor(ior)),
+                    InputDesc::Ior { .. } | InputDesc::Number(_) | InputDesc::Array(_) | InputDesc::Link { .. } => {}
                 }
             }
         }
+        if rgb {
+            f(SpectralItem::RgbData);
+        }
+    }
+}
+
+/// Whether a graph node refracts, so a dispersive index on it collapses paths.
+fn refracts(n: &crate::shading::NodeDesc) -> bool {
+    use crate::shading::InputDesc;
+    match n.kind.as_str() {
+        "ShaderNodeBsdfGlass" | "ShaderNodeBsdfRefraction" => true,
+        // Blender's default Transmission Weight is 0.
+        "ShaderNodeBsdfPrincipled" => match n.inputs.get("Transmission Weight") {
+            None => false,
+            Some(InputDesc::Number(w)) => *w > 0.0,
+            Some(_) => true,
+        },
+        _ => false,
     }
 }
 
@@ -586,11 +636,14 @@ impl LightDesc {
 }
 
 impl WorldDesc {
-    /// The world's radiance; its image (`texture`) is not a spectrum and is not visited.
+    /// The world's radiance, and its image (an HDRI) as RGB data.
     pub fn for_each_spectrum(&self, f: &mut dyn FnMut(SpectralItem)) {
-        let WorldDesc { radiance, texture: _, strength: _, rotation: _, importance_sampling: _ } = self;
+        let WorldDesc { radiance, texture, strength: _, rotation: _, importance_sampling: _ } = self;
         if let Some(r) = radiance {
             f(SpectralItem::Spectrum(SpectrumUse::Emitter, r));
+        }
+        if texture.is_some() {
+            f(SpectralItem::RgbData);
         }
     }
 }
