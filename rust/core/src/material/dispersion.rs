@@ -11,7 +11,8 @@ use serde::{Deserialize, Serialize};
 /// The Fraunhofer lines of the Abbe number Vd = (nd − 1)/(nF − nC), in nm: the helium d
 /// line and the hydrogen F and C lines, as SCHOTT's catalogue and ISO 7944 give them
 /// (SCHOTT Technical Information TIE-29, "Refractive Index and Dispersion", its table
-/// of spectral lines).
+/// of spectral lines; the same values in optowiki's table of Fraunhofer lines,
+/// https://www.optowiki.info/glossary/prefix:fr/).
 /// The only definition: Python (`polychrome.ior.LAMBDA_D`, ...) and the Blender node
 /// read these from `_core`.
 pub const LAMBDA_D: f64 = 587.5618;

@@ -9,7 +9,7 @@ use crate::color::uplift::{Uplift, UpliftMethod};
 use crate::color::{Observer, RgbSpace};
 use crate::material::IorDesc;
 use crate::scene::{SceneDesc, SpectralItem, SpectrumUse};
-use crate::spectrum::named::{RgbToSpectrum, SpectrumKind, SpectrumRole};
+use crate::spectrum::named::{NoRgb, RgbToSpectrum, SpectrumKind, SpectrumRole};
 use crate::spectrum::{SpectrumDesc, WavelengthGrid};
 use crate::Result;
 
@@ -59,13 +59,6 @@ fn collect(desc: &SceneDesc) -> (Vec<Found>, Holds) {
     (out, holds)
 }
 
-struct Flat;
-impl RgbToSpectrum for Flat {
-    fn convert(&self, rgb: [f32; 3], _: SpectrumRole) -> Vec<f32> {
-        vec![(rgb[0] + rgb[1] + rgb[2]) / 3.0; 1]
-    }
-}
-
 /// Spectra evaluated on one grid: emitters and reflectances.
 struct OnGrid {
     observer: Observer,
@@ -81,7 +74,8 @@ fn on_grid(grid: &WavelengthGrid, found: &[Found], rgb_samples: &[[f32; 3]], upl
     }
     let conv: &dyn RgbToSpectrum = match &up {
         Some(u) => u,
-        None => &Flat,
+        // No RGB colour is evaluated without an uplift (`needs_uplift` above).
+        None => &NoRgb,
     };
     let mut emitters = Vec::new();
     let mut reflectances = vec![vec![1.0; grid.len()]];
