@@ -313,14 +313,37 @@ class Diffuse(Material):
 
 
 class Emitter(Material):
-    """A surface that only emits (radiance ``emission`` times ``strength``, both faces)."""
+    """A surface that only emits (radiance ``emission`` times ``strength``), from both
+    faces, or with ``one_sided`` from its front face only: the side its triangles'
+    winding normal ((v1 − v0) × (v2 − v0)) points to, as Cycles' and UsdLux's area
+    lights (black behind). With ``see_through`` rays pass through it after gathering its
+    emission and it never blocks shadow rays, as Cycles treats its lights; otherwise it
+    is an opaque black surface that emits."""
 
-    def __init__(self, emission: Any = (1.0, 1.0, 1.0), *, strength: float = 1.0, name: str = "Emitter"):
+    def __init__(
+        self,
+        emission: Any = (1.0, 1.0, 1.0),
+        *,
+        strength: float = 1.0,
+        one_sided: bool = False,
+        see_through: bool = False,
+        name: str = "Emitter",
+    ):
         self.emission = as_spectrum(emission) * strength
+        self.one_sided = bool(one_sided)
+        self.see_through = bool(see_through)
         self.name = name
 
     def bsdf_dict(self) -> dict[str, Any]:
         return {"type": "none"}
+
+    def to_dict(self) -> dict[str, Any]:
+        d = super().to_dict()
+        if self.one_sided:
+            d["one_sided"] = True
+        if self.see_through:
+            d["see_through"] = True
+        return d
 
 
 @dataclass

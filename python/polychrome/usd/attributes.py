@@ -61,6 +61,10 @@ LIGHT = "polychrome:light"
 MATERIAL_NAME = "polychrome:materialName"
 #: bool on a RectLight / DiskLight: its black backing is already a mesh of the stage
 HAS_BACKING = "polychrome:hasBacking"
+#: bool on a Material: its emission leaves the front face only (``Emitter(one_sided=True)``)
+ONE_SIDED = "polychrome:oneSided"
+#: bool on a Material: rays pass through it after gathering its emission (``Emitter(see_through=True)``)
+SEE_THROUGH = "polychrome:seeThrough"
 
 # -- render settings (on /Render/PolychromeSettings, a UsdRender.Settings prim) --
 RENDER_SETTINGS_PATH = "/Render/PolychromeSettings"
@@ -111,5 +115,7 @@ ALL = [
     LIGHT,
     MATERIAL_NAME,
     HAS_BACKING,
+    ONE_SIDED,
+    SEE_THROUGH,
     *(name for name, _ in SETTINGS.values()),
 ]

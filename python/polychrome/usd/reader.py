@@ -106,7 +106,7 @@ def material_from_description(d: dict[str, Any]):
         if kind == "diffuse":
             m = Diffuse(spec("reflectance"), emission=emission, name=name)
         elif kind == "none" and emission is not None:
-            m = Emitter(emission, name=name)
+            m = Emitter(emission, one_sided=bool(d.get("one_sided", False)), see_through=bool(d.get("see_through", False)), name=name)
         elif kind == "dielectric":
             ior = dict(bsdf["ior"])
             m = Dielectric(Ior(str(ior.pop("type")), ior), roughness=bsdf.get("roughness", 0.0), name=name)
@@ -233,7 +233,6 @@ class _Reader:
         self.world = None
         self.world_texture: dict[str, Any] | None = None
         self.cameras: list[Any] = []
-        self.black_backing: int | None = None
         self.textures: dict[str, Any] = {}
 
     # -- helpers ------------------------------------------------------------------
@@ -469,6 +468,10 @@ class _Reader:
             d = {"name": name, "bsdf": bsdf}
             if emission is not None:
                 d["emission"] = emission.to_dict()
+            if self.custom(prim, A.ONE_SIDED, False):
+                d["one_sided"] = True
+            if self.custom(prim, A.SEE_THROUGH, False):
+                d["see_through"] = True
             return material_from_description(d)
 
         # Plain UsdPreviewSurface, with polychrome spectra where given.
@@ -995,10 +998,11 @@ class _Reader:
         self.lights.append(PointLight(pos, power=4.0 * math.pi, color=spectrum, name=name, radius=sphere))
 
     def add_emitter_polygon(self, prim, pts2d: np.ndarray, size: float, normalize: bool, scalar, colour, blackbody) -> None:
-        """An emissive polygon in the light's local XY plane shining along −Z, with a black
-        backing behind it (polychrome's emitters shine from both faces). Normalised, the
-        radiance is divided by the polygon's world-space area (UsdLux: "divide luminance by
-        the world-space surface area", so transform scale counts)."""
+        """An emissive polygon in the light's local XY plane emitting from its −Z face
+        only (UsdLux: RectLight and DiskLight emit "from one side", "along the -Z
+        axis"), see-through and invisible to camera and shadow rays as Cycles' lights. Normalised, the
+        radiance is divided by the polygon's world-space area (UsdLux: "divide luminance
+        by the world-space surface area", so transform scale counts)."""
         if prim.HasAPI(self.UsdLux.ShapingAPI):
             self.warn(f"shaping:{prim.GetPath()}", f"prim {prim.GetPath()}: ShapingAPI on an area light is not supported and is ignored")
         m = self.world_matrix(prim)
@@ -1016,33 +1020,25 @@ class _Reader:
         name = str(self.custom(prim, A.NAME, str(prim.GetPath())))
         exact = self.spectrum_attr(prim, A.EMISSION)  # the radiance Polychrome wrote, if it did
         radiance = exact if exact is not None else self.emitted(scalar, colour, blackbody)
-        # A UsdLux light is no geometry the camera sees: camera rays pass through it (as
-        # in Cycles with Blender's default, and Karma). Shadow rays do not: the backing
-        # keeps the two-sided emitter from lighting what is behind it. What Polychrome
-        # wrote from an emissive mesh stays a mesh every ray sees.
-        ours = exact is not None or self.custom(prim, A.HAS_BACKING, False)
-        vis = None if ours else {"camera": False}
-        emitter = self.add_material(Emitter(radiance, name=str(self.custom(prim, A.MATERIAL_NAME, name))))
+        # A stage Polychrome wrote from a two-sided emitter with a black backing (before
+        # area lights were one-sided) holds the backing as a mesh: keep both as they were.
+        legacy = bool(self.custom(prim, A.HAS_BACKING, False))
+        vis = None if legacy else {"camera": False, "shadow": False}
+        material_name = str(self.custom(prim, A.MATERIAL_NAME, name))
+        emitter = self.add_material(Emitter(radiance, one_sided=not legacy, see_through=not legacy, name=material_name))
         key = f"light:{prim.GetPath()}"
         self.meshes[key] = {
             "name": name,
             "order": None,
             "vertices": verts,
-            "triangles": tris,
+            # counter-clockwise seen from −Z: the emitting front face looks along −Z
+            "triangles": tris if legacy else tris[:, ::-1].copy(),
             "normals": None,
             "uvs": None,
             "material_ids": None,
             "material": emitter,
         }
         self.instances.append((key, m, name, vis))
-        if self.custom(prim, A.HAS_BACKING, False):
-            return  # the stage holds the backing as a mesh already
-        if self.black_backing is None:
-            self.black_backing = self.add_material(Diffuse(0.0, name="light backing"))
-        back = verts.copy()
-        back[:, 2] = 1e-3 * size
-        self.meshes[key + " (back)"] = {**self.meshes[key], "name": name + " (back)", "vertices": back, "material": self.black_backing}
-        self.instances.append((key + " (back)", m, name + " (back)", vis))
 
     def read_rect_light(self, prim) -> None:
         light = self.UsdLux.RectLight(prim)

@@ -214,9 +214,22 @@ def _is_black(material) -> bool:
     return False
 
 
+def _light_like(mat, inst) -> bool:
+    """A one-sided see-through emitter the camera does not see (and that, being
+    see-through, casts no shadow), seen by every other kind of ray: a UsdLux light as the
+    reader gives it and Cycles' area lights are by default."""
+    if not (mat.get("one_sided") and mat.get("see_through")):
+        return False
+    vis = {k: True for k in ("camera", "diffuse", "glossy", "transmission")}
+    vis.update({k: v for k, v in (inst.get("visibility") or {}).items() if k != "shadow"})
+    return vis == {"camera": False, "diffuse": True, "glossy": True, "transmission": True}
+
+
 def _area_lights(desc, buffers, uses) -> dict[int, dict[str, Any]]:
-    """Instances that are emissive rectangles / regular polygons with a black backing
-    (Blender's area lights as polychrome_blender exports them): instance → shape."""
+    """Instances that are emissive rectangles / regular polygons emitting from one face
+    with a light's visibility (Blender's area lights as polychrome_blender exports them),
+    or from both faces with a black backing just behind (how it exported them before):
+    instance → shape (``one_sided`` for the first kind)."""
     found: dict[int, dict[str, Any]] = {}
     materials, meshes, instances = desc["materials"], desc["meshes"], desc["instances"]
     backings = []
@@ -224,8 +237,6 @@ def _area_lights(desc, buffers, uses) -> dict[int, dict[str, Any]]:
         md = meshes[int(inst["mesh"])]
         if md.get("material_ids") is None and materials and _is_black(materials[int(md.get("material") or 0)]):
             backings.append((k, _world_points(desc, buffers, inst)))
-    if not backings:
-        return found
     for k, inst in enumerate(instances):
         index = int(inst["mesh"])
         md = meshes[index]
@@ -239,6 +250,9 @@ def _area_lights(desc, buffers, uses) -> dict[int, dict[str, Any]]:
             continue
         mat = materials[int(md.get("material") or 0)]
         if (mat.get("bsdf") or {}).get("type") != "none" or mat.get("emission") is None:
+            continue
+        one_sided = bool(mat.get("one_sided"))
+        if (one_sided and not _light_like(mat, inst)) or (not one_sided and (not backings or mat.get("see_through"))):
             continue
         tris = np.asarray(buffers[md["triangles"]], dtype=np.int64).reshape(-1, 3)
         p = _world_points(desc, buffers, inst)
@@ -284,6 +298,20 @@ def _area_lights(desc, buffers, uses) -> dict[int, dict[str, Any]]:
                 continue
             shape = {"kind": "disk", "radius": float(math.sqrt(polygon_area / math.pi)), "x": x_axis}  # same area
         else:
+            continue
+        if one_sided:
+            # It emits along its winding normal (through the inverse transpose, as the
+            # core orients it): the light's −Z.
+            linear = np.asarray(inst["transform"], dtype=np.float64)[:3, :3]
+            z = -normal if np.linalg.det(linear) > 0 else normal
+            x = shape.pop("x")
+            x = x - np.dot(x, z) * z
+            x /= np.linalg.norm(x)
+            frame = np.eye(4)
+            frame[:3, 0], frame[:3, 1], frame[:3, 2], frame[:3, 3] = x, np.cross(z, x), z, c
+            shape["frame"] = frame
+            shape["one_sided"] = True
+            found[k] = shape
             continue
         # A black copy just behind it: the light shines away from that side.
         for _, back in backings:
@@ -348,10 +376,14 @@ def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path
     :class:`polychrome.RenderSettings`, default: the defaults) go to
     ``/Render/PolychromeSettings``; its image size also sets the camera's apertures.
 
-    With ``area_lights`` (default), an emission-only rectangle or regular polygon backed
-    by a black copy just behind it (how Blender's area lights are exported) is written
-    as a UsdLux RectLight / DiskLight shining away from the backing, keeping its exact
-    spectrum in ``polychrome:emission``; the backing stays a mesh. Returns the path."""
+    With ``area_lights`` (default), an emission-only rectangle or regular polygon that
+    emits from one face and is see-through (``Emitter(one_sided=True,
+    see_through=True)``) and that the camera does not see (how Blender's area lights
+    are exported) is written as a UsdLux
+    RectLight / DiskLight shining the same way, keeping its exact spectrum in
+    ``polychrome:emission``. So is a two-sided one backed by a black copy just behind
+    it (the add-on's former export), shining away from the backing, which stays a mesh.
+    Returns the path."""
     Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdRender, UsdShade, Vt = _pxr()
     from ..render import RenderSettings
 
@@ -500,6 +532,10 @@ def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path
         if bsdf:
             prim.CreateAttribute(A.BSDF_EXTRA, Sdf.ValueTypeNames.String).Set(json.dumps(bsdf))
         emission = m.get("emission")
+        if m.get("one_sided"):
+            prim.CreateAttribute(A.ONE_SIDED, Sdf.ValueTypeNames.Bool).Set(True)
+        if m.get("see_through"):
+            prim.CreateAttribute(A.SEE_THROUGH, Sdf.ValueTypeNames.Bool).Set(True)
         if emission is not None:
             prim.CreateAttribute(A.EMISSION, Sdf.ValueTypeNames.String).Set(json.dumps(emission))
             inp("emissiveColor", colour, Gf.Vec3f(*rgb.emission(emission)))
@@ -670,7 +706,8 @@ def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path
         prim.CreateAttribute(A.EMISSION, Sdf.ValueTypeNames.String).Set(json.dumps(mat["emission"]))
         prim.CreateAttribute(A.NAME, Sdf.ValueTypeNames.String).Set(str(inst.get("name", "")))
         prim.CreateAttribute(A.MATERIAL_NAME, Sdf.ValueTypeNames.String).Set(str(mat.get("name", "")))
-        prim.CreateAttribute(A.HAS_BACKING, Sdf.ValueTypeNames.Bool).Set(True)
+        if not shape.get("one_sided"):
+            prim.CreateAttribute(A.HAS_BACKING, Sdf.ValueTypeNames.Bool).Set(True)
 
     world_desc = desc.get("world")
     if world_desc is not None and (world_desc.get("radiance") is not None or world_desc.get("texture") is not None):

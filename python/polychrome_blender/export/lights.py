@@ -12,10 +12,12 @@ colour × energy × 2^exposure; ``normalize`` from ``LA_UNNORMALIZED``) and
 * Area: a one-sided Lambertian emitter of radiance ``colour × P / (π A)``, A its
   world-space area (Cycles: |X axis|·size_x × |Y axis|·size_y, × π/4 for disks and
   ellipses, so object scale counts); with Normalize off ``colour × P / π``. Exported as an
-  emissive quad/disk (ellipse: a 32-gon, its radiance scaled so its power is Cycles') plus a
-  black backing one thousandth of its size behind it, because polychrome's emitters shine
-  from both faces. Both are seen by the camera only with the object's ``visible_camera``
-  (off by default), as in Cycles (``visibility.py``).
+  emissive quad/disk (ellipse: a 32-gon, its radiance scaled so its power is Cycles') that
+  emits from its −Z face only and that rays pass through after gathering its emission
+  (``pc.Emitter(one_sided=True, see_through=True)``): as in Cycles, where a light is a
+  transparent bounce, it casts no shadow and its back shows what lies behind it. The
+  camera sees it only with the object's ``visible_camera`` (off by default)
+  (``visibility.py``).
 * Spot: ``polychrome.SpotLight``, cone ``spot_size`` and ``spot_blend`` as Blender's.
 * Sun: ``polychrome.SunLight`` of irradiance ``colour × strength`` W/m² (Normalize on);
   with Normalize off Cycles' sun disk has radiance = strength, so the irradiance is
@@ -111,14 +113,11 @@ def export_area(scene, ld, name, matrix, warnings, visibility=None):
         radiance = spec * (power / (math.pi * area * stretch))
     else:
         radiance = spec * (power * exact / (math.pi * area))
-    emitter = pc.Emitter(radiance, name=f"{name} (area light)")
+    emitter = pc.Emitter(radiance, one_sided=True, see_through=True, name=f"{name} (area light)")
     verts = np.concatenate([pts, np.zeros((len(pts), 1))], axis=1).astype(np.float32)
-    back = verts.copy()
-    back[:, 2] = 1e-3 * size  # behind: the light shines along local −Z
-    m = scene.add_mesh(f"{name}", verts, tris, material=emitter, place=False)
+    # Wound clockwise seen from +Z: the front (emitting) face looks along local −Z.
+    m = scene.add_mesh(f"{name}", verts, tris[:, ::-1].copy(), material=emitter, place=False)
     scene.add_instance(m, matrix, name, visibility=visibility)
-    b = scene.add_mesh(f"{name} (back)", back, tris, material=pc.Diffuse(0.0, name=f"{name} (back)"), place=False)
-    scene.add_instance(b, matrix, f"{name} (back)", visibility=visibility)
 
 
 def _axis(m, name):

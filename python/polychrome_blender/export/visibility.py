@@ -5,11 +5,11 @@ Cycles (intern/cycles/blender/object.cpp ``object_ray_visibility``, light.cpp): 
 is seen by camera, shadow, diffuse, glossy and transmission rays as its ``visible_*``
 flags say. For lights, ``visible_camera`` (off by default) decides whether the camera sees
 them. Cycles' lights never block shadow rays (measured with Cycles 4.5: an area light
-between a sun and a floor casts no shadow, whatever ``visible_shadow`` says); Polychrome's
-area light keeps blocking them, because its black backing is what stops the two-sided
-emitter from lighting what is behind it through next-event estimation. A light's
-``visible_diffuse``/``glossy``/``transmission`` drop it from that kind of bounce in Cycles,
-next-event estimation included, which Polychrome does not do (warning).
+between a sun and a floor casts no shadow, whatever ``visible_shadow`` says), and neither
+does Polychrome's area light: it is a one-sided emitter (``pc.Emitter(one_sided=True)``)
+that shadow rays do not see. A light's ``visible_diffuse``/``glossy``/``transmission``
+drop it from that kind of bounce in Cycles, next-event estimation included, which
+Polychrome does not do (warning).
 """
 
 KINDS = ("camera", "shadow", "diffuse", "glossy", "transmission")
@@ -30,10 +30,11 @@ def object_visibility(ob, name, warnings):
 
 
 def light_visibility(ob, name, warnings):
-    """The visibility of an area light's emitter and backing: seen by the camera as
-    ``visible_camera`` says, by every other ray."""
+    """The visibility of an area light's emitter: seen by the camera as
+    ``visible_camera`` says, never by shadow rays (Cycles' lights cast no shadow), by
+    every other ray."""
     if not all(getattr(ob, f"visible_{k}", True) for k in ("diffuse", "glossy", "transmission")):
         warnings.add(
             ("vis-light", name), f"light '{name}': diffuse/glossy/transmission ray visibility of lights is not supported and is ignored"
         )
-    return {"camera": bool(getattr(ob, "visible_camera", False))}
+    return {"camera": bool(getattr(ob, "visible_camera", False)), "shadow": False}

@@ -19,7 +19,14 @@ const H: usize = 24;
 const SEEDS: u64 = 6;
 
 fn diffuse(name: &str, reflectance: SpectrumDesc, emission: Option<SpectrumDesc>) -> MaterialDesc {
-    MaterialDesc { name: name.into(), bsdf: BsdfDesc::Diffuse { reflectance }, emission, volume: None }
+    MaterialDesc {
+        name: name.into(),
+        bsdf: BsdfDesc::Diffuse { reflectance },
+        emission,
+        volume: None,
+        one_sided: false,
+        see_through: false,
+    }
 }
 
 fn quad(desc: &mut SceneDesc, buffers: &mut Vec<Buffer>, name: &str, p: [[f32; 3]; 4], material: u32) {

@@ -16,7 +16,7 @@ use polychrome_core::scene::{BsdfDesc, Buffer, BuildOptions, LightDesc, Material
 use polychrome_core::spectrum::{SpectrumDesc, WavelengthGrid};
 
 fn material(name: &str, bsdf: BsdfDesc) -> MaterialDesc {
-    MaterialDesc { name: name.into(), bsdf, emission: None, volume: None }
+    MaterialDesc { name: name.into(), bsdf, emission: None, volume: None, one_sided: false, see_through: false }
 }
 
 fn glass(name: &str, ior: IorDesc) -> MaterialDesc {

@@ -22,6 +22,8 @@ fn scene_desc() -> (SceneDesc, Vec<Buffer>) {
         bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(a) },
         emission: e.map(SpectrumDesc::constant),
         volume: None,
+        one_sided: false,
+        see_through: false,
     };
     desc.materials.push(diffuse("walls", 0.7, None));
     desc.materials.push(diffuse("lamp", 0.0, Some(4.0)));
@@ -30,6 +32,8 @@ fn scene_desc() -> (SceneDesc, Vec<Buffer>) {
         bsdf: BsdfDesc::Dielectric { ior: IorDesc::Named { name: "N-SF11".into() }, roughness: 0.0 },
         emission: None,
         volume: None,
+        one_sided: false,
+        see_through: false,
     });
     let s = 1.0f32;
     let quad =

@@ -58,6 +58,8 @@ fn floor_scene() -> (SceneDesc, Vec<Buffer>) {
         bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(0.8) },
         emission: None,
         volume: None,
+        one_sided: false,
+        see_through: false,
     });
     let v = vec![-4.0, -4.0, 0.0, 4.0, -4.0, 0.0, 4.0, 4.0, 0.0, -4.0, 4.0, 0.0];
     add_mesh(&mut desc, &mut buffers, "floor", v, vec![0, 1, 2, 0, 2, 3], 0);

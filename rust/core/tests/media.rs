@@ -25,7 +25,7 @@ fn tabulated(pairs: &[(f32, f32)], scale: f32) -> SpectrumDesc {
 }
 
 fn material(name: &str, bsdf: BsdfDesc, volume: Option<VolumeDesc>) -> MaterialDesc {
-    MaterialDesc { name: name.into(), bsdf, emission: None, volume }
+    MaterialDesc { name: name.into(), bsdf, emission: None, volume, one_sided: false, see_through: false }
 }
 
 fn absorbing(sigma_a: SpectrumDesc) -> VolumeDesc {
@@ -78,6 +78,8 @@ fn slab_scene(outer: MaterialDesc, inner: Option<MaterialDesc>) -> (SceneDesc, V
         bsdf: BsdfDesc::None,
         emission: Some(tabulated(&[(380.0, 0.5), (780.0, 2.0)], 1.0)),
         volume: None,
+        one_sided: false,
+        see_through: false,
     });
     desc.materials.push(outer);
     let (v, t) = cuboid([-50.0, 3.0, -50.0], [50.0, 3.1, 50.0]);
@@ -253,6 +255,8 @@ fn distance_sampling_options_agree_with_a_monochromatic_reference() {
         bsdf: BsdfDesc::None,
         emission: Some(SpectrumDesc::constant(3.0)),
         volume: None,
+        one_sided: false,
+        see_through: false,
     });
     let volume = VolumeDesc {
         absorption: Some(tabulated(&SIGMA_B, 0.5)),

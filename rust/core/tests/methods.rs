@@ -17,7 +17,14 @@ use polychrome_core::spectrum::named::{NoRgb, SpectrumKind, SpectrumRole};
 use polychrome_core::spectrum::{SampledSpectrum, SpectrumDesc, WavelengthGrid};
 
 fn diffuse(name: &str, reflectance: SpectrumDesc, emission: Option<SpectrumDesc>) -> MaterialDesc {
-    MaterialDesc { name: name.into(), bsdf: BsdfDesc::Diffuse { reflectance }, emission, volume: None }
+    MaterialDesc {
+        name: name.into(),
+        bsdf: BsdfDesc::Diffuse { reflectance },
+        emission,
+        volume: None,
+        one_sided: false,
+        see_through: false,
+    }
 }
 
 /// A uniform world of `radiance` (through JSON, as every front end builds it).

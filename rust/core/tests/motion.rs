@@ -33,6 +33,8 @@ fn square_scene() -> (SceneDesc, Vec<Buffer>) {
         bsdf: BsdfDesc::None,
         emission: Some(SpectrumDesc::constant(1.0)),
         volume: None,
+        one_sided: false,
+        see_through: false,
     });
     let v = vec![-0.5, -2.0, 0.0, 0.5, -2.0, 0.0, 0.5, 2.0, 0.0, -0.5, 2.0, 0.0];
     add_mesh(&mut desc, &mut buffers, "square", v, vec![0, 1, 2, 0, 2, 3], 0);
@@ -193,6 +195,8 @@ fn light_tracing_through_a_moving_camera_agrees_with_camera_paths() {
         bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(0.7) },
         emission: None,
         volume: None,
+        one_sided: false,
+        see_through: false,
     });
     let v = vec![-0.5, -2.0, -5.0, 0.5, -2.0, -5.0, 0.5, 2.0, -5.0, -0.5, 2.0, -5.0];
     add_mesh(&mut desc, &mut buffers, "square", v, vec![0, 1, 2, 0, 2, 3], 0);

@@ -20,6 +20,8 @@ fn furnace() -> (SceneDesc, Vec<Buffer>, f64) {
         bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(a) },
         emission: Some(SpectrumDesc::constant(l)),
         volume: None,
+        one_sided: false,
+        see_through: false,
     });
     let (v, t) = uv_sphere([0.0; 3], 2.0, 12, 24);
     add_mesh(&mut desc, &mut buffers, "sphere", v, t, 0);

@@ -14,6 +14,8 @@ fn diffuse(name: &str, albedo: f32, emission: Option<f32>) -> MaterialDesc {
         bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(albedo) },
         emission: emission.map(SpectrumDesc::constant),
         volume: None,
+        one_sided: false,
+        see_through: false,
     }
 }
 

@@ -121,6 +121,8 @@ fn white_sphere_scene(world: WorldDesc, textures: Option<(u32, u32, Vec<f32>)>) 
         bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(1.0) },
         emission: None,
         volume: None,
+        one_sided: false,
+        see_through: false,
     });
     if let Some((w, h, rgb)) = textures {
         add_texture(&mut desc, &mut buffers, "env", w, h, rgb);
@@ -198,6 +200,8 @@ fn importance_sampling_a_sun_reduces_variance_without_bias() {
             bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(0.5) },
             emission: None,
             volume: None,
+            one_sided: false,
+            see_through: false,
         });
         let s = 50.0;
         add_mesh(
@@ -274,6 +278,8 @@ fn constant_colour_and_one_texel_texture_render_identically() {
             bsdf: BsdfDesc::Diffuse { reflectance },
             emission: None,
             volume: None,
+            one_sided: false,
+            see_through: false,
         });
         let (v, t) = uv_sphere([0.0, 0.0, -4.0], 1.0, 12, 24);
         add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
@@ -324,6 +330,8 @@ fn texture_errors_name_the_texture_or_material() {
         bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::new(SpectrumKind::Texture { texture: 2 }) },
         emission: None,
         volume: None,
+        one_sided: false,
+        see_through: false,
     });
     let err = render(&desc, &buffers, &ResolvedSettings::default(), &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("material 'Wood'") && err.contains("texture 2"), "{err}");
@@ -377,6 +385,8 @@ fn extreme_hdri_is_finite_and_description_parses() {
         bsdf: BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(0.5) },
         emission: None,
         volume: None,
+        one_sided: false,
+        see_through: false,
     });
     add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
     let settings = ResolvedSettings { width: 8, height: 8, samples: 4, ..Default::default() };

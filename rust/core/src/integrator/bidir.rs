@@ -219,7 +219,7 @@ impl CameraMis for BidirectionalMis {
             le: scene.lights[l].pdf_le(v.si.p, v.wo),
             delta: false,
             infinite: false,
-            pdf_li: scene.lights[l].pdf_li(st.prev_p, st.ray.direction, v.si.t),
+            pdf_li: scene.lights[l].pdf_li(st.prev_p, st.ray.direction, st.traveled + v.si.t),
             cos: v.si.ng.dot(v.wo).abs(),
         };
         weights(&self.cam, &self.verts, &light, self.legacy)[0] as f32

@@ -142,6 +142,8 @@ pub fn light_seen_by_camera(
     }
     let c = scene.camera.connect(es.origin, time, rng);
     let (nl, c) = (es.normal?, c?);
+    // A one-sided emitter is dark behind: it starts no ray towards the camera there.
+    scene.lights[light].pdf_le(es.origin, c.wi)?;
     let cos = nl.dot(c.wi).abs();
     let origin = offset_ray_origin(es.origin, if nl.dot(c.wi) > 0.0 { nl } else { -nl });
     // Aimed from the offset origin at the camera: along c.wi from the unshifted point it

@@ -147,7 +147,17 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, T, M> {
         if st.depth == 0 {
             self.mis.first_hit(scene, v, st);
         }
-        if let Some(emission) = &v.material.emission {
+        if let Some(emission) = v.material.emission.as_ref().filter(|_| ctx.front_face || !v.material.one_sided) {
+            let w = self.mis.emission(scene, v, st);
+            self.gathered.add_emitted(beta, emission, w);
+        }
+    }
+
+    fn passed_emitter(&mut self, scene: &Scene, ctx: &mut ShadingContext, v: &Vertex, st: &PathState, beta: &T) {
+        if st.depth == 0 {
+            self.mis.first_hit(scene, v, st);
+        }
+        if let Some(emission) = v.material.emission.as_ref().filter(|_| ctx.front_face || !v.material.one_sided) {
             let w = self.mis.emission(scene, v, st);
             self.gathered.add_emitted(beta, emission, w);
         }

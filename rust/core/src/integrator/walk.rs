@@ -138,6 +138,10 @@ pub trait PathHooks<T: Throughput> {
         _scratch: &mut Scratch,
     ) {
     }
+    /// The path passed through see-through emitter `v` (`Material::see_through`, a
+    /// light's surface): gather its emission; the ray goes on behind it. Draws no random
+    /// numbers.
+    fn passed_emitter(&mut self, _scene: &Scene, _ctx: &mut ShadingContext, _v: &Vertex, _st: &PathState, _beta: &T) {}
     /// Connects `v` to a light (camera paths: next-event estimation) or to the camera
     /// (light paths); may draw random numbers.
     #[allow(clippy::too_many_arguments)]
@@ -300,6 +304,32 @@ impl Walk {
                 return End::Done;
             };
             let si = scene.interaction(&st.ray, &hit);
+            if scene.materials[si.material as usize].see_through {
+                // A light's surface as Cycles has it: its emission is gathered and the ray
+                // carries on behind it (a transparent bounce, no scattering).
+                crossings += 1;
+                if crossings > VOLUME_BOUNDS_MAX {
+                    return End::Done;
+                }
+                let Facing { wo, ng, ns, material } = facing(scene, &st.ray, &si, ctx);
+                let frame = Frame::from_normal(ns);
+                let v = Vertex {
+                    si,
+                    wo,
+                    ng,
+                    ns,
+                    material,
+                    frame,
+                    wo_local: frame.to_local(wo),
+                    flags: material.bsdf.flags(),
+                };
+                hooks.passed_emitter(scene, ctx, &v, &st, beta);
+                let front = si.ng.dot(st.ray.direction) < 0.0;
+                let origin = offset_ray_origin(si.p, if front { -si.ng } else { si.ng });
+                st.traveled += (origin - st.ray.origin).length();
+                st.ray = Ray { origin, tmin: 0.0, tmax: f32::INFINITY, ..st.ray };
+                continue;
+            }
             if media && scene.null_surface[si.material as usize] {
                 // A medium's boundary with no surface: pass straight through (no bounce,
                 // as Cycles' volume-only surfaces), entering or leaving the medium.

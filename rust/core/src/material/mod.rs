@@ -157,8 +157,13 @@ impl Bsdf for Black {
 pub struct Material {
     pub name: String,
     pub bsdf: Box<dyn Bsdf>,
-    /// Emitted radiance per wavelength (both faces), if the surface is a light.
+    /// Emitted radiance per wavelength (both faces, or the front one when
+    /// `one_sided`), if the surface is a light.
     pub emission: Option<SampledSpectrum>,
+    /// Emission from the front face only (`MaterialDesc::one_sided`).
+    pub one_sided: bool,
+    /// Rays pass through after gathering the emission (`MaterialDesc::see_through`).
+    pub see_through: bool,
     /// For a material driven by a graph per hit: the mesh data its program reads, by
     /// slot (the walk fills `ShadingContext::hit` only for these materials).
     pub hit_attributes: Option<Vec<crate::shading::program::AttributeRequest>>,

@@ -253,7 +253,7 @@ mod tests {
     }
 
     fn material(bsdf: BsdfDesc) -> MaterialDesc {
-        MaterialDesc { name: "m".into(), bsdf, emission: None, volume: None }
+        MaterialDesc { name: "m".into(), bsdf, emission: None, volume: None, one_sided: false, see_through: false }
     }
 
     fn diffuse(kind: SpectrumKind) -> BsdfDesc {

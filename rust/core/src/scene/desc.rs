@@ -72,13 +72,22 @@ pub struct MaterialDesc {
     pub name: String,
     #[serde(default)]
     pub bsdf: BsdfDesc,
-    /// Emitted radiance (both faces); makes every triangle using it an area light.
+    /// Emitted radiance (both faces, or the front one with `one_sided`); makes every
+    /// triangle using it an area light.
     #[serde(default)]
     pub emission: Option<SpectrumDesc>,
     /// A homogeneous medium filling the inside of every closed mesh with this material
     /// (docs/media.md).
     #[serde(default)]
     pub volume: Option<VolumeDesc>,
+    /// Emission from the front face only (the side the triangle's winding normal
+    /// points to), as Cycles' and UsdLux's area lights; the back face emits nothing.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub one_sided: bool,
+    /// Rays pass through the surface after gathering its emission, as Cycles treats its
+    /// lights (a transparent bounce); it never blocks shadow rays.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub see_through: bool,
 }
 
 /// A homogeneous participating medium (Blender's Volume output). Coefficients are per
@@ -116,6 +125,10 @@ struct RawMaterialDesc {
     output: Option<crate::shading::OutputDesc>,
     #[serde(default)]
     volume: Option<VolumeDesc>,
+    #[serde(default)]
+    one_sided: bool,
+    #[serde(default)]
+    see_through: bool,
 }
 
 impl TryFrom<RawMaterialDesc> for MaterialDesc {
@@ -123,7 +136,14 @@ impl TryFrom<RawMaterialDesc> for MaterialDesc {
     fn try_from(r: RawMaterialDesc) -> Result<Self, String> {
         let name = r.name;
         match (r.nodes, r.output) {
-            (None, None) => Ok(Self { name, bsdf: r.bsdf.unwrap_or_default(), emission: r.emission, volume: r.volume }),
+            (None, None) => Ok(Self {
+                name,
+                bsdf: r.bsdf.unwrap_or_default(),
+                emission: r.emission,
+                volume: r.volume,
+                one_sided: r.one_sided,
+                see_through: r.see_through,
+            }),
             (Some(nodes), output) => {
                 if r.bsdf.is_some() || r.emission.is_some() {
                     return Err(format!(
@@ -136,6 +156,8 @@ impl TryFrom<RawMaterialDesc> for MaterialDesc {
                     bsdf: BsdfDesc::Graph(Box::new(crate::shading::GraphDesc { nodes, output })),
                     emission: None,
                     volume: r.volume,
+                    one_sided: r.one_sided,
+                    see_through: r.see_through,
                 })
             }
             (None, Some(_)) => Err(format!("material '{name}': an output without nodes")),
@@ -503,7 +525,7 @@ impl SceneDesc {
 
 impl MaterialDesc {
     pub fn for_each_spectrum(&self, f: &mut dyn FnMut(SpectralItem)) {
-        let MaterialDesc { name: _, bsdf, emission, volume } = self;
+        let MaterialDesc { name: _, bsdf, emission, volume, one_sided: _, see_through: _ } = self;
         bsdf.for_each_spectrum(f);
         if let Some(e) = emission {
             f(SpectralItem::Spectrum(SpectrumUse::Emitter, e));

@@ -385,7 +385,14 @@ impl Scene {
                 Some(e) => Some(spectrum(e, SpectrumRole::Illuminant, "emission")?).filter(|s| !s.is_black()),
                 None => None,
             };
-            materials.push(Material { name: m.name.clone(), bsdf, emission, hit_attributes });
+            materials.push(Material {
+                name: m.name.clone(),
+                bsdf,
+                emission,
+                one_sided: m.one_sided,
+                see_through: m.see_through,
+                hit_attributes,
+            });
             // A graph with a volume and no surface is volume-only (Cycles' SD_HAS_ONLY_VOLUME).
             null_surface.push(match &m.bsdf {
                 BsdfDesc::Null => true,
@@ -409,6 +416,8 @@ impl Scene {
                 name: "default".into(),
                 bsdf: Box::new(Diffuse { reflectance: SpectralParam::Constant(grey) }),
                 emission: None,
+                one_sided: false,
+                see_through: false,
                 hit_attributes: None,
             });
             material_medium.push(None);
@@ -458,7 +467,7 @@ impl Scene {
         }
 
         // Instances.
-        let instances: Vec<Instance> = match &desc.instances {
+        let mut instances: Vec<Instance> = match &desc.instances {
             None => (0..meshes.len())
                 .map(|k| Instance::new(&meshes[k].name, k as u32, glam::Affine3A::IDENTITY))
                 .collect::<Result<_>>()?,
@@ -484,6 +493,13 @@ impl Scene {
                 })
                 .collect::<Result<_>>()?,
         };
+        for inst in &mut instances {
+            let ids = &meshes[inst.mesh as usize].material_ids;
+            if !ids.is_empty() && ids.iter().all(|&m| materials.get(m as usize).is_some_and(|m| m.see_through)) {
+                // See-through surfaces (Cycles' lights) never block shadow rays.
+                inst.visibility &= !crate::geometry::visibility::SHADOW;
+            }
+        }
         // A transform can carry valid vertices out of range, which overflows the BVH's
         // boxes (obvhs panics): reject it naming the instance (found by proptest).
         for inst in &instances {
@@ -547,9 +563,18 @@ impl Scene {
             }
             let mut map = vec![u32::MAX; mesh.indices.len()];
             for (t, &m) in mesh.material_ids.iter().enumerate() {
-                let Some(e) = &materials[m as usize].emission else { continue };
-                let p = mesh.triangle(t).map(|v| inst.to_world.transform_point3a(v));
-                if let Some(tri) = AreaTriangle::new(p, e.clone()) {
+                let material = &materials[m as usize];
+                let Some(e) = &material.emission else { continue };
+                let local = mesh.triangle(t);
+                let p = local.map(|v| inst.to_world.transform_point3a(v));
+                if let Some(mut tri) = AreaTriangle::new(p, e.clone()) {
+                    if material.one_sided {
+                        // The front is where the hit's geometric normal points (the
+                        // object-space winding normal through the inverse transpose, which
+                        // a mirroring transform does not turn around).
+                        let ng = inst.normal_to_world * (local[1] - local[0]).cross(local[2] - local[0]);
+                        tri.make_one_sided(ng.dot(tri.normal) < 0.0);
+                    }
                     map[t] = lights.len() as u32;
                     lights.push(Box::new(tri));
                     light_visibility.push(inst.visibility);
