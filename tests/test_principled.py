@@ -126,6 +126,42 @@ def test_white_principled_base_is_invisible_in_a_white_world():
         assert out.stats["nonfinite_samples"] == 0
 
 
+def test_white_coat_and_sheen_over_a_white_base_are_invisible_in_a_white_world():
+    """White furnace through the layers: a coat of weight 1 and white tint (smooth or
+    rough), and a white sheen over it, take from the layers below exactly what they
+    reflect (Cycles' closure_layering_weight), so the sphere keeps the world's colour."""
+    for kw in (
+        dict(coat_weight=1.0, coat_roughness=0.0),
+        dict(coat_weight=1.0, coat_roughness=0.4, coat_ior=1.8),
+        dict(coat_weight=1.0, coat_roughness=0.2, sheen_weight=1.0, sheen_roughness=0.3),
+    ):
+        mat = pc.Principled((1.0, 1.0, 1.0), roughness=0.5, **kw)
+        out = pc.render(convex_scene(mat), width=12, height=12, samples=32, max_bounces=6)
+        rgb = on_sphere(out).mean(axis=0)
+        assert np.allclose(rgb, 1.0, atol=0.015), (kw, rgb)
+        assert out.stats["nonfinite_samples"] == 0
+
+
+def test_coat_tint_and_specular_tint_closed_forms_at_normal_incidence():
+    """Seen straight down, a smooth coat of tint t over a white diffuse base in a white
+    world returns F_c + (1 − F_c)·t (Beer's law through the coat at normal incidence:
+    t¹, Cycles' coat_tint^(1/cos θt)); a smooth dielectric with Specular Tint s over a
+    black base reflects F0·s ((n − 1)/(n + 1))² per channel."""
+    t = 0.5
+    fc = ((1.5 - 1) / (1.5 + 1)) ** 2
+    mat = pc.Principled(1.0, roughness=0.3, coat_weight=1.0, coat_roughness=0.0, coat_tint=t)
+    out = pc.render(plane_scene(mat), width=4, height=4, samples=256, max_bounces=8)
+    got = luminance(out.rgba).mean()
+    assert got == pytest.approx(fc + (1 - fc) * t, rel=0.01), got
+    d = pc.Principled(coat_weight=1.0, coat_tint=(0.5, 0.5, 0.5), sheen_weight=0.3).bsdf_dict()
+    assert d["coat"]["tint"]["rgb"] == [0.5, 0.5, 0.5] and d["sheen"] == {"weight": 0.3, "roughness": 0.5}
+    for s in (1.0, 0.5, 0.1):
+        out = pc.render(
+            plane_scene(pc.Principled(0.0, roughness=0.0, ior=1.5, specular_tint=s)), width=4, height=4, samples=2, max_bounces=4
+        )
+        assert np.allclose(luminance(out.rgba), fc * s, rtol=3e-3), (s, luminance(out.rgba).mean())
+
+
 def test_mix_of_red_and_blue_diffuse_is_the_mixed_colour():
     """Mix(a, b, t) of two diffuse colours = diffuse (1 − t)·a + t·b: in a white world a
     convex diffuse object shows its reflectance's colour (the uplift round-trips RGB
@@ -166,6 +202,10 @@ def test_bad_parameters_are_value_errors_naming_the_material():
         pc.Principled(metallic=1.2, name="P")
     with pytest.raises(ValueError, match="thin_film_ior"):
         pc.Principled(thin_film_thickness=100.0, thin_film_ior=0.5, name="P")
+    with pytest.raises(ValueError, match="coat_ior"):
+        pc.Principled(coat_weight=1.0, coat_ior=0.5, name="P")
+    with pytest.raises(ValueError, match="sheen_weight"):
+        pc.Principled(sheen_weight=float("nan"), name="P")
     with pytest.raises(ValueError, match="material 'M'"):
         pc.Mix(pc.Diffuse(), pc.Diffuse(), 1.5, name="M")
     with pytest.raises(TypeError):

@@ -543,6 +543,10 @@ class Principled(Material):
     ``thin_film_ior`` put an interference film on the specular interface (and on the
     metal). ``specular_ior_level`` scales the specular layer's normal-incidence reflectance
     by 2·level (0.5 keeps ``ior``). ``roughness`` as Blender's (alpha = roughness²).
+    ``coat_weight`` puts Blender's Coat over everything (a GGX dielectric of
+    ``coat_roughness`` and ``coat_ior`` whose ``coat_tint`` absorbs the light reaching the
+    layers below), ``sheen_weight`` the microfibre sheen (``sheen_roughness``,
+    ``sheen_tint``) over the coat, stacked as Cycles does (docs/materials.md).
     Defaults are Blender's."""
 
     def __init__(
@@ -557,6 +561,13 @@ class Principled(Material):
         thin_film_thickness: float = 0.0,
         thin_film_ior: float = 1.33,
         specular_ior_level: float = 0.5,
+        coat_weight: float = 0.0,
+        coat_roughness: float = 0.03,
+        coat_ior: float = 1.5,
+        coat_tint: Any = None,
+        sheen_weight: float = 0.0,
+        sheen_roughness: float = 0.5,
+        sheen_tint: Any = None,
         emission: Any = None,
         name: str = "Principled",
     ):
@@ -576,6 +587,16 @@ class Principled(Material):
             raise ValueError(f"material '{name}': thin_film_ior {thin_film_ior} must be in 1..10")
         self.thin_film_thickness, self.thin_film_ior = t, n
         self.specular_ior_level = _unit(specular_ior_level, "specular_ior_level", name)
+        self.coat_weight = _unit(coat_weight, "coat_weight", name)
+        self.coat_roughness = _unit(coat_roughness, "coat_roughness", name)
+        ci = float(coat_ior)
+        if not (math.isfinite(ci) and 1.0 <= ci <= 10.0):
+            raise ValueError(f"material '{name}': coat_ior {coat_ior} must be in 1..10")
+        self.coat_ior = ci
+        self.coat_tint = None if coat_tint is None else as_spectrum(coat_tint)
+        self.sheen_weight = _unit(sheen_weight, "sheen_weight", name)
+        self.sheen_roughness = _unit(sheen_roughness, "sheen_roughness", name)
+        self.sheen_tint = None if sheen_tint is None else as_spectrum(sheen_tint)
         self.emission = None if emission is None else as_spectrum(emission)
         self.name = name
 
@@ -593,6 +614,14 @@ class Principled(Material):
         }
         if self.specular_tint is not None:
             d["specular_tint"] = self.specular_tint.to_dict()
+        if self.coat_weight > 0.0:
+            d["coat"] = {"weight": self.coat_weight, "roughness": self.coat_roughness, "ior": self.coat_ior}
+            if self.coat_tint is not None:
+                d["coat"]["tint"] = self.coat_tint.to_dict()
+        if self.sheen_weight > 0.0:
+            d["sheen"] = {"weight": self.sheen_weight, "roughness": self.sheen_roughness}
+            if self.sheen_tint is not None:
+                d["sheen"]["tint"] = self.sheen_tint.to_dict()
         return d
 
 

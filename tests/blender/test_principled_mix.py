@@ -76,11 +76,14 @@ def test_principled_mix_add_map_to_polychrome(tmp_path):
     )
     r = check(proc, res)[0]
     m = r["m"]
-    # Only the unsupported Principled inputs of 'Coated' are reported, once each.
-    assert len(r["warns"]) == 3 and all("'Coated'" in w for w in r["warns"]), r["warns"]
-    assert any("Coat Weight" in w for w in r["warns"]) and any("Alpha" in w for w in r["warns"])
-    assert any("driving 'Roughness'" in w for w in r["warns"])
+    # Only the unsupported Principled inputs of 'Coated' are reported, once each (its
+    # coat is exported: weight 0.5 and Blender's defaults).
+    assert len(r["warns"]) == 2 and all("'Coated'" in w for w in r["warns"]), r["warns"]
+    assert any("Alpha" in w for w in r["warns"]) and any("driving 'Roughness'" in w for w in r["warns"])
     assert m["Coated"]["bsdf"]["type"] == "principled"
+    coat = m["Coated"]["bsdf"]["coat"]
+    assert coat["weight"] == pytest.approx(0.5) and coat["roughness"] == pytest.approx(0.03) and coat["ior"] == pytest.approx(1.5)
+    assert "tint" not in coat and "sheen" not in m["Coated"]["bsdf"]
     d = m["Default"]["bsdf"]
     assert d["type"] == "principled"
     assert d["base_color"]["rgb"] == pytest.approx([0.8, 0.8, 0.8])

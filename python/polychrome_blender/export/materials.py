@@ -242,8 +242,6 @@ class MaterialExport:
         # Sockets looked up with .get() are absent in some Blender versions the add-on
         # supports (Diffuse Roughness: 4.3+).
         for lobe, value in (
-            ("Coat Weight", 0.0),
-            ("Sheen Weight", 0.0),
             ("Subsurface Weight", 0.0),
             ("Diffuse Roughness", 0.0),
             ("Alpha", 1.0),
@@ -252,7 +250,20 @@ class MaterialExport:
             sock = node.inputs.get(lobe)
             if sock is not None and (sock.is_linked or float(sock.default_value) != value):
                 warnings.add(("principled-lobe", name, lobe), f"{owner}: '{node.name}' {lobe} is not supported yet and is ignored")
-        for socket in ("Metallic", "Roughness", "Transmission Weight", "Thin Film Thickness", "Thin Film IOR", "Emission Strength"):
+        for socket in (
+            "Metallic",
+            "Roughness",
+            "Transmission Weight",
+            "Thin Film Thickness",
+            "Thin Film IOR",
+            "Emission Strength",
+            "Coat Weight",
+            "Coat Roughness",
+            "Coat IOR",
+            "Coat Normal",
+            "Sheen Weight",
+            "Sheen Roughness",
+        ):
             sock = node.inputs.get(socket)
             src = _linked_node(sock) if sock is not None else None
             if src is not None:
@@ -278,6 +289,15 @@ class MaterialExport:
             film_n = 1.0
         if isinstance(base, tuple):
             base = tuple(_clamp01(c) for c in base)
+        for lobe in ("Coat", "Sheen"):
+            sock = node.inputs.get(f"{lobe} Weight")
+            if sock is not None and float(sock.default_value) > 0.0:
+                tint = tuple(_clamp01(c) for c in self.colour(node, f"{lobe} Tint"))
+                extra[f"{lobe.lower()}_weight"] = _clamp01(sock.default_value)
+                extra[f"{lobe.lower()}_roughness"] = _clamp01(_input_value(node, f"{lobe} Roughness"))
+                extra[f"{lobe.lower()}_tint"] = None if tint == (1.0, 1.0, 1.0) else tint
+        if "coat_weight" in extra:
+            extra["coat_ior"] = min(max(_input_value(node, "Coat IOR"), 1.0), 10.0)
         return pc.Principled(
             base,
             metallic=_clamp01(_input_value(node, "Metallic")),

@@ -12,8 +12,13 @@
 //!
 //! with w the layer's weight and A_top the top lobe's directional albedo: the microfibre
 //! sheen's fitted albedo ([`super::sheen`]) times its tint, or the coat's GGX reflection
-//! with dielectric Fresnel at the coat's IOR (the [`super::energy`] tables; single
-//! scattering, no compensation, as Cycles' coat). μv is the cosine of the direction
+//! with dielectric Fresnel at the coat's IOR (the [`super::energy`] tables) with its
+//! multiple scattering: Cycles' `bsdf_microfacet_setup_fresnel_dielectric` always calls
+//! `microfacet_ggx_preserve_energy` with F_ss = `fresnel_dielectric_Fss(ior)`, which
+//! scales the single-scattering coat lobe by 1 + F_ms·(1 − E(μv))/E(μv) (E the GGX albedo
+//! for F = 1), and `bsdf_albedo` (through `bsdf_microfacet_estimate_albedo`, whose
+//! `ggx_gen_schlick_ior_s` table is the Fresnel-weighted albedo over E) is then the
+//! compensated lobe's albedo. μv is the cosine of the direction
 //! towards the camera: `wo` on camera paths, `wi` on light paths (the adjoint), so both
 //! tracing directions render the same image. A white layer over a white Lambertian base
 //! reflects everything (A + (1 − A)·1 = 1).
@@ -24,7 +29,7 @@
 //! lobe's weight over its selection probability.
 
 use super::conductor::{MetalFresnel, MicrofacetReflection};
-use super::energy::dielectric_e;
+use super::energy::{dielectric_e, fresnel_avg, reflection_compensation};
 use super::fresnel::fresnel_dielectric;
 use super::sheen::{Sheen, SheenLtc};
 use super::{Bsdf, BsdfFlags, BsdfSample, ShadingContext, SpectralParam, TransportMode};
@@ -86,6 +91,17 @@ impl TopLobe {
             TopLobe::Coat { lobe, .. } => lobe,
         }
     }
+    /// What scales the top lobe's own BSDF seen from cosine `mu` (the view side): the
+    /// coat's multiple-scattering compensation (Cycles' `microfacet_ggx_preserve_energy`:
+    /// energy_scale·darkening = 1 + F_ms·(1 − E)/E), 1 for the sheen.
+    fn lobe_scale(&self, mu: f32) -> f32 {
+        match self {
+            TopLobe::Sheen { .. } => 1.0,
+            TopLobe::Coat { ior, roughness, .. } => {
+                reflection_compensation(*roughness, mu.abs().min(1.0), fresnel_avg(*ior))
+            }
+        }
+    }
     /// The top lobe's albedo per lane at cosine `mu` (before its weight) into `out`.
     fn albedo_at(&self, ctx: &ShadingContext, mu: f32, out: &mut SampledSpectrum) {
         match self {
@@ -93,7 +109,9 @@ impl TopLobe {
                 sheen.color.evaluate_into(ctx, out);
                 out.scale(SheenLtc::albedo(sheen.roughness, mu));
             }
-            TopLobe::Coat { ior, roughness, .. } => out.fill(dielectric_e(*roughness, mu, *ior)),
+            TopLobe::Coat { ior, roughness, .. } => {
+                out.fill((dielectric_e(*roughness, mu, *ior) * self.lobe_scale(mu)).min(1.0))
+            }
         }
     }
     /// T(μ) per lane: what the layer leaves to the BSDF below, seen from `mu`.
@@ -175,7 +193,7 @@ impl Layered {
         self.top.transmittance(ctx, Self::view_cos(ctx, wo, wi), &mut f);
         out.mul_assign(&f);
         let pdf_t = self.top.bsdf().eval(ctx, wo, wi, &mut f);
-        out.add_scaled(&f, self.top.weight());
+        out.add_scaled(&f, self.top.weight() * self.top.lobe_scale(Self::view_cos(ctx, wo, wi)));
         p_top * pdf_t + (1.0 - p_top) * pdf_b
     }
 }
@@ -221,7 +239,7 @@ impl Bsdf for Layered {
             // The lobe's own weight over its selection probability.
             let mut k = SampledSpectrum::zeros(n);
             if choose_top {
-                k.fill(self.top.weight());
+                k.fill(self.top.weight() * self.top.lobe_scale(Self::view_cos(ctx, wo, s.wi)));
             } else {
                 self.top.transmittance(ctx, Self::view_cos(ctx, wo, s.wi), &mut k);
             }

@@ -174,7 +174,8 @@ pub struct PrincipledParams {
     /// Blender's "Specular IOR Level": 0.5 keeps `ior`; otherwise the specular layer's F0
     /// is scaled by 2·level (0: no specular reflection), as Cycles does.
     pub specular_ior_level: f32,
-    /// Blender's "Specular Tint" (the metal's tint at ~82°); white for none.
+    /// Blender's "Specular Tint": the metal's tint at ~82° and the dielectric layer's F0
+    /// tint (Cycles' generalized Schlick Fresnel); white for none.
     pub specular_tint: SampledSpectrum,
     pub thin_film: Option<ThinFilm>,
     /// The glass lobe (built by the caller from the same IOR and roughness), if
@@ -191,6 +192,8 @@ pub struct Principled {
     smooth: bool,
     ior: IndexOfRefraction,
     film: Option<ThinFilm>,
+    /// The Specular Tint on the dielectric layer's F0 (None: white).
+    spec_tint: Option<SampledSpectrum>,
     metal: MetalF82,
     glass: Option<Box<dyn Bsdf>>,
     /// E(μ) of the specular layer: one row, or one per wavelength lane.
@@ -233,21 +236,45 @@ impl Principled {
         let ior = specular_index(&p.ior, p.specular_ior_level);
         // The Fresnel of the specular layer depends on λ only through a film or a
         // varying index: then one table per lane.
+        let spec_tint = (p.specular_tint.len() == lanes && p.specular_tint.values().iter().any(|&t| t != 1.0))
+            .then(|| p.specular_tint.clone());
         let per_lane = film.is_some() || (0..lanes).any(|i| ior.at(i) != ior.at(0));
         let rows = if per_lane { lanes } else { 1 };
         let lambdas = grid.lambdas();
-        let e_table: Vec<Vec<f32>> = (0..rows)
+        let mut e_table: Vec<Vec<f32>> = (0..rows)
             .map(|i| {
                 let n = ior.at(i) as f64;
                 let lambda = lambdas[i] as f64;
+                let t = spec_tint.as_ref().map(|t| t.get(i) as f64);
                 match film {
                     Some(fl) => albedo_table(&distribution, smooth, &|c| {
-                        thin_film_reflectance(c, lambda, fl.thickness_nm as f64, fl.ior as f64, n, 0.0)
+                        let f = thin_film_reflectance(c, lambda, fl.thickness_nm as f64, fl.ior as f64, n, 0.0);
+                        t.map_or(f, |t| tinted_film_fresnel(f, n, t))
                     }),
                     None => albedo_table(&distribution, smooth, &|c| fresnel_dielectric_f64(c, n)),
                 }
             })
             .collect();
+        if let (Some(t), None) = (&spec_tint, film) {
+            // The tinted Fresnel mix(F0·t, 1, s), s = (F − F0)/(1 − F0), is linear in F, so
+            // its albedo per lane follows from the untinted one and that of F = 1:
+            // E_t = F0·t·E₁ + (1 − F0·t)·(E_F − F0·E₁)/(1 − F0).
+            let e1 = albedo_table(&distribution, smooth, &|_| 1.0);
+            e_table = (0..lanes)
+                .map(|k| {
+                    let f0 = dielectric_f0(ior.at(k) as f64) as f32;
+                    let ft = f0 * t.get(k);
+                    let ef = &e_table[if per_lane { k } else { 0 }];
+                    ef.iter()
+                        .zip(&e1)
+                        .map(|(&e, &one)| {
+                            let s = if f0 < 1.0 { ((e - f0 * one) / (1.0 - f0)).max(0.0) } else { 0.0 };
+                            (ft * one + (1.0 - ft) * s).clamp(0.0, 1.0)
+                        })
+                        .collect()
+                })
+                .collect();
+        }
         let inv_one_minus_eavg = e_table
             .iter()
             .map(|t| {
@@ -280,6 +307,7 @@ impl Principled {
             smooth,
             ior,
             film,
+            spec_tint,
             glass: if transmission > 0.0 { p.glass } else { None },
             e_table,
             inv_one_minus_eavg,
@@ -295,25 +323,36 @@ impl Principled {
         }
     }
 
-    /// Fresnel of the dielectric specular layer at `cos` for lane `i`.
+    /// Fresnel of the dielectric specular layer at `cos` for lane `i`, with the Specular
+    /// Tint as Cycles' `microfacet_fresnel` (GENERALIZED_SCHLICK, exponent < 0: the real
+    /// Fresnel F interpolates between F0·tint and 1 as s = (F − F0)/(1 − F0); with a thin
+    /// film F·mix(1, tint, s), s = (1 − F)/(1 − F0), its iridescence branch).
     #[inline]
     fn spec_fresnel(&self, ctx: &ShadingContext, cos: f32, i: usize) -> f32 {
         let n = self.ior.at(i) as f64;
-        match self.film {
-            Some(f) => thin_film_reflectance(
-                cos as f64,
-                ctx.grid.lambdas()[i] as f64,
-                f.thickness_nm as f64,
-                f.ior as f64,
-                n,
-                0.0,
-            ) as f32,
-            None => fresnel_dielectric_f64(cos as f64, n) as f32,
-        }
+        let t = self.spec_tint.as_ref().map(|t| t.get(i) as f64);
+        let f = match self.film {
+            Some(f) => {
+                let r = thin_film_reflectance(
+                    cos as f64,
+                    ctx.grid.lambdas()[i] as f64,
+                    f.thickness_nm as f64,
+                    f.ior as f64,
+                    n,
+                    0.0,
+                );
+                t.map_or(r, |t| tinted_film_fresnel(r, n, t))
+            }
+            None => {
+                let r = fresnel_dielectric_f64(cos as f64, n);
+                t.map_or(r, |t| tinted_fresnel(r, n, t))
+            }
+        };
+        f as f32
     }
 
     fn spec_fresnel_into(&self, ctx: &ShadingContext, cos: f32, out: &mut SampledSpectrum) {
-        if self.e_table.len() == 1 {
+        if self.e_table.len() == 1 && self.spec_tint.is_none() {
             out.fill(self.spec_fresnel(ctx, cos, 0));
         } else {
             for i in 0..out.len() {
@@ -465,6 +504,36 @@ impl Principled {
         }
         HitSpectra { rho, metal_f, fms }
     }
+}
+
+/// F0 = ((n − 1)/(n + 1))² (Cycles' `F0_from_ior`).
+#[inline]
+fn dielectric_f0(n: f64) -> f64 {
+    ((n - 1.0) / (n + 1.0)).powi(2)
+}
+
+/// The real dielectric Fresnel `f` at index `n` with its F0 tinted by `t` (Cycles'
+/// generalized Schlick with exponent −η): mix(F0·t, 1, saturate((f − F0)/(1 − F0))).
+#[inline]
+pub fn tinted_fresnel(f: f64, n: f64, t: f64) -> f64 {
+    let f0 = dielectric_f0(n);
+    if f0 >= 1.0 {
+        return f;
+    }
+    let s = ((f - f0) / (1.0 - f0)).clamp(0.0, 1.0);
+    f0 * t + (1.0 - f0 * t) * s
+}
+
+/// A thin film's reflectance `f` with the F0 tint `t` (Cycles' iridescence branch of the
+/// generalized Schlick Fresnel): f·mix(1, t, saturate((f − 1)/(F0 − 1))).
+#[inline]
+fn tinted_film_fresnel(f: f64, n: f64, t: f64) -> f64 {
+    let f0 = dielectric_f0(n);
+    if !(f0 > 1e-5) || f == 1.0 {
+        return f;
+    }
+    let s = ((f - 1.0) / (f0 - 1.0)).clamp(0.0, 1.0);
+    f * (1.0 + (t - 1.0) * s)
 }
 
 /// The specular layer's index for Blender's Specular IOR Level (Cycles:
@@ -867,6 +936,76 @@ mod tests {
                 Some(s) => assert!((tp.get(0) * s.pdf - expected).abs() < 1e-5, "level {level}: {}", tp.get(0) * s.pdf),
                 None => assert_eq!(expected, 0.0),
             }
+        }
+    }
+
+    fn tinted(grid: &WavelengthGrid, rho: f32, roughness: f32, ior: f32, tint: &[f32]) -> Principled {
+        let n = grid.len();
+        let ior_v = IndexOfRefraction::constant(n, ior);
+        Principled::new(
+            PrincipledParams {
+                base_color: SpectralParam::Constant(SampledSpectrum::splat(n, rho)),
+                metallic: 0.0,
+                transmission: 0.0,
+                roughness,
+                ior: ior_v,
+                specular_ior_level: 0.5,
+                specular_tint: SampledSpectrum::from_slice(tint),
+                thin_film: None,
+                glass: None,
+            },
+            grid,
+        )
+    }
+
+    /// Specular Tint on the dielectric layer: at normal incidence a smooth layer over a
+    /// black base reflects F0·tint per lane ((n − 1)/(n + 1))²·t (Cycles' generalized
+    /// Schlick with F0·tint and F90 = 1), and at grazing incidence it still reflects 1.
+    #[test]
+    fn specular_tint_scales_f0_per_lane() {
+        let grid = WavelengthGrid::uniform(4, 400.0, 700.0).unwrap();
+        let ctx = ShadingContext::new(&grid);
+        let tint = [1.0f32, 0.5, 0.2, 0.0];
+        for &n in &[1.5f32, 2.0] {
+            let f0 = ((n - 1.0) / (n + 1.0)).powi(2);
+            let m = tinted(&grid, 0.0, 0.0, n, &tint);
+            let mut tp = SampledSpectrum::splat(4, 1.0);
+            let s = m.sample(&ctx, Vec3A::Z, Vec2::new(0.5, 0.5), 0.01, &mut tp).unwrap();
+            assert!(s.specular);
+            for (k, t) in tint.iter().enumerate() {
+                let got = tp.get(k) * s.pdf;
+                assert!((got - f0 * t).abs() < 1e-5, "n {n} lane {k}: {got} vs {}", f0 * t);
+            }
+            // The layer's albedo pass at normal incidence, from the tinted tables.
+            let mut a = SampledSpectrum::zeros(4);
+            m.albedo(&ctx, &mut a);
+            for (k, t) in tint.iter().enumerate() {
+                assert!((a.get(k) - f0 * t).abs() < 2e-3, "albedo lane {k}: {} vs {}", a.get(k), f0 * t);
+            }
+        }
+        // The closed form itself: F0·t at F = F0, 1 at F = 1, linear in F between.
+        let f0 = 0.04f64;
+        assert!((tinted_fresnel(f0, 1.5, 0.3) - f0 * 0.3).abs() < 1e-9);
+        assert!((tinted_fresnel(1.0, 1.5, 0.3) - 1.0).abs() < 1e-9);
+        assert!((tinted_fresnel(0.52, 1.5, 1.0) - 0.52).abs() < 1e-9);
+    }
+
+    /// A rough tinted layer over a white base stays at most 1 (per lane, every angle),
+    /// and over a black base the sampled albedo matches a quadrature of eval per lane.
+    #[test]
+    fn specular_tint_rough_layer_conserves_energy() {
+        let grid = WavelengthGrid::uniform(4, 400.0, 700.0).unwrap();
+        let ctx = ShadingContext::new(&grid);
+        let tint = [0.1f32, 0.5, 0.9, 1.0];
+        let white = tinted(&grid, 1.0, 0.4, 1.5, &tint);
+        let black = tinted(&grid, 0.0, 0.4, 1.5, &tint);
+        for &th in &[0.2f32, 0.9, 1.3] {
+            let wo = dir(th, 0.3);
+            let (mean, se) = sampled_albedo(&white, &ctx, wo, 20_000, 3);
+            assert!(mean < 1.0 + 4.0 * se + 1e-3, "white base θ {th}: {mean} ± {se}");
+            let (mean, se) = sampled_albedo(&black, &ctx, wo, 40_000, 4);
+            let q = quadrature_albedo(&black, &ctx, wo);
+            assert!((mean - q).abs() < 4.0 * se + 2e-3, "black base θ {th}: {mean} ± {se} vs {q}");
         }
     }
 

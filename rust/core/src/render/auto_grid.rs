@@ -417,6 +417,8 @@ mod tests {
             thin_film_thickness: 0.0,
             thin_film_ior: 1.33,
             specular_ior_level: 0.5,
+            coat: None,
+            sheen: None,
         };
         assert!(grid_of(&scene(vec![material(principled(1.0))], vec![f11()])).len() >= 41);
         assert_eq!(

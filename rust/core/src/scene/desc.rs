@@ -227,6 +227,12 @@ pub enum BsdfDesc {
         /// Blender's Specular IOR Level (0.5: F0 from `ior`; F0 scales by 2·level).
         #[serde(default = "half")]
         specular_ior_level: f32,
+        /// Blender's Coat: a dielectric layer over everything else (absent: none).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        coat: Option<CoatDesc>,
+        /// Blender's Sheen: the microfibre sheen on top of the coat (absent: none).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        sheen: Option<SheenLayerDesc>,
     },
     /// Blender's Mix Shader: (1 − factor)·a + factor·b; `factor_from` (a Fresnel or
     /// Layer Weight node on Fac) replaces the constant by a function of the view angle.
@@ -301,6 +307,50 @@ impl BsdfDesc {
             _ => false,
         }
     }
+}
+
+/// The Principled BSDF's Coat (Cycles' `svm_node_closure_bsdf`, second layer): a GGX
+/// dielectric reflection of index `ior` and `roughness` with weight `weight`, whose
+/// `tint` absorbs the light reaching the layers below (Beer's law along the refracted
+/// view ray, the tint being the transmittance at normal incidence).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CoatDesc {
+    #[serde(default = "one")]
+    pub weight: f32,
+    #[serde(default = "default_coat_roughness")]
+    pub roughness: f32,
+    #[serde(default = "default_coat_ior")]
+    pub ior: f32,
+    /// White when absent.
+    #[serde(default)]
+    pub tint: Option<SpectrumDesc>,
+}
+
+/// The Principled BSDF's Sheen (Cycles' first layer): the microfibre sheen of
+/// `roughness`, scaled by `weight` × `tint`, over the coat and everything else.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SheenLayerDesc {
+    #[serde(default = "one")]
+    pub weight: f32,
+    #[serde(default = "half")]
+    pub roughness: f32,
+    /// White when absent.
+    #[serde(default)]
+    pub tint: Option<SpectrumDesc>,
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+fn default_coat_roughness() -> f32 {
+    0.03
+}
+
+fn default_coat_ior() -> f32 {
+    1.5
 }
 
 /// A view-dependent Mix Shader factor, as Blender's nodes compute it.
@@ -570,9 +620,11 @@ impl BsdfDesc {
                     f(Spectrum(Index, s));
                 }
             }
-            BsdfDesc::Principled { base_color, specular_tint, ior, transmission, .. } => {
+            BsdfDesc::Principled { base_color, specular_tint, ior, transmission, coat, sheen, .. } => {
                 f(Spectrum(Surface, base_color));
-                if let Some(t) = specular_tint {
+                let coat_tint = coat.as_ref().and_then(|c| c.tint.as_ref());
+                let sheen_tint = sheen.as_ref().and_then(|s| s.tint.as_ref());
+                for t in [specular_tint.as_ref(), coat_tint, sheen_tint].into_iter().flatten() {
                     f(Spectrum(Surface, t));
                 }
                 if *transmission > 0.0 {

@@ -7,8 +7,8 @@ use crate::color::uplift::Uplift;
 use crate::material::mix::MixFactor;
 use crate::material::principled::{Principled, PrincipledParams};
 use crate::material::{
-    Black, Bsdf, Diffuse, IndexOfRefraction, MixBsdf, OrenNayar, Sheen, SpectralParam, Texture, ThinFilm, Tinted,
-    Translucent,
+    Black, Bsdf, Diffuse, IndexOfRefraction, Layered, MixBsdf, OrenNayar, Sheen, SpectralParam, Texture, ThinFilm,
+    Tinted, TopLobe, Translucent,
 };
 use crate::spectrum::named::{SpectrumKind, SpectrumRole};
 use crate::spectrum::{SampledSpectrum, SpectrumDesc, WavelengthGrid};
@@ -76,6 +76,19 @@ impl BsdfBuild<'_> {
     }
 }
 
+impl BsdfBuild<'_> {
+    /// A constant reflectance in 0..1, white when absent (layer tints).
+    fn optional_reflectance(&self, d: Option<&SpectrumDesc>, material: &str, what: &str) -> Result<SpectralParam> {
+        match d {
+            Some(d) if matches!(d.kind, SpectrumKind::Texture { .. }) => {
+                Err(Error::object("material", material, format!("{what}: a texture is not supported here")))
+            }
+            Some(d) => self.reflectance(d, material, what),
+            None => Ok(SpectralParam::Constant(SampledSpectrum::splat(self.grid.len(), 1.0))),
+        }
+    }
+}
+
 fn unit_weight(material: &str, what: &str, v: f32) -> Result<f32> {
     if !(v.is_finite() && (0.0..=1.0).contains(&v)) {
         return Err(Error::object("material", material, format!("{what} {v} must be in 0..1")));
@@ -119,6 +132,8 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
             thin_film_thickness,
             thin_film_ior,
             specular_ior_level,
+            coat,
+            sheen,
         } => {
             let base_color = b.reflectance(base_color, material, "base_color")?;
             let metallic = unit_weight(material, "metallic", *metallic)?;
@@ -154,7 +169,7 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
             } else {
                 None
             };
-            Box::new(Principled::new(
+            let mut out: Box<dyn Bsdf> = Box::new(Principled::new(
                 PrincipledParams {
                     base_color,
                     metallic,
@@ -167,7 +182,29 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
                     glass,
                 },
                 b.grid,
-            ))
+            ));
+            // Cycles' svm_node_closure_bsdf (CLOSURE_BSDF_PRINCIPLED_ID) stacks the coat over
+            // everything else, then the sheen over the coat.
+            if let Some(c) = coat {
+                let weight = unit_weight(material, "coat weight", c.weight)?;
+                let roughness = unit_weight(material, "coat roughness", c.roughness)?;
+                if !(c.ior.is_finite() && (1.0..=10.0).contains(&c.ior)) {
+                    return Err(Error::object("material", material, format!("coat ior {} must be in 1..10", c.ior)));
+                }
+                if weight > 0.0 {
+                    let tint = b.optional_reflectance(c.tint.as_ref(), material, "coat tint")?;
+                    out = Box::new(Layered::new(TopLobe::coat(weight, roughness, c.ior, tint), out));
+                }
+            }
+            if let Some(sh) = sheen {
+                let weight = unit_weight(material, "sheen weight", sh.weight)?;
+                let roughness = unit_weight(material, "sheen roughness", sh.roughness)?;
+                if weight > 0.0 {
+                    let tint = b.optional_reflectance(sh.tint.as_ref(), material, "sheen tint")?;
+                    out = Box::new(Layered::new(TopLobe::sheen(weight, tint, roughness), out));
+                }
+            }
+            out
         }
         BsdfDesc::Mix { a, b: second, factor, factor_from } => {
             let f = unit_weight(material, "mix factor", *factor)?;

@@ -8,7 +8,7 @@ use super::compile::{Compiler, Value};
 use super::desc::InputDesc;
 use super::program::Reg;
 use crate::material::IorDesc;
-use crate::scene::{BsdfDesc, MixFactorDesc};
+use crate::scene::{BsdfDesc, CoatDesc, MixFactorDesc, SheenLayerDesc};
 use crate::spectrum::named::SpectrumKind;
 use crate::spectrum::SpectrumDesc;
 use crate::{Error, Result};
@@ -63,6 +63,54 @@ pub enum Ior {
     R(Reg),
 }
 
+/// The Principled BSDF's Coat parameters (see [`CoatDesc`]).
+#[derive(Clone, Debug)]
+pub struct CoatT {
+    pub weight: F,
+    pub roughness: F,
+    pub ior: F,
+    pub tint: Col,
+}
+
+/// The Principled BSDF's Sheen parameters (see [`SheenLayerDesc`]).
+#[derive(Clone, Debug)]
+pub struct SheenT {
+    pub weight: F,
+    pub roughness: F,
+    pub tint: Col,
+}
+
+impl CoatT {
+    fn is_const(&self) -> bool {
+        self.weight.is_const() && self.roughness.is_const() && self.ior.is_const() && self.tint.is_const()
+    }
+    fn at(&self, v: &dyn Fn(Reg) -> Vec3) -> Option<CoatDesc> {
+        let weight = self.weight.at(v);
+        let tint = self.tint.at(v);
+        (weight > 0.0).then(|| CoatDesc {
+            weight,
+            roughness: self.roughness.at(v),
+            ior: self.ior.at(v),
+            tint: (!is_white(&tint)).then_some(tint),
+        })
+    }
+}
+
+impl SheenT {
+    fn is_const(&self) -> bool {
+        self.weight.is_const() && self.roughness.is_const() && self.tint.is_const()
+    }
+    fn at(&self, v: &dyn Fn(Reg) -> Vec3) -> Option<SheenLayerDesc> {
+        let weight = self.weight.at(v);
+        let tint = self.tint.at(v);
+        (weight > 0.0).then(|| SheenLayerDesc {
+            weight,
+            roughness: self.roughness.at(v),
+            tint: (!is_white(&tint)).then_some(tint),
+        })
+    }
+}
+
 /// The surface's closures with their parameters: what a hit instantiates into a
 /// fixed description once the program has run.
 #[derive(Clone, Debug)]
@@ -78,6 +126,8 @@ pub enum Template {
         thin_film_thickness: F,
         thin_film_ior: F,
         specular_ior_level: F,
+        coat: Option<CoatT>,
+        sheen: Option<SheenT>,
     },
     Diffuse {
         color: Col,
@@ -195,8 +245,12 @@ impl Template {
                 thin_film_thickness,
                 thin_film_ior,
                 specular_ior_level,
+                coat,
+                sheen,
             } => {
-                base_color.is_const()
+                coat.as_ref().is_none_or(CoatT::is_const)
+                    && sheen.as_ref().is_none_or(SheenT::is_const)
+                    && base_color.is_const()
                     && specular_tint.is_const()
                     && matches!(ior, Ior::C(_))
                     && [metallic, roughness, transmission, thin_film_thickness, thin_film_ior, specular_ior_level]
@@ -220,7 +274,11 @@ impl Template {
     pub fn may_be_specular(&self) -> bool {
         match self {
             Template::Fixed(_) => false,
-            Template::Principled { roughness, transmission, .. } => !roughness.is_const() || !transmission.is_const(),
+            Template::Principled { roughness, transmission, coat, .. } => {
+                !roughness.is_const()
+                    || !transmission.is_const()
+                    || coat.as_ref().is_some_and(|c| !c.roughness.is_const() || !c.weight.is_const())
+            }
             Template::Glossy { roughness, .. } | Template::Glass { roughness, .. } => !roughness.is_const(),
             Template::Mix { a, b, .. } | Template::Add { a, b } => a.may_be_specular() || b.may_be_specular(),
             _ => false,
@@ -241,6 +299,8 @@ impl Template {
                 thin_film_thickness,
                 thin_film_ior,
                 specular_ior_level,
+                coat,
+                sheen,
             } => {
                 let tint = specular_tint.at(v);
                 BsdfDesc::Principled {
@@ -253,6 +313,8 @@ impl Template {
                     thin_film_thickness: thin_film_thickness.at(v),
                     thin_film_ior: thin_film_ior.at(v),
                     specular_ior_level: specular_ior_level.at(v),
+                    coat: coat.as_ref().and_then(|c| c.at(v)),
+                    sheen: sheen.as_ref().and_then(|c| c.at(v)),
                 }
             }
             Template::Diffuse { color, roughness } => {
@@ -449,8 +511,6 @@ impl<'c, 'a> Lowering<'c, 'a> {
                     ("Diffuse Roughness", 0.0, "Principled diffuse is Lambertian"),
                     ("Subsurface Weight", 0.0, "no subsurface scattering yet"),
                     ("Anisotropic", 0.0, "no anisotropy yet"),
-                    ("Coat Weight", 0.0, "no coat yet"),
-                    ("Sheen Weight", 0.0, "no Principled sheen yet"),
                 ] {
                     self.ignored(node, id, default, what)?;
                 }
@@ -470,6 +530,8 @@ impl<'c, 'a> Lowering<'c, 'a> {
                     thin_film_thickness: self.float(node, "Thin Film Thickness", 0.0, 100_000.0)?,
                     thin_film_ior: self.float(node, "Thin Film IOR", 1.0, 10.0)?,
                     specular_ior_level: self.float(node, "Specular IOR Level", 0.0, 1.0)?,
+                    coat: self.coat(node)?,
+                    sheen: self.sheen(node)?,
                 };
                 // Alpha: a transparent closure of weight 1 − alpha mixed in (Cycles'
                 // svm_node_closure_bsdf, CLOSURE_BSDF_PRINCIPLED_ID: bsdf_transparent_setup
@@ -552,6 +614,35 @@ impl<'c, 'a> Lowering<'c, 'a> {
                 (Template::Fixed(BsdfDesc::default()), None)
             }
         })
+    }
+
+    /// The Principled Coat (None when its weight is a constant 0). Cycles clamps the
+    /// weight below at 0, the roughness to 0..1 and the IOR below at 1.
+    fn coat(&mut self, node: usize) -> Result<Option<CoatT>> {
+        let weight = self.float(node, "Coat Weight", 0.0, 1.0)?;
+        if matches!(weight, F::C(w) if w <= 0.0) {
+            return Ok(None);
+        }
+        self.default_normal(node, "Coat Normal")?;
+        Ok(Some(CoatT {
+            weight,
+            roughness: self.float(node, "Coat Roughness", 0.0, 1.0)?,
+            ior: self.float(node, "Coat IOR", 1.0, 10.0)?,
+            tint: self.color(node, "Coat Tint")?,
+        }))
+    }
+
+    /// The Principled Sheen (None when its weight is a constant 0).
+    fn sheen(&mut self, node: usize) -> Result<Option<SheenT>> {
+        let weight = self.float(node, "Sheen Weight", 0.0, 1.0)?;
+        if matches!(weight, F::C(w) if w <= 0.0) {
+            return Ok(None);
+        }
+        Ok(Some(SheenT {
+            weight,
+            roughness: self.float(node, "Sheen Roughness", 0.0, 1.0)?,
+            tint: self.color(node, "Sheen Tint")?,
+        }))
     }
 
     fn emission(&mut self, node: usize, color: &str, strength: &str) -> Result<Option<Emission>> {
