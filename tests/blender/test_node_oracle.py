@@ -85,10 +85,8 @@ FAMILIES = [
     "Combine XYZ",
     "Value",
     "RGB",
-    pytest.param("Blackbody", marks=pytest.mark.xfail(reason="core: Blackbody is not evaluated yet (outputs read 0; measured error 1.0)")),
-    pytest.param(
-        "Wavelength", marks=pytest.mark.xfail(reason="core: Wavelength is not evaluated yet (outputs read 0; measured error 0.75-1.0)")
-    ),
+    "Blackbody",
+    "Wavelength",
     "Group",
     "MixRGB (legacy)",
     "Separate RGB (legacy)",
@@ -101,8 +99,7 @@ FAMILIES = [
 def test_constant_graphs_render(constant):
     assert constant["error"] is None, constant["error"]
     assert constant["cycles_finite"]
-    pending = ("Blackbody", "Wavelength")  # the core does not evaluate them yet (xfail below)
-    assert not [w for w in constant["warnings"] if "not supported" in w and not any(p in w for p in pending)], constant["warnings"]
+    assert not [w for w in constant["warnings"] if "not supported" in w], constant["warnings"]
 
 
 @pytest.mark.parametrize("family", FAMILIES)

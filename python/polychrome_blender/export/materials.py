@@ -130,7 +130,7 @@ class MaterialExport:
         own = Warnings()
         g = GraphExport(self.mat, own, self.textures)
         got = g.export()
-        if (g.per_hit and g.emits) or g.pending:
+        if g.per_hit and g.emits:
             return None
         g.convert_textures()
         self.warnings.extend(own.items)

@@ -120,11 +120,6 @@ PER_HIT = frozenset(
     }
 )
 
-#: Nodes the core lists but does not evaluate yet (it reads their outputs as 0): a graph
-#: with one of them keeps the fixed-pattern export (export/materials.py), which renders a
-#: Blackbody emission.
-CORE_PENDING = frozenset({"ShaderNodeBlackbody", "ShaderNodeWavelength"})
-
 #: Entries of Cycles' curve and ramp tables (RAMP_TABLE_SIZE, intern/cycles/scene/shader_nodes.h).
 TABLE_SIZE = 256
 #: Blender's default scene-linear luminance coefficients (colour → float conversion).
@@ -275,7 +270,6 @@ class GraphExport:
         self.nodes = []
         self.needs = {}
         self.per_hit = False  # some node's value changes from hit to hit
-        self.pending = False  # some node is in CORE_PENDING
         self.emits = False  # an Emission, or a Principled BSDF with an emission
         self._index = {}  # (scope key, node pointer) -> index in nodes
         self._active = []  # nodes being exported (cycle detection), as (key, name)
@@ -497,7 +491,6 @@ class GraphExport:
         self._index[key] = len(self.nodes) - 1
         self._note_needs(node, entry, name)
         self.per_hit = self.per_hit or node.bl_idname in PER_HIT
-        self.pending = self.pending or node.bl_idname in CORE_PENDING
         if entry["type"] == "ShaderNodeEmission" or (
             entry["type"] == "ShaderNodeBsdfPrincipled" and entry["inputs"].get("Emission Strength", 0.0) != 0.0
         ):

@@ -315,6 +315,10 @@ pub enum ColorOp {
     Combine(ColorMode),
     SeparateXyz,
     CombineXyz,
+    /// Temperature → Color: Cycles' Rec.709 fit of a blackbody's colour (luminance ≈ 1).
+    Blackbody,
+    /// Wavelength → Color: the CIE 1931 colour of one wavelength, as Cycles shows it.
+    Wavelength,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -357,6 +361,8 @@ impl ColorOp {
                 o[0] = (a * i[0] + Vec3::splat(b)).max(Vec3::ZERO);
             }
             ColorOp::RgbToBw => o[0].x = gray(i[0]),
+            ColorOp::Blackbody => o[0] = blackbody_rec709(i[0].x).max(Vec3::ZERO),
+            ColorOp::Wavelength => o[0] = wavelength_rec709(i[0].x),
             ColorOp::Separate(mode) => {
                 let c = match mode {
                     ColorMode::Rgb => i[0],
@@ -599,6 +605,87 @@ impl Curves {
     }
 }
 
+/// Cycles' fit of the Rec.709 colour of a blackbody at `t` kelvin: `a/t + b·t + c` for
+/// red and green, a cubic for blue, in seven ranges over 800..12000 K, constant outside
+/// (Cycles `svm_math_blackbody_color_rec709`, intern/cycles/kernel/svm/math_util.h,
+/// coefficients `blackbody_table_r/g/b` of intern/cycles/kernel/tables.h, Blender 4.5).
+/// Negative components (outside the Rec.709 gamut) are the caller's to clamp.
+pub fn blackbody_rec709(t: f32) -> Vec3 {
+    const R: [[f32; 3]; 7] = [
+        [1.619_191_1e3, -2.050_109_2e-3, 5.029_957_6],
+        [2.488_454_7e3, -1.113_309_1e-3, 3.226_215_4],
+        [3.341_431_9e3, -4.865_512e-4, 1.764_867_7],
+        [4.094_617_4e3, -1.274_465_8e-4, 7.257_316_4e-1],
+        [4.670_280_4e3, 2.912_582e-5, 1.267_034_4e-1],
+        [4.595_091_8e3, 2.874_956_5e-5, 1.503_450_2e-1],
+        [3.787_174_5e3, 9.359_078e-6, 3.990_758_7e-1],
+    ];
+    const G: [[f32; 3]; 7] = [
+        [-4.889_997_5e2, 6.043_307_5e-4, -7.558_075e-2],
+        [-7.559_942_8e2, 3.167_301e-4, 4.783_061_4e-1],
+        [-1.023_639_8e3, 1.202_234_7e-4, 9.366_623_2e-1],
+        [-1.265_713_2e3, 4.873_409e-6, 1.270_545],
+        [-1.425_293_3e3, -4.011_504_3e-5, 1.439_727_8],
+        [-1.175_548_2e3, -2.163_780_5e-5, 1.304_080_2],
+        [-5.007_995_7e2, -4.598_320_3e-6, 1.090_987_6],
+    ];
+    const B: [[f32; 4]; 7] = [
+        [5.969_453e-11, -4.857_428_9e-8, -9.706_222_5e-5, -4.079_361_5e-3],
+        [2.404_303_7e-11, 5.550_210_8e-8, -1.985_037_1e-4, 2.893_128_6e-2],
+        [-1.409_497_3e-11, 1.898_789_7e-7, -3.566_328_2e-4, 9.107_677_8e-2],
+        [-3.614_608_7e-11, 2.848_220_1e-7, -4.932_113e-4, 1.567_234_4e-1],
+        [-1.970_757_4e-11, 1.753_593_5e-7, -2.505_428_2e-4, -2.227_832_7e-2],
+        [-1.619_979_6e-13, -1.642_160_1e-8, 3.862_162_7e-4, -7.380_774e-1],
+        [6.726_503e-13, -2.730_788_1e-8, 4.240_982_6e-4, -7.523_357e-1],
+    ];
+    if t >= 12000.0 {
+        return Vec3::new(0.826_295_5, 0.994_508_05, 1.566_307_7);
+    }
+    // Below 800 K (and NaN): Cycles' arbitrary lower limit, matching OSL.
+    if t < 800.0 || t.is_nan() {
+        return Vec3::new(5.413_294_5, -0.203_193_9, -0.082_253_52);
+    }
+    let i = [965.0, 1167.0, 1449.0, 1902.0, 3315.0, 6365.0].iter().filter(|&&edge| t >= edge).count();
+    let (r, g, b) = (R[i], G[i], B[i]);
+    Vec3::new(r[0] / t + r[1] * t + r[2], g[0] / t + g[1] * t + g[2], ((b[0] * t + b[1]) * t + b[2]) * t + b[3])
+}
+
+/// Blender 4.5's XYZ (D65, its `cie_xyz_d65_interchange` role, "to determine XYZ for
+/// rendering") to Linear Rec.709: the matrix of datafiles/colormanagement/config.ocio.
+const XYZ_D65_TO_REC709: glam::Mat3 = glam::Mat3::from_cols_array(&[
+    3.240_437_4,
+    -0.969_267_5,
+    0.055_643_45,
+    -1.537_130_5,
+    1.876_013_7,
+    -0.204_025_97,
+    -0.498_528_8,
+    0.041_556_08,
+    1.057_225_5,
+]);
+
+/// The colour Cycles gives a wavelength in nm: CIE 1931 x̄ȳz̄ sampled every 5 nm from
+/// 380 nm, interpolated linearly, to Rec.709, scaled by 1/2.52 ("so all components are
+/// ≤ 1") and clamped at 0; black from 780 nm on (Cycles `svm_node_wavelength`,
+/// intern/cycles/kernel/svm/wavelength.h). The colour-matching values come from the
+/// core's CIE table, which Cycles' 4-decimal `cie_color_match` rounds.
+pub fn wavelength_rec709(lambda_nm: f32) -> Vec3 {
+    use crate::spectrum::tables::{CIE_LAMBDA_MIN, CIE_X, CIE_Y, CIE_Z};
+    let ii = (lambda_nm - 380.0) / 5.0;
+    // Truncation toward zero, as Cycles' float_to_int: 375..380 nm extrapolates entry 0.
+    let i = ii as i32;
+    if !(0..80).contains(&i) || ii.is_nan() {
+        return Vec3::ZERO;
+    }
+    let f = ii - i as f32;
+    let at = |k: i32| {
+        let j = (380.0 + 5.0 * k as f32 - CIE_LAMBDA_MIN) as usize;
+        Vec3::new(CIE_X[j], CIE_Y[j], CIE_Z[j])
+    };
+    let xyz = at(i) * (1.0 - f) + at(i + 1) * f;
+    (XYZ_D65_TO_REC709 * xyz / 2.52).max(Vec3::ZERO)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -754,5 +841,44 @@ mod tests {
         // Fac 0 returns the input.
         c.eval(&[Vec3::ZERO, Vec3::splat(0.75)], &mut o);
         assert_eq!(o[0].x, 0.75);
+    }
+
+    /// Cycles' blackbody fit against Planck's law: the chromaticity of the core's
+    /// blackbody spectrum (CIE 1931 at 1 nm) in Rec.709, normalised to luminance 1,
+    /// within 2 % per component where the colour is inside the gamut; a wavelength's
+    /// colour is its colour-matching values in Rec.709 / 2.52.
+    #[test]
+    fn blackbody_and_wavelength_match_their_definitions() {
+        use crate::color::Observer;
+        use crate::spectrum::named::{NoRgb, SpectrumKind, SpectrumRole};
+        use crate::spectrum::{SpectrumDesc, WavelengthGrid};
+        let grid = WavelengthGrid::uniform(401, 380.0, 780.0).unwrap();
+        let obs = Observer::new(&grid);
+        for t in [2500.0f32, 4000.0, 5000.0, 6500.0, 9000.0, 11000.0] {
+            let s = SpectrumDesc::new(SpectrumKind::Blackbody { temperature: t })
+                .evaluate(&grid, SpectrumRole::Illuminant, &NoRgb)
+                .unwrap();
+            let xyz = obs.xyz(&s);
+            let xyz = Vec3::new(xyz[0] as f32, xyz[1] as f32, xyz[2] as f32) / xyz[1] as f32;
+            let planck = XYZ_D65_TO_REC709 * xyz;
+            let fit = blackbody_rec709(t);
+            let lum = 0.2126 * fit.x + 0.7152 * fit.y + 0.0722 * fit.z;
+            assert!((lum - 1.0).abs() < 0.03, "{t} K: luminance {lum}");
+            assert!((fit - planck).abs().max_element() < 0.02 * planck.max_element(), "{t} K: {fit} vs {planck}");
+        }
+        // Out of range: Cycles' constants; negative components are clamped by the node.
+        assert_eq!(blackbody_rec709(100.0), blackbody_rec709(799.0));
+        assert_eq!(blackbody_rec709(12000.0), blackbody_rec709(1e6));
+        let mut o = [Vec3::ZERO];
+        ColorOp::Blackbody.eval(&[Vec3::splat(500.0)], &mut o);
+        assert!(o[0].min_element() >= 0.0 && o[0].x > 5.0);
+        // 555 nm: ȳ ≈ 1 (CIE 1931), so green ≈ M·(x̄, ȳ, z̄)/2.52; beyond 780 nm, black.
+        let c = wavelength_rec709(555.0);
+        assert!(c.y > 0.5 && c.x > 0.0 && c.z == 0.0, "{c}");
+        assert_eq!(wavelength_rec709(780.0), Vec3::ZERO);
+        assert_eq!(wavelength_rec709(300.0), Vec3::ZERO);
+        // The matrix maps D65 white (XYZ 0.9505, 1, 1.089) to RGB (1, 1, 1).
+        let w = XYZ_D65_TO_REC709 * Vec3::new(0.950_47, 1.0, 1.088_83);
+        assert!((w - Vec3::ONE).abs().max_element() < 1e-3, "{w}");
     }
 }

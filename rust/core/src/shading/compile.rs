@@ -327,6 +327,8 @@ impl<'a> Compiler<'a> {
             "ShaderNodeCombineColor" => Kernel::Color(ColorOp::Combine(color::color_mode(&p)?)),
             "ShaderNodeSeparateXYZ" => Kernel::Color(ColorOp::SeparateXyz),
             "ShaderNodeCombineXYZ" => Kernel::Color(ColorOp::CombineXyz),
+            "ShaderNodeBlackbody" => Kernel::Color(ColorOp::Blackbody),
+            "ShaderNodeWavelength" => Kernel::Color(ColorOp::Wavelength),
             "ShaderNodeValToRGB" => {
                 let (ramp, approx) = ColorRamp::parse(&p)?;
                 if let Some(a) = approx {
