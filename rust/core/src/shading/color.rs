@@ -610,6 +610,8 @@ impl Curves {
 /// (Cycles `svm_math_blackbody_color_rec709`, intern/cycles/kernel/svm/math_util.h,
 /// coefficients `blackbody_table_r/g/b` of intern/cycles/kernel/tables.h, Blender 4.5).
 /// Negative components (outside the Rec.709 gamut) are the caller's to clamp.
+// The coefficients as Cycles prints them, beyond f32 precision.
+#[allow(clippy::excessive_precision)]
 pub fn blackbody_rec709(t: f32) -> Vec3 {
     const R: [[f32; 3]; 7] = [
         [1.619_191_1e3, -2.050_109_2e-3, 5.029_957_6],
@@ -652,6 +654,7 @@ pub fn blackbody_rec709(t: f32) -> Vec3 {
 
 /// Blender 4.5's XYZ (D65, its `cie_xyz_d65_interchange` role, "to determine XYZ for
 /// rendering") to Linear Rec.709: the matrix of datafiles/colormanagement/config.ocio.
+#[allow(clippy::excessive_precision)]
 const XYZ_D65_TO_REC709: glam::Mat3 = glam::Mat3::from_cols_array(&[
     3.240_437_4,
     -0.969_267_5,
