@@ -11,6 +11,11 @@ input; renders alternate OLD, NEW, NEW, OLD, ... and the best of `--repeats` cou
 
 `--one {old,new} METHOD DIRECTION WAVELENGTHS` renders once on one thread instead, for
 counting instructions (`valgrind --tool=callgrind`), which load does not disturb.
+
+`--images` renders every case once with each build (same seed, spectral pass and
+adaptive sampling on for the BACKWARD cases) and prints the largest difference of the
+RGBA, albedo, depth, normal and spectral images relative to each image's peak: for
+checking that a speed change left the image unchanged.
 """
 
 from __future__ import annotations
@@ -61,6 +66,7 @@ def main(argv=None) -> int:
     ap.add_argument("--size", type=int, default=256)
     ap.add_argument("--samples", type=int, default=32)
     ap.add_argument("--repeats", type=int, default=6)
+    ap.add_argument("--images", action="store_true", help="compare the images of both builds instead of timing")
     ap.add_argument("--one", nargs=4, metavar=("BUILD", "METHOD", "DIRECTION", "WAVELENGTHS"))
     args = ap.parse_args(argv)
     pc_old, cores, desc_json, buffers = load(args.old, args.new)
@@ -77,6 +83,32 @@ def main(argv=None) -> int:
             **kw,
         ).to_json()
 
+    if args.images:
+        import numpy as np
+
+        print(f"Cornell box, {args.size}×{args.size}, {args.samples} spp, seed 1: max |new − old| / max |old| per image")
+        print("| method | direction | λ | options | rgba | albedo | depth | normal | spectral | samples old/new |")
+        print("| --- | --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | --- |")
+        for method, direction, n in CASES:
+            opts = [{}]
+            if direction == "BACKWARD":
+                opts += [{"spectral_output": True}, {"noise_threshold": 0.3}]
+            for kw in opts:
+                st = settings(method, direction, n, **kw)
+                out = {k: cores[k].render(desc_json, buffers, st, None) for k in ("old", "new")}
+
+                def rel(key):
+                    a, b = out["old"].get(key), out["new"].get(key)
+                    if a is None or b is None:
+                        return "—"
+                    a, b = np.asarray(a, float), np.asarray(b, float)
+                    return f"{np.max(np.abs(b - a)) / max(np.max(np.abs(a)), 1e-30):.1e}"
+
+                tot = [json.loads(out[k]["stats"])["total_samples"] for k in ("old", "new")]
+                cols = " | ".join(rel(k) for k in ("rgba", "albedo", "depth", "normal", "spectral"))
+                label = ", ".join(f"{k}={v}" for k, v in kw.items()) or "—"
+                print(f"| {method} | {direction} | {n} | {label} | {cols} | {tot[0]}/{tot[1]} |", flush=True)
+        return 0
     if args.one:
         build, method, direction, n = args.one
         print(f"{rate(cores[build], desc_json, buffers, settings(method, direction, n, threads=1)):.0f} paths/s")

@@ -28,6 +28,136 @@ impl PixelSample {
     }
 }
 
+/// f64 lanes of the folds in [`PixelSums`]: independent partial sums the compiler keeps in
+/// SIMD registers (a sequential f64 sum cannot be vectorised). Sums and rows are padded
+/// like [`SampledSpectrum`]'s storage (a multiple of this), so every loop runs over whole
+/// chunks.
+const FOLD_LANES: usize = 4;
+
+/// One pixel's sums over consecutive camera samples (the passes a tile renders for it),
+/// folded into a [`FilmBuffer`] once by [`PixelSums::fold_into`]: the film's box filter
+/// gives every sample of a pixel weight 1, so folding the summed spectrum through the
+/// observer is the same linear map as folding each sample (up to f64 rounding), at one
+/// fold per pixel instead of per sample. The non-finite guard stays per sample.
+#[derive(Clone, Debug)]
+pub struct PixelSums {
+    n: usize,
+    /// Radiance and albedo sums, f64, padded with zeros to whole [`FOLD_LANES`] chunks.
+    radiance: Vec<f64>,
+    albedo: Vec<f64>,
+    /// x̄, ȳ, z̄ (the observer's rows) and x̄·white, ȳ·white, z̄·white, f64, padded alike.
+    rows: [Vec<f64>; 6],
+    depth: f64,
+    normal: [f64; 3],
+    count: u32,
+    nonfinite: u64,
+}
+
+#[inline]
+fn dot_lanes(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0f64; FOLD_LANES];
+    for (x, y) in a.chunks_exact(FOLD_LANES).zip(b.chunks_exact(FOLD_LANES)) {
+        for k in 0..FOLD_LANES {
+            acc[k] += x[k] * y[k];
+        }
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3])
+}
+
+impl PixelSums {
+    /// Sums for spectra on `observer`'s grid; `albedo_white` as in [`FilmBuffer::add`].
+    pub fn new(observer: &Observer, albedo_white: &SampledSpectrum) -> Self {
+        let n = observer.x.len();
+        let m = SampledSpectrum::zeros(n).padded_values().len();
+        debug_assert_eq!(m % FOLD_LANES, 0);
+        let row = |r: &[f32], w: Option<&[f32]>| -> Vec<f64> {
+            let mut v = vec![0.0; m];
+            for i in 0..n {
+                v[i] = r[i] as f64 * w.map_or(1.0, |w| w[i] as f64);
+            }
+            v
+        };
+        let w = Some(albedo_white.values());
+        let rows = [
+            row(&observer.x, None),
+            row(&observer.y, None),
+            row(&observer.z, None),
+            row(&observer.x, w),
+            row(&observer.y, w),
+            row(&observer.z, w),
+        ];
+        Self {
+            n,
+            radiance: vec![0.0; m],
+            albedo: vec![0.0; m],
+            rows,
+            depth: 0.0,
+            normal: [0.0; 3],
+            count: 0,
+            nonfinite: 0,
+        }
+    }
+
+    /// Adds one sample. A sample with a non-finite radiance, depth, normal or albedo is
+    /// dropped and counted (docs/design.md#extremes: no NaN in any pass), as in
+    /// [`FilmBuffer::add`].
+    #[inline]
+    pub fn add(&mut self, s: &PixelSample) {
+        // Finite f32 spectra have finite f64 sums and XYZ: the per-sample XYZ check of
+        // `FilmBuffer::add` reduces to these.
+        if !(s.radiance.is_finite() && s.depth.is_finite() && s.normal.is_finite() && s.albedo.is_finite()) {
+            self.nonfinite += 1;
+            return;
+        }
+        // Whole padded chunks (the padding is zero on both sides).
+        for (d, v) in
+            self.radiance.chunks_exact_mut(FOLD_LANES).zip(s.radiance.padded_values().chunks_exact(FOLD_LANES))
+        {
+            for k in 0..FOLD_LANES {
+                d[k] += v[k] as f64;
+            }
+        }
+        for (d, v) in self.albedo.chunks_exact_mut(FOLD_LANES).zip(s.albedo.padded_values().chunks_exact(FOLD_LANES)) {
+            for k in 0..FOLD_LANES {
+                d[k] += v[k] as f64;
+            }
+        }
+        self.depth += s.depth as f64;
+        self.normal[0] += s.normal.x as f64;
+        self.normal[1] += s.normal.y as f64;
+        self.normal[2] += s.normal.z as f64;
+        self.count += 1;
+    }
+
+    /// Adds the sums to pixel `i` of `buf` (radiance and albedo folded to XYZ, the
+    /// spectral pass when `buf` keeps one) and resets them for the next pixel.
+    pub fn fold_into(&mut self, buf: &mut FilmBuffer, i: usize) {
+        buf.nonfinite += self.nonfinite;
+        if self.count > 0 {
+            let r = &self.rows;
+            for k in 0..3 {
+                buf.xyz[i][k] += dot_lanes(&self.radiance, &r[k]);
+                buf.albedo_xyz[i][k] += dot_lanes(&self.albedo, &r[3 + k]);
+                buf.normal[i][k] += self.normal[k];
+            }
+            buf.depth[i] += self.depth;
+            buf.count[i] += self.count;
+            if let Some(sp) = &mut buf.spectral {
+                let n = self.n;
+                for (d, &v) in sp[i * n..(i + 1) * n].iter_mut().zip(&self.radiance) {
+                    *d += v;
+                }
+            }
+        }
+        self.radiance.fill(0.0);
+        self.albedo.fill(0.0);
+        self.depth = 0.0;
+        self.normal = [0.0; 3];
+        self.count = 0;
+        self.nonfinite = 0;
+    }
+}
+
 /// Accumulated sums for a set of pixels (a tile or the whole image).
 #[derive(Clone, Debug)]
 pub struct FilmBuffer {
@@ -55,8 +185,10 @@ impl FilmBuffer {
         }
     }
 
-    /// Adds one sample to pixel `i`. `albedo_white` is the spectrum that makes a
-    /// reflectance of 1 map to Y = 1 (D65 normalised), so albedo reads as a colour.
+    /// Adds one sample to pixel `i`, folded to XYZ on its own. `albedo_white` is the
+    /// spectrum that makes a reflectance of 1 map to Y = 1 (D65 normalised), so albedo
+    /// reads as a colour. The renderer sums a pixel's samples in [`PixelSums`] and folds
+    /// once; this per-sample form is its reference (same sums up to f64 rounding).
     pub fn add(&mut self, i: usize, s: &PixelSample, observer: &Observer, albedo_white: &SampledSpectrum) {
         let xyz = observer.xyz(s.radiance.values());
         if !(xyz.iter().all(|v| v.is_finite()) && s.radiance.is_finite()) {
@@ -225,5 +357,66 @@ impl Film {
             _ => None,
         };
         FilmImages { rgba, depth, normal, albedo, spectral }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Rng;
+    use crate::spectrum::WavelengthGrid;
+
+    /// Summing a pixel's samples and folding once gives the per-sample fold's sums (up to
+    /// f64 rounding), the same counts and dropped samples, and the same spectral pass.
+    #[test]
+    fn folding_once_per_pixel_equals_folding_every_sample() {
+        let grid = WavelengthGrid::uniform(41, 380.0, 780.0).unwrap();
+        let observer = Observer::new(&grid);
+        let n = grid.len();
+        let white = SampledSpectrum::from_slice(&(0..n).map(|i| 0.5 + i as f32 / n as f32).collect::<Vec<_>>());
+        let mut rng = Rng::for_sample(7, 0, 0);
+        let (mut per_sample, mut per_pixel) = (FilmBuffer::new(4, Some(n)), FilmBuffer::new(4, Some(n)));
+        let mut sums = PixelSums::new(&observer, &white);
+        let mut ps = PixelSample::new(n);
+        for px in 0..4 {
+            for k in 0..16 {
+                ps.reset();
+                for i in 0..n {
+                    ps.radiance.set(i, 10.0 * rng.uniform() / (1.0 - rng.uniform()).max(1e-3));
+                    ps.albedo.set(i, rng.uniform());
+                }
+                ps.depth = 3.0 * rng.uniform();
+                ps.normal = Vec3A::new(rng.uniform(), rng.uniform(), 1.0).normalize();
+                // Non-finite samples of every kind, in pixels 1 and 3.
+                match (px, k) {
+                    (1, 3) => ps.radiance.set(5, f32::NAN),
+                    (1, 9) => ps.radiance.set(0, f32::INFINITY),
+                    (3, 0) => ps.albedo.set(2, f32::NAN),
+                    (3, 4) => ps.depth = f32::NAN,
+                    (3, 5) => ps.normal.y = f32::INFINITY,
+                    _ => {}
+                }
+                per_sample.add(px, &ps, &observer, &white);
+                sums.add(&ps);
+            }
+            sums.fold_into(&mut per_pixel, px);
+        }
+        assert_eq!(per_sample.count, per_pixel.count);
+        assert_eq!(per_pixel.count, vec![16, 14, 16, 13]);
+        assert_eq!(per_sample.nonfinite, 5);
+        assert_eq!(per_pixel.nonfinite, 5);
+        let close = |a: f64, b: f64, tol: f64| (a - b).abs() <= tol * a.abs().max(b.abs()).max(1e-30);
+        for px in 0..4 {
+            for k in 0..3 {
+                assert!(close(per_sample.xyz[px][k], per_pixel.xyz[px][k], 1e-12), "xyz {px} {k}");
+                // The per-sample albedo fold multiplies in f32 before widening.
+                assert!(close(per_sample.albedo_xyz[px][k], per_pixel.albedo_xyz[px][k], 1e-6), "albedo {px} {k}");
+                assert!(close(per_sample.normal[px][k], per_pixel.normal[px][k], 1e-12));
+            }
+            assert!(close(per_sample.depth[px], per_pixel.depth[px], 1e-12));
+        }
+        // A pixel's samples are consecutive and the tile buffer starts at zero: the spectral
+        // pass is bit-for-bit the same sums.
+        assert_eq!(per_sample.spectral, per_pixel.spectral);
     }
 }

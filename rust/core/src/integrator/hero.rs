@@ -189,7 +189,7 @@ pub struct HeroSet {
 
 impl Wavelengths for HeroSet {
     type Throughput = Hero;
-    fn unit(&self, _grid_len: usize) -> Hero {
+    fn unit(&self, _grid_len: usize, _spare: &mut super::throughput::Spare) -> Hero {
         Hero { set: *self, values: [1.0; HERO_LANES], alone: 0.0 }
     }
     fn emitted(&self, le: SampledSpectrum) -> Hero {
@@ -199,7 +199,7 @@ impl Wavelengths for HeroSet {
     fn single(&self) -> Option<usize> {
         None
     }
-    fn resolve(&self, gathered: Hero, out: &mut SampledSpectrum) {
+    fn resolve(&self, gathered: &Hero, out: &mut SampledSpectrum) {
         for j in 0..HERO_LANES {
             let i = self.index[j] as usize;
             out.set(i, out.get(i) + gathered.values[j] * self.weight[j]);

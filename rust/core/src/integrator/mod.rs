@@ -166,6 +166,8 @@ pub struct Scratch {
     pub em: SampledSpectrum,
     pub tr: SampledSpectrum,
     pub phase: SampledSpectrum,
+    /// Storage of camera paths' throughput and gathered radiance, reused path to path.
+    pub spare: throughput::Spare,
 }
 
 impl Scratch {
@@ -180,6 +182,7 @@ impl Scratch {
             em: z(),
             tr: z(),
             phase: z(),
+            spare: throughput::Spare::default(),
         }
     }
 }

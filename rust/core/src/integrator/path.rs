@@ -291,16 +291,20 @@ pub fn trace_camera<W: Wavelengths, M: CameraMis>(
     let PixelSample { radiance, depth, normal, albedo } = out;
     let mut ctx = ShadingContext::new(&scene.grid);
     ctx.single_wavelength = wl.single();
-    let mut beta = wl.unit(scene.grid.len());
-    let mut gathered = beta.zero_like();
     let Some(ray) = scene.camera.generate_ray(film.x, film.y, rng) else {
         return; // outside the lens (fisheye, mirror ball): black
     };
+    // Throughput and gathered radiance live in the worker's spare spectra: no heap
+    // allocation per camera path.
+    let mut beta = wl.unit(scene.grid.len(), &mut scratch.spare);
+    let mut gathered = beta.zero_like_in(&mut scratch.spare);
     let start = PathState::start(ray);
     let mut hooks = CameraPath { mis, gathered: &mut gathered, first_hit: Some(FirstHit { depth, normal, albedo }) };
     let end = walk.run(scene, &mut ctx, start, &mut beta, rng, &mut hooks, scratch);
     continue_single_wavelength(scene, walk, end, &mut ctx, &beta, &mut gathered, rng, scratch);
-    wl.resolve(gathered, radiance);
+    wl.resolve(&gathered, radiance);
+    gathered.recycle(&mut scratch.spare);
+    beta.recycle(&mut scratch.spare);
 }
 
 /// Carries a whole-spectrum camera path on past a dispersive surface with one wavelength

@@ -15,10 +15,37 @@ use crate::material::ShadingContext;
 use crate::sampling::Rng;
 use crate::spectrum::SampledSpectrum;
 
+/// Grid-wide spectra a worker keeps between paths, so whole-spectrum throughputs need no
+/// heap allocation per path ([`Throughput::zero_like_in`], [`Throughput::recycle`]).
+#[derive(Debug, Default)]
+pub struct Spare(Vec<SampledSpectrum>);
+
+impl Spare {
+    /// A spectrum of `len` samples (contents unspecified): a kept one, or a new one.
+    pub fn take(&mut self, len: usize) -> SampledSpectrum {
+        while let Some(s) = self.0.pop() {
+            if s.len() == len {
+                return s;
+            }
+        }
+        SampledSpectrum::zeros(len)
+    }
+    /// Keeps `s` for a later [`Spare::take`].
+    pub fn give(&mut self, s: SampledSpectrum) {
+        self.0.push(s);
+    }
+}
+
 /// Per-wavelength path throughput, and radiance gathered on the same wavelengths.
 pub trait Throughput: Clone {
     /// Zero on the same wavelengths: the accumulator of what the path gathers.
     fn zero_like(&self) -> Self;
+    /// [`Throughput::zero_like`] built in storage from `spare` when it needs any.
+    fn zero_like_in(&self, _spare: &mut Spare) -> Self {
+        self.zero_like()
+    }
+    /// Gives the throughput's heap storage (if any) to `spare` for the next path.
+    fn recycle(self, _spare: &mut Spare) {}
     /// Whether the path can still carry light after a scattering (finite; for a single
     /// wavelength also positive).
     fn is_alive(&self) -> bool;
@@ -67,6 +94,14 @@ pub trait Throughput: Clone {
 impl Throughput for SampledSpectrum {
     fn zero_like(&self) -> Self {
         SampledSpectrum::zeros(self.len())
+    }
+    fn zero_like_in(&self, spare: &mut Spare) -> Self {
+        let mut s = spare.take(self.len());
+        s.fill(0.0);
+        s
+    }
+    fn recycle(self, spare: &mut Spare) {
+        spare.give(self);
     }
     fn is_alive(&self) -> bool {
         self.is_finite()

@@ -10,7 +10,7 @@
 //! A policy of k stratified continuous hero wavelengths (Wilkie et al. 2014) is one more
 //! [`WavelengthPolicy`] whose [`Wavelengths`] carry a k-lane [`Throughput`].
 
-use super::throughput::{SingleWavelength, Throughput};
+use super::throughput::{SingleWavelength, Spare, Throughput};
 use crate::sampling::{Distribution1D, Rng};
 use crate::scene::Scene;
 use crate::spectrum::SampledSpectrum;
@@ -19,8 +19,10 @@ use crate::spectrum::SampledSpectrum;
 /// `SampledWavelengths`).
 pub trait Wavelengths: Copy {
     type Throughput: Throughput;
-    /// Throughput 1 on these wavelengths: where camera paths start.
-    fn unit(&self, grid_len: usize) -> Self::Throughput;
+    /// Throughput 1 on these wavelengths: where camera paths start. A throughput with
+    /// heap storage takes it from `spare` when it holds a buffer (see
+    /// [`Throughput::recycle`]), so camera paths allocate nothing.
+    fn unit(&self, grid_len: usize, spare: &mut Spare) -> Self::Throughput;
     /// Emitted radiance `le` on these wavelengths divided by their selection probability:
     /// where light paths start.
     fn emitted(&self, le: SampledSpectrum) -> Self::Throughput;
@@ -29,7 +31,7 @@ pub trait Wavelengths: Copy {
     fn single(&self) -> Option<usize>;
     /// Writes what a camera path gathered, divided by the selection probability, into a
     /// pixel sample's (zeroed) grid-wide radiance.
-    fn resolve(&self, gathered: Self::Throughput, out: &mut SampledSpectrum);
+    fn resolve(&self, gathered: &Self::Throughput, out: &mut SampledSpectrum);
 }
 
 /// Chooses the wavelengths of every camera sample and light path of a render.
@@ -50,8 +52,10 @@ pub struct AllOfGrid;
 
 impl Wavelengths for AllOfGrid {
     type Throughput = SampledSpectrum;
-    fn unit(&self, grid_len: usize) -> SampledSpectrum {
-        SampledSpectrum::splat(grid_len, 1.0)
+    fn unit(&self, grid_len: usize, spare: &mut Spare) -> SampledSpectrum {
+        let mut s = spare.take(grid_len);
+        s.fill(1.0);
+        s
     }
     fn emitted(&self, le: SampledSpectrum) -> SampledSpectrum {
         le
@@ -59,8 +63,8 @@ impl Wavelengths for AllOfGrid {
     fn single(&self) -> Option<usize> {
         None
     }
-    fn resolve(&self, gathered: SampledSpectrum, out: &mut SampledSpectrum) {
-        *out = gathered;
+    fn resolve(&self, gathered: &SampledSpectrum, out: &mut SampledSpectrum) {
+        out.copy_from(gathered);
     }
 }
 
@@ -78,7 +82,7 @@ pub struct OneOfGrid {
 
 impl Wavelengths for OneOfGrid {
     type Throughput = SingleWavelength;
-    fn unit(&self, _grid_len: usize) -> SingleWavelength {
+    fn unit(&self, _grid_len: usize, _spare: &mut Spare) -> SingleWavelength {
         SingleWavelength { index: self.index, value: 1.0 }
     }
     fn emitted(&self, le: SampledSpectrum) -> SingleWavelength {
@@ -87,7 +91,7 @@ impl Wavelengths for OneOfGrid {
     fn single(&self) -> Option<usize> {
         Some(self.index)
     }
-    fn resolve(&self, gathered: SingleWavelength, out: &mut SampledSpectrum) {
+    fn resolve(&self, gathered: &SingleWavelength, out: &mut SampledSpectrum) {
         out.set(self.index, gathered.value * self.scale / self.pdf);
     }
 }

@@ -11,7 +11,7 @@
 
 use super::adaptive::Adaptive;
 use super::{RenderControl, RenderOutput, RenderStats, ResolvedSettings, PREVIEW_INTERVAL};
-use crate::film::{Film, FilmBuffer, PixelSample};
+use crate::film::{Film, FilmBuffer, PixelSample, PixelSums};
 use crate::integrator::forward::Splat;
 use crate::integrator::{self, CameraSample, Integrator, Scratch};
 use crate::sampling::Rng;
@@ -149,7 +149,7 @@ impl<'a> Driver<'a> {
 
     /// Renders sample passes `passes` (a sub-range of `0..sample_passes()`) of the pixels
     /// whose `active` entry is true (all when None) into per-pixel sums, which merge with
-    /// other ranges' sums by addition ([`FilmBuffer::add`]). None when `control` was
+    /// other ranges' sums by addition ([`FilmBuffer::merge`]). None when `control` was
     /// cancelled meanwhile. For distributed rendering: each worker renders its ranges,
     /// the client adds the sums and calls [`Driver::output`].
     pub fn render_passes(
@@ -406,6 +406,7 @@ impl<'a> Driver<'a> {
         let n = scene.grid.len();
         let mut buf = FilmBuffer::new((tile.w * tile.h) as usize, self.settings.spectral_output.then_some(n));
         let mut ps = PixelSample::new(n);
+        let mut sums = PixelSums::new(&scene.observer, &self.albedo_white);
         let mut scratch = Scratch::new(n);
         let width = scene.camera.width() as u64;
         for ty in 0..tile.h {
@@ -425,8 +426,10 @@ impl<'a> Driver<'a> {
                     let film = glam::Vec2::new(x as f32 + jitter.x, y as f32 + jitter.y);
                     let cs = CameraSample { film, pixel, pass: g };
                     self.integrator.technique.camera_sample(scene, cs, &mut rng, &mut ps, &mut scratch);
-                    buf.add((ty * tile.w + tx) as usize, &ps, &scene.observer, &self.albedo_white);
+                    sums.add(&ps);
                 }
+                // The pixel's samples of these passes, folded to XYZ once.
+                sums.fold_into(&mut buf, (ty * tile.w + tx) as usize);
             }
             control.done.fetch_add(tile.w as u64 * passes.len() as u64, Ordering::Relaxed);
         }

@@ -122,8 +122,23 @@ impl SampledSpectrum {
     pub fn is_black(&self) -> bool {
         self.data.iter().all(|&v| v == 0.0)
     }
+    /// No sample is NaN or infinite. Branch-free over whole chunks (v − v is 0 for a
+    /// finite v and NaN otherwise), so it vectorises: it runs per sample and per bounce.
+    #[inline]
+    #[allow(clippy::eq_op)] // v - v is the point: 0 exactly when v is finite
     pub fn is_finite(&self) -> bool {
-        self.data.iter().all(|v| v.is_finite())
+        let mut acc = [0.0f32; LANES];
+        for c in self.data.chunks_exact(LANES) {
+            for k in 0..LANES {
+                acc[k] += c[k] - c[k];
+            }
+        }
+        acc.iter().all(|&a| a == 0.0)
+    }
+    /// The values with the zero padding up to whole [`LANES`] chunks.
+    #[inline]
+    pub fn padded_values(&self) -> &[f32] {
+        &self.data
     }
     /// Keep only sample `i` (a ray collapsed to one wavelength).
     pub fn keep_only(&mut self, i: usize) {
