@@ -60,6 +60,7 @@ def main() -> int:
         t = time.perf_counter()
         img = mi.render(scene, spp=spp, seed=spp)
         dr.eval(img)
+        dr.sync_thread()  # the LLVM variants launch kernels asynchronously: wait for the render
         sec = time.perf_counter() - t
         path = out_dir / f"{variant}_{spp}.exr"
         dr.set_thread_count(int(os.environ.get("THREADS", "2")))
