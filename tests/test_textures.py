@@ -231,9 +231,20 @@ def test_description_lists_each_texture_once_with_its_buffer():
     json.dumps(desc)  # every Texture object was replaced by an index
     assert [d["name"] for d in desc["textures"]] == ["shared", "Texture"]
     first = desc["textures"][0]
-    assert (first["width"], first["height"], first["channels"], first["wrap"], first["encoding"]) == (3, 2, 3, "EXTEND", "linear")
-    assert buffers[first["buffer"]].dtype == np.float32 and buffers[first["buffer"]].size == 18
+    # its alpha (0) is not trivial: kept as a fourth channel (docs/textures.md)
+    assert (first["width"], first["height"], first["channels"], first["wrap"], first["encoding"]) == (3, 2, 4, "EXTEND", "linear")
+    assert buffers[first["buffer"]].dtype == np.float32 and buffers[first["buffer"]].size == 24
     assert buffers[desc["textures"][1]["buffer"]].dtype == np.uint8
     refs = [m["bsdf"]["reflectance"]["texture"] for m in desc["materials"]]
     assert refs == [0, 1, 0]
     assert desc["world"] == {"texture": 0, "strength": 2.0, "rotation": 0.5, "importance_sampling": False}
+
+
+def test_an_opaque_alpha_channel_is_not_kept():
+    opaque = np.concatenate([np.full((2, 3, 3), 0.5, np.float32), np.ones((2, 3, 1), np.float32)], axis=2)
+    assert pc.Texture.from_array(opaque).pixels.shape == (2, 3, 3)
+    cut = opaque.copy()
+    cut[0, 0, 3] = 0.25
+    assert pc.Texture.from_array(cut).pixels.shape == (2, 3, 4)
+    b = pc.Texture.from_array(np.full((1, 2, 4), 255, np.uint8), encoding="srgb")
+    assert b.pixels.shape == (1, 2, 3) and b.nbytes() == 6

@@ -38,7 +38,9 @@ class Texture:
 
     @classmethod
     def from_array(cls, rgb: Any, encoding: str = "linear", wrap: str = "REPEAT", name: str = "Texture") -> Texture:
-        """A texture from an (H, W, 3|4) array (alpha is ignored).
+        """A texture from an (H, W, 3|4) array. A fourth channel is kept as the
+        texture's alpha (linear, never sRGB-encoded; read by the shading graph's Image
+        Texture Alpha output) only when some texel's alpha is not 1.
 
         ``encoding="linear"``: scene-linear values, stored as float32 (any finite value;
         HDRIs may exceed 1). ``encoding="srgb"``: 8-bit sRGB-encoded values — a uint8
@@ -56,7 +58,10 @@ class Texture:
             a = np.repeat(a[:, :, None], 3, axis=2)
         if a.ndim != 3 or a.shape[2] not in (3, 4) or a.shape[0] == 0 or a.shape[1] == 0:
             raise ValueError(f"texture '{name}': expected an array of shape (H, W, 3) or (H, W, 4), got {a.shape}")
-        a = a[:, :, :3]
+        if a.shape[2] == 4:
+            opaque = np.all(a[:, :, 3] == (255 if a.dtype == np.uint8 else 1.0))
+            if opaque:
+                a = a[:, :, :3]
         if enc == "linear":
             if a.dtype == np.uint8:
                 raise ValueError(f"texture '{name}': uint8 pixels need encoding='srgb' (or convert to float linear)")

@@ -467,7 +467,71 @@ def image_cases():
         return out(t, "Alpha")
 
     cases.append(("Image Texture", "alpha", alpha, COORD_TOL))
+    return cases + alpha_cases(), environment_cases()
 
+
+def image_copy(name, mode, float_buffer=False, colorspace="sRGB"):
+    """Another datablock of ``name``'s file with alpha mode ``mode``."""
+    base = image(name, float_buffer, colorspace)
+    img = bpy.data.images.get(f"{name} {mode}")
+    if img is None:
+        img = bpy.data.images.load(base.filepath, check_existing=False)
+        img.name = f"{name} {mode}"
+        img.colorspace_settings.name = colorspace
+        img.alpha_mode = mode
+    return img
+
+
+def alpha_cases():
+    """Image Texture's Alpha output and what reading it does to Color (Cycles divides
+    the filtered associated colour by the filtered alpha): R and G of the Color output
+    with the Alpha output in B, so that Alpha is read and both are seen."""
+    cases = []
+
+    def rg_alpha(nt, t):
+        sep = node(nt, "ShaderNodeSeparateColor", Color=out(t, "Color"))
+        return out(node(nt, "ShaderNodeCombineColor", Red=out(sep, "Red"), Green=out(sep, "Green"), Blue=out(t, "Alpha")))
+
+    for label, get, interp in (
+        ("bytes", lambda: image("bytes", False), "Linear"),
+        ("bytes closest", lambda: image("bytes", False), "Closest"),
+        ("float", lambda: image("float", True, "Linear Rec.709"), "Linear"),
+        ("data", lambda: image("data", False, "Non-Color"), "Linear"),
+        ("channel packed", lambda: image_copy("bytes", "CHANNEL_PACKED"), "Linear"),
+        ("alpha none", lambda: image_copy("bytes", "NONE"), "Linear"),
+    ):
+
+        def build(nt, get=get, interp=interp):
+            t = node(nt, "ShaderNodeTexImage", {"interpolation": interp})
+            t.image = get()
+            return rg_alpha(nt, t)
+
+        cases.append(("Image Texture Alpha", f"{label} colour and alpha", build, COORD_TOL))
+
+    def float_alpha(nt):
+        t = node(nt, "ShaderNodeTexImage")
+        t.image = image("float", True, "Linear Rec.709")
+        return out(t, "Alpha")
+
+    cases.append(("Image Texture Alpha", "float alpha", float_alpha, COORD_TOL))
+
+    def clip(nt):
+        t = node(nt, "ShaderNodeTexImage", {"extension": "CLIP"}, Vector=mapped(nt, "UV", 0.3, (1.2, -0.7, 0.0)))
+        t.image = image("bytes", False)
+        return out(t, "Alpha")
+
+    cases.append(("Image Texture Alpha", "clip alpha", clip, COORD_TOL))
+
+    def packed_color(nt):  # Color alone: not associated in Channel Packed mode
+        t = node(nt, "ShaderNodeTexImage")
+        t.image = image_copy("bytes", "CHANNEL_PACKED")
+        return out(t, "Color")
+
+    cases.append(("Image Texture Alpha", "channel packed colour", packed_color, COORD_TOL))
+    return cases
+
+
+def environment_cases():
     def environment(nt, linked):
         t = node(nt, "ShaderNodeTexEnvironment")
         t.image = image("float", True, "Linear Rec.709")
@@ -475,11 +539,12 @@ def image_cases():
             nt.links.new(mapped(nt, "Normal", 1.0, (0.0, 0.0, 0.0), (0.4, 0.3, 0.0), "VECTOR"), t.inputs["Vector"])
         return out(t, "Color")
 
-    return cases, [
+    return [
         ("Environment Texture", "incoming", lambda nt: environment(nt, False), COORD_TOL),
         ("Environment Texture", "mapped normal", lambda nt: environment(nt, True), COORD_TOL),
     ]
 
 
 IMAGE_CASES, ENVIRONMENT_CASES = image_cases()
-HIT_CASES = coordinate_cases() + procedural_cases() + IMAGE_CASES
+ALPHA_CASES = [c for c in IMAGE_CASES if c[0] == "Image Texture Alpha"]
+HIT_CASES = coordinate_cases() + procedural_cases() + [c for c in IMAGE_CASES if c[0] != "Image Texture Alpha"]

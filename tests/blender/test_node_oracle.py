@@ -134,7 +134,7 @@ HIT_FAMILIES = [
     "Magic Texture",
     "Brick Texture",
     "WhiteNoise Texture",
-    core_gap("Image Texture", "the Alpha output reads 1 (measured error 0.25); the colour cases pass"),
+    "Image Texture",
 ]
 
 
@@ -164,5 +164,19 @@ def test_environment_texture_in_a_material_matches_cycles(tmp_path):
     r = run_oracle(tmp_path, "ENVIRONMENT_CASES", samples=256, albedo=True)
     assert r["error"] is None, r["error"]
     rows = errors(r, tile_means=True)
+    bad = [f"{f} {label}: error {e:.3g} > {tol:g} (Cycles {c}, Polychrome {p})" for f, label, e, tol, c, p in rows if not e <= tol]
+    assert not bad, "\n".join(bad)
+
+
+def test_image_texture_alpha_matches_cycles(tmp_path):
+    """Image Texture's Alpha output, and its Color output when Alpha is read (Cycles
+    un-associates), for 8-bit sRGB, float, Non-Color, Channel Packed and None alpha
+    modes (Premultiplied on an 8-bit image is warned: Cycles' colour differs by 0.23), Closest and CLIP (ALPHA_CASES). Kept apart from HIT_CASES so it
+    runs on its own in a few seconds."""
+    r = run_oracle(tmp_path, "ALPHA_CASES", samples=256, albedo=True)
+    assert r["error"] is None, r["error"]
+    assert not [w for w in r["warnings"] if "not supported" in w], r["warnings"]
+    rows = errors(r, tile_means=True)
+    assert len(rows) == 9, rows
     bad = [f"{f} {label}: error {e:.3g} > {tol:g} (Cycles {c}, Polychrome {p})" for f, label, e, tol, c, p in rows if not e <= tol]
     assert not bad, "\n".join(bad)

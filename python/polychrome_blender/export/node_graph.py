@@ -292,21 +292,32 @@ class GraphExport:
         export that is not used converts nothing).
 
         Cycles associates alpha when it loads an image (colour × alpha, except for
-        Non-Color data and the Channel Packed / None alpha modes) and gives the Color
-        output that way unless the node's Alpha output is linked
-        (ImageTextureNode::compile, intern/cycles/scene/shader_nodes.cpp); the texture
-        holds what Color gives."""
-        alpha_read = {
-            inp["link"][0]
-            for n in self.nodes
-            for inp in n.get("inputs", {}).values()
-            if isinstance(inp, dict) and "link" in inp and inp["link"][1] == "Alpha"
-        }
-        for props, node, name, index in self._images:
+        Non-Color data and the Channel Packed / None alpha modes; Blender's float buffers
+        are associated already) and the texture holds what Cycles holds. When the
+        node's Alpha output is read, Cycles' Color output divides the filtered colour by
+        the filtered alpha (ImageTextureNode::compile, intern/cycles/scene/shader_nodes.cpp;
+        svm_image_texture): the ``associated`` property asks the core to do the same.
+        The None alpha mode reads alpha 1 (Cycles ignores the channel)."""
+        for props, node, name, _index in self._images:
             img = node.image
-            associate = index not in alpha_read and not img.colorspace_settings.is_data and img.alpha_mode not in ("CHANNEL_PACKED", "NONE")
+            mode = img.alpha_mode
+            associate = not img.colorspace_settings.is_data and mode not in ("CHANNEL_PACKED", "NONE")
+            props["associated"] = associate
+            if mode == "PREMUL" and not img.is_float and index_reads_alpha(self.nodes, _index):
+                self.warnings.add(
+                    ("premul", self.name, img.name),
+                    f"{self.owner}: node '{name}': alpha mode Premultiplied on the 8-bit image '{img.name}' is not supported "
+                    "with the Alpha output read (its colour is read as Straight)",
+                )
             props["texture"] = graph_texture(
-                node, self.owner, name, self.warnings, self.textures, user=("MATERIAL", self.name), associate=associate
+                node,
+                self.owner,
+                name,
+                self.warnings,
+                self.textures,
+                user=("MATERIAL", self.name),
+                associate=associate,
+                ignore_alpha=mode == "NONE",
             )
         self._images = []
 
@@ -548,6 +559,15 @@ class GraphExport:
             need.append(("uv", ""))
         for k in need:
             self.needs.setdefault(k, who)
+
+
+def index_reads_alpha(nodes, index):
+    """Whether some node of ``nodes`` reads the Alpha output of node ``index``."""
+    return any(
+        isinstance(inp, dict) and inp.get("link") is not None and inp["link"][0] == index and inp["link"][1] == "Alpha"
+        for n in nodes
+        for inp in n.get("inputs", {}).values()
+    )
 
 
 def export_graph(mat, warnings, textures):

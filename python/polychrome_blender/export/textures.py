@@ -101,10 +101,11 @@ def graph_rgba(img, owner, warnings):
     return np.nan_to_num(buf, nan=0.0, posinf=0.0, neginf=0.0), "linear"
 
 
-def graph_texture(node, owner, node_name, warnings, cache, user=None, associate=False):
+def graph_texture(node, owner, node_name, warnings, cache, user=None, associate=False, ignore_alpha=False):
     """The RGBA Texture of an Image or Environment Texture node for the shading graph, or
     None. ``associate``: colour × alpha (in the stored encoding, as Cycles associates 8-bit
-    sRGB bytes before decoding them)."""
+    sRGB bytes before decoding them). ``ignore_alpha``: alpha 1 (alpha mode None). The
+    alpha channel is kept only where some texel's alpha is not 1."""
     img = node.image
     extension = getattr(node, "extension", "REPEAT")
 
@@ -113,7 +114,9 @@ def graph_texture(node, owner, node_name, warnings, cache, user=None, associate=
         if got is None:
             return None
         px, encoding = got
-        if associate and not img.is_float:  # Blender's float buffers are associated already
+        if ignore_alpha:
+            px = px[:, :, :3]
+        elif associate and not img.is_float:  # Blender's float buffers are associated already
             if px.dtype == np.uint8:
                 a = px[:, :, 3:4].astype(np.float32) / 255.0
                 px = np.concatenate([np.rint(px[:, :, :3] * a).astype(np.uint8), px[:, :, 3:]], axis=2)
@@ -121,7 +124,8 @@ def graph_texture(node, owner, node_name, warnings, cache, user=None, associate=
                 px = np.concatenate([px[:, :, :3] * px[:, :, 3:4], px[:, :, 3:]], axis=2)
         return pc.Texture.from_array(px, encoding, extension if extension in WRAPS else "REPEAT", img.name)
 
-    return cache.texture(node, owner, warnings, user, convert=convert, kind="graph-associated" if associate else "graph")
+    kind = "graph-" + ("opaque" if ignore_alpha else "associated" if associate else "straight")
+    return cache.texture(node, owner, warnings, user, convert=convert, kind=kind)
 
 
 class TextureCache:

@@ -4,7 +4,9 @@
 //!
 //! Storage is either linear `f32` RGB (12 bytes per texel) or 8-bit sRGB-encoded RGB
 //! (3 bytes per texel, decoded through a 256-entry table on lookup). An alpha channel in
-//! the input is dropped.
+//! the input is kept as a separate plane (f32 or byte, as the colour) only when some
+//! texel's alpha differs from 1 (model only what a scene requires); without a plane
+//! every texel's alpha is 1. Alpha is linear (never sRGB-encoded).
 //!
 //! Conventions (Blender's): the pixel buffer is row-major with the *top* row first (as
 //! numpy, Pillow and OpenEXR give images), texture coordinate `v = 0` is the bottom edge,
@@ -37,7 +39,15 @@ pub enum TexelData {
     Srgb8(Vec<u8>),
 }
 
-/// An RGB image texture.
+/// The alpha plane of a texture, one value per texel.
+#[derive(Clone, Debug)]
+pub enum AlphaData {
+    Linear(Vec<f32>),
+    /// Bytes, alpha = byte / 255.
+    Byte(Vec<u8>),
+}
+
+/// An RGB image texture, with an alpha plane when the image has a non-trivial alpha.
 #[derive(Clone, Debug)]
 pub struct Texture {
     pub name: String,
@@ -45,6 +55,7 @@ pub struct Texture {
     pub height: u32,
     pub wrap: Wrap,
     data: TexelData,
+    alpha: Option<AlphaData>,
 }
 
 /// The sRGB transfer function, decoded for every byte value.
@@ -121,14 +132,15 @@ impl Texture {
         let texels = check_shape(name, width, height, channels, pixels.len())?;
         let mut data = Vec::with_capacity(texels * 3);
         for (k, px) in pixels.chunks_exact(channels as usize).enumerate() {
-            let rgb = &px[..3];
-            if let Some(v) = rgb.iter().find(|v| !v.is_finite()) {
+            if let Some(v) = px.iter().find(|v| !v.is_finite()) {
                 let (x, y) = (k % width as usize, k / width as usize);
                 return Err(Error::object("texture", name, format!("texel ({x}, {y}) has the non-finite value {v}")));
             }
-            data.extend_from_slice(rgb);
+            data.extend_from_slice(&px[..3]);
         }
-        Ok(Self { name: name.into(), width, height, wrap, data: TexelData::Linear(data) })
+        let alpha = (channels == 4 && pixels.chunks_exact(4).any(|px| px[3] != 1.0))
+            .then(|| AlphaData::Linear(pixels.chunks_exact(4).map(|px| px[3]).collect()));
+        Ok(Self { name: name.into(), width, height, wrap, data: TexelData::Linear(data), alpha })
     }
 
     /// A texture from 8-bit sRGB-encoded pixels (`channels` = 3 or 4, top row first).
@@ -143,14 +155,52 @@ impl Texture {
             }
             d
         };
-        Ok(Self { name: name.into(), width, height, wrap, data: TexelData::Srgb8(data) })
+        let alpha = (channels == 4 && pixels.chunks_exact(4).any(|px| px[3] != 255))
+            .then(|| AlphaData::Byte(pixels.chunks_exact(4).map(|px| px[3]).collect()));
+        Ok(Self { name: name.into(), width, height, wrap, data: TexelData::Srgb8(data), alpha })
     }
 
-    /// Bytes of texel storage held (the raw RGB size).
+    /// Bytes of texel storage held (the raw RGB size, plus the alpha plane if any).
     pub fn bytes(&self) -> usize {
-        match &self.data {
+        let rgb = match &self.data {
             TexelData::Linear(v) => v.len() * std::mem::size_of::<f32>(),
             TexelData::Srgb8(v) => v.len(),
+        };
+        rgb + match &self.alpha {
+            None => 0,
+            Some(AlphaData::Linear(v)) => v.len() * std::mem::size_of::<f32>(),
+            Some(AlphaData::Byte(v)) => v.len(),
+        }
+    }
+
+    /// Whether the texture holds an alpha plane (some texel's alpha is not 1).
+    pub fn has_alpha(&self) -> bool {
+        self.alpha.is_some()
+    }
+
+    /// Whether the colour is stored as sRGB-encoded bytes.
+    pub fn is_srgb8(&self) -> bool {
+        matches!(self.data, TexelData::Srgb8(_))
+    }
+
+    /// Alpha of the texel at column `x`, row `y` (1 without an alpha plane).
+    #[inline]
+    pub fn texel_alpha(&self, x: usize, y: usize) -> f32 {
+        let k = y * self.width as usize + x;
+        match &self.alpha {
+            None => 1.0,
+            Some(AlphaData::Linear(v)) => v[k],
+            Some(AlphaData::Byte(v)) => f32::from(v[k]) / 255.0,
+        }
+    }
+
+    /// The stored colour of a texel as it is encoded (sRGB bytes / 255, or linear floats).
+    #[inline]
+    fn texel_encoded(&self, x: usize, y: usize) -> [f32; 3] {
+        let k = 3 * (y * self.width as usize + x);
+        match &self.data {
+            TexelData::Linear(v) => [v[k], v[k + 1], v[k + 2]],
+            TexelData::Srgb8(v) => [0, 1, 2].map(|c| f32::from(v[k + c]) / 255.0),
         }
     }
 
@@ -205,16 +255,45 @@ impl Texture {
 
     /// Bilinearly filtered linear RGB with explicit wrap modes along u and v.
     pub fn lookup_with(&self, uv: Vec2, wrap_u: Wrap, wrap_v: Wrap) -> [f32; 3] {
+        self.bilinear(uv, wrap_u, wrap_v, |x, y| self.texel(x, y))
+    }
+
+    /// Bilinearly filtered alpha, with the same wrap modes and weights as the colour
+    /// (outside the image under CLIP alpha is 0, so a texture without an alpha plane
+    /// gives its coverage).
+    pub fn lookup_alpha_with(&self, uv: Vec2, wrap_u: Wrap, wrap_v: Wrap) -> f32 {
+        self.bilinear(uv, wrap_u, wrap_v, |x, y| [self.texel_alpha(x, y)])[0]
+    }
+
+    /// Bilinearly filtered colour in its stored encoding (sRGB-encoded values for byte
+    /// textures, as Cycles filters 8-bit sRGB images before decoding them) and alpha.
+    pub fn lookup_encoded_with(&self, uv: Vec2, wrap_u: Wrap, wrap_v: Wrap) -> [f32; 4] {
+        self.bilinear(uv, wrap_u, wrap_v, |x, y| {
+            let [r, g, b] = self.texel_encoded(x, y);
+            [r, g, b, self.texel_alpha(x, y)]
+        })
+    }
+
+    /// Bilinear filter of `texel` values (0 outside the image under CLIP; 0 for a
+    /// non-finite coordinate).
+    #[inline]
+    fn bilinear<const N: usize>(
+        &self,
+        uv: Vec2,
+        wrap_u: Wrap,
+        wrap_v: Wrap,
+        texel: impl Fn(usize, usize) -> [f32; N],
+    ) -> [f32; N] {
         if !(uv.x.is_finite() && uv.y.is_finite()) {
-            return [0.0; 3];
+            return [0.0; N];
         }
         // Texel centres at integers; rows count from the top (v = 1).
         let (x0, x1, fx) = Self::axis(uv.x, self.width, wrap_u);
         let (y0, y1, fy) = Self::axis(1.0 - uv.y, self.height, wrap_v);
         let (xs, ys) = ([x0, x1], [y0, y1]);
         let at = |xi: Option<usize>, yi: Option<usize>| match (xi, yi) {
-            (Some(a), Some(b)) => self.texel(a, b),
-            _ => [0.0; 3],
+            (Some(a), Some(b)) => texel(a, b),
+            _ => [0.0; N],
         };
         let (c00, c10, c01, c11) = (at(xs[0], ys[0]), at(xs[1], ys[0]), at(xs[0], ys[1]), at(xs[1], ys[1]));
         std::array::from_fn(|c| lerp(lerp(c00[c], c10[c], fx), lerp(c01[c], c11[c], fx), fy))
@@ -253,13 +332,41 @@ mod tests {
     }
 
     #[test]
-    fn srgb_bytes_decode_and_alpha_is_dropped() {
+    fn srgb_bytes_decode_and_alpha_is_kept_apart() {
         let t = Texture::from_srgb8("s", 1, 1, 4, &[255, 128, 0, 7], Wrap::Repeat).unwrap();
-        assert_eq!(t.bytes(), 3);
+        assert_eq!(t.bytes(), 4);
+        assert!((t.lookup_alpha_with(Vec2::new(0.3, 0.9), Wrap::Repeat, Wrap::Repeat) - 7.0 / 255.0).abs() < 1e-7);
+        // An opaque alpha channel stores no plane.
+        let o = Texture::from_srgb8("o", 1, 1, 4, &[255, 128, 0, 255], Wrap::Repeat).unwrap();
+        assert!(!o.has_alpha() && o.bytes() == 3);
         let c = t.lookup(Vec2::new(0.3, 0.9));
         assert_eq!(c[0], 1.0);
         assert!((c[1] - 0.215_860_5).abs() < 1e-6, "{}", c[1]);
         assert_eq!(c[2], 0.0);
+    }
+
+    #[test]
+    fn alpha_filters_like_the_colour() {
+        // 2×1 RGBA: alpha 0.2 and 0.6; same weights, wraps and CLIP fade as the colour.
+        let px = [1.0, 0.0, 0.0, 0.2, 3.0, 0.0, 0.0, 0.6];
+        let t = Texture::from_linear("t", 2, 1, 4, &px, Wrap::Extend).unwrap();
+        assert!(t.has_alpha() && t.bytes() == 8 * 4);
+        let a = |t: &Texture, u: f32, w: Wrap| t.lookup_alpha_with(Vec2::new(u, 0.5), w, w);
+        assert_eq!(a(&t, 0.25, Wrap::Extend), 0.2);
+        assert!((a(&t, 0.5, Wrap::Extend) - 0.4).abs() < 1e-6);
+        assert!((a(&t, 0.0, Wrap::Repeat) - 0.4).abs() < 1e-6);
+        assert_eq!(a(&t, -1.0, Wrap::Clip), 0.0);
+        assert!((a(&t, 0.0, Wrap::Clip) - 0.1).abs() < 1e-6);
+        // Without a plane: 1 inside, the coverage at a CLIP edge.
+        let rgb = Texture::from_linear("rgb", 2, 1, 3, &[1.0, 0.0, 0.0, 3.0, 0.0, 0.0], Wrap::Clip).unwrap();
+        assert!(!rgb.has_alpha());
+        assert_eq!(a(&rgb, 0.5, Wrap::Clip), 1.0);
+        assert!((a(&rgb, 0.0, Wrap::Clip) - 0.5).abs() < 1e-6);
+        let e = t.lookup_encoded_with(Vec2::new(0.5, 0.5), Wrap::Extend, Wrap::Extend);
+        assert!((e[0] - 2.0).abs() < 1e-6 && (e[3] - 0.4).abs() < 1e-6);
+        // A non-finite alpha is an error like a non-finite colour.
+        let e = Texture::from_linear("m", 1, 1, 4, &[0.0, 0.0, 0.0, f32::NAN], Wrap::Repeat).unwrap_err().to_string();
+        assert!(e.contains("'m'") || e.contains("m"), "{e}");
     }
 
     #[test]

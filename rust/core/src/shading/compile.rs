@@ -466,6 +466,12 @@ impl<'a> Compiler<'a> {
                 environment
             }
         };
-        Ok(Image { texture, wrap, mirror, interpolation, equirectangular })
+        // "associated": the exporter's texture holds colour × alpha as Cycles loads it;
+        // the Color output then un-associates when the node's Alpha output is read.
+        let alpha_read = self.nodes.iter().any(|n| {
+            n.inputs.values().any(|i| matches!(i, InputDesc::Link { link } if link.0 == node && link.1 == "Alpha"))
+        });
+        let unassociate = !environment && alpha_read && p.boolean("associated", false)?;
+        Ok(Image { texture, wrap, mirror, interpolation, equirectangular, unassociate })
     }
 }
