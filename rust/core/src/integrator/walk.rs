@@ -350,7 +350,8 @@ impl Walk {
                 // Stochastic transparency (Cycles' transparent closure): pass straight on
                 // with the Transparent BSDF's weight, tinted; else shade the opaque rest,
                 // whose weight 1 − p this choice cancels.
-                if pt.probability >= 1.0 || rng.uniform() < pt.probability {
+                let p = pt.probability_at(scene, &st.ray, &si);
+                if p >= 1.0 || (p > 0.0 && rng.uniform() < p) {
                     crossings += 1;
                     if crossings > VOLUME_BOUNDS_MAX {
                         return End::Done;

@@ -220,8 +220,9 @@ impl Scene {
             let front = si.ng.dot(ray.direction) < 0.0;
             if let Some(pt) = &self.pass_through[m] {
                 // Stochastic transparency, in expectation: × probability × tint.
+                let p = pt.probability_at(self, &ray, &si);
                 for i in 0..tr.len() {
-                    tr.set(i, tr.get(i) * pt.probability * pt.tint.get(i));
+                    tr.set(i, tr.get(i) * p * pt.tint.get(i));
                 }
                 if tr.is_black() {
                     return false;

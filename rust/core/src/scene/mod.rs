@@ -95,10 +95,37 @@ impl EnvironmentRef {
 /// which mixes a transparent closure of weight 1 − alpha in, svm_closure.h): a path
 /// passes straight through with `probability` (its throughput × `tint`), else the
 /// surface is shaded; shadow rays are attenuated by `probability × tint`.
+/// A varying probability (a textured Principled Alpha) is evaluated at each hit from
+/// the material's program reduced to the ops it depends on.
 #[derive(Clone, Debug)]
 pub struct PassThrough {
     pub probability: f32,
     pub tint: SampledSpectrum,
+    pub varying: Option<VaryingPass>,
+}
+
+/// A pass probability read from a program register at each hit.
+#[derive(Clone, Debug)]
+pub struct VaryingPass {
+    pub program: crate::shading::Program,
+    pub probability: crate::shading::closure::PassProbability,
+}
+
+thread_local! {
+    static PASS_REGS: std::cell::RefCell<Vec<glam::Vec3>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+impl PassThrough {
+    /// The probability that a path passes at hit `si` of `ray`.
+    pub fn probability_at(&self, scene: &Scene, ray: &Ray, si: &SurfaceInteraction) -> f32 {
+        let Some(v) = &self.varying else { return self.probability };
+        let sp = scene.shading_point(ray, si, &v.program.attributes);
+        PASS_REGS.with(|regs| {
+            let mut regs = regs.borrow_mut();
+            v.program.run(&sp, &mut regs);
+            v.probability.at(&|r| regs[r as usize])
+        })
+    }
 }
 
 pub struct Scene {
@@ -271,6 +298,7 @@ impl Scene {
             let mut per_hit = None;
             let mut hit_attributes = None;
             let mut transparency = None;
+            let mut compiled_program = None;
             let opaque_rest;
             let (bsdf_desc, emission_desc) = match &m.bsdf {
                 BsdfDesc::Graph(g) => {
@@ -282,11 +310,12 @@ impl Scene {
                         hit_attributes = Some(compiled.program.attributes.clone());
                     }
                     transparency = compiled.transparency.clone();
+                    compiled_program = Some(&compiled.program);
                     (&constant, compiled.emission.as_ref())
                 }
                 d => match d.split_transparent() {
                     Some((p, color, rest)) => {
-                        transparency = Some((p, color));
+                        transparency = Some((crate::shading::closure::PassProbability::Constant(p), color));
                         opaque_rest = rest;
                         (&opaque_rest, m.emission.as_ref())
                     }
@@ -300,9 +329,16 @@ impl Scene {
                     m.name
                 ));
             }
+            let varying = match (&transparency, &compiled_program) {
+                (Some((p @ crate::shading::closure::PassProbability::Register { reg, .. }, _)), Some(program)) => {
+                    Some(VaryingPass { program: program.pruned_for(*reg), probability: *p })
+                }
+                _ => None,
+            };
             pass_through.push(match transparency {
-                Some((p, color)) if p > 0.0 => Some(PassThrough {
-                    probability: p.min(1.0),
+                Some((p, color)) if varying.is_some() || p.at(&|_| glam::Vec3::ZERO) > 0.0 => Some(PassThrough {
+                    probability: p.at(&|_| glam::Vec3::ZERO),
+                    varying,
                     tint: {
                         let mut t = SampledSpectrum::from_slice(&rgb.evaluate(
                             &color,

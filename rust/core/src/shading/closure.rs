@@ -111,6 +111,36 @@ impl SheenT {
     }
 }
 
+/// The probability that a path passes a material's top Transparent BSDF: a constant,
+/// or a register of the program (clamped to `lo..hi`, `1 −` it when `invert`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PassProbability {
+    Constant(f32),
+    Register { reg: Reg, lo: f32, hi: f32, invert: bool },
+}
+
+impl PassProbability {
+    /// The probability at register values `v`, in 0..1.
+    pub fn at(&self, v: &dyn Fn(Reg) -> Vec3) -> f32 {
+        let p = match *self {
+            PassProbability::Constant(p) => p,
+            PassProbability::Register { reg, lo, hi, invert } => {
+                let x = v(reg).x.clamp(lo, hi);
+                if invert {
+                    1.0 - x
+                } else {
+                    x
+                }
+            }
+        };
+        if p.is_finite() {
+            p.clamp(0.0, 1.0)
+        } else {
+            0.0
+        }
+    }
+}
+
 /// The surface's closures with their parameters: what a hit instantiates into a
 /// fixed description once the program has run.
 #[derive(Clone, Debug)]
@@ -201,25 +231,28 @@ fn is_white(d: &SpectrumDesc) -> bool {
 }
 
 impl Template {
-    /// Splits a top-level Transparent BSDF off (alone, or one side of a Mix with a
-    /// constant factor): the probability a path passes, its tint, and the opaque rest
-    /// (see `BsdfDesc::split_transparent`).
-    pub fn split_transparent(&self) -> Option<(f32, SpectrumDesc, Template)> {
+    /// Splits a top-level Transparent BSDF off (alone, or one side of a Mix whose factor
+    /// is a constant or a register, e.g. a textured Principled Alpha): the probability a
+    /// path passes, its tint, and the opaque rest (see `BsdfDesc::split_transparent`).
+    pub fn split_transparent(&self) -> Option<(PassProbability, SpectrumDesc, Template)> {
         let color_of = |t: &Template| match t {
             Template::Fixed(BsdfDesc::Transparent { color }) => Some(color.clone()),
             _ => None,
         };
         if let Some(c) = color_of(self) {
-            return Some((1.0, c, Template::Fixed(BsdfDesc::None)));
+            return Some((PassProbability::Constant(1.0), c, Template::Fixed(BsdfDesc::None)));
         }
-        match self {
-            Template::Mix { factor: F::C(f), factor_from: None, a, b } => match (color_of(a), color_of(b)) {
-                (Some(c), _) => Some((1.0 - f, c, (**b).clone())),
-                (None, Some(c)) => Some((*f, c, (**a).clone())),
-                _ => None,
-            },
-            _ => None,
-        }
+        let Template::Mix { factor, factor_from: None, a, b } = self else { return None };
+        let (color, rest, invert) = match (color_of(a), color_of(b)) {
+            (Some(c), _) => (c, b, true),
+            (None, Some(c)) => (c, a, false),
+            _ => return None,
+        };
+        let p = match *factor {
+            F::C(f) => PassProbability::Constant(if invert { 1.0 - f } else { f }),
+            F::R(reg, lo, hi) => PassProbability::Register { reg, lo, hi, invert },
+        };
+        Some((p, color, (**rest).clone()))
     }
 
     /// Whether a Transparent BSDF is anywhere in the template.
@@ -500,13 +533,7 @@ impl<'c, 'a> Lowering<'c, 'a> {
         Ok(match kind {
             "ShaderNodeBsdfPrincipled" => {
                 self.default_normal(node, "Normal")?;
-                let alpha = match self.float(node, "Alpha", 0.0, 1.0)? {
-                    F::C(a) => a,
-                    F::R(..) => {
-                        self.c.warn(node, "a varying Alpha is not supported yet (per-hit transparency); using 1");
-                        1.0
-                    }
-                };
+                let alpha = self.float(node, "Alpha", 0.0, 1.0)?;
                 for (id, default, what) in [
                     ("Diffuse Roughness", 0.0, "Principled diffuse is Lambertian"),
                     ("Subsurface Weight", 0.0, "no subsurface scattering yet"),
@@ -535,11 +562,12 @@ impl<'c, 'a> Lowering<'c, 'a> {
                 };
                 // Alpha: a transparent closure of weight 1 − alpha mixed in (Cycles'
                 // svm_node_closure_bsdf, CLOSURE_BSDF_PRINCIPLED_ID: bsdf_transparent_setup
-                // with weight·(1 − alpha), the other closures × alpha).
-                let t = if alpha < 1.0 {
+                // with weight·(1 − alpha), the other closures × alpha). A varying alpha
+                // (an alpha texture) is a Mix of that register, evaluated per hit.
+                let t = if !matches!(alpha, F::C(a) if a >= 1.0) {
                     let white = SpectrumDesc::new(SpectrumKind::Rgb { rgb: [1.0; 3] });
                     Template::Mix {
-                        factor: F::C(alpha),
+                        factor: alpha,
                         factor_from: None,
                         a: Box::new(Template::Fixed(BsdfDesc::Transparent { color: white })),
                         b: Box::new(t),

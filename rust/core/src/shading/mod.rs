@@ -30,7 +30,7 @@ pub struct CompiledMaterial {
     pub template: closure::Template,
     pub emission: Option<crate::spectrum::SpectrumDesc>,
     /// A top-level Transparent BSDF split off the template: (pass probability, tint).
-    pub transparency: Option<(f32, crate::spectrum::SpectrumDesc)>,
+    pub transparency: Option<(closure::PassProbability, crate::spectrum::SpectrumDesc)>,
     pub program: Program,
     pub warnings: Vec<String>,
 }

@@ -200,6 +200,27 @@ impl Program {
         self.ops.is_empty()
     }
 
+    /// The program reduced to the ops that register `reg` depends on (e.g. a
+    /// material's alpha, evaluated before any shading: a cut-out that passes costs only
+    /// its alpha's ops). Register numbers and attribute slots are unchanged.
+    pub fn pruned_for(&self, reg: Reg) -> Program {
+        let mut live = vec![false; self.init.len()];
+        if let Some(l) = live.get_mut(reg as usize) {
+            *l = true;
+        }
+        let mut keep = vec![false; self.ops.len()];
+        for (k, op) in self.ops.iter().enumerate().rev() {
+            if op.outs.iter().any(|&r| r != NONE && live[r as usize]) {
+                keep[k] = true;
+                for &r in &op.ins {
+                    live[r as usize] = true;
+                }
+            }
+        }
+        let ops = self.ops.iter().zip(keep).filter(|(_, k)| *k).map(|(op, _)| op.clone()).collect();
+        Program { init: self.init.clone(), ops, attributes: self.attributes.clone() }
+    }
+
     /// Runs the program at `sp` into `regs` (resized to the register file; reuse it
     /// between hits so no allocation happens per hit).
     pub fn run(&self, sp: &ShadingPoint, regs: &mut Vec<Vec3>) {

@@ -270,6 +270,7 @@ fn principled_alpha_and_a_transparent_mix_split_into_a_pass_probability() {
     }))
     .unwrap();
     let (p, tint) = c.transparency.clone().unwrap();
+    let p = p.at(&|_| Vec3::ZERO);
     assert!((p - 0.65).abs() < 1e-6);
     assert_eq!(tint.kind, crate::spectrum::named::SpectrumKind::Rgb { rgb: [1.0; 3] });
     assert!(matches!(c.constant_surface().unwrap(), BsdfDesc::Principled { .. }));
@@ -285,6 +286,7 @@ fn principled_alpha_and_a_transparent_mix_split_into_a_pass_probability() {
     }))
     .unwrap();
     let (p, tint) = c.transparency.clone().unwrap();
+    let p = p.at(&|_| Vec3::ZERO);
     assert!((p - 0.2).abs() < 1e-6);
     assert_eq!(tint.kind, crate::spectrum::named::SpectrumKind::Rgb { rgb: [0.5, 0.25, 1.0] });
     assert!(matches!(c.constant_surface().unwrap(), BsdfDesc::Diffuse { .. }));
@@ -301,4 +303,38 @@ fn principled_alpha_and_a_transparent_mix_split_into_a_pass_probability() {
     .unwrap();
     assert!(c.transparency.is_none());
     assert!(c.warnings.iter().any(|w| w.contains("'M'") && w.contains("Transparent")), "{:?}", c.warnings);
+}
+
+#[test]
+fn a_textured_alpha_is_a_per_hit_pass_probability_with_its_own_pruned_program() {
+    // Alpha = UV.x through a Separate XYZ; Base Color from a Checker (not needed for alpha).
+    let c = compile(json!({
+        "nodes": [
+            {"type": "ShaderNodeUVMap", "name": "UV"},
+            {"type": "ShaderNodeSeparateXYZ", "name": "S", "inputs": {"Vector": {"link": [0, "UV"]}}},
+            {"type": "ShaderNodeTexChecker", "name": "C", "inputs": {"Vector": {"link": [0, "UV"]}}},
+            {"type": "ShaderNodeBsdfPrincipled", "name": "P", "inputs": {
+                "Alpha": {"link": [1, "X"]}, "Base Color": {"link": [2, "Color"]}}}
+        ],
+        "output": {"surface": [3, "BSDF"]}
+    }))
+    .unwrap();
+    assert!(c.warnings.is_empty(), "{:?}", c.warnings);
+    let (p, _) = c.transparency.clone().unwrap();
+    let crate::shading::closure::PassProbability::Register { reg, invert: true, .. } = p else { panic!("{p:?}") };
+    let pruned = c.program.pruned_for(reg);
+    assert!(pruned.ops.len() < c.program.ops.len(), "{} vs {}", pruned.ops.len(), c.program.ops.len());
+    for u in [0.0f32, 0.3, 1.0] {
+        let mut attributes = [[0.0; 4]; crate::shading::program::MAX_ATTRIBUTES];
+        attributes[0] = [u, 0.5, 0.0, 0.0];
+        let sp = crate::shading::ShadingPoint { uv: glam::Vec2::new(u, 0.5), attributes, ..Default::default() };
+        let (mut full, mut small) = (Vec::new(), Vec::new());
+        c.program.run(&sp, &mut full);
+        pruned.run(&sp, &mut small);
+        assert_eq!(full[reg as usize], small[reg as usize]);
+        // Pass probability 1 − alpha.
+        assert!((p.at(&|r| small[r as usize]) - (1.0 - u)).abs() < 1e-6);
+    }
+    // The opaque rest is the Principled alone, varying (its base colour).
+    assert!(!c.template.is_constant() && !c.template.has_transparent());
 }
