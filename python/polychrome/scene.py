@@ -543,6 +543,7 @@ class Principled(Material):
     ``thin_film_ior`` put an interference film on the specular interface (and on the
     metal). ``specular_ior_level`` scales the specular layer's normal-incidence reflectance
     by 2·level (0.5 keeps ``ior``). ``roughness`` as Blender's (alpha = roughness²).
+    ``diffuse_roughness`` makes the base Oren–Nayar (Cycles' energy-preserving form).
     ``coat_weight`` puts Blender's Coat over everything (a GGX dielectric of
     ``coat_roughness`` and ``coat_ior`` whose ``coat_tint`` absorbs the light reaching the
     layers below), ``sheen_weight`` the microfibre sheen (``sheen_roughness``,
@@ -561,6 +562,7 @@ class Principled(Material):
         thin_film_thickness: float = 0.0,
         thin_film_ior: float = 1.33,
         specular_ior_level: float = 0.5,
+        diffuse_roughness: float = 0.0,
         coat_weight: float = 0.0,
         coat_roughness: float = 0.03,
         coat_ior: float = 1.5,
@@ -587,6 +589,7 @@ class Principled(Material):
             raise ValueError(f"material '{name}': thin_film_ior {thin_film_ior} must be in 1..10")
         self.thin_film_thickness, self.thin_film_ior = t, n
         self.specular_ior_level = _unit(specular_ior_level, "specular_ior_level", name)
+        self.diffuse_roughness = _unit(diffuse_roughness, "diffuse_roughness", name)
         self.coat_weight = _unit(coat_weight, "coat_weight", name)
         self.coat_roughness = _unit(coat_roughness, "coat_roughness", name)
         ci = float(coat_ior)
@@ -614,6 +617,8 @@ class Principled(Material):
         }
         if self.specular_tint is not None:
             d["specular_tint"] = self.specular_tint.to_dict()
+        if self.diffuse_roughness > 0.0:
+            d["diffuse_roughness"] = self.diffuse_roughness
         if self.coat_weight > 0.0:
             d["coat"] = {"weight": self.coat_weight, "roughness": self.coat_roughness, "ior": self.coat_ior}
             if self.coat_tint is not None:

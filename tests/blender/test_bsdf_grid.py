@@ -67,14 +67,14 @@ FEATURES = {
 # Measured mean ΔE00 (128 spp each) of the features that do not match Cycles yet.
 # Before stochastic transparency: alpha 12.4, transparent_bsdf 59.2, transparent_white 100;
 # before the Glass colour tinted the whole closure: tinted_glass 5.7; before the Principled
-# layers: coat 19.1, sheen 7.5; before the Specular Tint on the dielectric layer: 10.0.
+# layers: coat 19.1, sheen 7.5; before the Specular Tint on the dielectric layer: 10.0;
+# before the Principled's Oren–Nayar base: diffuse_roughness 1.2 (warned).
 XFAIL = {
     "coat": "the coat matches (white tint 0.21, rough coat 0.35 in a probe), but the sun's reflection in the "
     "near-smooth coat (roughness 0.05) is one block of high variance (BSDF rays do not hit the sun, and "
     "light samples rarely fall in the narrow lobe): dE00 1.53",
     "anisotropic_metal": "Principled Anisotropic not supported yet (warned): dE00 2.8",
     "rough_glass": "rough glass loses energy (no multiple-scattering compensation): dE00 7.9",
-    "diffuse_roughness": "Principled Diffuse Roughness not supported yet (warned): dE00 1.2",
     "subsurface": "no subsurface scattering yet (warned): dE00 2.7",
     "translucent_bsdf": "Translucent BSDF borderline: dE00 1.26-1.52 between runs",
     "transparent_bsdf": "tint passed twice: Cycles squares the RGB, Polychrome the uplifted spectrum: dE00 1.61",

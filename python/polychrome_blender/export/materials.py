@@ -243,7 +243,6 @@ class MaterialExport:
         # supports (Diffuse Roughness: 4.3+).
         for lobe, value in (
             ("Subsurface Weight", 0.0),
-            ("Diffuse Roughness", 0.0),
             ("Alpha", 1.0),
             ("Anisotropic", 0.0),
         ):
@@ -263,6 +262,7 @@ class MaterialExport:
             "Coat Normal",
             "Sheen Weight",
             "Sheen Roughness",
+            "Diffuse Roughness",
         ):
             sock = node.inputs.get(socket)
             src = _linked_node(sock) if sock is not None else None
@@ -296,6 +296,9 @@ class MaterialExport:
                 extra[f"{lobe.lower()}_weight"] = _clamp01(sock.default_value)
                 extra[f"{lobe.lower()}_roughness"] = _clamp01(_input_value(node, f"{lobe} Roughness"))
                 extra[f"{lobe.lower()}_tint"] = None if tint == (1.0, 1.0, 1.0) else tint
+        dr = node.inputs.get("Diffuse Roughness")
+        if dr is not None and float(dr.default_value) > 0.0:
+            extra["diffuse_roughness"] = _clamp01(dr.default_value)
         if "coat_weight" in extra:
             extra["coat_ior"] = min(max(_input_value(node, "Coat IOR"), 1.0), 10.0)
         return pc.Principled(

@@ -42,6 +42,7 @@ use super::conductor::MetalFresnel;
 use super::dispersion::IndexOfRefraction;
 use super::fresnel::{fresnel_dielectric_f64, reflect};
 use super::microfacet::Ggx;
+use super::oren_nayar::OrenNayarLobe;
 use super::thinfilm::{metal_index_from_reflectance, thin_film_reflectance, ThinFilm};
 use super::{Bsdf, BsdfFlags, BsdfSample, ShadingContext, SpectralParam};
 use crate::sampling::cosine_hemisphere;
@@ -178,6 +179,10 @@ pub struct PrincipledParams {
     /// tint (Cycles' generalized Schlick Fresnel); white for none.
     pub specular_tint: SampledSpectrum,
     pub thin_film: Option<ThinFilm>,
+    /// Blender's Diffuse Roughness of the base (0: Lambertian; else Cycles' energy-
+    /// preserving Oren–Nayar, `bsdf_oren_nayar_setup` in the Principled branch of
+    /// `svm_node_closure_bsdf`).
+    pub diffuse_roughness: f32,
     /// The glass lobe (built by the caller from the same IOR and roughness), if
     /// `transmission > 0`.
     pub glass: Option<Box<dyn Bsdf>>,
@@ -194,6 +199,8 @@ pub struct Principled {
     film: Option<ThinFilm>,
     /// The Specular Tint on the dielectric layer's F0 (None: white).
     spec_tint: Option<SampledSpectrum>,
+    /// The base's Oren–Nayar lobe (None: Lambertian, Cycles' cutoff 1e-5).
+    diffuse_on: Option<OrenNayarLobe>,
     metal: MetalF82,
     glass: Option<Box<dyn Bsdf>>,
     /// E(μ) of the specular layer: one row, or one per wavelength lane.
@@ -308,6 +315,8 @@ impl Principled {
             ior,
             film,
             spec_tint,
+            diffuse_on: (p.diffuse_roughness.is_finite() && p.diffuse_roughness >= 1e-5)
+                .then(|| OrenNayarLobe::new(p.diffuse_roughness)),
             glass: if transmission > 0.0 { p.glass } else { None },
             e_table,
             inv_one_minus_eavg,
@@ -423,15 +432,17 @@ impl Principled {
             let (mu_o, mu_i) = (o.z, i.z);
             // Diffuse base.
             if self.w_base > 0.0 {
+                // Lambert ρ/π·cos θi, or the Oren–Nayar lobe (ρ·(single + F_ms(ρ)·multi)).
+                let on = self.diffuse_on.map(|l| (l, l.terms(o, i)));
                 for k in 0..n {
                     let r = self.row(k);
                     let t = &self.e_table[r];
-                    let v = rho.get(k)
-                        * FRAC_1_PI
-                        * (1.0 - lookup(t, mu_o))
-                        * (1.0 - lookup(t, mu_i))
-                        * self.inv_one_minus_eavg[r]
-                        * mu_i;
+                    let rk = rho.get(k);
+                    let diffuse = match on {
+                        None => rk * FRAC_1_PI * mu_i,
+                        Some((l, (single, multi))) => rk * (single + l.multiscatter(rk) * multi),
+                    };
+                    let v = diffuse * (1.0 - lookup(t, mu_o)) * (1.0 - lookup(t, mu_i)) * self.inv_one_minus_eavg[r];
                     out.set(k, self.w_base * v);
                 }
                 pdf += lobes.diffuse * mu_i * FRAC_1_PI;
@@ -754,6 +765,7 @@ mod tests {
                 specular_ior_level: 0.5,
                 specular_tint: SampledSpectrum::splat(n, 1.0),
                 thin_film: film,
+                diffuse_roughness: 0.0,
                 glass,
             },
             grid,
@@ -952,6 +964,7 @@ mod tests {
                 specular_ior_level: 0.5,
                 specular_tint: SampledSpectrum::from_slice(tint),
                 thin_film: None,
+                diffuse_roughness: 0.0,
                 glass: None,
             },
             grid,
@@ -1006,6 +1019,35 @@ mod tests {
             let (mean, se) = sampled_albedo(&black, &ctx, wo, 40_000, 4);
             let q = quadrature_albedo(&black, &ctx, wo);
             assert!((mean - q).abs() < 4.0 * se + 2e-3, "black base θ {th}: {mean} ± {se} vs {q}");
+        }
+    }
+
+    /// Diffuse Roughness: a white Oren–Nayar base under the specular layer still reflects
+    /// everything at every angle (the EON lobe keeps its energy), and with Specular IOR
+    /// Level 0 the base is exactly the Oren–Nayar BSDF of the Diffuse node.
+    #[test]
+    fn rough_diffuse_base_keeps_its_energy() {
+        let grid = WavelengthGrid::uniform(4, 400.0, 700.0).unwrap();
+        let ctx = ShadingContext::new(&grid);
+        for &(sigma, r) in &[(1.0f32, 0.5f32), (0.5, 0.2)] {
+            let mut m = principled(&grid, 1.0, 0.0, 0.0, r, 1.5, None);
+            m.diffuse_on = Some(OrenNayarLobe::new(sigma));
+            for &th in &[0.1f32, 0.8, 1.3] {
+                let (mean, se) = sampled_albedo(&m, &ctx, dir(th, 0.2), 40_000, 9);
+                assert!((mean - 1.0).abs() < 4.0 * se + 6e-3, "σ {sigma} θ {th}: {mean} ± {se}");
+            }
+        }
+        let mut m = principled(&grid, 0.6, 0.0, 0.0, 0.5, 1.5, None);
+        m.ior = specular_index(&IndexOfRefraction::constant(4, 1.5), 0.0);
+        m.e_table = vec![vec![0.0; ALBEDO_MU]];
+        m.inv_one_minus_eavg = vec![1.0];
+        m.diffuse_on = Some(OrenNayarLobe::new(0.8));
+        let on = crate::material::OrenNayar::new(SpectralParam::Constant(SampledSpectrum::splat(4, 0.6)), 0.8);
+        let (mut a, mut b) = (SampledSpectrum::zeros(4), SampledSpectrum::zeros(4));
+        for &(wo, wi) in &[(dir(0.3, 0.0), dir(1.0, 2.0)), (dir(1.2, 0.5), dir(0.4, 0.7))] {
+            m.eval(&ctx, wo, wi, &mut a);
+            on.eval(&ctx, wo, wi, &mut b);
+            assert!((a.get(0) - b.get(0)).abs() < 1e-5 * b.get(0).max(1.0), "{} vs {}", a.get(0), b.get(0));
         }
     }
 

@@ -417,6 +417,7 @@ mod tests {
             thin_film_thickness: 0.0,
             thin_film_ior: 1.33,
             specular_ior_level: 0.5,
+            diffuse_roughness: 0.0,
             coat: None,
             sheen: None,
         };

@@ -227,6 +227,9 @@ pub enum BsdfDesc {
         /// Blender's Specular IOR Level (0.5: F0 from `ior`; F0 scales by 2·level).
         #[serde(default = "half")]
         specular_ior_level: f32,
+        /// Blender's Diffuse Roughness of the base (0: Lambertian, else Oren–Nayar).
+        #[serde(default)]
+        diffuse_roughness: f32,
         /// Blender's Coat: a dielectric layer over everything else (absent: none).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         coat: Option<CoatDesc>,

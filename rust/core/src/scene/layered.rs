@@ -132,6 +132,7 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
             thin_film_thickness,
             thin_film_ior,
             specular_ior_level,
+            diffuse_roughness,
             coat,
             sheen,
         } => {
@@ -179,6 +180,7 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
                     specular_ior_level,
                     specular_tint,
                     thin_film,
+                    diffuse_roughness: unit_weight(material, "diffuse_roughness", *diffuse_roughness)?,
                     glass,
                 },
                 b.grid,

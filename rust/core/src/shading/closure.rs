@@ -156,6 +156,7 @@ pub enum Template {
         thin_film_thickness: F,
         thin_film_ior: F,
         specular_ior_level: F,
+        diffuse_roughness: F,
         coat: Option<CoatT>,
         sheen: Option<SheenT>,
     },
@@ -278,6 +279,7 @@ impl Template {
                 thin_film_thickness,
                 thin_film_ior,
                 specular_ior_level,
+                diffuse_roughness,
                 coat,
                 sheen,
             } => {
@@ -286,9 +288,17 @@ impl Template {
                     && base_color.is_const()
                     && specular_tint.is_const()
                     && matches!(ior, Ior::C(_))
-                    && [metallic, roughness, transmission, thin_film_thickness, thin_film_ior, specular_ior_level]
-                        .iter()
-                        .all(|f| f.is_const())
+                    && [
+                        metallic,
+                        roughness,
+                        transmission,
+                        thin_film_thickness,
+                        thin_film_ior,
+                        specular_ior_level,
+                        diffuse_roughness,
+                    ]
+                    .iter()
+                    .all(|f| f.is_const())
             }
             Template::Diffuse { color, roughness } | Template::Glossy { color, roughness } => {
                 color.is_const() && roughness.is_const()
@@ -332,6 +342,7 @@ impl Template {
                 thin_film_thickness,
                 thin_film_ior,
                 specular_ior_level,
+                diffuse_roughness,
                 coat,
                 sheen,
             } => {
@@ -346,6 +357,7 @@ impl Template {
                     thin_film_thickness: thin_film_thickness.at(v),
                     thin_film_ior: thin_film_ior.at(v),
                     specular_ior_level: specular_ior_level.at(v),
+                    diffuse_roughness: diffuse_roughness.at(v),
                     coat: coat.as_ref().and_then(|c| c.at(v)),
                     sheen: sheen.as_ref().and_then(|c| c.at(v)),
                 }
@@ -535,7 +547,6 @@ impl<'c, 'a> Lowering<'c, 'a> {
                 self.default_normal(node, "Normal")?;
                 let alpha = self.float(node, "Alpha", 0.0, 1.0)?;
                 for (id, default, what) in [
-                    ("Diffuse Roughness", 0.0, "Principled diffuse is Lambertian"),
                     ("Subsurface Weight", 0.0, "no subsurface scattering yet"),
                     ("Anisotropic", 0.0, "no anisotropy yet"),
                 ] {
@@ -557,6 +568,7 @@ impl<'c, 'a> Lowering<'c, 'a> {
                     thin_film_thickness: self.float(node, "Thin Film Thickness", 0.0, 100_000.0)?,
                     thin_film_ior: self.float(node, "Thin Film IOR", 1.0, 10.0)?,
                     specular_ior_level: self.float(node, "Specular IOR Level", 0.0, 1.0)?,
+                    diffuse_roughness: self.float(node, "Diffuse Roughness", 0.0, 1.0)?,
                     coat: self.coat(node)?,
                     sheen: self.sheen(node)?,
                 };
