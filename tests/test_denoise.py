@@ -153,14 +153,14 @@ def test_cli_denoise_flag_writes_the_denoised_image_and_passes(tmp_path):
     assert np.isfinite(ch["Combined.R"]).all() and not np.allclose(ch["Combined.R"], ch["Noisy Image.R"])
 
 
-def through_specular_scene(front: str) -> pc.Scene:
+def through_specular_scene(front: str, ior=1.5, wall_reflectance=None) -> pc.Scene:
     """An orthographic camera at the origin looking along +y at a wall (y = 2) of one
     colour; in the middle third of the view a perfect mirror (y = 1, facing the camera)
     or a glass slab (y = 1 to 1.1). With the mirror, behind the camera (y = −1) a wall of
     the same colour, which the mirror shows; with the glass nothing there, so light the
     slab reflects leaves the scene. Every ray meets the surfaces at normal incidence."""
     scene = pc.Scene()
-    wall = scene.add_material(pc.Diffuse(pc.spectra.rgb(0.7, 0.3, 0.1), name="wall"))
+    wall = scene.add_material(pc.Diffuse(wall_reflectance or pc.spectra.rgb(0.7, 0.3, 0.1), name="wall"))
 
     def quad(name, y, x0, x1, z0, z1, m, facing):  # facing: -1 towards the camera (−y)
         p = np.array([[x0, y, z0], [x1, y, z0], [x1, y, z1], [x0, y, z1]], np.float32)
@@ -173,7 +173,7 @@ def through_specular_scene(front: str) -> pc.Scene:
         mirror = scene.add_material(pc.Conductor(eta=0.2, k=3.0, name="mirror"))
         quad("mirror", 1.0, -0.15, 0.15, -1, 1, mirror, -1)
     else:
-        glass = scene.add_material(pc.Dielectric(1.5, name="glass"))
+        glass = scene.add_material(pc.Dielectric(ior, name="glass"))
         x0, x1, y0, y1, z0, z1 = -0.15, 0.15, 1.0, 1.1, -1.0, 1.0
         v = np.array([[x, y, z] for z in (z0, z1) for y in (y0, y1) for x in (x0, x1)], np.float32)
         # A closed box, outward faces (vertex k: x bit 0, y bit 1, z bit 2).
@@ -212,3 +212,61 @@ def test_aux_passes_see_through_mirrors_and_glass(front):
         # 256 spp × 120 pixels of a Bernoulli (reflected paths escape, adding 0): σ ≈ 0.1 %.
         np.testing.assert_allclose(ratio, expected, rtol=0.01)
         assert abs(r.normal[15, 15, 1]) > 0.95
+
+
+# A strongly dispersive Cauchy glass: n = 2.13 at 380 nm, 1.50 at 780 nm.
+CAUCHY_A, CAUCHY_B = 1.3, 0.12
+
+
+@pytest.mark.parametrize(
+    "dispersive, how",
+    [
+        (False, {}),
+        (True, {}),
+        (True, {"dispersion_splitting": True}),
+        (True, {"method": "HERO"}),
+        (True, {"method": "MONOCHROMATIC_RAYS"}),
+    ],
+    ids=["constant n=1.5", "Cauchy, collapse", "Cauchy, splitting", "Cauchy, hero", "Cauchy, monochromatic rays"],
+)
+def test_albedo_through_a_dispersive_slab_matches_the_closed_form(dispersive, how):
+    """Behind a glass slab at normal incidence a wall of constant reflectance ρ has
+    albedo ρ·T(λ), T = (1 − F)/(1 + F) with F = ((n(λ) − 1)/(n(λ) + 1))² (both faces and
+    the internal reflections), at each wavelength's own index even though the path
+    carries one wavelength past a dispersive glass (eq. 9). The pass integrates
+    ρ·T(λ)·D65(λ) against the CIE 1931 observer with the grid's quadrature, normalised
+    to Y(D65) = 1, to linear sRGB: computed here with colour-science's tables. A
+    dispersive glass makes T fall towards the blue, so the pass is tinted; the constant
+    glass (n = 1.5) gives a grey one. Past the dispersive glass the path collapses to
+    one wavelength (eq. 9), splits into one per wavelength, goes on with its hero
+    wavelength, or carries one from the camera on: the pass is the same."""
+    rho = 0.5
+    ior = pc.ior.cauchy(CAUCHY_A, CAUCHY_B) if dispersive else 1.5
+    scene = through_specular_scene("glass", ior=ior, wall_reflectance=pc.spectra.constant(rho))
+    r = pc.render(scene, width=30, height=30, samples=256, quality="FINAL", max_bounces=16, seed=3, wavelength_count=41, **how)
+    behind = r.albedo[:, 13:17].reshape(-1, 3).mean(axis=0)
+    direct = r.albedo[:, 2:8].reshape(-1, 3).mean(axis=0)
+
+    lam = np.linspace(380.0, 780.0, 41)
+    w = np.full(41, 10.0)
+    w[[0, -1]] = 5.0  # the grid's quadrature weights (eq. 6)
+    n = CAUCHY_A + CAUCHY_B / (lam / 1000.0) ** 2 if dispersive else np.full(41, 1.5)
+    f = ((n - 1) / (n + 1)) ** 2
+    t = (1 - f) / (1 + f)
+    shape = colour.SpectralShape(380, 780, 10)
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape).values
+    d65 = colour.SDS_ILLUMINANTS["D65"].copy().align(shape).values
+    cs = colour.RGB_COLOURSPACES["sRGB"]
+
+    def albedo_rgb(reflectance):
+        xyz = (cmfs * (d65 * reflectance * w)[:, None]).sum(axis=0) / (cmfs[:, 1] * d65 * w).sum()
+        return colour.XYZ_to_RGB(xyz, cs, apply_cctf_encoding=False)
+
+    np.testing.assert_allclose(direct, albedo_rgb(np.full(41, rho)), rtol=2e-3)
+    expected = albedo_rgb(rho * t)
+    print(f"through the slab: {behind} expected {expected}")
+    # 256 spp × 120 pixels; the paths the slab reflects back add 0: σ ≈ 0.1 %.
+    np.testing.assert_allclose(behind, expected, rtol=0.01)
+    if dispersive:
+        assert expected[2] < 0.95 * expected[0] and behind[2] < 0.95 * behind[0], (behind, expected)
+    assert abs(r.normal[15, 15, 1]) > 0.95  # the wall's normal, not the glass'

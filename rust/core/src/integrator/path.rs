@@ -88,21 +88,76 @@ impl CameraMis for PowerHeuristic {
 /// as Open Image Denoise expects and Cycles writes its denoising passes
 /// (intern/cycles/kernel/film/denoising_passes.h). A chain of such surfaces that leaves
 /// the scene gives zero, as an escaped camera ray; one that ends otherwise (bounce limit,
-/// a dispersive surface's single-wavelength continuation) keeps the first hit's values.
+/// Russian roulette) keeps the first hit's values.
+///
+/// Through a dispersive glass the path goes on with one wavelength (eq. 9) and the chain
+/// with it: from there the albedo is weighted by [`FirstHit::weight`], each wavelength's
+/// own Fresnel factors along the carried wavelength's direction
+/// ([`crate::material::Bsdf::specular_weights`]), so the pass keeps its colour and is
+/// not divided by the collapse's lane probability. The same holds for paths that carry
+/// one wavelength from the camera on (monochromatic methods).
 pub struct FirstHit<'a> {
     pub depth: &'a mut f32,
     pub normal: &'a mut Vec3A,
     pub albedo: &'a mut SampledSpectrum,
+    /// Once the path carries one wavelength: the chain's grid-wide weight.
+    weight: Option<SampledSpectrum>,
+    /// The grid-wide throughput arriving at the dispersive vertex being scattered.
+    before: Option<SampledSpectrum>,
+    /// The grid index the path carries (with `weight`) and its throughput there after
+    /// the last update, so factors other than the BSDF's (roulette, media) follow it grey.
+    lane: usize,
+    last: f32,
+}
+
+impl<'a> FirstHit<'a> {
+    pub fn new(depth: &'a mut f32, normal: &'a mut Vec3A, albedo: &'a mut SampledSpectrum) -> Self {
+        Self { depth, normal, albedo, weight: None, before: None, lane: 0, last: 0.0 }
+    }
+
+    /// The path carries grid wavelength `lane` alone with throughput `value`, the chain
+    /// weighing `weight`.
+    fn carry(&mut self, weight: SampledSpectrum, lane: usize, value: f32) {
+        self.weight = Some(weight);
+        self.lane = lane;
+        self.last = value;
+    }
+
+    /// After the specular event `sc` at `v` (`before`: the grid-wide throughput arriving
+    /// there; `ctx` as `sample` saw it): the chain's weight is `before` times each
+    /// wavelength's own factor of the event, or the carried one's (`grey`) if unknown.
+    fn weigh_event(
+        &self,
+        ctx: &ShadingContext,
+        v: &Vertex,
+        sc: &Scatter,
+        before: &SampledSpectrum,
+        grey: f32,
+    ) -> SampledSpectrum {
+        let mut w = SampledSpectrum::zeros(before.len());
+        if v.material.bsdf.specular_weights(ctx, v.wo_local, sc.sample.wi, before, &mut w) {
+            w.mul_assign(before);
+        } else {
+            w = before.clone();
+            w.scale(grey);
+        }
+        w
+    }
+
+    /// The carried wavelength's throughput in `beta`, if it carries it.
+    fn carried<T: Throughput>(&self, beta: &T) -> Option<f32> {
+        (0..beta.lanes()).find(|&j| beta.lane_index(j) == self.lane).map(|j| beta.lane(j))
+    }
 }
 
 /// The hooks of a camera path: gathers into `gathered` what it reaches, weighted by `mis`.
-pub struct CameraPath<'a, T, M> {
+pub struct CameraPath<'a, 'b, T, M> {
     pub mis: M,
     pub gathered: &'a mut T,
-    pub first_hit: Option<FirstHit<'a>>,
+    pub first_hit: Option<FirstHit<'b>>,
 }
 
-impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, T, M> {
+impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
     fn escaped(&mut self, scene: &Scene, st: &PathState, beta: &T, scratch: &mut Scratch) {
         if let Some(out) = self.first_hit.take() {
             // Out through mirrors and glass: nothing seen, as a ray that escapes at once.
@@ -129,6 +184,19 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, T, M> {
             if st.depth == 0 {
                 *out.depth = scene.camera.depth(v.si.p);
             }
+            if out.weight.is_some() {
+                // What changed the carried wavelength since the last vertex (roulette,
+                // media) weighs the chain alike.
+                if let Some(now) = out.carried(beta) {
+                    if out.last > 0.0 && now != out.last {
+                        let f = now / out.last;
+                        if let Some(w) = &mut out.weight {
+                            w.scale(f);
+                        }
+                    }
+                    out.last = now;
+                }
+            }
             // The first hit, and after perfect mirrors and glass the first other surface.
             if st.depth == 0 || v.flags.smooth || !v.flags.specular {
                 *out.normal = v.si.ns;
@@ -137,11 +205,21 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, T, M> {
                 v.material.bsdf.albedo(ctx, out.albedo);
                 ctx.single_wavelength = single;
                 if st.depth > 0 {
-                    beta.weigh_grid(out.albedo);
+                    match &out.weight {
+                        Some(w) => out.albedo.mul_assign(w),
+                        None => beta.weigh_grid(out.albedo),
+                    }
                 }
             }
             if v.flags.smooth || !v.flags.specular {
                 self.first_hit = None;
+            } else if v.flags.dispersive && ctx.single_wavelength.is_none() {
+                // Where the path may collapse: keep the grid-wide throughput arriving.
+                let mut b = SampledSpectrum::splat(scene.grid.len(), 1.0);
+                beta.weigh_grid(&mut b);
+                out.before = Some(b);
+            } else {
+                out.before = None;
             }
         }
         if st.depth == 0 {
@@ -226,9 +304,30 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, T, M> {
         v: &Vertex,
         st: &PathState,
         sc: &Scatter,
-        _beta: &T,
+        beta: &T,
     ) -> bool {
         self.mis.scattered(ctx, v, st, sc);
+        if let Some(out) = &mut self.first_hit {
+            // A specular vertex of the aux chain (any other one ended it).
+            if let Some(before) = out.before.take() {
+                if let Some(i) = sc.sample.collapsed_to {
+                    // Collapsed here (eq. 9): every wavelength takes the sampled event
+                    // with its own factor (the event's probability as sample saw it, with
+                    // the whole spectrum), along the chosen wavelength's direction.
+                    let single = ctx.single_wavelength.take();
+                    let w = out.weigh_event(ctx, v, sc, &before, 1.0);
+                    ctx.single_wavelength = single;
+                    let value = (0..beta.lanes()).find(|&j| beta.lane_index(j) == i).map_or(0.0, |j| beta.lane(j));
+                    out.carry(w, i, value);
+                }
+            } else if let Some(w) = out.weight.take() {
+                // A later specular vertex of a single-wavelength chain.
+                let now = out.carried(beta).unwrap_or(0.0);
+                let grey = if out.last > 0.0 { now / out.last } else { 0.0 };
+                let w = out.weigh_event(ctx, v, sc, &w, grey);
+                out.carry(w, out.lane, now);
+            }
+        }
         true
     }
 
@@ -299,16 +398,26 @@ pub fn trace_camera<W: Wavelengths, M: CameraMis>(
     let mut beta = wl.unit(scene.grid.len(), &mut scratch.spare);
     let mut gathered = beta.zero_like_in(&mut scratch.spare);
     let start = PathState::start(ray);
-    let mut hooks = CameraPath { mis, gathered: &mut gathered, first_hit: Some(FirstHit { depth, normal, albedo }) };
+    let mut aux = FirstHit::new(depth, normal, albedo);
+    if let Some(i) = wl.single() {
+        // One wavelength from the camera on: the chain is weighed grid-wide from here.
+        let mut unit = SampledSpectrum::splat(scene.grid.len(), 1.0);
+        unit.scale(beta.lane(0));
+        aux.carry(unit, i, beta.lane(0));
+    }
+    let mut hooks = CameraPath { mis, gathered: &mut gathered, first_hit: Some(aux) };
     let end = walk.run(scene, &mut ctx, start, &mut beta, rng, &mut hooks, scratch);
-    continue_single_wavelength(scene, walk, end, &mut ctx, &beta, &mut gathered, rng, scratch);
+    // The aux chain goes on through a dispersive surface with the single wavelength.
+    let aux = hooks.first_hit.take();
+    continue_single_wavelength(scene, walk, end, &mut ctx, &beta, &mut gathered, aux, rng, scratch);
     wl.resolve(&gathered, radiance);
     gathered.recycle(&mut scratch.spare);
     beta.recycle(&mut scratch.spare);
 }
 
 /// Carries a whole-spectrum camera path on past a dispersive surface with one wavelength
-/// per path (power-heuristic MIS), adding what each gathers at its wavelength.
+/// per path (power-heuristic MIS), adding what each gathers at its wavelength; `aux`,
+/// the first-hit passes' chain if it reached the dispersive surface, goes on with it.
 #[allow(clippy::too_many_arguments)]
 fn continue_single_wavelength<T: Throughput>(
     scene: &Scene,
@@ -317,6 +426,7 @@ fn continue_single_wavelength<T: Throughput>(
     ctx: &mut ShadingContext,
     beta: &T,
     gathered: &mut T,
+    aux: Option<FirstHit>,
     rng: &mut Rng,
     scratch: &mut Scratch,
 ) {
@@ -325,26 +435,35 @@ fn continue_single_wavelength<T: Throughput>(
         // Collapsed (eq. 9): the BSDF chose wavelength `index` and divided by its probability.
         End::Collapsed { index, state } => {
             if let Some(b) = beta.collapse(index) {
-                let l = trace_single(scene, walk, state, b, rng, scratch);
+                let l = trace_single(scene, walk, state, b, aux.filter(|a| a.weight.is_some()), rng, scratch);
                 gathered.add_at(index, l);
             }
         }
         // Deterministic (splitting) mode: one sub-path per wavelength that still carries
-        // energy, each scattering the vertex at its own wavelength.
+        // energy, each scattering the vertex at its own wavelength. The aux chain follows
+        // the sub-path of the most energy (β·quadrature weight), drawing nothing random.
         End::Split { vertex: v, state } => {
+            let weights = scene.grid.weights();
+            let follow = (0..scene.grid.len())
+                .filter_map(|i| beta.collapse(i).map(|b| (i, b.value * weights[i])))
+                .filter(|&(_, e)| e > 0.0)
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+                .map(|(i, _)| i);
+            let mut aux = aux;
             for i in 0..scene.grid.len() {
                 let Some(b) = beta.collapse(i) else { return };
                 if !(b.value > 0.0) {
                     continue;
                 }
-                let l = scatter_single(scene, walk, ctx, &v, &state, b, false, rng, scratch);
+                let a = if Some(i) == follow { aux.take() } else { None };
+                let l = scatter_single(scene, walk, ctx, &v, &state, b, false, a, rng, scratch);
                 gathered.add_at(i, l);
             }
         }
         // Hero wavelengths: the secondary ones end here, the hero carries on alone.
         End::Terminated { index, vertex: v, state } => {
             if let Some(b) = beta.collapse(index) {
-                let l = scatter_single(scene, walk, ctx, &v, &state, b, true, rng, scratch);
+                let l = scatter_single(scene, walk, ctx, &v, &state, b, true, aux, rng, scratch);
                 gathered.add_at(index, l);
             }
         }
@@ -364,28 +483,40 @@ fn scatter_single(
     state: &PathState,
     mut b: SingleWavelength,
     roulette: bool,
+    aux: Option<FirstHit>,
     rng: &mut Rng,
     scratch: &mut Scratch,
 ) -> f32 {
     ctx.single_wavelength = Some(b.index);
+    let arriving = b.value;
     let Some(sc) = b.scatter(v, ctx, rng, &mut scratch.tp) else {
         return 0.0;
     };
+    // The aux chain (its grid-wide throughput kept where it reached `v`) takes the
+    // event with every wavelength's own factor at this wavelength's probability.
+    let aux = aux.and_then(|mut a| {
+        let before = a.before.take()?;
+        let grey = if arriving > 0.0 { b.value / arriving } else { 0.0 };
+        let w = a.weigh_event(ctx, v, &sc, &before, grey);
+        a.carry(w, b.index, b.value);
+        Some(a)
+    });
     let st = state.after(scene, v, &sc, ctx.front_face);
     if roulette && !russian_roulette(&mut b, st.depth, walk.rr_depth, rng) {
         return 0.0;
     }
-    trace_single(scene, walk, st, b, rng, scratch)
+    trace_single(scene, walk, st, b, aux, rng, scratch)
 }
 
 /// The radiance a single-wavelength camera path from `st` with throughput `beta`
-/// gathers (already multiplied by `beta`). It has its own shading context: the vertex a
+/// gathers (already multiplied by `beta`), going on with the aux chain `first_hit`. It has its own shading context: the vertex a
 /// split continues from keeps its own for the next wavelength.
 fn trace_single(
     scene: &Scene,
     walk: &Walk,
     st: PathState,
     mut beta: SingleWavelength,
+    first_hit: Option<FirstHit>,
     rng: &mut Rng,
     scratch: &mut Scratch,
 ) -> f32 {
@@ -395,7 +526,7 @@ fn trace_single(
     let mut ctx = ShadingContext::new(&scene.grid);
     ctx.single_wavelength = Some(beta.index);
     let mut gathered = beta.zero_like();
-    let mut hooks = CameraPath { mis: PowerHeuristic, gathered: &mut gathered, first_hit: None };
+    let mut hooks = CameraPath { mis: PowerHeuristic, gathered: &mut gathered, first_hit };
     walk.run(scene, &mut ctx, st, &mut beta, rng, &mut hooks, scratch);
     gathered.value
 }

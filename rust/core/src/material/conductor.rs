@@ -138,6 +138,21 @@ impl<F: MetalFresnel> Bsdf for MicrofacetReflection<F> {
         throughput.mul_assign(&f);
         Some(BsdfSample { wi, pdf, specular: false, collapsed_to: None })
     }
+    /// A smooth metal reflects every wavelength the same way: F_λ (chosen with probability 1).
+    fn specular_weights(
+        &self,
+        ctx: &ShadingContext,
+        wo: Vec3A,
+        _wi: Vec3A,
+        _throughput: &SampledSpectrum,
+        out: &mut SampledSpectrum,
+    ) -> bool {
+        if !self.smooth() || wo.z <= 0.0 {
+            return false;
+        }
+        self.fresnel.eval(ctx, wo.z, out);
+        true
+    }
     fn albedo(&self, ctx: &ShadingContext, out: &mut SampledSpectrum) {
         self.fresnel.eval(ctx, 1.0, out);
     }

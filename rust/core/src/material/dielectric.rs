@@ -146,6 +146,54 @@ impl Bsdf for Dielectric {
     fn albedo(&self, _: &ShadingContext, out: &mut SampledSpectrum) {
         out.fill(1.0);
     }
+    /// Reflection: R_λ / p, refraction: T_λ/η_λ² / p, with each wavelength's own index;
+    /// p is the event's probability in `sample`: R or 1 − R at the common index, the
+    /// energy-weighted R̄ or 1 − R̄ for a polychromatic ray at a dispersive glass (the
+    /// lane choice of the collapse is not part of it: every lane takes the event).
+    fn specular_weights(
+        &self,
+        ctx: &ShadingContext,
+        wo: Vec3A,
+        wi: Vec3A,
+        throughput: &SampledSpectrum,
+        out: &mut SampledSpectrum,
+    ) -> bool {
+        if wo.z == 0.0 {
+            return false;
+        }
+        let reflected = wi.z * wo.z > 0.0;
+        let r_event = match common_index(&self.ior, ctx) {
+            Some(n) => fresnel_dielectric(wo.z, relative(n, ctx)),
+            None => {
+                let weights = ctx.grid.weights();
+                let (mut energy, mut energy_r) = (0.0f32, 0.0f32);
+                for (i, w) in weights.iter().enumerate().take(throughput.len()) {
+                    let e = throughput.get(i).max(0.0) * w;
+                    energy += e;
+                    energy_r += e * fresnel_dielectric(wo.z, relative(self.ior.at(i), ctx));
+                }
+                if !(energy > 0.0) {
+                    return false;
+                }
+                (energy_r / energy).clamp(0.0, 1.0)
+            }
+        };
+        let p = if reflected { r_event } else { 1.0 - r_event };
+        if !(p > 0.0) {
+            return false;
+        }
+        for i in 0..out.len() {
+            let eta = relative(self.ior.at(i), ctx);
+            let r = fresnel_dielectric(wo.z, eta);
+            let v = if reflected {
+                r
+            } else {
+                refract(wo, Vec3A::Z, eta).map_or(0.0, |(_, etap)| (1.0 - r) * radiance_scale(ctx, etap))
+            };
+            out.set(i, v / p);
+        }
+        true
+    }
 }
 
 /// A rough dielectric interface (GGX microfacets; Walter et al. 2007, pbrt-v4 §9.7).
@@ -409,6 +457,49 @@ mod tests {
         assert!(s.collapsed_to.is_none());
         let sin_t = (s.wi.x * s.wi.x + s.wi.y * s.wi.y).sqrt();
         assert!((wo.x - ior.at(2) * sin_t).abs() < 1e-5);
+    }
+
+    /// The aux pass's per-wavelength weights of the event `sample` chose have the
+    /// expectation R_λ + T_λ/η_λ² at every lane, each with its own index, whether the ray
+    /// arrives with the whole spectrum (and collapses) or carries one wavelength, from
+    /// outside or inside.
+    #[test]
+    fn specular_weights_are_unbiased_per_wavelength() {
+        let grid = WavelengthGrid::uniform(9, 380.0, 780.0).unwrap();
+        let ior = glass(&grid, IorDesc::Named { name: "N-SF11".into() });
+        let m = Dielectric { ior: ior.clone() };
+        let wo = Vec3A::new(0.5f32.sin(), 0.0, 0.5f32.cos());
+        let beta: Vec<f32> = (0..9).map(|i| 0.2 + 0.1 * i as f32).collect();
+        for single in [None, Some(6)] {
+            for front in [true, false] {
+                let mut ctx = ShadingContext::new(&grid);
+                ctx.single_wavelength = single;
+                ctx.front_face = front;
+                let mut rng = Rng::new(5, 6);
+                let n = 100_000;
+                let mut sum = [0.0f64; 9];
+                let mut w = SampledSpectrum::zeros(9);
+                for _ in 0..n {
+                    let before = SampledSpectrum::from_slice(&beta);
+                    let mut tp = before.clone();
+                    let Some(s) = m.sample(&ctx, wo, rng.uniform2(), rng.uniform(), &mut tp) else { continue };
+                    assert!(m.specular_weights(&ctx, wo, s.wi, &before, &mut w));
+                    for (k, acc) in sum.iter_mut().enumerate() {
+                        *acc += w.get(k) as f64;
+                    }
+                }
+                for (k, &got) in sum.iter().enumerate() {
+                    let eta = if front { ior.at(k) } else { 1.0 / ior.at(k) };
+                    let r = fresnel_dielectric(wo.z, eta) as f64;
+                    let t = if r < 1.0 { (1.0 - r) / (eta as f64 * eta as f64) } else { 0.0 };
+                    let (got, expected) = (got / n as f64, r + t);
+                    assert!(
+                        (got - expected).abs() < 0.01 * expected,
+                        "{single:?} {front} lane {k}: {got} vs {expected}"
+                    );
+                }
+            }
+        }
     }
 
     /// White furnace for the rough dielectric: reflected + transmitted importance ≤ 1,

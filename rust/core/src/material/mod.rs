@@ -129,6 +129,23 @@ pub trait Bsdf: Send + Sync {
     ) -> Option<BsdfSample>;
     /// Directional-hemispherical reflectance seen from the normal, for the albedo pass.
     fn albedo(&self, ctx: &ShadingContext, out: &mut SampledSpectrum);
+    /// For the albedo pass seen through mirrors and glass once a path carries one
+    /// wavelength (after a dispersive collapse, or monochromatic rays): `out` = the
+    /// weight f·|cos θi|/p of the specular event `wo → wi` that [`Bsdf::sample`] chose,
+    /// at every grid wavelength, as if each had taken it with its own Fresnel factor,
+    /// divided by the probability `p` that `sample` (given `throughput` and `ctx`) gave
+    /// that event. False: not known here; the caller weighs by the carried wavelength's
+    /// own factor (grey).
+    fn specular_weights(
+        &self,
+        _ctx: &ShadingContext,
+        _wo: Vec3A,
+        _wi: Vec3A,
+        _throughput: &SampledSpectrum,
+        _out: &mut SampledSpectrum,
+    ) -> bool {
+        false
+    }
 }
 
 /// A BSDF that reflects nothing (emission-only surfaces).

@@ -40,6 +40,20 @@ impl Bsdf for Tinted {
         self.inner.albedo(ctx, out);
         self.color.multiply_into(ctx, out);
     }
+    fn specular_weights(
+        &self,
+        ctx: &ShadingContext,
+        wo: Vec3A,
+        wi: Vec3A,
+        throughput: &SampledSpectrum,
+        out: &mut SampledSpectrum,
+    ) -> bool {
+        let known = self.inner.specular_weights(ctx, wo, wi, throughput, out);
+        if known {
+            self.color.multiply_into(ctx, out);
+        }
+        known
+    }
 }
 
 #[cfg(test)]
