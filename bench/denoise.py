@@ -1,8 +1,9 @@
 """Denoising inside the speed-for-accuracy trade (issue 18): mean ΔE00 to a converged
 reference against time, noisy and denoised, on the Cornell box (or the glass room of
-fig. 13, `--scene glass_room`) at 1, 2, 4, ... 64 spp.
+fig. 13, `--scene glass_room`, or a textured glTF asset imported by Blender and exported
+by the add-on, `--scene gltf`: bench/gltf_scene.py, needs bpy) at 1, 2, 4, ... 64 spp.
 
-    python bench/denoise.py [--scene cornell|glass_room] [--size 64] [--ref-samples 2048] [--write docs/BENCHMARKS.md]
+    python bench/denoise.py [--scene cornell|glass_room|gltf] [--size 64] [--ref-samples 2048] [--max-samples 64] [--write docs/BENCHMARKS.md]
 
 Times are wall seconds of `pc.render` (scene build included) and of the denoiser
 (`stats["denoise_seconds"]`: OIDN with prefiltered albedo and normal, as `denoise=True`
@@ -41,7 +42,7 @@ def mean_de00(a, b) -> float:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--scene", choices=("cornell", "glass_room"), default="cornell")
+    ap.add_argument("--scene", choices=("cornell", "glass_room", "gltf"), default="cornell")
     ap.add_argument("--size", type=int, default=64)
     ap.add_argument("--ref-samples", type=int, default=2048)
     ap.add_argument("--max-samples", type=int, default=64)
@@ -51,6 +52,13 @@ def main() -> int:
         from cornell_box import build_scene
 
         scene, what = build_scene(), "Cornell box (examples/cornell_box.py)"
+    elif args.scene == "gltf":
+        from gltf_scene import WHAT, build_scene
+
+        scene, warnings = build_scene()
+        for w in warnings:
+            print("warning:", w)
+        what = WHAT
     else:
         from methods import room
 
@@ -89,9 +97,14 @@ def main() -> int:
     body = "\n".join(lines)
     print(body)
     if args.write:
-        title = "Denoising against time" + ("" if args.scene == "cornell" else " (glass room)")
+        title = "Denoising against time" + {"cornell": "", "glass_room": " (glass room)", "gltf": " (textured glTF asset)"}[args.scene]
         flags = "" if args.scene == "cornell" else f" --scene {args.scene} --ref-samples {args.ref_samples}"
-        write_section(args.write, title, body, f"python bench/denoise.py{flags} --write docs/BENCHMARKS.md")
+        if args.size != 64:
+            flags += f" --size {args.size}"
+        if args.max_samples != 64:
+            flags += f" --max-samples {args.max_samples}"
+        after = "Denoising against time (glass room)" if args.scene == "gltf" else None
+        write_section(args.write, title, body, f"python bench/denoise.py{flags} --write docs/BENCHMARKS.md", after=after)
     return 0
 
 

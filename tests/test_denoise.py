@@ -7,6 +7,7 @@ by which it helps is measured (docs/denoise.md) and asserted with a margin."""
 from __future__ import annotations
 
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -270,3 +271,36 @@ def test_albedo_through_a_dispersive_slab_matches_the_closed_form(dispersive, ho
     if dispersive:
         assert expected[2] < 0.95 * expected[0] and behind[2] < 0.95 * behind[0], (behind, expected)
     assert abs(r.normal[15, 15, 1]) > 0.95  # the wall's normal, not the glass'
+
+
+def test_viewport_session_denoises_its_previews_with_denoise_previews():
+    """The Blender viewport (the add-on's ViewportSession, which runs a RenderJob with the
+    scene's settings, scene.polychrome.denoise_previews included) shows OIDN-denoised
+    previews: each one equals the same pass of a session without it, denoised colour-only
+    with OIDN's fast quality; the final one stays the noisy image without `denoise`."""
+    from polychrome_blender import viewport
+
+    def previews(**flags):
+        s = viewport.ViewportSession()
+        s.set_scene(*cornell().description())
+        s.set_settings(pc.RenderSettings(samples=24, seed=4, max_bounces=4, wavelength_count=16, **flags))
+        s.set_view(pc.Camera.looking_at((0.0, -3.5, 1.0), (0.0, 0.0, 1.0)), 24, 16)
+        assert s.sync()
+        seen, deadline = {}, time.monotonic() + 120
+        while s.refining or not seen:
+            p = s.poll()
+            if p is not None:
+                seen[(p.samples, p.last)] = p.rgba.copy()
+            assert time.monotonic() < deadline, "the viewport render did not finish"
+            time.sleep(0.002)
+        s.free()
+        return seen
+
+    plain, denoised = previews(), previews(denoise_previews=True)
+    common = [k for k in denoised if k in plain and not k[1]]
+    assert common, (sorted(plain), sorted(denoised))
+    for k in common:
+        np.testing.assert_allclose(denoised[k], denoise.denoise(plain[k], quality="fast"), atol=1e-5)
+        assert not np.allclose(denoised[k], plain[k])
+    last = [k for k in denoised if k[1]]
+    assert last and np.array_equal(denoised[last[0]], plain[last[0]])

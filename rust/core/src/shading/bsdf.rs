@@ -106,4 +106,14 @@ impl Bsdf for GraphBsdf {
     fn albedo(&self, ctx: &ShadingContext, out: &mut SampledSpectrum) {
         self.with(ctx, |b| b.albedo(ctx, out))
     }
+    fn specular_weights(
+        &self,
+        ctx: &ShadingContext,
+        wo: Vec3A,
+        wi: Vec3A,
+        throughput: &SampledSpectrum,
+        out: &mut SampledSpectrum,
+    ) -> bool {
+        self.with(ctx, |b| b.specular_weights(ctx, wo, wi, throughput, out))
+    }
 }
