@@ -113,3 +113,83 @@ def test_bad_visibility_raises_naming_the_instance():
         scene.add_instance(m, np.eye(4), "x", visibility={"camera": "no"})
     scene.add_instance(m, np.eye(4), "x", visibility={"camera": True})
     assert "visibility" not in scene.description()[0]["instances"][0]  # the default is left out
+
+
+# -- diffuse / glossy / transmission visibility, by the kind of lobe (Cycles' closure
+# labels) that scatters a ray or is lit by a light ------------------------------------
+
+
+def lamp_scene(floor_material, light_visibility=None, panel_visibility=None, point=True):
+    """A floor under a point light of power P at height h (or a camera-invisible
+    emissive square of half-width 1 at height 1), seen from above (orthographic)."""
+    scene = pc.Scene()
+    floor = scene.add_material(floor_material)
+    scene.add_mesh("floor", *quad(10.0, 0.0), material=floor)
+    if point:
+        scene.add_light(pc.PointLight((0, 0, 1.0), power=40.0, name="lamp", visibility=light_visibility))
+    else:
+        panel = scene.add_material(pc.Emitter(3.0, name="panel"))
+        m = scene.add_mesh("panel", *quad(1.0, 0.0), material=panel, place=False)
+        placed = np.eye(4)
+        placed[2, 3] = 1.0
+        scene.add_instance(m, placed, "panel", visibility={"camera": False, **(panel_visibility or {})})
+    scene.camera = pc.Camera.looking_at((0, 0, 3), (0, 0, 0), projection="ORTHOGRAPHIC", ortho_scale=0.05, name="top")
+    return scene
+
+
+def test_light_invisible_to_diffuse_rays_does_not_light_a_diffuse_floor():
+    lit = RHO / math.pi * 40.0 / (4 * math.pi) / 1.0**2  # ρ/π · I/h² under the lamp
+    assert mean_luminance(lamp_scene(pc.Diffuse(RHO))) == pytest.approx(lit, rel=0.01)
+    assert mean_luminance(lamp_scene(pc.Diffuse(RHO), {"glossy": False, "transmission": False})) == pytest.approx(lit, rel=0.01)
+    assert mean_luminance(lamp_scene(pc.Diffuse(RHO), {"diffuse": False})) == pytest.approx(0.0, abs=1e-7)
+    with pytest.raises(ValueError, match="light 'x'.*camra"):
+        pc.PointLight((0, 0, 1), name="x", visibility={"camra": False}).to_dict()
+
+
+def test_emitter_invisible_to_a_lobe_kind_lights_nothing_through_that_kind():
+    """A diffuse floor under an emissive square it cannot see by diffuse rays is black
+    (next-event estimation skips it, BSDF rays pass through it); by glossy rays, lit as
+    the closed form; a rough glossy floor the other way round."""
+    L, a, h = 3.0, 1.0, 1.0
+
+    def corner(x, y):
+        return 0.5 * (x / math.hypot(x, h) * math.atan(y / math.hypot(x, h)) + y / math.hypot(y, h) * math.atan(x / math.hypot(y, h)))
+
+    lit = RHO / math.pi * L * 4 * corner(a, a)
+    kw = {"samples": 64, "max_bounces": 1}
+    assert mean_luminance(lamp_scene(pc.Diffuse(RHO), point=False, panel_visibility={"glossy": False}), **kw) == pytest.approx(
+        lit, rel=0.02
+    )
+    assert mean_luminance(lamp_scene(pc.Diffuse(RHO), point=False, panel_visibility={"diffuse": False}), **kw) == pytest.approx(
+        0.0, abs=1e-7
+    )
+    glossy = pc.Glossy(0.8, roughness=0.4, name="satin")
+    seen = mean_luminance(lamp_scene(glossy, point=False), **kw)
+    assert seen > 0.05
+    assert mean_luminance(lamp_scene(glossy, point=False, panel_visibility={"diffuse": False}), **kw) == pytest.approx(seen, rel=1e-6)
+    assert mean_luminance(lamp_scene(glossy, point=False, panel_visibility={"glossy": False}), **kw) == pytest.approx(0.0, abs=1e-7)
+
+
+def test_card_invisible_to_glossy_rays_is_not_in_the_mirror():
+    """A mirror floor (reflectance 1) under a black card and, above it, a camera-invisible
+    emissive panel of radiance L: the camera sees the panel in the mirror only when the
+    card is invisible to glossy rays."""
+    L = 3.0
+
+    def scene(card_visibility):
+        s = pc.Scene()
+        s.add_mesh("mirror", *quad(10.0, 0.0), material=s.add_material(pc.Conductor(eta=1.0, k=1e4, name="mirror")))
+        for name, z, mat, vis in (
+            ("card", 1.0, pc.Diffuse(0.0, name="card"), card_visibility),
+            ("panel", 2.0, pc.Emitter(L, name="panel"), {"camera": False}),
+        ):
+            m = s.add_mesh(name, *quad(2.0, 0.0), material=s.add_material(mat), place=False)
+            placed = np.eye(4)
+            placed[2, 3] = z
+            s.add_instance(m, placed, name, visibility=vis)
+        s.camera = pc.Camera.looking_at((0, 0, 0.5), (0, 0, 0), projection="ORTHOGRAPHIC", ortho_scale=0.2, name="top")
+        return s
+
+    assert mean_luminance(scene({"camera": False, "glossy": False}), max_bounces=1) == pytest.approx(L, rel=0.01)
+    assert mean_luminance(scene({"camera": False}), max_bounces=1) == pytest.approx(0.0, abs=1e-7)
+    assert mean_luminance(scene({"camera": False, "diffuse": False}), max_bounces=1) == pytest.approx(0.0, abs=1e-7)

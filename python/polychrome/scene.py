@@ -362,6 +362,8 @@ class PointLight:
     color: Any = (1.0, 1.0, 1.0)
     name: str = "PointLight"
     radius: float = 0.0
+    #: the kinds of bounces it lights, e.g. ``{"diffuse": False}`` (``LIGHT_RAY_KINDS``)
+    visibility: Any = None
 
     def to_dict(self) -> dict[str, Any]:
         pos = _finite_floats(self.position, f"light '{self.name}': position")
@@ -370,7 +372,28 @@ class PointLight:
         _finite_floats([self.power], f"light '{self.name}': power")
         intensity = as_spectrum(self.color) * (float(self.power) / (4.0 * math.pi))
         d = {"type": "point", "name": self.name, "position": pos, "intensity": intensity.to_dict()}
-        return _with_radius(d, self.radius, self.name)
+        return _with_light_visibility(_with_radius(d, self.radius, self.name), self.visibility, self.name)
+
+
+#: The kinds of rays a light's ``visibility`` names: the bounces it lights (Cycles' light
+#: ray visibility; a light that is no geometry has no camera or shadow visibility).
+LIGHT_RAY_KINDS = ("diffuse", "glossy", "transmission")
+
+
+def _with_light_visibility(d: dict[str, Any], visibility: Any, name: str) -> dict[str, Any]:
+    """``d`` with the light's ray visibility (a dict of LIGHT_RAY_KINDS booleans, missing
+    ones True), left out when every kind sees it."""
+    if visibility is None:
+        return d
+    vis = dict(visibility)
+    unknown = sorted(set(vis) - set(LIGHT_RAY_KINDS))
+    if unknown:
+        raise ValueError(f"light '{name}': unknown ray visibility {unknown} (known: {', '.join(LIGHT_RAY_KINDS)})")
+    if not all(isinstance(v, (bool, np.bool_)) for v in vis.values()):
+        raise ValueError(f"light '{name}': ray visibility values must be True or False")
+    if not all(vis.values()):
+        d["visibility"] = {k: bool(v) for k, v in vis.items()}
+    return d
 
 
 def _with_radius(d: dict[str, Any], radius: float, name: str) -> dict[str, Any]:
@@ -462,6 +485,8 @@ class SpotLight:
     spot_blend: float = 0.15
     name: str = "SpotLight"
     radius: float = 0.0
+    #: the kinds of bounces it lights, e.g. ``{"diffuse": False}`` (``LIGHT_RAY_KINDS``)
+    visibility: Any = None
 
     def to_dict(self) -> dict[str, Any]:
         pos = _finite_floats(self.position, f"light '{self.name}': position")
@@ -479,7 +504,7 @@ class SpotLight:
             "spot_size": float(self.spot_size),
             "spot_blend": float(self.spot_blend),
         }
-        return _with_radius(out, self.radius, self.name)
+        return _with_light_visibility(_with_radius(out, self.radius, self.name), self.visibility, self.name)
 
 
 @dataclass
@@ -495,6 +520,8 @@ class SunLight:
     color: Any = (1.0, 1.0, 1.0)
     name: str = "Sun"
     angle: float = 0.0
+    #: the kinds of bounces it lights, e.g. ``{"diffuse": False}`` (``LIGHT_RAY_KINDS``)
+    visibility: Any = None
 
     def to_dict(self) -> dict[str, Any]:
         d = _finite_floats(self.direction, f"light '{self.name}': direction")
@@ -508,7 +535,7 @@ class SunLight:
             raise ValueError(f"light '{self.name}': angle {self.angle} rad must be in [0, π]")
         if a > 0.0:
             out["angle"] = a
-        return out
+        return _with_light_visibility(out, self.visibility, self.name)
 
 
 def _unit(value: Any, what: str, name: str) -> float:

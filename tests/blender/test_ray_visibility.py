@@ -70,3 +70,67 @@ def test_ray_visibility_matches_cycles(tmp_path):
     assert r["err"] is None and r["warn"] == [], r
     assert r["de"] < 2.0, r
     assert r["de_all_visible"] > 3.0 * max(r["de"], 1.0), r
+
+
+def test_diffuse_and_glossy_visibility_match_cycles(tmp_path):
+    """A cube invisible to glossy rays in front of a rough mirror (Glossy BSDF), and a
+    point light invisible to diffuse rays over a diffuse floor (it still shows in the
+    mirror), beside a sun every ray sees: Cycles CPU and Polychrome render the same scene;
+    mean CIEDE2000 on 2 × 2 blocks below 2, and far above it when every ray sees all."""
+    proc, res = run_bpy(
+        tmp_path,
+        """
+    sc = empty_scene(32, 24); sc.world = None
+    bpy.ops.mesh.primitive_plane_add(size=10)
+    bpy.context.object.data.materials.append(diffuse_material('Floor', (0.7, 0.6, 0.5)))
+    bpy.ops.mesh.primitive_plane_add(size=3.0, location=(0, 1.5, 1.5), rotation=(math.radians(90), 0, 0))
+    mirror = bpy.data.materials.new('Mirror'); mirror.use_nodes = True
+    nt = mirror.node_tree
+    for n in list(nt.nodes):
+        if n.type != 'OUTPUT_MATERIAL': nt.nodes.remove(n)
+    g = nt.nodes.new('ShaderNodeBsdfGlossy'); g.inputs['Color'].default_value = (0.9, 0.9, 0.9, 1.0)
+    g.inputs['Roughness'].default_value = 0.4
+    nt.links.new(g.outputs['BSDF'], nt.nodes['Material Output'].inputs['Surface'])
+    bpy.context.object.data.materials.append(mirror)
+    bpy.ops.mesh.primitive_cube_add(size=0.8, location=(0.3, 0.0, 0.4))
+    cube = bpy.context.object; cube.data.materials.append(diffuse_material('Cube', (0.2, 0.5, 0.7)))
+    cube.visible_glossy = False
+    sun = bpy.data.lights.new('Sun', 'SUN'); sun.energy = 2.0; sun.angle = 0.0
+    so = bpy.data.objects.new('Sun', sun); sc.collection.objects.link(so); so.rotation_euler = (math.radians(30), 0, math.radians(200))
+    lamp = bpy.data.lights.new('Lamp', 'POINT'); lamp.energy = 300.0; lamp.shadow_soft_size = 0.0
+    lo = bpy.data.objects.new('Lamp', lamp); sc.collection.objects.link(lo); lo.location = (-1.0, -0.5, 1.5)
+    lo.visible_diffuse = False
+    add_camera(sc, (1.5, -5.0, 2.0), (0, 0.5, 0.8), lens=30)
+    sc.render.image_settings.file_format = 'OPEN_EXR'
+    c = sc.cycles; c.device = 'CPU'; c.samples = 128; c.use_denoising = False; c.use_adaptive_sampling = False
+    c.filter_width = 0.01; c.max_bounces = 4; c.diffuse_bounces = 4; c.glossy_bounces = 4
+    c.sample_clamp_indirect = 0.0; c.sample_clamp_direct = 0.0
+    sc.polychrome.samples = 128; sc.polychrome.max_bounces = 4
+    import colour
+    rec709 = colour.RGB_COLOURSPACES['ITU-R BT.709']
+    def render(engine, tag):
+        sc.render.engine = engine
+        sc.render.filepath = os.path.abspath(tag + '.exr'); bpy.ops.render.render(write_still=True)
+        ch = exr_channels(tag + '.exr')
+        return np.stack([ch[k] for k in 'RGB'], -1).reshape(24, 32, 3)
+    def de(a, b):
+        blocks = [x.reshape(12, 2, 16, 2, 3).mean(axis=(1, 3)) for x in (a, b)]
+        xyz = [colour.RGB_to_XYZ(x, rec709, apply_cctf_decoding=False) for x in blocks]
+        w = max(float(np.percentile(xyz[0][..., 1], 99)), 1e-6)
+        lab = [colour.XYZ_to_Lab(x / w, rec709.whitepoint) for x in xyz]
+        return float(np.mean(colour.delta_E(lab[0], lab[1], method='CIE 2000')))
+    cycles = render('CYCLES', 'cycles')
+    poly = render('POLYCHROME', 'poly')
+    out = dict(de=de(cycles, poly), err=Engine.last_error, warn=Engine.last_warnings)
+    cube.visible_glossy = True; lo.visible_diffuse = True
+    out['de_all_visible'] = de(cycles, render('POLYCHROME', 'poly_all'))
+    emit(**out)
+    """,
+        timeout=400,
+    )
+    r = check(proc, res)[0]
+    print(r)
+    assert r["err"] is None, r
+    assert sorted(w.split(":")[0] for w in r["warn"]) == ["light 'Lamp'", "object 'Cube'"], r
+    assert r["de"] < 2.0, r
+    assert r["de_all_visible"] > 3.0 * max(r["de"], 1.0), r

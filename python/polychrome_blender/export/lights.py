@@ -33,7 +33,7 @@ import math
 import numpy as np
 import polychrome as pc
 
-from .visibility import light_visibility
+from .visibility import light_visibility, point_light_visibility
 
 DISK_SEGMENTS = 32
 
@@ -178,7 +178,16 @@ def export_lights(depsgraph, scene, warnings):
         if ld.type == "POINT":
             spec = light_colour(ld, name, warnings)
             radius = _radius(ld, name, warnings)
-            scene.add_light(pc.PointLight(pos.tolist(), _point_power(ld, name), spec, name=name, radius=radius))
+            scene.add_light(
+                pc.PointLight(
+                    pos.tolist(),
+                    _point_power(ld, name),
+                    spec,
+                    name=name,
+                    radius=radius,
+                    visibility=point_light_visibility(ob, name, warnings),
+                )
+            )
         elif ld.type == "AREA":
             export_area(scene, ld, name, m, warnings, light_visibility(ob, name, warnings))
         elif ld.type == "SPOT":
@@ -193,12 +202,22 @@ def export_lights(depsgraph, scene, warnings):
                     spot_blend=float(ld.spot_blend),
                     name=name,
                     radius=_radius(ld, name, warnings),
+                    visibility=point_light_visibility(ob, name, warnings),
                 )
             )
         elif ld.type == "SUN":
             spec = light_colour(ld, name, warnings)
             angle = min(max(float(ld.angle), 0.0), math.pi)
-            scene.add_light(pc.SunLight(_axis(m, name), strength=_sun_strength(ld, name), color=spec, name=name, angle=angle))
+            scene.add_light(
+                pc.SunLight(
+                    _axis(m, name),
+                    strength=_sun_strength(ld, name),
+                    color=spec,
+                    name=name,
+                    angle=angle,
+                    visibility=point_light_visibility(ob, name, warnings),
+                )
+            )
         else:
             warnings.add(("light", ld.type), f"light '{name}': {ld.type.lower()} lights are not supported yet and are skipped")
             continue

@@ -291,6 +291,7 @@ fn spot_light_on_a_plane_is_inverse_square_inside_and_black_outside() {
         spot_size: 60f32.to_radians(),
         spot_blend: 0.0,
         radius: 0.0,
+        visibility: Default::default(),
     });
     desc.camera = CameraDesc {
         projection: Projection::Orthographic,
@@ -349,6 +350,7 @@ fn sun_on_a_plane_gives_irradiance_times_cosine() {
         direction: [theta.sin(), 0.0, -theta.cos()],
         irradiance: SpectrumDesc::constant(e),
         angle: 0.0,
+        visibility: Default::default(),
     });
     desc.camera = CameraDesc {
         projection: Projection::Orthographic,
@@ -429,6 +431,7 @@ fn sun_through_a_glass_slab_is_found_by_forward_tracing() {
         direction: [0.0, 0.0, -1.0],
         irradiance: SpectrumDesc::constant(e),
         angle: 0.0,
+        visibility: Default::default(),
     });
     // Perspective camera at (4, 0, 2) looking at the origin, +z up: its line of sight to
     // the floor near the origin passes beside the slab.

@@ -59,6 +59,7 @@ fn scene_desc() -> (SceneDesc, Vec<Buffer>) {
         position: [-0.5, 0.2, 0.6],
         intensity: SpectrumDesc::constant(0.5),
         radius: 0.0,
+        visibility: Default::default(),
     });
     desc.camera.to_world = [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, -1.0, -0.95], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
     desc.camera.focal_length = 18.0;

@@ -72,6 +72,7 @@ fn point_light_on_diffuse_plane_matches_inverse_square_cosine_law() {
         position: [0.0, 0.0, h],
         intensity: SpectrumDesc::constant(intensity),
         radius: 0.0,
+        visibility: Default::default(),
     });
     // Orthographic camera 5 units above looking down −Z, 4 units wide.
     desc.camera = CameraDesc {

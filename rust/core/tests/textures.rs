@@ -288,6 +288,7 @@ fn constant_colour_and_one_texel_texture_render_identically() {
             position: [2.0, 2.0, 0.0],
             intensity: SpectrumDesc::constant(20.0),
             radius: 0.0,
+            visibility: Default::default(),
         });
         (desc, buffers)
     };
@@ -362,6 +363,7 @@ fn texture_errors_name_the_texture_or_material() {
         position: [0.0; 3],
         intensity: SpectrumDesc::new(SpectrumKind::Texture { texture: 0 }),
         radius: 0.0,
+        visibility: Default::default(),
     });
     let err = render(&desc, &[], &ResolvedSettings::default(), &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("light 'Lamp'") && err.contains("texture"), "{err}");

@@ -7,8 +7,10 @@
 //! Which kind a ray is: camera rays (and light paths' connections to the camera, the
 //! same segment traced the other way); shadow rays of next-event estimation; rays a BSDF
 //! sampled: transmission when they leave through the surface, glossy for a specular
-//! reflection and diffuse *or* glossy for any other reflection (the BSDF sample does not
-//! say which lobe it came from, so such a ray sees what either kind sees). Rays leaving
+//! reflection, else the kind of the BSDF's reflection lobes (`Bsdf::lobe_kinds`: diffuse
+//! or glossy, or either when it mixes both, as the sample does not say which lobe it
+//! came from). Next-event estimation skips a light that the lobes lit along the
+//! connection do not see (`of_connection`; Cycles' SHADER_EXCLUDE_*). Rays leaving
 //! lights (light paths) see everything visible to any kind.
 
 use serde::{Deserialize, Serialize};
@@ -53,16 +55,32 @@ impl VisibilityDesc {
     }
 }
 
-/// The kind of a ray a BSDF sampled (see the module docs).
+/// The kind of a ray a BSDF with lobes `lobe_kinds` ([`crate::material::Bsdf::lobe_kinds`])
+/// sampled (see the module docs): transmission when it left through the surface, glossy
+/// for a specular reflection, else the BSDF's reflection kind — diffuse or glossy when
+/// it has one of them only, either when it has both (the sample does not say which
+/// lobe it came from).
 #[inline]
-pub fn of_bsdf_ray(transmitted: bool, specular: bool) -> u8 {
+pub fn of_bsdf_ray(transmitted: bool, specular: bool, lobe_kinds: u8) -> u8 {
     if transmitted {
         TRANSMISSION
     } else if specular {
         GLOSSY
     } else {
-        DIFFUSE | GLOSSY
+        match lobe_kinds & (DIFFUSE | GLOSSY) {
+            0 => DIFFUSE | GLOSSY,
+            k => k,
+        }
     }
+}
+
+/// The kinds of light a BSDF with lobes `lobe_kinds` takes along a connection to a light
+/// (next-event estimation) on the transmitted side or not: a light invisible to all of
+/// them is skipped there, as Cycles excludes a light's closures by kind
+/// (SHADER_EXCLUDE_DIFFUSE/GLOSSY/TRANSMIT).
+#[inline]
+pub fn of_connection(transmitted: bool, lobe_kinds: u8) -> u8 {
+    lobe_kinds & if transmitted { TRANSMISSION } else { DIFFUSE | GLOSSY }
 }
 
 /// Whether an instance of visibility `mask` is seen by a ray of kind `kind`.
@@ -81,14 +99,19 @@ mod tests {
         let light = VisibilityDesc { camera: false, ..Default::default() };
         assert_eq!(light.mask(), ALL & !CAMERA);
         assert!(!sees(light.mask(), CAMERA) && sees(light.mask(), SHADOW));
-        assert_eq!(of_bsdf_ray(true, false), TRANSMISSION);
-        assert_eq!(of_bsdf_ray(false, true), GLOSSY);
+        assert_eq!(of_bsdf_ray(true, false, ALL), TRANSMISSION);
+        assert_eq!(of_bsdf_ray(false, true, ALL), GLOSSY);
+        assert_eq!(of_bsdf_ray(false, false, DIFFUSE), DIFFUSE);
+        assert_eq!(of_bsdf_ray(false, false, GLOSSY | TRANSMISSION), GLOSSY);
         let no_diffuse = VisibilityDesc { diffuse: false, ..Default::default() }.mask();
-        assert!(sees(no_diffuse, of_bsdf_ray(false, false)), "a rough reflection may be glossy");
+        assert!(sees(no_diffuse, of_bsdf_ray(false, false, ALL)), "a rough reflection of a mixed BSDF may be glossy");
+        assert!(!sees(no_diffuse, of_bsdf_ray(false, false, DIFFUSE)));
         assert!(!sees(
             VisibilityDesc { diffuse: false, glossy: false, ..Default::default() }.mask(),
-            of_bsdf_ray(false, false)
+            of_bsdf_ray(false, false, ALL)
         ));
+        assert_eq!(of_connection(false, DIFFUSE | TRANSMISSION), DIFFUSE);
+        assert_eq!(of_connection(true, GLOSSY), 0);
         let parsed: VisibilityDesc = serde_json::from_str(r#"{"camera": false}"#).unwrap();
         assert_eq!(parsed, light);
         assert!(serde_json::from_str::<VisibilityDesc>(r#"{"camra": false}"#).is_err());

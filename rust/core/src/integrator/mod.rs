@@ -56,7 +56,7 @@ pub fn scatter(
         return None;
     }
     let origin = crate::geometry::offset_ray_origin(v.si.p, if transmitted { -v.ng } else { v.ng });
-    let kind = crate::geometry::visibility::of_bsdf_ray(transmitted, sample.specular);
+    let kind = crate::geometry::visibility::of_bsdf_ray(transmitted, sample.specular, v.material.bsdf.lobe_kinds());
     let ray = crate::geometry::Ray::new(origin, wi).with_time(v.si.time).with_kind(kind);
     Some(Scatter { sample, wi, transmitted, ray })
 }

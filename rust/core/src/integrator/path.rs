@@ -271,6 +271,13 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
         let Some(side) = super::connection_side(v.ng, v.wo_local, wi_local, ls.wi) else {
             return;
         };
+        // A light that the kinds of lobes lit along this connection do not see (its ray
+        // visibility) lights nothing here.
+        let kinds = crate::geometry::visibility::of_connection(side.dot(v.ng) < 0.0, v.material.bsdf.lobe_kinds());
+        let mask = scene.light_visibility.get(l).copied().unwrap_or(crate::geometry::visibility::ALL);
+        if !crate::geometry::visibility::sees(mask, kinds) {
+            return;
+        }
         let bsdf_pdf = v.material.bsdf.eval(ctx, v.wo_local, wi_local, &mut scratch.f);
         if !beta.carries(&scratch.f) {
             return;

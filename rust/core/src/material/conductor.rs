@@ -67,6 +67,9 @@ impl<F: MetalFresnel> MicrofacetReflection<F> {
 }
 
 impl<F: MetalFresnel> Bsdf for MicrofacetReflection<F> {
+    fn lobe_kinds(&self) -> u8 {
+        crate::geometry::visibility::GLOSSY
+    }
     fn flags(&self) -> BsdfFlags {
         BsdfFlags { smooth: !self.smooth(), specular: self.smooth(), dispersive: false }
     }

@@ -79,6 +79,9 @@ pub struct Dielectric {
 }
 
 impl Bsdf for Dielectric {
+    fn lobe_kinds(&self) -> u8 {
+        crate::geometry::visibility::GLOSSY | crate::geometry::visibility::TRANSMISSION
+    }
     fn flags(&self) -> BsdfFlags {
         BsdfFlags { smooth: false, specular: true, dispersive: self.ior.dispersive }
     }
@@ -264,6 +267,9 @@ impl RoughDielectric {
 }
 
 impl Bsdf for RoughDielectric {
+    fn lobe_kinds(&self) -> u8 {
+        crate::geometry::visibility::GLOSSY | crate::geometry::visibility::TRANSMISSION
+    }
     fn flags(&self) -> BsdfFlags {
         BsdfFlags { smooth: true, specular: false, dispersive: self.ior.dispersive }
     }

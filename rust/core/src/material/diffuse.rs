@@ -11,6 +11,9 @@ pub struct Diffuse {
 }
 
 impl Bsdf for Diffuse {
+    fn lobe_kinds(&self) -> u8 {
+        crate::geometry::visibility::DIFFUSE
+    }
     fn flags(&self) -> BsdfFlags {
         BsdfFlags { smooth: true, ..Default::default() }
     }

@@ -207,6 +207,9 @@ fn mean(ctx: &ShadingContext, s: &SampledSpectrum) -> f32 {
 }
 
 impl Bsdf for Layered {
+    fn lobe_kinds(&self) -> u8 {
+        self.top.bsdf().lobe_kinds() | self.bottom.lobe_kinds()
+    }
     fn flags(&self) -> BsdfFlags {
         let (t, b) = (self.top.bsdf().flags(), self.bottom.flags());
         BsdfFlags { smooth: t.smooth || b.smooth, specular: t.specular || b.specular, dispersive: b.dispersive }

@@ -158,6 +158,12 @@ impl MixBsdf {
 }
 
 impl Bsdf for MixBsdf {
+    fn lobe_kinds(&self) -> u8 {
+        {
+            let (ua, ub) = self.used();
+            (if ua { self.a.lobe_kinds() } else { 0 }) | (if ub { self.b.lobe_kinds() } else { 0 })
+        }
+    }
     fn flags(&self) -> BsdfFlags {
         let (fa, fb) = (self.a.flags(), self.b.flags());
         let (ua, ub) = self.used();

@@ -113,6 +113,14 @@ pub struct BsdfSample {
 
 pub trait Bsdf: Send + Sync {
     fn flags(&self) -> BsdfFlags;
+    /// The kinds of lobes it has, as ray-visibility bits (`geometry::visibility`:
+    /// DIFFUSE, GLOSSY, TRANSMISSION; Cycles' closure labels): what a ray it scatters, or
+    /// a light it is lit by, may be seen as. All three unless a BSDF knows better.
+    fn lobe_kinds(&self) -> u8 {
+        crate::geometry::visibility::DIFFUSE
+            | crate::geometry::visibility::GLOSSY
+            | crate::geometry::visibility::TRANSMISSION
+    }
     /// `out` = f(wo, wi)·|cos θi| per wavelength; returns the pdf of sampling `wi`.
     fn eval(&self, ctx: &ShadingContext, wo: Vec3A, wi: Vec3A, out: &mut SampledSpectrum) -> f32;
     /// Pdf of sampling `wi` given `wo` (solid angle), for MIS.
@@ -152,6 +160,9 @@ pub trait Bsdf: Send + Sync {
 pub struct Black;
 
 impl Bsdf for Black {
+    fn lobe_kinds(&self) -> u8 {
+        0
+    }
     fn flags(&self) -> BsdfFlags {
         BsdfFlags::default()
     }

@@ -96,6 +96,9 @@ impl OrenNayar {
 }
 
 impl Bsdf for OrenNayar {
+    fn lobe_kinds(&self) -> u8 {
+        crate::geometry::visibility::DIFFUSE
+    }
     fn flags(&self) -> BsdfFlags {
         BsdfFlags { smooth: true, ..Default::default() }
     }

@@ -117,6 +117,9 @@ impl Sheen {
 }
 
 impl Bsdf for Sheen {
+    fn lobe_kinds(&self) -> u8 {
+        crate::geometry::visibility::DIFFUSE
+    }
     fn flags(&self) -> BsdfFlags {
         BsdfFlags { smooth: true, ..Default::default() }
     }

@@ -13,6 +13,9 @@ pub struct Tinted {
 }
 
 impl Bsdf for Tinted {
+    fn lobe_kinds(&self) -> u8 {
+        self.inner.lobe_kinds()
+    }
     fn flags(&self) -> BsdfFlags {
         self.inner.flags()
     }

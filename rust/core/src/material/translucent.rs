@@ -14,6 +14,9 @@ pub struct Translucent {
 }
 
 impl Bsdf for Translucent {
+    fn lobe_kinds(&self) -> u8 {
+        crate::geometry::visibility::TRANSMISSION
+    }
     fn flags(&self) -> BsdfFlags {
         BsdfFlags { smooth: true, ..Default::default() }
     }

@@ -249,7 +249,13 @@ mod tests {
     }
 
     fn point(intensity: SpectrumDesc) -> LightDesc {
-        LightDesc::Point { name: "lamp".into(), position: [0.0, 0.0, 1.0], intensity, radius: 0.0 }
+        LightDesc::Point {
+            name: "lamp".into(),
+            position: [0.0, 0.0, 1.0],
+            intensity,
+            radius: 0.0,
+            visibility: Default::default(),
+        }
     }
 
     fn material(bsdf: BsdfDesc) -> MaterialDesc {

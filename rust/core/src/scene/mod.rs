@@ -619,8 +619,15 @@ impl Scene {
             triangle_lights[k] = Some(map);
         }
         for l in &desc.lights {
+            let visibility = match l {
+                LightDesc::Point { visibility, .. }
+                | LightDesc::Spot { visibility, .. }
+                | LightDesc::Distant { visibility, .. } => visibility.mask(),
+            };
+            light_visibility.resize(lights.len(), crate::geometry::visibility::ALL);
+            light_visibility.push(visibility);
             match l {
-                LightDesc::Point { name, position, intensity, radius } => {
+                LightDesc::Point { name, position, intensity, radius, .. } => {
                     let position = Vec3A::from(*position);
                     if !position.is_finite() {
                         return Err(Error::object("light", name, "position is not finite"));
@@ -634,7 +641,7 @@ impl Scene {
                         radius,
                     }));
                 }
-                LightDesc::Spot { name, position, direction, intensity, spot_size, spot_blend, radius } => {
+                LightDesc::Spot { name, position, direction, intensity, spot_size, spot_blend, radius, .. } => {
                     let intensity =
                         rgb.evaluate(intensity, &grid, SpectrumRole::Illuminant, "light", name, "intensity")?;
                     lights.push(optics::build_spot(
@@ -647,7 +654,7 @@ impl Scene {
                         *radius,
                     )?);
                 }
-                LightDesc::Distant { name, direction, irradiance, angle } => {
+                LightDesc::Distant { name, direction, irradiance, angle, .. } => {
                     let irradiance =
                         rgb.evaluate(irradiance, &grid, SpectrumRole::Illuminant, "light", name, "irradiance")?;
                     lights.push(optics::build_distant(
