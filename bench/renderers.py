@@ -201,6 +201,24 @@ def run_cycles(scene_json: Path, tmp: Path, spps: list[int]):
     raise RuntimeError(f"Cycles run failed:\n{p.stdout[-2000:]}\n{p.stderr[-2000:]}")
 
 
+def run_mitsuba_worker(python, scene_json, variant, out_dir, spps, env=None, timeout=3600):
+    """Renders `scene_json` with bench/mitsuba_worker.py in Mitsuba's own venv at each
+    of `spps`; the worker's rows (seconds, exr path per spp), or None after printing
+    why it failed. Two threads unless `env` says otherwise."""
+    p = subprocess.run(
+        [str(python), str(ROOT / "bench" / "mitsuba_worker.py"), str(scene_json), variant, str(out_dir), ",".join(map(str, spps))],
+        capture_output=True,
+        text=True,
+        env=env if env is not None else dict(os.environ, THREADS="2"),
+        timeout=timeout,
+    )
+    if p.returncode != 0:
+        print(f"Mitsuba {variant} failed:", p.stderr[-3000:])
+        return None
+    last = [ln for ln in p.stdout.splitlines() if "[{" in ln][-1]
+    return json.loads(last[last.index("[{") :])
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--size", type=int, default=64)
@@ -254,25 +272,9 @@ def main(argv=None) -> int:
     blend_note = ""
     if "mitsuba" not in skip and ensure_mitsuba(args.mitsuba_python):
         for variant in ("scalar_spectral", "scalar_rgb"):
-            p = subprocess.run(
-                [
-                    str(args.mitsuba_python),
-                    str(ROOT / "bench" / "mitsuba_worker.py"),
-                    str(tmp / "scene.json"),
-                    variant,
-                    str(tmp),
-                    ",".join(map(str, spps)),
-                ],
-                capture_output=True,
-                text=True,
-                env=dict(os.environ, THREADS="2"),
-                timeout=7200,
-            )
-            if p.returncode != 0:
-                print(p.stderr[-3000:])
+            rows = run_mitsuba_worker(args.mitsuba_python, tmp / "scene.json", variant, tmp, spps, timeout=7200)
+            if rows is None:
                 continue
-            last = [ln for ln in p.stdout.splitlines() if "[{" in ln][-1]
-            rows = json.loads(last[last.index("[{") :])
             for row in rows:
                 row["de"] = mean_de(read_exr(row["exr"]), ref)
                 print("Mitsuba", variant, row, flush=True)

@@ -23,7 +23,6 @@ import importlib
 import json
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -107,25 +106,9 @@ def main(argv=None) -> int:
             env = dict(os.environ, THREADS="2")
             if args.llvm:
                 env["DRJIT_LIBLLVM_PATH"] = args.llvm
-            p = subprocess.run(
-                [
-                    str(args.mitsuba_python),
-                    str(ROOT / "bench" / "mitsuba_worker.py"),
-                    str(tmp / "scene.json"),
-                    variant,
-                    str(tmp),
-                    f"{args.spp},{args.spp}",
-                ],
-                capture_output=True,
-                text=True,
-                env=env,
-                timeout=3600,
-            )
-            if p.returncode != 0:
-                print(variant, "failed:", p.stderr[-2000:])
+            rows = renderers.run_mitsuba_worker(args.mitsuba_python, tmp / "scene.json", variant, tmp, [args.spp, args.spp], env=env)
+            if rows is None:
                 continue
-            last = [ln for ln in p.stdout.splitlines() if "[{" in ln][-1]
-            rows = json.loads(last[last.index("[{") :])
             sec = rows[-1]["seconds"]
             de = renderers.mean_de(images[(builds[-1][0], 41)], renderers.read_exr(rows[-1]["exr"]))
             mitsuba[variant] = (paths / sec, de)
