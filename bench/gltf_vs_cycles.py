@@ -1,0 +1,206 @@
+"""Khronos glTF 2.0 sample models, Polychrome against Cycles CPU (issue 12's acceptance).
+
+Each model is imported with Blender's own glTF importer (`bpy.ops.import_scene.gltf`),
+framed by a camera from its bounding box, lit by the same sun and grey world and given a
+grey floor; then rendered by Cycles CPU and by Polychrome through the add-on (same
+`bpy` scene, EXR, Standard view). The table: model, mean CIEDE2000 over 4 × 4 blocks
+(colour-science, Rec.709 linear, white = Cycles' 99th-percentile Y), 95th percentile,
+the add-on's warnings, the two render times.
+
+    python bench/gltf_vs_cycles.py [--models A,B] [--size 128] [--samples 64]
+        [--cache ~/.cache/polychrome/gltf] [--write-docs]
+
+Models are looked up as CACHE/<Name>/<Name>.gltf or .glb (glTF-Embedded or glTF-Binary
+variants of KhronosGroup/glTF-Sample-Assets, fetched there by hand: they are not
+vendored, except BoxTextured in tests/data/gltf). A missing model is listed as such.
+Needs `bpy` (numpy < 2) and OpenEXR in the venv.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+VENDORED = ROOT / "tests" / "data" / "gltf"
+DEFAULT_CACHE = Path(os.environ.get("POLYCHROME_GLTF_CACHE", Path.home() / ".cache" / "polychrome" / "gltf"))
+MODELS = [
+    "BoxTextured",
+    "BoxVertexColors",
+    "TextureTransformTest",
+    "AlphaBlendModeTest",
+    "MetalRoughSpheres",
+    "NormalTangentTest",
+    "EmissiveStrengthTest",
+    "DamagedHelmet",
+    "ClearCoatTest",
+    "SheenCloth",
+    "TransmissionTest",
+    "IridescenceLamp",
+    "Avocado",
+    "Lantern",
+    "WaterBottle",
+]
+
+
+def find_model(name: str, cache: Path) -> Path | None:
+    for d in (VENDORED / name, cache / name):
+        for ext in (".gltf", ".glb"):
+            p = d / f"{name}{ext}"
+            if p.is_file():
+                return p
+    return None
+
+
+def setup_scene(path: Path, size: int, samples: int):
+    """Imports `path` into an empty scene, adds floor, sun, world and a framing camera."""
+    import bpy
+    from mathutils import Vector
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x = sc.render.resolution_y = size
+    sc.render.resolution_percentage = 100
+    sc.view_settings.view_transform = "Standard"
+    sc.render.image_settings.file_format = "OPEN_EXR"
+    bpy.ops.import_scene.gltf(filepath=str(path))
+    meshes = [o for o in sc.objects if o.type == "MESH"]
+    if not meshes:
+        raise ValueError(f"glTF asset '{path}': Blender's importer made no mesh")
+    bpy.context.view_layer.update()
+    pts = [o.matrix_world @ Vector(c) for o in meshes for c in o.bound_box]
+    lo = Vector([min(p[i] for p in pts) for i in range(3)])
+    hi = Vector([max(p[i] for p in pts) for i in range(3)])
+    centre, radius = (lo + hi) / 2, max((hi - lo).length / 2, 1e-3)
+    bpy.ops.mesh.primitive_plane_add(size=radius * 20, location=(centre.x, centre.y, lo.z))
+    floor = bpy.context.object
+    mat = bpy.data.materials.new("Floor")
+    mat.use_nodes = True
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = (0.5, 0.5, 0.5, 1.0)
+    bsdf.inputs["Roughness"].default_value = 1.0
+    floor.data.materials.append(mat)
+    sun = bpy.data.lights.new("Sun", "SUN")
+    sun.energy, sun.angle = 3.0, math.radians(10)
+    so = bpy.data.objects.new("Sun", sun)
+    sc.collection.objects.link(so)
+    so.rotation_euler = (math.radians(50), 0.0, math.radians(-35))
+    world = bpy.data.worlds.new("World")
+    world.use_nodes = True
+    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.25, 0.27, 0.3, 1.0)
+    sc.world = world
+    cd = bpy.data.cameras.new("Camera")
+    cd.lens = 50.0
+    cam = bpy.data.objects.new("Camera", cd)
+    sc.collection.objects.link(cam)
+    fov = 2 * math.atan(cd.sensor_width / (2 * cd.lens))
+    dist = 1.15 * radius / math.sin(fov / 2)
+    d = Vector((1.0, -1.0, 0.6)).normalized()
+    cam.location = centre + d * dist
+    cam.rotation_euler = (centre - cam.location).to_track_quat("-Z", "Y").to_euler()
+    cd.clip_start, cd.clip_end = dist * 1e-3, dist * 100
+    sc.camera = cam
+    c = sc.cycles
+    c.device, c.samples = "CPU", samples
+    c.use_denoising = c.use_adaptive_sampling = False
+    c.filter_width = 0.01
+    c.sample_clamp_direct = c.sample_clamp_indirect = 0.0
+    sc.polychrome.samples = samples
+    return sc
+
+
+def render(sc, engine: str, out: Path):
+    import bpy
+    import numpy as np
+    import OpenEXR
+
+    sc.render.engine = engine
+    sc.render.filepath = str(out)
+    t = time.perf_counter()
+    bpy.ops.render.render(write_still=True)
+    dt = time.perf_counter() - t
+    ch = {k: np.asarray(v.pixels, np.float64) for k, v in OpenEXR.File(str(out), separate_channels=True).channels().items()}
+    h, w = sc.render.resolution_y, sc.render.resolution_x
+    return np.stack([ch[k] for k in "RGB"], -1).reshape(h, w, 3), dt
+
+
+def delta_e(ref, img):
+    """Mean and 95th percentile CIEDE2000 over 4 × 4 blocks (white: ref's 99th-percentile Y)."""
+    import colour
+    import numpy as np
+
+    h, w, _ = ref.shape
+    rec709 = colour.RGB_COLOURSPACES["ITU-R BT.709"]
+    blocks = [x.reshape(h // 4, 4, w // 4, 4, 3).mean(axis=(1, 3)) for x in (ref, img)]
+    xyz = [colour.RGB_to_XYZ(x, rec709, apply_cctf_decoding=False) for x in blocks]
+    white = max(float(np.percentile(xyz[0][..., 1], 99)), 1e-6)
+    lab = [colour.XYZ_to_Lab(x / white, rec709.whitepoint) for x in xyz]
+    d = colour.delta_E(lab[0], lab[1], method="CIE 2000")
+    return float(np.mean(d)), float(np.percentile(d, 95))
+
+
+def compare(path: Path, size: int = 128, samples: int = 64, tmp: Path | None = None) -> dict:
+    """One model: {'de', 'p95', 'warnings', 'error', 't_cycles', 't_poly'}."""
+    import polychrome_blender
+
+    engine = polychrome_blender.engine.PolychromeRenderEngine
+    tmp = Path(tmp or tempfile.mkdtemp(prefix="gltf_vs_cycles_"))
+    sc = setup_scene(path, size, samples)
+    cyc, t_c = render(sc, "CYCLES", tmp / f"{path.stem}_cycles.exr")
+    poly, t_p = render(sc, "POLYCHROME", tmp / f"{path.stem}_poly.exr")
+    de, p95 = delta_e(cyc, poly)
+    return {
+        "de": de,
+        "p95": p95,
+        "warnings": list(engine.last_warnings),
+        "error": engine.last_error,
+        "t_cycles": t_c,
+        "t_poly": t_p,
+    }
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--models", default=",".join(MODELS))
+    ap.add_argument("--size", type=int, default=128)
+    ap.add_argument("--samples", type=int, default=64)
+    ap.add_argument("--cache", type=Path, default=DEFAULT_CACHE)
+    ap.add_argument("--out", type=Path, default=None, help="directory for the EXRs (default: a temp dir)")
+    args = ap.parse_args()
+    import atexit
+
+    import polychrome_blender
+
+    polychrome_blender.register()
+    atexit.register(polychrome_blender.unregister)
+    rows = []
+    for name in args.models.split(","):
+        p = find_model(name, args.cache)
+        if p is None:
+            rows.append(f"| {name} | – | – | not in {args.cache} | – | – |")
+            print(rows[-1], flush=True)
+            continue
+        try:
+            r = compare(p, args.size, args.samples, args.out)
+        except Exception as e:  # noqa: BLE001 - one model failing must not stop the table
+            rows.append(f"| {name} | – | – | failed: {e} | – | – |")
+        else:
+            warn = "; ".join(r["warnings"]) or ("error: " + r["error"] if r["error"] else "none")
+            rows.append(f"| {name} | {r['de']:.2f} | {r['p95']:.2f} | {warn} | {r['t_cycles']:.1f} | {r['t_poly']:.1f} |")
+        print(rows[-1], flush=True)
+    print()
+    print(f"| model | mean ΔE00 | p95 ΔE00 | add-on warnings | Cycles s | Polychrome s |  ({args.size}², {args.samples} spp)")
+    print("|---|---|---|---|---|---|")
+    print("\n".join(rows))
+    polychrome_blender.unregister()
+    atexit.unregister(polychrome_blender.unregister)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
