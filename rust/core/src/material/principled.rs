@@ -55,9 +55,50 @@ const ALBEDO_MU: usize = 33;
 /// Stratified visible-normal samples per table entry (per axis).
 const ALBEDO_STRATA: usize = 24;
 
+/// Points at which a Fresnel function is read to key the albedo-table memo.
+const KEY_COSINES: [f64; 8] = [0.001, 0.05, 0.13, 0.27, 0.42, 0.6, 0.81, 1.0];
+/// Tables kept per thread (the memo is cleared when full).
+const MEMO_TABLES: usize = 512;
+
+thread_local! {
+    static ALBEDO_MEMO: std::cell::RefCell<std::collections::HashMap<[u64; 11], Vec<f32>>> =
+        std::cell::RefCell::new(std::collections::HashMap::new());
+}
+
 /// The directional albedo E(μ) of a GGX reflection lobe with Fresnel `f(cos θ_h)`, for
 /// μ = i/(ALBEDO_MU − 1); `smooth` lobes reflect exactly F(μ).
+///
+/// Memoised per thread: a material whose graph varies per hit (docs/shading.md) builds
+/// its Principled at every hit, mostly with the same roughness and index (a texture on
+/// Base Color), and a table costs ALBEDO_MU × ALBEDO_STRATA² microfacet evaluations. The
+/// key is the roughness, `smooth` and `f` at eight cosines (the Fresnel functions used
+/// here are fixed by one or two parameters, which those values tell apart).
 fn albedo_table(g: &Ggx, smooth: bool, f: &dyn Fn(f64) -> f64) -> Vec<f32> {
+    if smooth {
+        return compute_albedo_table(g, smooth, f);
+    }
+    let mut key = [0u64; 11];
+    key[0] = g.alpha_x.to_bits() as u64;
+    key[1] = g.alpha_y.to_bits() as u64;
+    key[2] = smooth as u64;
+    for (k, &c) in key[3..].iter_mut().zip(&KEY_COSINES) {
+        *k = f(c).to_bits();
+    }
+    if let Some(t) = ALBEDO_MEMO.with(|m| m.borrow().get(&key).cloned()) {
+        return t;
+    }
+    let t = compute_albedo_table(g, smooth, f);
+    ALBEDO_MEMO.with(|m| {
+        let mut m = m.borrow_mut();
+        if m.len() >= MEMO_TABLES {
+            m.clear();
+        }
+        m.insert(key, t.clone());
+    });
+    t
+}
+
+fn compute_albedo_table(g: &Ggx, smooth: bool, f: &dyn Fn(f64) -> f64) -> Vec<f32> {
     (0..ALBEDO_MU)
         .map(|i| {
             let mu = (i as f64 / (ALBEDO_MU - 1) as f64).max(1e-3);
@@ -733,6 +774,22 @@ mod tests {
     use super::*;
     use crate::material::{Dielectric, RoughDielectric, TransportMode};
     use crate::sampling::Rng;
+
+    #[test]
+    fn memoised_albedo_tables_are_the_computed_ones() {
+        let g = Ggx::from_roughness(0.4);
+        for n in [1.45, 1.5, 1.45] {
+            let f = |c: f64| fresnel_dielectric_f64(c, n);
+            assert_eq!(albedo_table(&g, false, &f), compute_albedo_table(&g, false, &f), "n {n}");
+        }
+        let (a, b) = (
+            albedo_table(&g, false, &|c| fresnel_dielectric_f64(c, 1.45)),
+            albedo_table(&g, false, &|c| fresnel_dielectric_f64(c, 1.5)),
+        );
+        assert_ne!(a, b);
+        let rougher = albedo_table(&Ggx::from_roughness(0.5), false, &|c| fresnel_dielectric_f64(c, 1.45));
+        assert_ne!(a, rougher);
+    }
 
     pub(super) fn principled(
         grid: &WavelengthGrid,
