@@ -51,6 +51,31 @@ def diffuse_material(name, rgb):
 def exr_channels(path):
     import OpenEXR
     return {k: np.asarray(v.pixels, np.float64) for k, v in OpenEXR.File(path, separate_channels=True).channels().items()}
+
+# Renders `sc` with `engine` ('CYCLES', 'POLYCHROME') to tag.exr; its RGB as (H, W, 3).
+def render_rgb(sc, engine, tag):
+    sc.render.engine = engine
+    sc.render.filepath = os.path.abspath(tag + '.exr'); bpy.ops.render.render(write_still=True)
+    ch = exr_channels(tag + '.exr')
+    pct = sc.render.resolution_percentage / 100.0
+    h, w = int(sc.render.resolution_y * pct), int(sc.render.resolution_x * pct)
+    return np.stack([ch[k] for k in 'RGB'], -1).reshape(h, w, 3)
+
+# CIEDE2000 of block x block pixel means by colour-science (an independent reference),
+# L*a*b* relative to a D65 white at the 99th-percentile luminance of `reference`.
+def block_de00(reference, test, block):
+    import colour
+    rec709 = colour.RGB_COLOURSPACES['ITU-R BT.709']
+    h, w = reference.shape[0] // block, reference.shape[1] // block
+    blocks = [x[:h * block, :w * block].reshape(h, block, w, block, 3).mean(axis=(1, 3)) for x in (reference, test)]
+    xyz = [colour.RGB_to_XYZ(x, rec709, apply_cctf_decoding=False) for x in blocks]
+    white = max(float(np.percentile(xyz[0][..., 1], 99)), 1e-6)
+    lab = [colour.XYZ_to_Lab(x / white, rec709.whitepoint) for x in xyz]
+    return colour.delta_E(lab[0], lab[1], method='CIE 2000')
+
+# The Cycles-vs-Polychrome score: mean block CIEDE2000 (<= 1.5 'looks the same').
+def mean_de00(reference, test, block):
+    return float(np.mean(block_de00(reference, test, block)))
 """
 
 EPILOGUE = """

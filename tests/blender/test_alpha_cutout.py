@@ -53,26 +53,13 @@ c.filter_width = 0.01; c.max_bounces = 8; c.transparent_max_bounces = 8
 c.sample_clamp_direct = 0.0; c.sample_clamp_indirect = 0.0
 sc.render.threads_mode = 'FIXED'; sc.render.threads = 2
 sc.polychrome.samples = SPP; sc.polychrome.max_bounces = 8
-import colour
-rec709 = colour.RGB_COLOURSPACES['ITU-R BT.709']
-def render(engine, tag):
-    sc.render.engine = engine
-    sc.render.filepath = os.path.abspath(tag + '.exr'); bpy.ops.render.render(write_still=True)
-    ch = exr_channels(tag + '.exr')
-    return np.stack([ch[k] for k in 'RGB'], -1).reshape(N, N, 3)
-def de(a, b):
-    blocks = [x.reshape(N // 4, 4, N // 4, 4, 3).mean(axis=(1, 3)) for x in (a, b)]
-    xyz = [colour.RGB_to_XYZ(x, rec709, apply_cctf_decoding=False) for x in blocks]
-    wl = max(float(np.percentile(xyz[0][..., 1], 99)), 1e-6)
-    lab = [colour.XYZ_to_Lab(x / wl, rec709.whitepoint) for x in xyz]
-    return float(np.mean(colour.delta_E(lab[0], lab[1], method='CIE 2000')))
-cycles = render('CYCLES', 'cycles')
-poly = render('POLYCHROME', 'poly')
+cycles = render_rgb(sc, 'CYCLES', 'cycles')
+poly = render_rgb(sc, 'POLYCHROME', 'poly')
 err, warn = Engine.last_error, list(Engine.last_warnings or [])
 nt.links.remove(alpha_link)
 sc.polychrome.samples = 16  # the control is far off; few samples do
-opaque = render('POLYCHROME', 'opaque')
-emit(de=de(cycles, poly), control=de(cycles, opaque), err=err, warn=warn,
+opaque = render_rgb(sc, 'POLYCHROME', 'opaque')
+emit(de=mean_de00(cycles, poly, 4), control=mean_de00(cycles, opaque, 4), err=err, warn=warn,
      means=[float(cycles.mean()), float(poly.mean()), float(opaque.mean())])
 """
 

@@ -40,23 +40,10 @@ def test_one_sided_area_lights_match_cycles(tmp_path):
     c.filter_width = 0.01; c.max_bounces = 12; c.diffuse_bounces = 12
     c.sample_clamp_indirect = 0.0; c.sample_clamp_direct = 0.0
     sc.polychrome.samples = 128; sc.polychrome.max_bounces = 12
-    import colour
-    rec709 = colour.RGB_COLOURSPACES['ITU-R BT.709']
-    def render(engine, tag):
-        sc.render.engine = engine
-        sc.render.filepath = os.path.abspath(tag + '.exr'); bpy.ops.render.render(write_still=True)
-        ch = exr_channels(tag + '.exr')
-        return np.stack([ch[k] for k in 'RGB'], -1).reshape(H, W, 3)
-    def de(a, b):
-        blocks = [x.reshape(H // 4, 4, W // 4, 4, 3).mean(axis=(1, 3)) for x in (a, b)]
-        xyz = [colour.RGB_to_XYZ(x, rec709, apply_cctf_decoding=False) for x in blocks]
-        w = max(float(np.percentile(xyz[0][..., 1], 99)), 1e-6)
-        lab = [colour.XYZ_to_Lab(x / w, rec709.whitepoint) for x in xyz]
-        d = colour.delta_E(lab[0], lab[1], method='CIE 2000')
-        return float(np.mean(d)), float(np.percentile(d, 95))
-    cycles = render('CYCLES', 'cycles')
-    poly = render('POLYCHROME', 'poly')
-    mean, p95 = de(cycles, poly)
+    cycles = render_rgb(sc, 'CYCLES', 'cycles')
+    poly = render_rgb(sc, 'POLYCHROME', 'poly')
+    d = block_de00(cycles, poly, 4)
+    mean, p95 = float(np.mean(d)), float(np.percentile(d, 95))
     emit(de=mean, p95=p95, err=Engine.last_error, warn=Engine.last_warnings,
          ceiling_ratio=float(poly[:H // 4].mean() / max(cycles[:H // 4].mean(), 1e-9)))
     """,

@@ -41,27 +41,14 @@ def test_ray_visibility_matches_cycles(tmp_path):
     c.filter_width = 0.01; c.max_bounces = 4; c.diffuse_bounces = 4
     c.sample_clamp_indirect = 0.0; c.sample_clamp_direct = 0.0
     sc.polychrome.samples = 64; sc.polychrome.max_bounces = 4
-    import colour
-    rec709 = colour.RGB_COLOURSPACES['ITU-R BT.709']
-    def render(engine, tag):
-        sc.render.engine = engine
-        sc.render.filepath = os.path.abspath(tag + '.exr'); bpy.ops.render.render(write_still=True)
-        ch = exr_channels(tag + '.exr')
-        return np.stack([ch[k] for k in 'RGB'], -1).reshape(24, 32, 3)
-    def de(a, b):
-        blocks = [x.reshape(12, 2, 16, 2, 3).mean(axis=(1, 3)) for x in (a, b)]
-        xyz = [colour.RGB_to_XYZ(x, rec709, apply_cctf_decoding=False) for x in blocks]
-        w = max(float(np.percentile(xyz[0][..., 1], 99)), 1e-6)
-        lab = [colour.XYZ_to_Lab(x / w, rec709.whitepoint) for x in xyz]
-        return float(np.mean(colour.delta_E(lab[0], lab[1], method='CIE 2000')))
-    cycles = render('CYCLES', 'cycles')
-    poly = render('POLYCHROME', 'poly')
-    out = dict(de=de(cycles, poly), err=Engine.last_error, warn=Engine.last_warnings)
+    cycles = render_rgb(sc, 'CYCLES', 'cycles')
+    poly = render_rgb(sc, 'POLYCHROME', 'poly')
+    out = dict(de=mean_de00(cycles, poly, 2), err=Engine.last_error, warn=Engine.last_warnings)
     # every ray sees everything: the panel, its backing and the wall block the view
     for ob in (wall, card, lo):
         for k in ('camera', 'shadow'):
             setattr(ob, 'visible_' + k, True)
-    out['de_all_visible'] = de(cycles, render('POLYCHROME', 'poly_all'))
+    out['de_all_visible'] = mean_de00(cycles, render_rgb(sc, 'POLYCHROME', 'poly_all'), 2)
     emit(**out)
     """,
         timeout=400,
@@ -106,24 +93,11 @@ def test_diffuse_and_glossy_visibility_match_cycles(tmp_path):
     c.filter_width = 0.01; c.max_bounces = 4; c.diffuse_bounces = 4; c.glossy_bounces = 4
     c.sample_clamp_indirect = 0.0; c.sample_clamp_direct = 0.0
     sc.polychrome.samples = 128; sc.polychrome.max_bounces = 4
-    import colour
-    rec709 = colour.RGB_COLOURSPACES['ITU-R BT.709']
-    def render(engine, tag):
-        sc.render.engine = engine
-        sc.render.filepath = os.path.abspath(tag + '.exr'); bpy.ops.render.render(write_still=True)
-        ch = exr_channels(tag + '.exr')
-        return np.stack([ch[k] for k in 'RGB'], -1).reshape(24, 32, 3)
-    def de(a, b):
-        blocks = [x.reshape(12, 2, 16, 2, 3).mean(axis=(1, 3)) for x in (a, b)]
-        xyz = [colour.RGB_to_XYZ(x, rec709, apply_cctf_decoding=False) for x in blocks]
-        w = max(float(np.percentile(xyz[0][..., 1], 99)), 1e-6)
-        lab = [colour.XYZ_to_Lab(x / w, rec709.whitepoint) for x in xyz]
-        return float(np.mean(colour.delta_E(lab[0], lab[1], method='CIE 2000')))
-    cycles = render('CYCLES', 'cycles')
-    poly = render('POLYCHROME', 'poly')
-    out = dict(de=de(cycles, poly), err=Engine.last_error, warn=Engine.last_warnings)
+    cycles = render_rgb(sc, 'CYCLES', 'cycles')
+    poly = render_rgb(sc, 'POLYCHROME', 'poly')
+    out = dict(de=mean_de00(cycles, poly, 2), err=Engine.last_error, warn=Engine.last_warnings)
     cube.visible_glossy = True; lo.visible_diffuse = True
-    out['de_all_visible'] = de(cycles, render('POLYCHROME', 'poly_all'))
+    out['de_all_visible'] = mean_de00(cycles, render_rgb(sc, 'POLYCHROME', 'poly_all'), 2)
     emit(**out)
     """,
         timeout=400,

@@ -48,31 +48,18 @@ def test_soft_shadows_match_cycles(tmp_path):
     c.filter_width = 0.01; c.max_bounces = 4; c.diffuse_bounces = 4
     c.sample_clamp_direct = 0.0; c.sample_clamp_indirect = 0.0
     sc.polychrome.samples = 128; sc.polychrome.max_bounces = 4
-    import colour
-    rec709 = colour.RGB_COLOURSPACES['ITU-R BT.709']
-    def render(engine, tag):
-        sc.render.engine = engine
-        sc.render.filepath = os.path.abspath(tag + '.exr'); bpy.ops.render.render(write_still=True)
-        ch = exr_channels(tag + '.exr')
-        return np.stack([ch[k] for k in 'RGB'], -1).reshape(32, 32, 3)
-    def de(a, b):
-        blocks = [x.reshape(8, 4, 8, 4, 3).mean(axis=(1, 3)) for x in (a, b)]
-        xyz = [colour.RGB_to_XYZ(x, rec709, apply_cctf_decoding=False) for x in blocks]
-        w = max(float(np.percentile(xyz[0][..., 1], 99)), 1e-6)
-        lab = [colour.XYZ_to_Lab(x / w, rec709.whitepoint) for x in xyz]
-        return float(np.mean(colour.delta_E(lab[0], lab[1], method='CIE 2000')))
     for name, (kind, settings, loc, rot, sharp) in CASES.items():
         ld = bpy.data.lights.new(name, kind)
         for k, v in settings.items():
             setattr(ld, k, v)
         ob = bpy.data.objects.new(name, ld); sc.collection.objects.link(ob)
         ob.location = loc; ob.rotation_euler = tuple(math.radians(x) for x in rot)
-        cycles = render('CYCLES', 'cycles')
-        poly = render('POLYCHROME', 'poly')
+        cycles = render_rgb(sc, 'CYCLES', 'cycles')
+        poly = render_rgb(sc, 'POLYCHROME', 'poly')
         err, warn = Engine.last_error, Engine.last_warnings
         setattr(ld, sharp, 0.0)
-        point = render('POLYCHROME', 'sharp')
-        emit(name=name, de=de(cycles, poly), control=de(cycles, point), err=err, warn=warn,
+        point = render_rgb(sc, 'POLYCHROME', 'sharp')
+        emit(name=name, de=mean_de00(cycles, poly, 4), control=mean_de00(cycles, point, 4), err=err, warn=warn,
              means=[float(cycles.mean()), float(poly.mean()), float(point.mean()), float(cycles.min()), float(point.min())])
         bpy.data.objects.remove(ob); bpy.data.lights.remove(ld)
     """,
