@@ -88,7 +88,7 @@ def build_tiles(cases, shader="ShaderNodeEmission"):
     return tiles
 
 
-def render(cases, samples=1, albedo=False):
+def render(cases, samples=1, albedo=False, pixel_average=False):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
     tiles = build_tiles(cases, "ShaderNodeBsdfDiffuse" if albedo else "ShaderNodeEmission")
@@ -140,9 +140,11 @@ def render(cases, samples=1, albedo=False):
     sc.cycles.use_adaptive_sampling = False
     sc.cycles.use_denoising = False
     sc.cycles.pixel_filter_type = "BOX"
-    sc.cycles.filter_width = 0.01
+    # pixel_average: both renderers estimate the pixel's box integral (Cycles' Box filter
+    # one pixel wide, ``samples`` each) instead of Cycles' pixel centre.
+    sc.cycles.filter_width = 1.0 if pixel_average else 0.01
     sc.cycles.max_bounces = 1 if albedo else 0
-    sc.cycles.samples = 64 if albedo else 1
+    sc.cycles.samples = samples if pixel_average else 64 if albedo else 1
     sc.render.threads_mode = "FIXED"
     sc.render.threads = 2
     for engine in ("CYCLES", "POLYCHROME"):
@@ -177,10 +179,10 @@ def tile_values(path, tiles, rows):
     return np.array(vals)
 
 
-def run(cases, samples=1, albedo=False):
+def run(cases, samples=1, albedo=False, pixel_average=False):
     """Renders ``cases`` [(family, label, build(nt) -> socket, tolerance)] both ways and
     prints the RESULT line the test reads."""
-    tiles, rows, images, seconds, error, warnings = render(cases, samples, albedo)
+    tiles, rows, images, seconds, error, warnings = render(cases, samples, albedo, pixel_average)
     cyc = tile_values(images["CYCLES"], tiles, rows)
     pc = tile_values(images["POLYCHROME"], tiles, rows) if images["POLYCHROME"] else np.zeros_like(cyc)
     result = []

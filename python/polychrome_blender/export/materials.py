@@ -2,8 +2,8 @@
 
 Node materials are exported as their node graph (export/node_graph.py →
 ``polychrome.NodeMaterial``, docs/shading.md); a Principled Hair BSDF on the Surface keeps
-the approximation below (:meth:`MaterialExport.hair`). The core does not evaluate emission
-per hit yet, so a graph that varies over the surface and emits goes the fixed-pattern way.
+the approximation below (:meth:`MaterialExport.hair`). Emission that varies over the
+surface is evaluated per hit by the core (docs/shading.md) like every other input.
 
 The fixed-pattern export: Principled BSDF → ``polychrome.Principled`` (base colour or image texture,
 metallic, roughness, IOR — or a Polychrome Dispersion node linked to IOR —, transmission,
@@ -125,13 +125,10 @@ class MaterialExport:
         return self.node(node)
 
     def graph(self):
-        """The material as a ``polychrome.NodeMaterial`` (None: the core cannot evaluate
-        this graph yet — per-hit emission —, use the fixed patterns)."""
+        """The material as a ``polychrome.NodeMaterial``."""
         own = Warnings()
         g = GraphExport(self.mat, own, self.textures)
         got = g.export()
-        if g.per_hit and g.emits:
-            return None
         g.convert_textures()
         self.warnings.extend(own.items)
         if got is None:

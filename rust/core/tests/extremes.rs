@@ -35,7 +35,7 @@ impl Light for PoisonLight {
         let d = Vec3A::new(0.0, 0.0, 2.0) - p;
         let distance = d.length();
         self.radiance(le);
-        Some(LightSample { wi: d / distance, distance, pdf: 1.0, delta: true })
+        Some(LightSample { wi: d / distance, distance, pdf: 1.0, delta: true, part: 0 })
     }
     fn sample_le(&self, _u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
         self.radiance(le);
@@ -46,6 +46,7 @@ impl Light for PoisonLight {
             pdf_pos: 1.0,
             pdf_dir: 1.0 / (4.0 * std::f32::consts::PI),
             delta_position: true,
+            part: 0,
         })
     }
 }

@@ -216,10 +216,10 @@ impl CameraMis for BidirectionalMis {
         let light = LightEnd {
             p: v.si.p,
             pmf: scene.light_distribution.pmf(l),
-            le: scene.lights[l].pdf_le(v.si.p, v.wo),
+            le: scene.lights[l].pdf_le_part(v.si.triangle, v.si.p, v.wo),
             delta: false,
             infinite: false,
-            pdf_li: scene.lights[l].pdf_li(st.prev_p, st.ray.direction, st.traveled + v.si.t),
+            pdf_li: scene.lights[l].pdf_li_part(v.si.triangle, st.prev_p, st.ray.direction, st.traveled + v.si.t),
             cos: v.si.ng.dot(v.wo).abs(),
         };
         weights(&self.cam, &self.verts, &light, self.legacy)[0] as f32
@@ -246,7 +246,7 @@ impl CameraMis for BidirectionalMis {
         let DirectSample { light, pmf, ls, wi_local, bsdf_pdf } = *d;
         let infinite = ls.distance.is_infinite();
         let lp = if infinite { v.si.p + ls.wi } else { v.si.p + ls.wi * ls.distance };
-        let dens = scene.lights[light].pdf_le(lp, -ls.wi);
+        let dens = scene.lights[light].pdf_le_part(ls.part, lp, -ls.wi);
         let pdf_light = reverse_pdf(ctx, v, wi_local, v.wo_local, TransportMode::Importance);
         self.verts.push(Vtx { p: v.si.p, n: v.si.ng, specular: false, pdf_cam: bsdf_pdf, pdf_light });
         let end = LightEnd {
@@ -300,6 +300,8 @@ struct MisLightPath<'a> {
     pmf: f32,
     origin: Vec3A,
     delta_position: bool,
+    /// The part of the light the path starts on (`EmissionSample::part`).
+    part: u32,
     /// `sample_le` densities of the path's first ray.
     dens: Option<LeDensity>,
     /// Light-path vertices so far (light order).
@@ -341,7 +343,11 @@ impl<T: Throughput> PathHooks<T> for MisLightPath<'_> {
             le: self.dens,
             delta: self.delta_position,
             infinite: false,
-            pdf_li: if self.delta_position { 1.0 } else { self.light.pdf_li(first, to_light / dist, dist) },
+            pdf_li: if self.delta_position {
+                1.0
+            } else {
+                self.light.pdf_li_part(self.part, first, to_light / dist, dist)
+            },
             cos: self.dens.map_or(1.0, |d| d.cos),
         };
         let w = weights(&cam_end(v.si.p, &c), &self.cam_verts, &end, self.legacy)[2] as f32;
@@ -403,7 +409,7 @@ impl<P: WavelengthPolicy> Technique for Bidirectional<P> {
             let end = LightEnd {
                 p: es.origin,
                 pmf,
-                le: light.pdf_le(es.origin, c.wi),
+                le: light.pdf_le_part(es.part, es.origin, c.wi),
                 delta: false,
                 infinite: false,
                 pdf_li: 0.0,
@@ -422,7 +428,8 @@ impl<P: WavelengthPolicy> Technique for Bidirectional<P> {
             pmf,
             origin: es.origin,
             delta_position: es.delta_position,
-            dens: light.pdf_le(es.origin, es.direction),
+            part: es.part,
+            dens: light.pdf_le_part(es.part, es.origin, es.direction),
             path: Vec::with_capacity(capacity),
             cam_verts: Vec::with_capacity(capacity),
             legacy: false,

@@ -59,7 +59,7 @@ impl CameraMis for PowerHeuristic {
         match scene.triangle_light(v.si.instance, v.si.triangle) {
             Some(l) => {
                 let pl = scene.light_distribution.pmf(l)
-                    * scene.lights[l].pdf_li(st.prev_p, st.ray.direction, st.traveled + v.si.t);
+                    * scene.lights[l].pdf_li_part(v.si.triangle, st.prev_p, st.ray.direction, st.traveled + v.si.t);
                 power_heuristic(st.prev_pdf, pl)
             }
             None => 1.0,
@@ -178,7 +178,7 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
         v: &Vertex,
         st: &PathState,
         beta: &T,
-        _scratch: &mut Scratch,
+        scratch: &mut Scratch,
     ) {
         if let Some(out) = &mut self.first_hit {
             if st.depth == 0 {
@@ -225,9 +225,14 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
         if st.depth == 0 {
             self.mis.first_hit(scene, v, st);
         }
-        if let Some(emission) = v.material.emission.as_ref().filter(|_| ctx.front_face || !v.material.one_sided) {
+        let front = ctx.front_face || !v.material.one_sided;
+        if let Some(emission) = v.material.emission.as_ref().filter(|_| front) {
             let w = self.mis.emission(scene, v, st);
             self.gathered.add_emitted(beta, emission, w);
+        } else if let Some(g) = &v.material.graph_emission {
+            g.radiance(&ctx.hit, &mut scratch.le);
+            let w = self.mis.emission(scene, v, st);
+            self.gathered.add_emitted(beta, &scratch.le, w);
         }
     }
 

@@ -13,7 +13,8 @@ pub struct AreaTriangle {
     pub p: [Vec3A; 3],
     pub normal: Vec3A,
     pub area: f32,
-    /// Emitted radiance per wavelength.
+    /// Emitted radiance per wavelength (constant over the triangle; an emission that
+    /// varies over a mesh is a [`super::MeshLight`]).
     pub radiance: SampledSpectrum,
     /// Emits along `normal` only (the back face is dark).
     pub one_sided: bool,
@@ -80,7 +81,7 @@ impl Light for AreaTriangle {
             return None;
         }
         le.copy_from(&self.radiance);
-        Some(LightSample { wi, distance, pdf, delta: false })
+        Some(LightSample { wi, distance, pdf, delta: false, part: 0 })
     }
     fn pdf_li(&self, _p: Vec3A, wi: Vec3A, distance: f32) -> f32 {
         self.pdf_solid_angle(wi, distance)
@@ -103,14 +104,16 @@ impl Light for AreaTriangle {
         if !(pdf_dir > 0.0) {
             return None;
         }
+        let direction = Frame::from_normal(n).to_world(local);
         le.copy_from(&self.radiance);
         Some(EmissionSample {
             origin,
-            direction: Frame::from_normal(n).to_world(local),
+            direction,
             normal: Some(n),
             pdf_pos: 1.0 / self.area,
             pdf_dir,
             delta_position: false,
+            part: 0,
         })
     }
     fn pdf_le(&self, _origin: Vec3A, dir: Vec3A) -> Option<super::LeDensity> {

@@ -55,10 +55,10 @@ impl Light for DistantLight {
             le.scale(self.radiance_scale());
             let wi = Frame::from_normal(-self.direction).to_world(local);
             // Not hittable by BSDF rays: weight 1 (delta), the pdf still divides.
-            return Some(LightSample { wi, distance: f32::INFINITY, pdf, delta: true });
+            return Some(LightSample { wi, distance: f32::INFINITY, pdf, delta: true, part: 0 });
         }
         le.copy_from(&self.irradiance);
-        Some(LightSample { wi: -self.direction, distance: f32::INFINITY, pdf: 1.0, delta: true })
+        Some(LightSample { wi: -self.direction, distance: f32::INFINITY, pdf: 1.0, delta: true, part: 0 })
     }
     /// Light paths start on the disk of the bounding sphere facing the light; the
     /// direction is a delta (pdf_dir = 1), `le` is the irradiance, so `le/pdf_pos` is
@@ -88,6 +88,7 @@ impl Light for DistantLight {
             pdf_pos: 1.0 / (PI * r * r),
             pdf_dir,
             delta_position: true,
+            part: 0,
         })
     }
     fn pdf_le(&self, _origin: Vec3A, _dir: Vec3A) -> Option<super::LeDensity> {

@@ -24,7 +24,7 @@ impl Light for UniformEnvironment {
     }
     fn sample_li(&self, _p: Vec3A, u: Vec2, le: &mut SampledSpectrum) -> Option<LightSample> {
         le.copy_from(&self.radiance);
-        Some(LightSample { wi: uniform_sphere(u), distance: f32::INFINITY, pdf: Self::PDF, delta: false })
+        Some(LightSample { wi: uniform_sphere(u), distance: f32::INFINITY, pdf: Self::PDF, delta: false, part: 0 })
     }
     fn pdf_li(&self, _p: Vec3A, _wi: Vec3A, _distance: f32) -> f32 {
         Self::PDF
@@ -339,7 +339,7 @@ impl Light for ImageEnvironment {
             return None;
         }
         self.radiance_into(wi, le);
-        Some(LightSample { wi, distance: f32::INFINITY, pdf, delta: false })
+        Some(LightSample { wi, distance: f32::INFINITY, pdf, delta: false, part: 0 })
     }
     fn pdf_li(&self, _p: Vec3A, wi: Vec3A, _distance: f32) -> f32 {
         self.pdf_direction(wi)

@@ -4,6 +4,7 @@
 pub mod area;
 pub mod distant;
 pub mod environment;
+pub mod mesh;
 pub mod point;
 pub mod spot;
 
@@ -13,6 +14,7 @@ use glam::{Vec2, Vec3A};
 pub use area::AreaTriangle;
 pub use distant::DistantLight;
 pub use environment::{ImageEnvironment, UniformEnvironment};
+pub use mesh::{MeshLight, SurfaceEmission};
 pub use point::PointLight;
 pub use spot::SpotLight;
 
@@ -27,6 +29,9 @@ pub struct LightSample {
     pub pdf: f32,
     /// A point or directional light that BSDF sampling can never hit.
     pub delta: bool,
+    /// Which part of the light the point lies on (a [`MeshLight`]'s mesh triangle; 0
+    /// for lights of one part), for [`Light::pdf_li_part`] / [`Light::pdf_le_part`].
+    pub part: u32,
 }
 
 /// A ray leaving a light, for forward (light) tracing.
@@ -42,6 +47,8 @@ pub struct EmissionSample {
     pub pdf_dir: f32,
     /// The position is a delta (point, spot): no camera or BSDF ray can hit it.
     pub delta_position: bool,
+    /// Which part of the light the origin lies on (see [`LightSample::part`]).
+    pub part: u32,
 }
 
 /// The densities with which [`Light::sample_le`] starts a given ray, for bidirectional
@@ -81,6 +88,16 @@ pub trait Light: Send + Sync {
     /// `dir` (unit). None: this light cannot start light paths, or not this ray.
     fn pdf_le(&self, _origin: Vec3A, _dir: Vec3A) -> Option<LeDensity> {
         None
+    }
+    /// `pdf_li` for a point on part `part` of the light (the mesh triangle a BSDF ray
+    /// hit, or [`LightSample::part`]). Lights of one part ignore it; integrators call
+    /// this form wherever they know the part.
+    fn pdf_li_part(&self, _part: u32, p: Vec3A, wi: Vec3A, distance: f32) -> f32 {
+        self.pdf_li(p, wi, distance)
+    }
+    /// `pdf_le` for an origin on part `part` of the light (see [`Light::pdf_li_part`]).
+    fn pdf_le_part(&self, _part: u32, origin: Vec3A, dir: Vec3A) -> Option<LeDensity> {
+        self.pdf_le(origin, dir)
     }
 }
 

@@ -44,7 +44,7 @@ pub(crate) fn sample_point_or_sphere(
         le.copy_from(intensity);
         le.scale(scale / (PI * radius * radius));
         // Not hittable by BSDF rays: weight 1 (delta), the pdf still divides.
-        return Some(LightSample { wi, distance, pdf, delta: true });
+        return Some(LightSample { wi, distance, pdf, delta: true, part: 0 });
     }
     let d = center - p;
     let d2 = d.length_squared();
@@ -54,7 +54,7 @@ pub(crate) fn sample_point_or_sphere(
     let distance = d2.sqrt();
     le.copy_from(intensity);
     le.scale(scale / d2);
-    Some(LightSample { wi: d / distance, distance, pdf: 1.0, delta: true })
+    Some(LightSample { wi: d / distance, distance, pdf: 1.0, delta: true, part: 0 })
 }
 
 /// A ray leaving a sphere light: a uniform point of the sphere and a cosine-weighted
@@ -84,6 +84,7 @@ pub(crate) fn sphere_le(
         // No camera or BSDF ray can reach the sphere (it is not geometry): for the
         // integrators' partitions it is as unreachable as a point.
         delta_position: true,
+        part: 0,
     })
 }
 
@@ -106,6 +107,7 @@ impl Light for PointLight {
             pdf_pos: 1.0,
             pdf_dir: 1.0 / (4.0 * PI),
             delta_position: true,
+            part: 0,
         })
     }
     fn pdf_le(&self, _origin: Vec3A, _dir: Vec3A) -> Option<super::LeDensity> {

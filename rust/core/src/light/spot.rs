@@ -100,6 +100,7 @@ impl Light for SpotLight {
             pdf_pos: 1.0,
             pdf_dir: 1.0 / (2.0 * PI * one_minus),
             delta_position: true,
+            part: 0,
         })
     }
     fn pdf_le(&self, _origin: Vec3A, dir: Vec3A) -> Option<super::LeDensity> {

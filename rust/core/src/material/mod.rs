@@ -195,4 +195,7 @@ pub struct Material {
     /// For a material driven by a graph per hit: the mesh data its program reads, by
     /// slot (the walk fills `ShadingContext::hit` only for these materials).
     pub hit_attributes: Option<Vec<crate::shading::program::AttributeRequest>>,
+    /// An emission that varies over the surface (a node graph), evaluated at each hit
+    /// from `ShadingContext::hit`; `emission` is then None.
+    pub graph_emission: Option<std::sync::Arc<crate::shading::emission::GraphEmission>>,
 }

@@ -137,6 +137,15 @@ impl Distribution1D {
         let i = (i..self.pmf.len()).find(|&k| self.pmf[k] > 0.0).unwrap_or(i);
         Some(i)
     }
+    /// As [`Distribution1D::sample`], and `u` rescaled to [0, 1) within the chosen
+    /// item's interval of the cdf (one uniform number serves both choices).
+    pub fn sample_remapped(&self, u: f32) -> Option<(usize, f32)> {
+        let i = self.sample(u)?;
+        let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
+        let width = self.cdf[i] - lo;
+        let r = if width > 0.0 { ((u as f64 - lo) / width) as f32 } else { 0.5 };
+        Some((i, r.clamp(0.0, 1.0 - f32::EPSILON / 2.0)))
+    }
 }
 
 #[cfg(test)]

@@ -2,13 +2,18 @@
 //! the named per-vertex data of each mesh, and the [`ShadingPoint`] of a hit.
 
 use super::{buffer_f32, MeshDesc, Scene, SurfaceInteraction};
-use crate::geometry::{Mesh, Ray};
+use crate::geometry::{Instance, Mesh, Ray};
+use crate::light::SurfaceEmission;
+use crate::sampling::uniform_triangle;
+use crate::shading::emission::GraphEmission;
 use crate::shading::program::{AttributeRequest, ShadingPoint, MAX_ATTRIBUTES};
+use crate::spectrum::SampledSpectrum;
 use crate::{Error, Result};
 use glam::{Mat3, Vec2, Vec3, Vec3A};
+use std::sync::Arc;
 
 /// Named per-vertex data of one mesh, RGBA per vertex (UV maps in xy, scalars in x).
-#[derive(Default)]
+#[derive(Clone, Default)]
 pub struct MeshShadingData {
     pub bounds: (Vec3, Vec3),
     pub uv_maps: Vec<(String, Vec<[f32; 4]>)>,
@@ -104,82 +109,150 @@ fn object_random(i: u32) -> f32 {
 impl Scene {
     /// The shading point of a hit for a graph reading `requests`.
     pub fn shading_point(&self, ray: &Ray, si: &SurfaceInteraction, requests: &[AttributeRequest]) -> ShadingPoint {
-        let inst = &self.instances[si.instance as usize];
-        let mesh = &self.meshes[inst.mesh as usize];
-        let data = &self.mesh_data[inst.mesh as usize];
-        let (_, to_object, normal_to_world) = inst.transforms_at(ray.time);
-        let [i0, i1, i2] = mesh.indices[si.triangle as usize].map(|i| i as usize);
-        let (b1, b2) = (si.b1, si.b2);
-        let b0 = 1.0 - b1 - b2;
-        let lerp =
-            |v: &[[f32; 4]]| -> [f32; 4] { std::array::from_fn(|c| v[i0][c] * b0 + v[i1][c] * b1 + v[i2][c] * b2) };
-        let incoming = Vec3::from(-ray.direction);
-        let backfacing = si.ng.dot(-ray.direction) < 0.0;
-        let flip = |n: Vec3A| Vec3::from(if backfacing { -n } else { n });
-        let normal = flip(si.ns);
-        let object_position = Vec3::from(to_object.transform_point3a(si.p));
-        let (lo, hi) = data.bounds;
-        let size = hi - lo;
-        let generated = Vec3::select(size.cmpgt(Vec3::ZERO), (object_position - lo) / size, Vec3::ZERO);
-        let n2w = Mat3::from(normal_to_world);
-        // Tangent: the mesh's MikkTSpace tangent, else the triangle's ∂p/∂u.
-        let (tangent, tangent_sign) = match &data.tangents {
-            Some(t) => {
-                let t = lerp(t);
-                let w = inst.transforms_at(ray.time).0;
-                let tw = Vec3::from(w.transform_vector3a(Vec3A::new(t[0], t[1], t[2])));
-                (tw, if t[3] < 0.0 { -1.0 } else { 1.0 })
-            }
-            None => (self.uv_tangent(mesh, si, ray.time).unwrap_or_else(|| any_tangent(normal)), 1.0),
-        };
-        // Orthogonalise against the shading normal.
-        let tangent = (tangent - normal * normal.dot(tangent)).try_normalize().unwrap_or_else(|| any_tangent(normal));
-        let mut attributes = [[0.0; 4]; MAX_ATTRIBUTES];
-        for (k, r) in requests.iter().enumerate().take(MAX_ATTRIBUTES) {
-            if let Some(v) = data.lookup(r) {
-                attributes[k] = lerp(v);
-            }
-        }
-        ShadingPoint {
-            position: Vec3::from(si.p),
-            object_position,
-            generated,
-            normal,
-            true_normal: flip(si.ng),
-            tangent,
-            tangent_sign,
-            incoming,
-            backfacing,
-            uv: si.uv,
-            parametric: Vec2::new(b1, b2),
-            camera: Vec3::ZERO,
-            window: Vec3::ZERO,
-            normal_to_world: n2w,
-            object_location: Vec3::from(inst.transforms_at(ray.time).0.translation),
-            object_color: [1.0; 4],
-            object_index: si.instance as f32,
-            material_index: si.material as f32,
-            object_random: object_random(si.instance),
-            attributes,
-        }
+        shading_point_in(&self.instances, &self.meshes, &self.mesh_data, ray, si, requests)
     }
+}
 
-    /// ∂p/∂u of the hit triangle from its default UVs, in world space.
-    fn uv_tangent(&self, mesh: &Mesh, si: &SurfaceInteraction, time: f32) -> Option<Vec3> {
-        let uvs = mesh.uvs.as_ref()?;
-        let [i0, i1, i2] = mesh.indices[si.triangle as usize].map(|i| i as usize);
-        let [p0, p1, p2] = mesh.triangle_at(si.triangle as usize, time);
-        let (d1, d2) = (uvs[i1] - uvs[i0], uvs[i2] - uvs[i0]);
-        let det = d1.x * d2.y - d1.y * d2.x;
-        if det.abs() < 1e-12 {
-            return None;
+pub(crate) fn shading_point_in(
+    instances: &[Instance],
+    meshes: &[Mesh],
+    mesh_data: &[MeshShadingData],
+    ray: &Ray,
+    si: &SurfaceInteraction,
+    requests: &[AttributeRequest],
+) -> ShadingPoint {
+    let inst = &instances[si.instance as usize];
+    shading_point_of(inst, &meshes[inst.mesh as usize], &mesh_data[inst.mesh as usize], ray, si, requests)
+}
+
+/// The shading point of a hit on `inst` (instance number `si.instance`), whose mesh
+/// and shading data are `mesh` and `data`.
+pub(crate) fn shading_point_of(
+    inst: &Instance,
+    mesh: &Mesh,
+    data: &MeshShadingData,
+    ray: &Ray,
+    si: &SurfaceInteraction,
+    requests: &[AttributeRequest],
+) -> ShadingPoint {
+    let (_, to_object, normal_to_world) = inst.transforms_at(ray.time);
+    let [i0, i1, i2] = mesh.indices[si.triangle as usize].map(|i| i as usize);
+    let (b1, b2) = (si.b1, si.b2);
+    let b0 = 1.0 - b1 - b2;
+    let lerp = |v: &[[f32; 4]]| -> [f32; 4] { std::array::from_fn(|c| v[i0][c] * b0 + v[i1][c] * b1 + v[i2][c] * b2) };
+    let incoming = Vec3::from(-ray.direction);
+    let backfacing = si.ng.dot(-ray.direction) < 0.0;
+    let flip = |n: Vec3A| Vec3::from(if backfacing { -n } else { n });
+    let normal = flip(si.ns);
+    let object_position = Vec3::from(to_object.transform_point3a(si.p));
+    let (lo, hi) = data.bounds;
+    let size = hi - lo;
+    let generated = Vec3::select(size.cmpgt(Vec3::ZERO), (object_position - lo) / size, Vec3::ZERO);
+    let n2w = Mat3::from(normal_to_world);
+    // Tangent: the mesh's MikkTSpace tangent, else the triangle's ∂p/∂u.
+    let (tangent, tangent_sign) = match &data.tangents {
+        Some(t) => {
+            let t = lerp(t);
+            let w = inst.transforms_at(ray.time).0;
+            let tw = Vec3::from(w.transform_vector3a(Vec3A::new(t[0], t[1], t[2])));
+            (tw, if t[3] < 0.0 { -1.0 } else { 1.0 })
         }
-        let t = ((p1 - p0) * d2.y - (p2 - p0) * d1.y) / det;
-        let w = self.instances[si.instance as usize].transforms_at(time).0;
-        Some(Vec3::from(w.transform_vector3a(t)))
+        None => (uv_tangent(inst, mesh, si, ray.time).unwrap_or_else(|| any_tangent(normal)), 1.0),
+    };
+    // Orthogonalise against the shading normal.
+    let tangent = (tangent - normal * normal.dot(tangent)).try_normalize().unwrap_or_else(|| any_tangent(normal));
+    let mut attributes = [[0.0; 4]; MAX_ATTRIBUTES];
+    for (k, r) in requests.iter().enumerate().take(MAX_ATTRIBUTES) {
+        if let Some(v) = data.lookup(r) {
+            attributes[k] = lerp(v);
+        }
     }
+    ShadingPoint {
+        position: Vec3::from(si.p),
+        object_position,
+        generated,
+        normal,
+        true_normal: flip(si.ng),
+        tangent,
+        tangent_sign,
+        incoming,
+        backfacing,
+        uv: si.uv,
+        parametric: Vec2::new(b1, b2),
+        camera: Vec3::ZERO,
+        window: Vec3::ZERO,
+        normal_to_world: n2w,
+        object_location: Vec3::from(inst.transforms_at(ray.time).0.translation),
+        object_color: [1.0; 4],
+        object_index: si.instance as f32,
+        material_index: si.material as f32,
+        object_random: object_random(si.instance),
+        attributes,
+    }
+}
+
+/// ∂p/∂u of the hit triangle from its default UVs, in world space.
+fn uv_tangent(inst: &Instance, mesh: &Mesh, si: &SurfaceInteraction, time: f32) -> Option<Vec3> {
+    let uvs = mesh.uvs.as_ref()?;
+    let [i0, i1, i2] = mesh.indices[si.triangle as usize].map(|i| i as usize);
+    let [p0, p1, p2] = mesh.triangle_at(si.triangle as usize, time);
+    let (d1, d2) = (uvs[i1] - uvs[i0], uvs[i2] - uvs[i0]);
+    let det = d1.x * d2.y - d1.y * d2.x;
+    if det.abs() < 1e-12 {
+        return None;
+    }
+    let t = ((p1 - p0) * d2.y - (p2 - p0) * d1.y) / det;
+    let w = inst.transforms_at(time).0;
+    Some(Vec3::from(w.transform_vector3a(t)))
 }
 
 fn any_tangent(n: Vec3) -> Vec3 {
     n.any_orthonormal_vector()
+}
+
+/// A varying emitter's surface as a [`crate::light::MeshLight`] samples it: the
+/// emission's program run at the shading point of the sampled point, exactly as when a
+/// path hits it there.
+pub(crate) struct MeshEmission {
+    pub emission: Arc<GraphEmission>,
+    pub instance: Instance,
+    /// The instance's number in the scene (Object Info › Random, Object Index).
+    pub index: u32,
+    pub mesh: Arc<Mesh>,
+    pub data: Arc<MeshShadingData>,
+}
+
+impl MeshEmission {
+    /// The shading point at barycentrics (b1, b2) of `triangle`, seen along `incoming`
+    /// (None: from the front face).
+    fn point(&self, triangle: u32, b1: f32, b2: f32, incoming: Option<Vec3A>) -> ShadingPoint {
+        let hit = crate::accel::Hit { t: 1.0, instance: self.index, triangle, b1, b2 };
+        let probe = Ray::new(Vec3A::ZERO, -incoming.unwrap_or(Vec3A::Z));
+        let si = super::interaction_of(&self.instance, &self.mesh, &probe, &hit);
+        let ray = match incoming {
+            Some(_) => probe,
+            None => Ray::new(si.p + si.ng, -si.ng),
+        };
+        shading_point_of(&self.instance, &self.mesh, &self.data, &ray, &si, self.emission.requests())
+    }
+}
+
+impl SurfaceEmission for MeshEmission {
+    fn radiance(&self, triangle: u32, b1: f32, b2: f32, incoming: Vec3A, out: &mut SampledSpectrum) {
+        self.emission.radiance(&self.point(triangle, b1, b2, Some(incoming)), out);
+    }
+    fn estimate(&self, triangle: u32, strata: usize, out: &mut SampledSpectrum) {
+        let s = strata.max(1);
+        let mut sum = Vec3::ZERO;
+        for i in 0..s {
+            for j in 0..s {
+                let (u, v) = ((i as f32 + 0.5) / s as f32, (j as f32 + 0.5) / s as f32);
+                // One point: the centroid; more: square → triangle as the light samples.
+                let (b1, b2) = if s == 1 { (1.0 / 3.0, 1.0 / 3.0) } else { uniform_triangle(Vec2::new(u, v)) };
+                sum += self.emission.rgb(&self.point(triangle, b1, b2, None));
+            }
+        }
+        let mean = sum / (s * s) as f32;
+        self.emission.uplift.illuminant_into(mean.to_array(), out.values_mut());
+    }
 }

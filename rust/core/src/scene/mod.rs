@@ -300,10 +300,33 @@ impl Scene {
             let mut transparency = None;
             let mut compiled_program = None;
             let opaque_rest;
+            let mut graph_emission = None;
             let (bsdf_desc, emission_desc) = match &m.bsdf {
                 BsdfDesc::Graph(g) => {
                     compiled = crate::shading::compile_material(&m.name, g, &textures)?;
                     warnings.extend(compiled.warnings.iter().cloned());
+                    if let Some(terms) = &compiled.varying_emission {
+                        let Some(up) = &uplift else {
+                            return Err(Error::object(
+                                "material",
+                                &m.name,
+                                "its emission varies over the surface, which needs an RGB → spectrum map this wavelength grid lacks",
+                            ));
+                        };
+                        graph_emission = Some(Arc::new(crate::shading::emission::GraphEmission {
+                            program: compiled.program.clone(),
+                            terms: terms.clone(),
+                            uplift: up.clone(),
+                        }));
+                        hit_attributes = Some(compiled.program.attributes.clone());
+                        if m.one_sided {
+                            warnings.push(format!(
+                                "material '{}': one_sided is not applied to an emission that varies over the \
+                                 surface (it emits from both faces)",
+                                m.name
+                            ));
+                        }
+                    }
                     constant = compiled.constant_surface().unwrap_or(BsdfDesc::None);
                     if !compiled.template.is_constant() {
                         per_hit = Some(self::graph_bsdf(&m.name, &compiled, &grid, uplift.as_ref(), &textures)?);
@@ -428,6 +451,7 @@ impl Scene {
                 one_sided: m.one_sided,
                 see_through: m.see_through,
                 hit_attributes,
+                graph_emission,
             });
             // A graph with a volume and no surface is volume-only (Cycles' SD_HAS_ONLY_VOLUME).
             null_surface.push(match &m.bsdf {
@@ -455,6 +479,7 @@ impl Scene {
                 one_sided: false,
                 see_through: false,
                 hit_attributes: None,
+                graph_emission: None,
             });
             material_medium.push(None);
             null_surface.push(false);
@@ -585,9 +610,13 @@ impl Scene {
         let mut triangle_lights = vec![None; instances.len()];
         let mut moving_emitters = Vec::new();
         let mut light_visibility = Vec::new();
+        // Varying emitters' copies of their meshes (shared by the instances of one mesh).
+        let mut emitter_meshes = std::collections::HashMap::new();
         for (k, inst) in instances.iter().enumerate() {
             let mesh = &meshes[inst.mesh as usize];
-            if !mesh.material_ids.iter().any(|&m| materials[m as usize].emission.is_some()) {
+            let emits =
+                |m: u32| materials[m as usize].emission.is_some() || materials[m as usize].graph_emission.is_some();
+            if !mesh.material_ids.iter().any(|&m| emits(m)) {
                 continue;
             }
             // A moving emitter is no light to sample: its triangles are elsewhere at
@@ -598,21 +627,54 @@ impl Scene {
                 continue;
             }
             let mut map = vec![u32::MAX; mesh.indices.len()];
+            // Varying emitters: one light per (instance, material) over its triangles,
+            // which samples a triangle by a cdf of cheap power estimates (docs/shading.md).
+            let mut varying: Vec<(u32, Vec<(u32, [Vec3A; 3])>)> = Vec::new();
             for (t, &m) in mesh.material_ids.iter().enumerate() {
                 let material = &materials[m as usize];
-                let Some(e) = &material.emission else { continue };
                 let local = mesh.triangle(t);
                 let p = local.map(|v| inst.to_world.transform_point3a(v));
-                if let Some(mut tri) = AreaTriangle::new(p, e.clone()) {
-                    if material.one_sided {
-                        // The front is where the hit's geometric normal points (the
-                        // object-space winding normal through the inverse transpose, which
-                        // a mirroring transform does not turn around).
-                        let ng = inst.normal_to_world * (local[1] - local[0]).cross(local[2] - local[0]);
-                        tri.make_one_sided(ng.dot(tri.normal) < 0.0);
+                match (&material.emission, &material.graph_emission) {
+                    (Some(e), _) => {
+                        if let Some(mut tri) = AreaTriangle::new(p, e.clone()) {
+                            if material.one_sided {
+                                // The front is where the hit's geometric normal points (the
+                                // object-space winding normal through the inverse transpose, which
+                                // a mirroring transform does not turn around).
+                                let ng = inst.normal_to_world * (local[1] - local[0]).cross(local[2] - local[0]);
+                                tri.make_one_sided(ng.dot(tri.normal) < 0.0);
+                            }
+                            map[t] = lights.len() as u32;
+                            lights.push(Box::new(tri));
+                            light_visibility.push(inst.visibility);
+                        }
                     }
-                    map[t] = lights.len() as u32;
-                    lights.push(Box::new(tri));
+                    (None, Some(_)) => match varying.iter_mut().find(|(vm, _)| *vm == m) {
+                        Some((_, tris)) => tris.push((t as u32, p)),
+                        None => varying.push((m, vec![(t as u32, p)])),
+                    },
+                    (None, None) => {}
+                }
+            }
+            for (m, tris) in varying {
+                let Some(g) = &materials[m as usize].graph_emission else { continue };
+                let (mesh_arc, data_arc) = emitter_meshes
+                    .entry(inst.mesh)
+                    .or_insert_with(|| (Arc::new(mesh.clone()), Arc::new(mesh_data[inst.mesh as usize].clone())))
+                    .clone();
+                let surface = Arc::new(hit::MeshEmission {
+                    emission: g.clone(),
+                    instance: inst.clone(),
+                    index: k as u32,
+                    mesh: mesh_arc,
+                    data: data_arc,
+                });
+                let ids: Vec<u32> = tris.iter().map(|t| t.0).collect();
+                if let Some(light) = crate::light::MeshLight::new(tris, surface, grid.weights()) {
+                    for t in ids {
+                        map[t as usize] = lights.len() as u32;
+                    }
+                    lights.push(Box::new(light));
                     light_visibility.push(inst.visibility);
                 }
             }
@@ -781,54 +843,7 @@ impl Scene {
 
     /// World-space geometry at a hit.
     pub fn interaction(&self, ray: &Ray, hit: &Hit) -> SurfaceInteraction {
-        let inst = &self.instances[hit.instance as usize];
-        let mesh = &self.meshes[inst.mesh as usize];
-        let [i0, i1, i2] = mesh.indices[hit.triangle as usize].map(|i| i as usize);
-        let (b1, b2) = (hit.b1, hit.b2);
-        let b0 = 1.0 - b1 - b2;
-        // Where the geometry is at the ray's time (motion blur).
-        let (to_world, _, normal_to_world) = inst.transforms_at(ray.time);
-        let [p0, p1, p2] = mesh.triangle_at(hit.triangle as usize, ray.time);
-        let p_obj = p0 * b0 + p1 * b1 + p2 * b2;
-        let p = to_world.transform_point3a(p_obj);
-        let ng = (normal_to_world * (p1 - p0).cross(p2 - p0)).normalize_or_zero();
-        let motion_normals = mesh.motion.as_ref().filter(|m| m.normals.is_some());
-        let normal = |i: usize| match motion_normals {
-            Some(m) => m.normal(i, ray.time).unwrap_or(Vec3A::ZERO),
-            None => mesh.normals.as_ref().map_or(Vec3A::ZERO, |n| n[i]),
-        };
-        let ns = match &mesh.normals {
-            Some(_) => {
-                let s = (normal_to_world * (normal(i0) * b0 + normal(i1) * b1 + normal(i2) * b2)).normalize_or_zero();
-                if s == Vec3A::ZERO {
-                    ng
-                } else if s.dot(ng) < 0.0 {
-                    -s
-                } else {
-                    s
-                }
-            }
-            None => ng,
-        };
-        let uv = match &mesh.uvs {
-            Some(uv) => uv[i0] * b0 + uv[i1] * b1 + uv[i2] * b2,
-            None => Vec2::new(b1, b2),
-        };
-        // Fall back to the ray's position if the barycentric point lost precision.
-        let p = if p.is_finite() { p } else { ray.at(hit.t) };
-        SurfaceInteraction {
-            p,
-            ng,
-            ns,
-            uv,
-            b1,
-            b2,
-            material: mesh.material_ids[hit.triangle as usize],
-            instance: hit.instance,
-            triangle: hit.triangle,
-            t: hit.t,
-            time: ray.time,
-        }
+        interaction_in(&self.instances, &self.meshes, ray, hit)
     }
 
     /// The light index of an emissive triangle, if it is one.
@@ -836,5 +851,61 @@ impl Scene {
         let map = self.triangle_lights[instance as usize].as_ref()?;
         let l = map[triangle as usize];
         (l != u32::MAX).then_some(l as usize)
+    }
+}
+
+/// World-space geometry at a hit.
+pub(crate) fn interaction_in(instances: &[Instance], meshes: &[Mesh], ray: &Ray, hit: &Hit) -> SurfaceInteraction {
+    let inst = &instances[hit.instance as usize];
+    interaction_of(inst, &meshes[inst.mesh as usize], ray, hit)
+}
+
+/// World-space geometry at a hit on `inst` (instance number `hit.instance`) of `mesh`.
+pub(crate) fn interaction_of(inst: &Instance, mesh: &Mesh, ray: &Ray, hit: &Hit) -> SurfaceInteraction {
+    let [i0, i1, i2] = mesh.indices[hit.triangle as usize].map(|i| i as usize);
+    let (b1, b2) = (hit.b1, hit.b2);
+    let b0 = 1.0 - b1 - b2;
+    // Where the geometry is at the ray's time (motion blur).
+    let (to_world, _, normal_to_world) = inst.transforms_at(ray.time);
+    let [p0, p1, p2] = mesh.triangle_at(hit.triangle as usize, ray.time);
+    let p_obj = p0 * b0 + p1 * b1 + p2 * b2;
+    let p = to_world.transform_point3a(p_obj);
+    let ng = (normal_to_world * (p1 - p0).cross(p2 - p0)).normalize_or_zero();
+    let motion_normals = mesh.motion.as_ref().filter(|m| m.normals.is_some());
+    let normal = |i: usize| match motion_normals {
+        Some(m) => m.normal(i, ray.time).unwrap_or(Vec3A::ZERO),
+        None => mesh.normals.as_ref().map_or(Vec3A::ZERO, |n| n[i]),
+    };
+    let ns = match &mesh.normals {
+        Some(_) => {
+            let s = (normal_to_world * (normal(i0) * b0 + normal(i1) * b1 + normal(i2) * b2)).normalize_or_zero();
+            if s == Vec3A::ZERO {
+                ng
+            } else if s.dot(ng) < 0.0 {
+                -s
+            } else {
+                s
+            }
+        }
+        None => ng,
+    };
+    let uv = match &mesh.uvs {
+        Some(uv) => uv[i0] * b0 + uv[i1] * b1 + uv[i2] * b2,
+        None => Vec2::new(b1, b2),
+    };
+    // Fall back to the ray's position if the barycentric point lost precision.
+    let p = if p.is_finite() { p } else { ray.at(hit.t) };
+    SurfaceInteraction {
+        p,
+        ng,
+        ns,
+        uv,
+        b1,
+        b2,
+        material: mesh.material_ids[hit.triangle as usize],
+        instance: hit.instance,
+        triangle: hit.triangle,
+        t: hit.t,
+        time: ray.time,
     }
 }

@@ -17,11 +17,38 @@ use glam::Vec3;
 /// Deepest nesting of Mix/Add Shader nodes (guards the recursion).
 const MAX_DEPTH: usize = 64;
 
-/// What the surface emits: an RGB radiance, or a spectral one.
+/// What the surface emits: an RGB radiance, a spectral one, or a sum of RGB terms
+/// that vary over the surface (evaluated per hit and uplifted there, docs/shading.md).
 #[derive(Clone, Debug)]
 pub enum Emission {
     Rgb(Vec3),
     Spectrum(SpectrumDesc),
+    Varying(Vec<EmissionTerm>),
+}
+
+/// One term of a varying emission: `rgb × colour register × strength register` (a
+/// missing register reads 1), clamped to ≥ 0 per hit.
+#[derive(Clone, Debug)]
+pub struct EmissionTerm {
+    pub color: Option<Reg>,
+    pub strength: Option<Reg>,
+    pub rgb: Vec3,
+    /// Mix Shader factors on the way (register, and whether this is the first shader:
+    /// weight 1 − Fac), each clamped to 0..1.
+    pub weights: Vec<(Reg, bool)>,
+}
+
+impl EmissionTerm {
+    /// The term's RGB radiance from the program's registers.
+    pub fn eval(&self, regs: &[Vec3]) -> Vec3 {
+        let c = self.color.map_or(Vec3::ONE, |r| regs[r as usize].max(Vec3::ZERO));
+        let mut s = self.strength.map_or(1.0, |r| regs[r as usize].x.max(0.0));
+        for &(r, first) in &self.weights {
+            let f = regs[r as usize].x.clamp(0.0, 1.0);
+            s *= if first { 1.0 - f } else { f };
+        }
+        (self.rgb * c * s).max(Vec3::ZERO)
+    }
 }
 
 impl Emission {
@@ -31,6 +58,12 @@ impl Emission {
             Emission::Spectrum(mut d) => {
                 d.scale *= s;
                 Emission::Spectrum(d)
+            }
+            Emission::Varying(mut t) => {
+                for x in &mut t {
+                    x.rgb *= s;
+                }
+                Emission::Varying(t)
             }
         }
     }
@@ -410,6 +443,15 @@ fn add_emission(material: &str, a: Option<Emission>, b: Option<Emission>) -> Res
         (Some(Emission::Spectrum(x)), Some(Emission::Spectrum(y))) if x.kind == y.kind => {
             Some(Emission::Spectrum(SpectrumDesc { kind: x.kind, scale: x.scale + y.scale }))
         }
+        (Some(Emission::Varying(mut x)), Some(Emission::Varying(y))) => {
+            x.extend(y);
+            Some(Emission::Varying(x))
+        }
+        (Some(Emission::Varying(mut x)), Some(Emission::Rgb(c)))
+        | (Some(Emission::Rgb(c)), Some(Emission::Varying(mut x))) => {
+            x.push(EmissionTerm { color: None, strength: None, rgb: c, weights: Vec::new() });
+            Some(Emission::Varying(x))
+        }
         _ => {
             return Err(Error::object(
                 "material",
@@ -418,6 +460,20 @@ fn add_emission(material: &str, a: Option<Emission>, b: Option<Emission>) -> Res
             ))
         }
     })
+}
+
+/// `e` weighted by a per-hit Mix Shader factor (None: a spectral emission, which
+/// cannot be).
+fn weighted(e: Emission, r: Reg, first: bool) -> Option<Emission> {
+    let mut terms = match e {
+        Emission::Rgb(c) => vec![EmissionTerm { color: None, strength: None, rgb: c, weights: Vec::new() }],
+        Emission::Varying(t) => t,
+        Emission::Spectrum(_) => return None,
+    };
+    for t in &mut terms {
+        t.weights.push((r, first));
+    }
+    Some(Emission::Varying(terms))
 }
 
 impl<'c, 'a> Lowering<'c, 'a> {
@@ -436,12 +492,6 @@ impl<'c, 'a> Lowering<'c, 'a> {
             Some(v) => F::C(v.x.clamp(lo, hi)),
             None => F::R(r, lo, hi),
         })
-    }
-
-    /// A float input that must be constant (emission strength, layer weights).
-    fn const_float(&mut self, node: usize, id: &str, what: &str) -> Result<f32> {
-        let r = self.c.input_reg(node, id)?;
-        self.c.const_of(r).map(|v| v.x).ok_or_else(|| self.per_hit_unsupported(node, id, what))
     }
 
     /// A colour input: constants become spectrum descriptions (reflectances clamped to 0..1).
@@ -645,6 +695,15 @@ impl<'c, 'a> Lowering<'c, 'a> {
                 let emission = match (&factor, &factor_from) {
                     (_, _) if ea.is_none() && eb.is_none() => None,
                     (F::C(f), None) => add_emission(material, ea.map(|e| e.scaled(1.0 - f)), eb.map(|e| e.scaled(*f)))?,
+                    (F::R(r, _, _), None) => {
+                        let (wa, wb) = match (ea.map(|e| weighted(e, *r, true)), eb.map(|e| weighted(e, *r, false))) {
+                            (Some(None), _) | (_, Some(None)) => {
+                                return Err(self.per_hit_unsupported(node, "Fac", "mixing of a spectral emission"))
+                            }
+                            (a, b) => (a.flatten(), b.flatten()),
+                        };
+                        add_emission(material, wa, wb)?
+                    }
                     _ => return Err(self.per_hit_unsupported(node, "Fac", "emission")),
                 };
                 (Template::Mix { a: Box::new(a), b: Box::new(b), factor, factor_from }, emission)
@@ -686,17 +745,33 @@ impl<'c, 'a> Lowering<'c, 'a> {
     }
 
     fn emission(&mut self, node: usize, color: &str, strength: &str) -> Result<Option<Emission>> {
-        let s = self.const_float(node, strength, "emission")?;
+        let sr = self.c.input_reg(node, strength)?;
+        let s = self.c.const_of(sr).map(|v| v.x);
+        if s.is_some_and(|s| s <= 0.0) {
+            return Ok(None);
+        }
         let e = match self.c.input(node, color)? {
-            Value::Spectrum(d) => Emission::Spectrum(d),
+            Value::Spectrum(d) => match s {
+                Some(_) => Emission::Spectrum(d),
+                None => return Err(self.per_hit_unsupported(node, strength, "spectral emission")),
+            },
             Value::Ior(_) => return Err(self.c.error(node, format!("input '{color}': an IOR model on a colour"))),
-            Value::Reg(r) => match self.c.const_of(r) {
-                Some(v) => Emission::Rgb(v.max(Vec3::ZERO)),
-                None if s == 0.0 => Emission::Rgb(Vec3::ZERO),
-                None => return Err(self.per_hit_unsupported(node, color, "emission")),
+            Value::Reg(r) => match (self.c.const_of(r), s) {
+                (Some(v), Some(_)) => Emission::Rgb(v.max(Vec3::ZERO)),
+                (Some(v), None) if v.max_element() <= 0.0 => return Ok(None),
+                (v, _) => Emission::Varying(vec![EmissionTerm {
+                    color: v.is_none().then_some(r),
+                    strength: s.is_none().then_some(sr),
+                    rgb: v.map_or(Vec3::ONE, |v| v.max(Vec3::ZERO)),
+                    weights: Vec::new(),
+                }]),
             },
         };
-        Ok((s > 0.0).then(|| e.scaled(s)).filter(|e| !matches!(e, Emission::Rgb(c) if *c == Vec3::ZERO)))
+        let e = match s {
+            Some(s) => e.scaled(s),
+            None => e,
+        };
+        Ok(Some(e).filter(|e| !matches!(e, Emission::Rgb(c) if *c == Vec3::ZERO)))
     }
 
     /// A Mix Shader's Fac: a constant or register, or a Fresnel / Layer Weight node the
@@ -728,14 +803,19 @@ impl<'c, 'a> Lowering<'c, 'a> {
     }
 }
 
-/// The surface of a graph: its closures' template and constant emission.
-pub fn lower_surface(c: &mut Compiler, surface: Option<&(usize, String)>) -> Result<(Template, Option<SpectrumDesc>)> {
-    let Some((node, out)) = surface else { return Ok((Template::Fixed(BsdfDesc::None), None)) };
+/// The surface of a graph: its closures' template, its constant emission, or the terms
+/// of an emission that varies per hit.
+pub fn lower_surface(
+    c: &mut Compiler,
+    surface: Option<&(usize, String)>,
+) -> Result<(Template, Option<SpectrumDesc>, Option<Vec<EmissionTerm>>)> {
+    let Some((node, out)) = surface else { return Ok((Template::Fixed(BsdfDesc::None), None, None)) };
     let mut l = Lowering::new(c);
     let (t, emission) = l.closure(*node, out, 0)?;
-    let emission = emission.map(|e| match e {
-        Emission::Rgb(c) => SpectrumDesc::new(SpectrumKind::Rgb { rgb: c.to_array() }),
-        Emission::Spectrum(d) => d,
-    });
-    Ok((t, emission))
+    Ok(match emission {
+        None => (t, None, None),
+        Some(Emission::Rgb(c)) => (t, Some(SpectrumDesc::new(SpectrumKind::Rgb { rgb: c.to_array() })), None),
+        Some(Emission::Spectrum(d)) => (t, Some(d), None),
+        Some(Emission::Varying(terms)) => (t, None, Some(terms)),
+    })
 }

@@ -8,6 +8,7 @@ pub mod closure;
 pub mod color;
 pub mod compile;
 pub mod desc;
+pub mod emission;
 pub mod fold;
 pub mod input;
 pub mod math;
@@ -31,6 +32,9 @@ pub struct CompiledMaterial {
     pub emission: Option<crate::spectrum::SpectrumDesc>,
     /// A top-level Transparent BSDF split off the template: (pass probability, tint).
     pub transparency: Option<(closure::PassProbability, crate::spectrum::SpectrumDesc)>,
+    /// An emission that varies over the surface: RGB terms over the program's
+    /// registers, evaluated per hit (`emission::GraphEmission`).
+    pub varying_emission: Option<Vec<closure::EmissionTerm>>,
     pub program: Program,
     pub warnings: Vec<String>,
 }
@@ -49,7 +53,7 @@ pub fn compile_material(name: &str, graph: &GraphDesc, textures: &[Arc<Texture>]
     if graph.output.volume.is_some() || graph.output.displacement.is_some() {
         c.warnings.push(format!("material '{name}': volume and displacement outputs are not supported yet (ignored)"));
     }
-    let (mut template, emission) = closure::lower_surface(&mut c, graph.output.surface.as_ref())?;
+    let (mut template, emission, varying_emission) = closure::lower_surface(&mut c, graph.output.surface.as_ref())?;
     let mut transparency = None;
     if let Some((p, color, rest)) = template.split_transparent() {
         transparency = Some((p, color));
@@ -61,7 +65,14 @@ pub fn compile_material(name: &str, graph: &GraphDesc, textures: &[Arc<Texture>]
              constant Mix Shader there) is not supported yet; it reflects nothing"
         ));
     }
-    Ok(CompiledMaterial { template, emission, transparency, program: c.program, warnings: c.warnings })
+    Ok(CompiledMaterial {
+        template,
+        emission,
+        varying_emission,
+        transparency,
+        program: c.program,
+        warnings: c.warnings,
+    })
 }
 
 #[cfg(test)]

@@ -338,3 +338,48 @@ fn a_textured_alpha_is_a_per_hit_pass_probability_with_its_own_pruned_program() 
     // The opaque rest is the Principled alone, varying (its base colour).
     assert!(!c.template.is_constant() && !c.template.has_transparent());
 }
+
+/// The RGB emission of a compiled graph at `sp`, from its varying terms.
+fn emitted_rgb(c: &CompiledMaterial, sp: &ShadingPoint) -> Vec3 {
+    let mut regs = Vec::new();
+    c.program.run(sp, &mut regs);
+    c.varying_emission.as_ref().expect("varying emission").iter().fold(Vec3::ZERO, |a, t| a + t.eval(&regs))
+}
+
+#[test]
+fn a_varying_emission_is_evaluated_per_hit() {
+    // UV → Emission Color (strength 3), mixed per hit by the UV's v with a constant
+    // orange emission: e = (1 − v)·3·(u, v, 0) + v·(1, 0.5, 0).
+    let c = compile(json!({
+        "nodes": [
+            {"type": "ShaderNodeTexCoord", "name": "TC"},
+            {"type": "ShaderNodeEmission", "name": "E", "inputs": {"Color": {"link": [0, "UV"]}, "Strength": 3.0}},
+            {"type": "ShaderNodeEmission", "name": "O", "inputs": {"Color": [1.0, 0.5, 0.0, 1.0], "Strength": 1.0}},
+            {"type": "ShaderNodeSeparateXYZ", "name": "S", "inputs": {"Vector": {"link": [0, "UV"]}}},
+            {"type": "ShaderNodeMixShader", "name": "Mix", "inputs": {"Fac": {"link": [3, "Y"]},
+                "Shader": {"link": [1, "Emission"]}, "Shader_001": {"link": [2, "Emission"]}}}
+        ],
+        "output": {"surface": [4, "Shader"]}
+    }))
+    .unwrap();
+    assert!(c.emission.is_none());
+    let sp = ShadingPoint { uv: Vec2::new(0.25, 0.5), ..Default::default() };
+    let e = emitted_rgb(&c, &sp);
+    let want = 0.5 * 3.0 * Vec3::new(0.25, 0.5, 0.0) + 0.5 * Vec3::new(1.0, 0.5, 0.0);
+    assert!((e - want).abs().max_element() < 1e-6, "{e} vs {want}");
+    // A varying strength over a constant colour, never negative.
+    let c = compile(json!({
+        "nodes": [
+            {"type": "ShaderNodeTexCoord", "name": "TC"},
+            {"type": "ShaderNodeSeparateXYZ", "name": "S", "inputs": {"Vector": {"link": [0, "UV"]}}},
+            {"type": "ShaderNodeMath", "name": "M", "props": {"operation": "SUBTRACT"},
+             "inputs": {"Value": {"link": [1, "X"]}, "Value_001": 0.5}},
+            {"type": "ShaderNodeEmission", "name": "E", "inputs": {"Color": [0.2, 0.4, 0.8, 1.0], "Strength": {"link": [2, "Value"]}}}
+        ],
+        "output": {"surface": [3, "Emission"]}
+    }))
+    .unwrap();
+    let at = |u: f32| emitted_rgb(&c, &ShadingPoint { uv: Vec2::new(u, 0.0), ..Default::default() });
+    assert!((at(1.0) - 0.5 * Vec3::new(0.2, 0.4, 0.8)).abs().max_element() < 1e-6);
+    assert_eq!(at(0.0), Vec3::ZERO);
+}
