@@ -4,7 +4,8 @@ What is read: UsdGeom meshes (polygons fan-triangulated, holes dropped, GeomSubs
 material, normals and ``st`` per vertex or face-varying), transforms
 (``ComputeLocalToWorldTransform`` through an XformCache), instanceable prims and
 PointInstancers, one UsdGeom.Camera, UsdLux sphere / rect / disk / distant / dome lights,
-UsdPreviewSurface materials and the ``polychrome:`` attributes (which win). Units are
+UsdPreviewSurface materials (networks of UsdUVTexture, UsdTransform2d and UsdPrimvarReader
+become shading graphs, ``preview.py``) and the ``polychrome:`` attributes (which win). Units are
 converted to metres (``metersPerUnit``) and Y-up stages rotated to Z-up.
 
 Unsupported prims are skipped with one ``warnings.warn`` each naming the prim; malformed
@@ -226,7 +227,7 @@ class _Reader:
         # Collected, then turned into a Scene at the end.
         self.materials: list[Any] = []
         self.material_index: dict[str, int] = {}
-        self.default_materials: dict[tuple, int] = {}
+        self.default_materials: dict[Any, int] = {}
         self.meshes: dict[str, dict[str, Any]] = {}
         self.instances: list[tuple[str, np.ndarray, str]] = []
         self.lights: list[Any] = []
@@ -234,6 +235,9 @@ class _Reader:
         self.world_texture: dict[str, Any] | None = None
         self.cameras: list[Any] = []
         self.textures: dict[str, Any] = {}
+        # UV sets and primvars some material's network reads (meshes carry them).
+        self.uv_names: set[str] = set()
+        self.attribute_names: set[str] = set()
 
     # -- helpers ------------------------------------------------------------------
     def error(self, prim_or_path, problem: str) -> ValueError:
@@ -327,9 +331,25 @@ class _Reader:
                 arr = np.asarray(c, np.float64).reshape(-1, 3)
                 if np.all(np.isfinite(arr)):
                     colour = tuple(float(x) for x in arr.mean(axis=0))
+                    if len(arr) > 1 and np.ptp(arr, axis=0).max() > 0 and prim.GetTypeName() == "Mesh":
+                        return self.display_colour_material()
         if colour not in self.default_materials:
             self.default_materials[colour] = self.add_material(Diffuse(rgb(*colour), name=f"displayColor {colour}"))
         return self.default_materials[colour]
+
+    def display_colour_material(self) -> int:
+        """A diffuse of the mesh's ``displayColor`` primvar read per vertex / face (the
+        graph's Attribute node), shared by every unbound mesh whose colour varies."""
+        from ..scene import NodeMaterial
+
+        if "displayColor" not in self.default_materials:
+            self.attribute_names.add("displayColor")
+            nodes = [
+                {"type": "ShaderNodeAttribute", "name": "displayColor", "props": {"attribute_name": "displayColor"}},
+                {"type": "ShaderNodeBsdfDiffuse", "name": "Diffuse", "inputs": {"Color": {"link": [0, "Color"]}}},
+            ]
+            self.default_materials["displayColor"] = self.add_material(NodeMaterial("displayColor", nodes, {"surface": [1, "BSDF"]}))
+        return self.default_materials["displayColor"]
 
     def bound_material(self, prim) -> int:
         # The 'full' (final render) binding, falling back to the all-purpose one.
@@ -337,37 +357,6 @@ class _Reader:
         if mat and mat.GetPrim().IsValid():
             return self.material_for(mat.GetPrim())
         return self.default_material(prim)
-
-    def shader_input(self, shader, name: str, default, material_prim):
-        inp = shader.GetInput(name)
-        if not inp:
-            return default
-        if inp.HasConnectedSource():
-            tex = self.texture_source(inp) if name == "diffuseColor" else None
-            if tex is not None:
-                # Read by texture_input; this is what a missing file falls back to.
-                return self.texture_fallback(tex, default)
-            source = inp.GetConnectedSources()[0]
-            src = source[0].source if source else None
-            fallback = None
-            if src is not None:
-                fb = src.GetInput("fallback")
-                fallback = fb.Get(self.time) if fb else None
-            self.warn(
-                f"tex:{material_prim.GetPath()}:{name}",
-                f"prim {material_prim.GetPath()}: input '{name}' is connected to a texture or node, which is not supported yet; its fallback value is used",
-            )
-            if fallback is not None:
-                return (
-                    tuple(fallback)[:3]
-                    if isinstance(default, tuple)
-                    else float(tuple(fallback)[0] if hasattr(fallback, "__len__") else fallback)
-                )
-            return default
-        v = inp.Get(self.time)
-        if v is None:
-            return default
-        return tuple(float(x) for x in v) if isinstance(default, tuple) else float(v)
 
     def texture_source(self, inp):
         """The UsdUVTexture shader driving ``inp``, or None."""
@@ -378,16 +367,6 @@ class _Reader:
         if src and src.GetShaderId() == "UsdUVTexture":
             return src
         return None
-
-    def texture_fallback(self, tex, default):
-        """A UsdUVTexture's authored ``fallback`` (its RGB), else ``default``: the value
-        the preview surface input takes when the texture cannot be read."""
-        fb = tex.GetInput("fallback")
-        v = fb.Get(self.time) if fb and fb.GetAttr().HasAuthoredValue() else None
-        if v is None:
-            return default
-        v = tuple(float(x) for x in v)[:3]
-        return v if len(v) == 3 and all(math.isfinite(x) for x in v) else default
 
     def asset_path(self, attr_value, prim, what: str) -> Path | None:
         """An SdfAssetPath as a file path (resolved, or relative to the stage's layer);
@@ -496,19 +475,26 @@ class _Reader:
                     f"prim {prim.GetPath()}: its surface is only given for render contexts ({', '.join(others)}), which are not supported; rendered as grey diffuse",
                 )
         if shader is not None:
-            diffuse = self.shader_input(shader, "diffuseColor", FALLBACK_GREY, prim)
-            emissive = self.shader_input(shader, "emissiveColor", (0.0, 0.0, 0.0), prim)
-            opacity = self.shader_input(shader, "opacity", 1.0, prim)
-            ior_value = self.shader_input(shader, "ior", 1.5, prim)
-            metallic = self.shader_input(shader, "metallic", 0.0, prim)
-            roughness = self.shader_input(shader, "roughness", 0.5, prim)
+            from . import preview
+
+            graph, consts = preview.build(self, prim, shader, name)
+            if graph is not None:
+                if reflectance is not None or emission is not None:
+                    self.warn(
+                        f"graphspec:{self.key_of(prim)}",
+                        f"prim {prim.GetPath()}: polychrome: spectra are not applied to a textured UsdPreviewSurface",
+                    )
+                return graph
+            as3 = lambda v: tuple(float(x) for x in v)[:3] if isinstance(v, tuple) else (float(v),) * 3  # noqa: E731
+            as1 = lambda v: float(v[0]) if isinstance(v, tuple) else float(v)  # noqa: E731
+            diffuse, emissive = as3(consts["diffuseColor"]), as3(consts["emissiveColor"])
+            opacity, ior_value = as1(consts["opacity"]), as1(consts["ior"])
+            metallic, roughness = as1(consts["metallic"]), as1(consts["roughness"])
         values = [*diffuse, *emissive, opacity, ior_value, metallic, roughness]
         if not all(math.isfinite(v) for v in values):
             raise self.error(prim, "its UsdPreviewSurface inputs are not finite")
         if emission is None and max(emissive) > 0.0:
             emission = rgb(*emissive)
-        if reflectance is None and shader is not None:
-            reflectance = self.texture_input(shader, "diffuseColor", prim)
         if reflectance is None:
             reflectance = rgb(*(min(max(c, 0.0), 1.0) for c in diffuse))
         rough = min(max(float(roughness), 0.0), 1.0)
@@ -731,29 +717,6 @@ class _Reader:
                     break
         uvs = self.primvar(prim, uv_name, f"primvars:{uv_name}", len(pts), n_corners, n_faces, 2)
 
-        if (normals is not None and normals[1] == "corner") or (uvs is not None and uvs[1] == "corner"):
-            # Split vertices whose corners disagree (as Blender's exporter does).
-            cols = [idx.astype(np.int64)[:, None].view(np.int32).reshape(n_corners, 2)]
-            corner_n = corner_uv = None
-            if normals is not None:
-                corner_n = normals[0] if normals[1] == "corner" else normals[0][idx]
-                cols.append(np.ascontiguousarray(corner_n).view(np.int32))
-            if uvs is not None:
-                corner_uv = uvs[0] if uvs[1] == "corner" else uvs[0][idx]
-                cols.append(np.ascontiguousarray(corner_uv).view(np.int32))
-            keys = np.ascontiguousarray(np.concatenate(cols, axis=1))
-            row = keys.view(np.dtype((np.void, keys.dtype.itemsize * keys.shape[1]))).ravel()
-            _, first_corner, inverse = np.unique(row, return_index=True, return_inverse=True)
-            vertices = pts[idx[first_corner]]
-            tris = inverse.ravel()[corners]
-            out_n = None if corner_n is None else corner_n[first_corner]
-            out_uv = None if corner_uv is None else corner_uv[first_corner]
-        else:
-            vertices = pts
-            tris = idx[corners]
-            out_n = None if normals is None else normals[0]
-            out_uv = None if uvs is None else uvs[0]
-
         # Materials: GeomSubsets of the materialBind family, else the prim's binding.
         binding = self.UsdShade.MaterialBindingAPI(prim)
         subsets = binding.GetMaterialBindSubsets()
@@ -775,6 +738,65 @@ class _Reader:
             material_ids = face_material[face_of_tri]
         else:
             material = self.bound_material(prim)
+        # Named UV sets and primvars that some material's network reads.
+        face_of_corner = None
+        extras: dict[tuple[str, str], tuple[np.ndarray, str]] = {}
+        api = self.UsdGeom.PrimvarsAPI(prim)
+        wanted = [("uv", n) for n in sorted(self.uv_names)] + [("attr", n) for n in sorted(self.attribute_names)]
+        for kind, pv_name in wanted:
+            pv = api.GetPrimvar(pv_name)
+            if not pv or not pv.HasValue():
+                continue
+            value = pv.ComputeFlattened(self.time)
+            if value is None or len(value) == 0:
+                continue
+            arr = np.asarray(value, dtype=np.float32)
+            arr = arr.reshape(len(arr), -1)
+            if kind == "uv":
+                arr = arr[:, :2]
+            interp = str(pv.GetInterpolation())
+            if interp in ("uniform", "constant"):
+                expected = n_faces if interp == "uniform" else 1
+                if len(arr) != expected or not np.all(np.isfinite(arr)):
+                    raise self.error(
+                        prim, f"primvars:{pv_name} has {len(arr)} values for {interp} interpolation; expected {expected} finite ones"
+                    )
+                if interp == "constant":
+                    extras[(kind, pv_name)] = (np.repeat(arr, len(pts), axis=0), "vertex")
+                    continue
+                if face_of_corner is None:
+                    face_of_corner = np.repeat(np.arange(n_faces), counts)
+                extras[(kind, pv_name)] = (arr[face_of_corner], "corner")
+                continue
+            checked = self.check_interp(prim, arr, interp, f"primvars:{pv_name}", len(pts), n_corners, n_faces)
+            if checked is not None:
+                extras[(kind, pv_name)] = checked
+
+        per_vertex = [("normals", normals), ("uvs", uvs)] + list(extras.items())
+        if any(d is not None and d[1] == "corner" for _, d in per_vertex):
+            # Split vertices whose corners disagree (as Blender's exporter does).
+            cols = [idx.astype(np.int64)[:, None].view(np.int32).reshape(n_corners, 2)]
+            corner_data = {}
+            for key, d in per_vertex:
+                if d is None:
+                    continue
+                c = np.ascontiguousarray(d[0] if d[1] == "corner" else d[0][idx], dtype=np.float32)
+                corner_data[key] = c
+                cols.append(c.view(np.int32))
+            keys = np.ascontiguousarray(np.concatenate(cols, axis=1))
+            row = keys.view(np.dtype((np.void, keys.dtype.itemsize * keys.shape[1]))).ravel()
+            _, first_corner, inverse = np.unique(row, return_index=True, return_inverse=True)
+            vertices = pts[idx[first_corner]]
+            tris = inverse.ravel()[corners]
+            out = {key: c[first_corner] for key, c in corner_data.items()}
+        else:
+            vertices = pts
+            tris = idx[corners]
+            out = {key: d[0] for key, d in per_vertex if d is not None}
+        out_n, out_uv = out.get("normals"), out.get("uvs")
+        uv_maps = {k[1]: v for k, v in out.items() if isinstance(k, tuple) and k[0] == "uv"} or None
+        attrs = {k[1]: v for k, v in out.items() if isinstance(k, tuple) and k[0] == "attr"} or None
+
         return {
             "name": str(self.custom(prim, A.NAME, str(prim.GetPath()))),
             "order": self.custom(prim, A.MESH_INDEX),
@@ -782,6 +804,8 @@ class _Reader:
             "triangles": tris,
             "normals": out_n,
             "uvs": out_uv,
+            "uv_maps": uv_maps,
+            "attributes": attrs,
             "material_ids": material_ids,
             "material": material,
         }
@@ -1320,6 +1344,8 @@ class _Reader:
                 material=m["material"],
                 material_ids=m["material_ids"],
                 place=False,
+                uv_maps=m.get("uv_maps"),
+                attributes=m.get("attributes"),
             )
         for key, matrix, name, *visibility in self.instances:
             scene.add_instance(index[key], matrix, name, visibility=visibility[0] if visibility else None)

@@ -1,0 +1,520 @@
+"""UsdPreviewSurface shading networks → the shading graph of docs/shading.md.
+
+A UsdPreviewSurface whose inputs are driven by ``UsdUVTexture``, ``UsdTransform2d`` and
+``UsdPrimvarReader_*`` shaders becomes a :class:`polychrome.NodeMaterial` in Blender's
+node vocabulary, the graph the Blender add-on writes (a Principled BSDF fed by Image
+Texture, Mapping, UV Map, Attribute, Math, Vector Math and Separate Color nodes), so
+the core compiles USD networks and Blender node trees with one compiler.
+
+The meaning of every node follows the UsdPreviewSurface specification
+(openusd.org/release/spec_usdpreviewsurface.html, version 2.5):
+
+* UsdUVTexture: ``file`` sampled at ``st`` with ``wrapS``/``wrapT`` (repeat, mirror,
+  clamp, black; ``useMetadata`` reads as repeat), ``sourceColorSpace`` (``raw``,
+  ``sRGB``, ``auto``: sRGB for 8-bit images of 3 or 4 channels, else raw), every
+  output = texel × ``scale`` + ``bias`` (per channel, after decoding), ``fallback`` when
+  the file cannot be read; outputs ``r``, ``g``, ``b``, ``a``, ``rgb``.
+* UsdTransform2d: ``in`` × ``scale``, rotated by ``rotation`` degrees counter-clockwise,
+  plus ``translation`` — scale first, then rotation, then translation, which is exactly
+  Blender's Mapping node of type Point (Cycles' svm_mapping: R·(S·v) + T).
+* UsdPrimvarReader_float2: the UV set named by ``varname`` (a UV Map node);
+  UsdPrimvarReader_float / float3 / float4 / color...: the primvar as a mesh attribute
+  (an Attribute node), e.g. ``displayColor`` per vertex or face-varying.
+
+When every input resolves to a constant (no network, or only textures whose files are
+missing) :func:`build` returns the constants and the reader builds the fixed material
+as before.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+@dataclass
+class Const:
+    value: Any  # float or tuple of floats
+
+
+@dataclass
+class Link:
+    node: int
+    output: str
+
+
+#: UsdPreviewSurface inputs read as Principled BSDF inputs: USD name → (kind, spec fallback).
+INPUTS = {
+    "diffuseColor": ("color", (0.18, 0.18, 0.18)),
+    "emissiveColor": ("color", (0.0, 0.0, 0.0)),
+    "useSpecularWorkflow": ("float", 0.0),
+    "specularColor": ("color", (0.0, 0.0, 0.0)),
+    "metallic": ("float", 0.0),
+    "roughness": ("float", 0.5),
+    "clearcoat": ("float", 0.0),
+    "clearcoatRoughness": ("float", 0.01),
+    "opacity": ("float", 1.0),
+    "opacityThreshold": ("float", 0.0),
+    "ior": ("float", 1.5),
+}
+
+#: Direct Principled sockets.
+SOCKETS = {
+    "diffuseColor": "Base Color",
+    "metallic": "Metallic",
+    "roughness": "Roughness",
+    "clearcoat": "Coat Weight",
+    "clearcoatRoughness": "Coat Roughness",
+    "ior": "IOR",
+}
+
+WRAPS = {"repeat": "REPEAT", "mirror": "MIRROR", "clamp": "EXTEND", "black": "CLIP"}
+_CHANNEL = {"r": 0, "g": 1, "b": 2, "a": 3}
+
+
+def _srgb_to_linear(x: np.ndarray) -> np.ndarray:
+    """IEC 61966-2-1 decoding."""
+    return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4).astype(np.float32)
+
+
+def load_texture(path: Path, colour_space: str, wrap: str, name: str):
+    """A polychrome.Texture holding what UsdUVTexture reads from ``path``: RGB (one
+    channel replicated) and alpha, decoded as ``sourceColorSpace`` says. Raises OSError /
+    ValueError when the file cannot be read."""
+    from ..imageio import read_image
+    from ..texture import Texture, read_radiance_hdr
+
+    suffix = path.suffix.lower()
+    if suffix == ".exr":
+        a = read_image(path)
+        return Texture.from_array(_srgb_to_linear(a[..., :3]) if colour_space == "sRGB" else a, "linear", wrap, name)
+    if suffix == ".hdr":
+        a = read_radiance_hdr(path)
+        return Texture.from_array(_srgb_to_linear(a) if colour_space == "sRGB" else a, "linear", wrap, name)
+    from PIL import Image
+
+    try:
+        with Image.open(path) as im:
+            mode = im.mode
+            if mode in ("I;16", "I;16B", "I;16L", "I"):
+                a = np.asarray(im, dtype=np.float64)
+                a = (a / (65535.0 if mode.startswith("I;16") or a.max() > 255 else 255.0)).astype(np.float32)
+                a = np.repeat(a[:, :, None], 3, axis=2)
+                eight_bit = False
+            elif mode == "F":
+                a = np.repeat(np.asarray(im, dtype=np.float32)[:, :, None], 3, axis=2)
+                eight_bit = False
+            else:
+                if mode in ("L", "LA"):
+                    la = np.asarray(im.convert("LA"), dtype=np.uint8)
+                    a = np.concatenate([np.repeat(la[:, :, :1], 3, axis=2), la[:, :, 1:]], axis=2)
+                    channels = 1 if mode == "L" else 2
+                else:
+                    has_alpha = "A" in mode or "transparency" in im.info
+                    a = np.asarray(im.convert("RGBA" if has_alpha else "RGB"), dtype=np.uint8)
+                    channels = 4 if has_alpha else 3
+                eight_bit = True
+    except (OSError, Image.DecompressionBombError, SyntaxError) as exc:
+        raise ValueError(str(exc)) from exc
+    if eight_bit:
+        srgb = colour_space == "sRGB" or (colour_space != "raw" and channels in (3, 4))
+        if srgb:
+            if a.shape[2] == 4:  # alpha stays linear: a float texture with decoded colour
+                f = a.astype(np.float32) / 255.0
+                f[..., :3] = _srgb_to_linear(f[..., :3])
+                return Texture.from_array(f, "linear", wrap, name)
+            return Texture.from_array(a, "srgb", wrap, name)
+        return Texture.from_array(a.astype(np.float32) / 255.0, "linear", wrap, name)
+    return Texture.from_array(_srgb_to_linear(a) if colour_space == "sRGB" else a, "linear", wrap, name)
+
+
+def texture_shape(texture) -> tuple[int, int]:
+    return int(texture.pixels.shape[0]), int(texture.pixels.shape[1])
+
+
+_WRAPPED: dict[tuple, Any] = {}
+
+
+def wrapped_texture(texture, wrap_s: str, wrap_t: str):
+    """``texture`` prepared for REPEAT lookups that reproduce ``wrap_s``/``wrap_t``:
+    mirrored axes doubled with the flipped image (row 0 is the top: v grows upwards),
+    black axes padded by one black, transparent texel on each side."""
+    from ..texture import Texture
+
+    key = (id(texture), wrap_s, wrap_t)
+    if key in _WRAPPED and _WRAPPED[key][0] is texture:
+        return _WRAPPED[key][1]
+    a = texture.pixels
+    if "black" in (wrap_s, wrap_t) and a.shape[2] == 3:
+        alpha = np.full(a.shape[:2] + (1,), 255 if a.dtype == np.uint8 else 1.0, a.dtype)
+        a = np.concatenate([a, alpha], axis=2)
+    if wrap_s == "mirror":
+        a = np.concatenate([a, a[:, ::-1]], axis=1)
+    if wrap_t == "mirror":
+        a = np.concatenate([a[::-1], a], axis=0)
+    if wrap_s == "black":
+        a = np.pad(a, ((0, 0), (1, 1), (0, 0)))
+    if wrap_t == "black":
+        a = np.pad(a, ((1, 1), (0, 0), (0, 0)))
+    out = Texture.from_array(np.ascontiguousarray(a), texture.encoding, "REPEAT", texture.name)
+    _WRAPPED[key] = (texture, out)
+    return out
+
+
+class Graph:
+    """One material's graph, built from its UsdPreviewSurface network."""
+
+    def __init__(self, reader, material_prim, shader):
+        self.r = reader
+        self.material = material_prim
+        self.shader = shader
+        self.nodes: list[dict[str, Any]] = []
+        self.memo: dict[tuple, Any] = {}
+
+    # -- plumbing ----------------------------------------------------------------------
+    def add(self, kind: str, name: str, props=None, inputs=None) -> int:
+        self.nodes.append({"type": kind, "name": name, "props": props or {}, "inputs": inputs or {}})
+        return len(self.nodes) - 1
+
+    def warn(self, key: str, message: str) -> None:
+        self.r.warn(f"{key}:{self.material.GetPath()}", f"prim {self.material.GetPath()}: {message}")
+
+    @staticmethod
+    def socket(v, kind: str):
+        """A Const or Link as the JSON of an input socket."""
+        if isinstance(v, Link):
+            return {"link": [v.node, v.output]}
+        x = v.value
+        if kind == "float":
+            return float(x[0] if isinstance(x, tuple) else x)
+        t = x if isinstance(x, tuple) else (float(x),) * 3
+        return [float(c) for c in (tuple(t) + (0.0, 0.0, 0.0))[:3]]
+
+    def value(self, inp, kind: str):
+        """What drives a shader input: Const, Link, or None when nothing is authored."""
+        if not inp:
+            return None
+        attrs = inp.GetValueProducingAttributes()
+        if not attrs:
+            return None
+        attr = attrs[0]
+        UsdShade = self.r.UsdShade
+        if UsdShade.Output.IsOutput(attr):
+            out = UsdShade.Output(attr)
+            source = UsdShade.Shader(attr.GetPrim())
+            return self.output(source, str(out.GetBaseName()), kind, inp)
+        v = attr.Get(self.r.time)
+        if v is None:
+            return None
+        return Const(self.plain(v, kind))
+
+    def plain(self, v, kind: str):
+        if isinstance(v, str) or kind == "string":
+            return str(v)
+        try:
+            t = tuple(float(c) for c in v)
+        except TypeError:
+            t = float(v)
+        vals = t if isinstance(t, tuple) else (t,)
+        if not all(math.isfinite(c) for c in vals):
+            raise self.r.error(self.material, "its UsdPreviewSurface inputs are not finite")
+        return t
+
+    def const(self, inp, default):
+        """A constant input of a non-surface shader (rotation, scale, ...)."""
+        v = self.value(inp, "float" if not isinstance(default, tuple) else "color")
+        if v is None:
+            return default
+        if isinstance(v, Link):
+            self.warn(
+                f"linkparam:{inp.GetAttr().GetPath()}",
+                f"{inp.GetAttr().GetPath()} is connected; only a constant is supported there, its fallback is used",
+            )
+            return default
+        return v.value
+
+    def output(self, shader, name: str, kind: str, consumer):
+        key = (str(shader.GetPath()), name, kind)
+        if key not in self.memo:
+            self.memo[key] = self._output(shader, name, kind, consumer)
+        return self.memo[key]
+
+    def _output(self, shader, name: str, kind: str, consumer):
+        sid = str(shader.GetShaderId() or "")
+        path = shader.GetPath()
+        if sid == "UsdUVTexture":
+            return self.texture_output(shader, name, kind)
+        if sid == "UsdTransform2d":
+            return self.transform2d(shader)
+        if sid.startswith("UsdPrimvarReader_"):
+            return self.primvar_reader(shader, sid[len("UsdPrimvarReader_") :], kind)
+        self.r.warn(
+            f"node:{path}",
+            f"prim {path}: shader '{sid}' driving {consumer.GetAttr().GetPath()} is not supported; the input's fallback is used",
+        )
+        return None
+
+    # -- nodes -------------------------------------------------------------------------
+    def primvar_reader(self, shader, ty: str, kind: str):
+        var = self.value(shader.GetInput("varname"), "string")
+        varname = str(var.value) if isinstance(var, Const) else ""
+        if not varname:
+            self.r.warn(f"varname:{shader.GetPath()}", f"prim {shader.GetPath()}: primvar reader without a varname; its fallback is used")
+            fb = self.value(shader.GetInput("fallback"), kind)
+            return fb if isinstance(fb, Const) else None
+        if ty == "float2":
+            self.r.uv_names.add(varname)
+            return Link(self.add("ShaderNodeUVMap", f"{shader.GetPath()}", {"uv_map": varname}), "UV")
+        self.r.attribute_names.add(varname)
+        node = self.add("ShaderNodeAttribute", f"{shader.GetPath()}", {"attribute_name": varname, "attribute_type": "GEOMETRY"})
+        if ty in ("float", "int"):
+            return Link(node, "Fac")
+        return Link(node, "Color" if kind == "color" else "Vector")
+
+    def transform2d(self, shader):
+        vin = self.value(shader.GetInput("in"), "vector")
+        rotation = float(self.const(shader.GetInput("rotation"), 0.0))
+        scale = self.const(shader.GetInput("scale"), (1.0, 1.0))
+        translation = self.const(shader.GetInput("translation"), (0.0, 0.0))
+        inputs: dict[str, Any] = {
+            "Location": [float(translation[0]), float(translation[1]), 0.0],
+            "Rotation": [0.0, 0.0, math.radians(rotation)],
+            "Scale": [float(scale[0]), float(scale[1]), 1.0],
+        }
+        if vin is None:  # UsdTransform2d's `in` fallback is (0, 0)
+            vin = Const((0.0, 0.0, 0.0))
+        inputs["Vector"] = self.socket(vin, "vector")
+        return Link(self.add("ShaderNodeMapping", f"{shader.GetPath()}", {"vector_type": "POINT"}, inputs), "Vector")
+
+    def texture_file(self, shader):
+        """(Texture or None, colour space) of a UsdUVTexture; warns once per prim."""
+        key = str(shader.GetPath())
+        if key in self.r.textures:
+            return self.r.textures[key]
+        self.r.textures[key] = None  # warn once, whatever happens below
+        file_input = shader.GetInput("file")
+        value = file_input.Get(self.r.time) if file_input else None
+        if value is None or not (getattr(value, "path", "") or ""):
+            self.r.warn(f"texfile:{key}", f"prim {key}: UsdUVTexture without a file; its fallback is used")
+            return None
+        path = self.r.asset_path(value, shader.GetPrim(), "texture file")
+        if path is None:
+            return None
+        cs_in = shader.GetInput("sourceColorSpace")
+        cs = str(cs_in.Get(self.r.time)) if cs_in and cs_in.Get(self.r.time) is not None else "auto"
+        if cs not in ("raw", "sRGB", "auto"):
+            self.r.warn(f"colorspace:{key}", f"prim {key}: sourceColorSpace '{cs}' is not known; read as auto")
+            cs = "auto"
+        from . import attributes as A
+
+        name = str(self.r.custom(shader.GetPrim(), A.NAME, path.name))
+        try:
+            texture = load_texture(path, cs, "REPEAT", name)
+        except (OSError, ValueError) as e:
+            self.r.warn(f"unreadable:{key}", f"prim {key}: cannot read texture {path} ({e}); its fallback is used")
+            return None
+        self.r.textures[key] = texture
+        return texture
+
+    def wrap(self, shader, which: str) -> str:
+        i = shader.GetInput(which)
+        w = str(i.Get(self.r.time)) if i and i.Get(self.r.time) is not None else "useMetadata"
+        if w not in WRAPS:
+            if w != "useMetadata":
+                self.r.warn(f"wrap:{shader.GetPath()}", f"prim {shader.GetPath()}: {which} '{w}' is not known; repeat is used")
+            w = "repeat"
+        return w
+
+    def texture_node(self, shader):
+        """(node index of the Image Texture, scale, bias), or None when the file is unusable."""
+        key = ("image", str(shader.GetPath()))
+        if key in self.memo:
+            return self.memo[key]
+        texture = self.texture_file(shader)
+        result = None
+        if texture is not None:
+            st = self.value(shader.GetInput("st"), "vector")
+            ws, wt = self.wrap(shader, "wrapS"), self.wrap(shader, "wrapT")
+            inputs: dict[str, Any] = {}
+            if ws == wt:
+                extension = WRAPS[ws]
+            else:
+                # The core has one extension per image: mixed modes become REPEAT on an
+                # image prepared per axis, exactly (the bilinear filter included): mirror
+                # = the image and its flipped copy repeated (coordinate / 2), clamp = the
+                # coordinate clamped to the edge texels' centres, black = one black
+                # texel around the image and the coordinate clamped to its centres.
+                extension = "REPEAT"
+                texture = wrapped_texture(texture, ws, wt)
+                if st is None:
+                    st = Link(self.add("ShaderNodeUVMap", f"{shader.GetPath()} st", {"uv_map": ""}), "UV")
+                sep = self.add("ShaderNodeSeparateXYZ", f"{shader.GetPath()} st", inputs={"Vector": self.socket(st, "vector")})
+                h, w = texture_shape(self.texture_file(shader))
+                axes = []
+                for mode, out, n in ((ws, "X", w), (wt, "Y", h)):
+                    src: Any = {"link": [sep, out]}
+                    if mode == "mirror":
+                        src = {
+                            "link": [
+                                self.add("ShaderNodeMath", "mirror", {"operation": "MULTIPLY"}, {"Value": src, "Value_001": 0.5}),
+                                "Value",
+                            ]
+                        }
+                    elif mode in ("clamp", "black"):
+                        m = n
+                        if mode == "black":
+                            m = n + 2
+                            op = {"operation": "MULTIPLY_ADD"}
+                            src = {
+                                "link": [
+                                    self.add("ShaderNodeMath", "border", op, {"Value": src, "Value_001": n / m, "Value_002": 1.0 / m}),
+                                    "Value",
+                                ]
+                            }
+                        lo, hi = 0.5 / m, 1.0 - 0.5 / m
+                        clamp = self.add("ShaderNodeClamp", "clamp", {"clamp_type": "MINMAX"}, {"Value": src, "Min": lo, "Max": hi})
+                        src = {"link": [clamp, "Result"]}
+                    axes.append(src)
+                st = Link(self.add("ShaderNodeCombineXYZ", "st", inputs={"X": axes[0], "Y": axes[1], "Z": 0.0}), "Vector")
+            if st is not None:
+                inputs["Vector"] = self.socket(st, "vector")
+            img = self.add(
+                "ShaderNodeTexImage",
+                str(shader.GetPath()),
+                {"texture": texture, "interpolation": "Linear", "extension": extension},
+                inputs,
+            )
+            scale = self.const(shader.GetInput("scale"), (1.0, 1.0, 1.0, 1.0))
+            bias = self.const(shader.GetInput("bias"), (0.0, 0.0, 0.0, 0.0))
+            result = (img, tuple(scale) + (1.0,) * (4 - len(scale)), tuple(bias) + (0.0,) * (4 - len(bias)))
+        self.memo[key] = result
+        return result
+
+    def texture_output(self, shader, name: str, kind: str):
+        if name not in ("r", "g", "b", "a", "rgb", "rgba"):
+            self.r.warn(
+                f"texout:{shader.GetPath()}:{name}",
+                f"prim {shader.GetPath()}: output '{name}' is not a UsdUVTexture output; the fallback is used",
+            )
+            return None
+        t = self.texture_node(shader)
+        if t is None:
+            fb = self.const(shader.GetInput("fallback"), (0.0, 0.0, 0.0, 1.0))
+            fb = tuple(fb) + (0.0, 0.0, 0.0, 1.0)[len(fb) :]
+            if name in _CHANNEL:
+                return Const(fb[_CHANNEL[name]])
+            # Not authored: the preview surface input's own fallback (None).
+            fb_in = shader.GetInput("fallback")
+            return Const(tuple(fb[:3])) if fb_in and fb_in.GetAttr().HasAuthoredValue() else None
+        img, scale, bias = t
+        if name == "a":
+            key = ("alpha", str(shader.GetPath()))
+            if key not in self.memo:
+                link = Link(img, "Alpha")
+                if scale[3] != 1.0 or bias[3] != 0.0:
+                    link = Link(
+                        self.add(
+                            "ShaderNodeMath",
+                            "scale/bias a",
+                            {"operation": "MULTIPLY_ADD"},
+                            {"Value": {"link": [img, "Alpha"]}, "Value_001": scale[3], "Value_002": bias[3]},
+                        ),
+                        "Value",
+                    )
+                self.memo[key] = link
+            return self.memo[key]
+        key = ("rgb", str(shader.GetPath()))
+        if key not in self.memo:
+            link = Link(img, "Color")
+            if scale[:3] != (1.0, 1.0, 1.0) or bias[:3] != (0.0, 0.0, 0.0):
+                n = self.add(
+                    "ShaderNodeVectorMath",
+                    "scale/bias rgb",
+                    {"operation": "MULTIPLY_ADD"},
+                    {"Vector": {"link": [img, "Color"]}, "Vector_001": list(scale[:3]), "Vector_002": list(bias[:3])},
+                )
+                link = Link(n, "Vector")
+            self.memo[key] = link
+        rgb = self.memo[key]
+        if name in ("rgb", "rgba"):
+            return rgb
+        key = ("sep", str(shader.GetPath()))
+        if key not in self.memo:
+            self.memo[key] = self.add("ShaderNodeSeparateColor", "channels", {"mode": "RGB"}, {"Color": {"link": [rgb.node, rgb.output]}})
+        return Link(self.memo[key], {"r": "Red", "g": "Green", "b": "Blue"}[name])
+
+
+def build(reader, material_prim, shader, name: str):
+    """(NodeMaterial, None) when some input of ``shader`` varies over the surface, else
+    (None, {input: constant}) with every input of :data:`INPUTS` resolved (missing
+    textures replaced by their fallbacks)."""
+    from ..scene import NodeMaterial
+
+    g = Graph(reader, material_prim, shader)
+    values = {}
+    for usd_name, (kind, fallback) in INPUTS.items():
+        v = g.value(shader.GetInput(usd_name), kind)
+        values[usd_name] = Const(fallback) if v is None else v
+    for unsupported, what in (("normal", "normal maps"), ("displacement", "displacement"), ("occlusion", "occlusion")):
+        inp = shader.GetInput(unsupported)
+        if inp and (inp.HasConnectedSource() or (unsupported != "normal" and inp.GetAttr().HasAuthoredValue())):
+            g.warn(f"unsupported:{unsupported}", f"{what} ({unsupported}) are not supported yet and are ignored")
+    threshold = values["opacityThreshold"]
+    if isinstance(threshold, Link):
+        g.warn("threshold", "a connected opacityThreshold is not supported; 0 is used")
+        threshold = Const(0.0)
+    thr = float(threshold.value if not isinstance(threshold.value, tuple) else threshold.value[0])
+    varying = any(isinstance(v, Link) for v in values.values())
+    if not varying and thr <= 0.0:
+        return None, {k: v.value for k, v in values.items()}
+
+    inputs: dict[str, Any] = {}
+    for usd_name, socket in SOCKETS.items():
+        kind = INPUTS[usd_name][0]
+        inputs[socket] = g.socket(values[usd_name], kind)
+    emissive = values["emissiveColor"]
+    if isinstance(emissive, Link) or max(emissive.value) > 0.0:
+        inputs["Emission Color"] = g.socket(emissive, "color")
+        inputs["Emission Strength"] = 1.0
+    spec_wf = values["useSpecularWorkflow"]
+    if isinstance(spec_wf, Const) and float(spec_wf.value if not isinstance(spec_wf.value, tuple) else spec_wf.value[0]) >= 0.5:
+        # Specular workflow: F0 = specularColor, no metal. Principled's F0 is
+        # ((n−1)/(n+1))² × tint, so n is chosen from the brightest channel and the tint
+        # carries the colour; a textured specularColor tints the F0 of `ior`.
+        inputs["Metallic"] = 0.0
+        sc = values["specularColor"]
+        if isinstance(sc, Link):
+            g.warn("specular", "a textured specularColor tints the Fresnel of ior (approximated)")
+            inputs["Specular Tint"] = g.socket(sc, "color")
+        else:
+            c = [min(max(float(x), 0.0), 1.0) for x in sc.value]
+            m = max(c)
+            if m <= 0.0:
+                inputs["Specular IOR Level"] = 0.0
+            else:
+                s = math.sqrt(min(m, 0.999))
+                inputs["IOR"] = (1.0 + s) / (1.0 - s)
+                inputs["Specular Tint"] = [x / m for x in c]
+    opacity = values["opacity"]
+    if thr > 0.0:
+        # Cut-out: fragments with opacity < opacityThreshold are discarded, the rest opaque.
+        if isinstance(opacity, Link):
+            lt = g.add(
+                "ShaderNodeMath", "opacity < threshold", {"operation": "LESS_THAN"}, {"Value": g.socket(opacity, "float"), "Value_001": thr}
+            )
+            keep = g.add("ShaderNodeMath", "kept", {"operation": "SUBTRACT"}, {"Value": 1.0, "Value_001": {"link": [lt, "Value"]}})
+            inputs["Alpha"] = {"link": [keep, "Value"]}
+        else:
+            inputs["Alpha"] = 0.0 if float(g.socket(opacity, "float")) < thr else 1.0
+    elif isinstance(opacity, Link):
+        # Partial coverage, as Blender's USD importer reads it (Principled Alpha).
+        inputs["Alpha"] = g.socket(opacity, "float")
+    elif float(g.socket(opacity, "float")) < 1.0:
+        # Spec: a transparent surface still has its specular response (clear glass).
+        inputs["Transmission Weight"] = 1.0 - float(g.socket(opacity, "float"))
+    principled = g.add("ShaderNodeBsdfPrincipled", str(shader.GetPath()), {}, inputs)
+    return NodeMaterial(name, g.nodes, {"surface": [principled, "BSDF"]}), None

@@ -1,0 +1,408 @@
+"""UsdPreviewSurface networks through the shading graph (issue 15 item 9): UsdUVTexture
+(scale, bias, wrapS/wrapT, fallback, sourceColorSpace, outputs), UsdTransform2d and
+UsdPrimvarReader on every input, opacityThreshold cut-outs and displayColor primvars.
+
+References are independent of the reader: the expected pixels of an emissive plane are
+the texture sampled by a numpy bilinear filter written here from the UsdPreviewSurface
+specification (transform order scale → rotate → translate, OpenGL-style wrap modes,
+sRGB decoding of IEC 61966-2-1), a cut-out is compared with geometry that has the cut
+part removed, a roughness map's halves with Python-API Principled materials of the two
+constant roughnesses, and displayColor under a uniform white dome with its albedo.
+"""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+pxr = pytest.importorskip("pxr")
+from pxr import Gf, Sdf, UsdGeom, UsdLux, UsdShade, Vt  # noqa: E402
+
+import polychrome as pc  # noqa: E402
+from polychrome import usd  # noqa: E402
+from polychrome.imageio import write_exr  # noqa: E402
+from conftest import luminance  # noqa: E402
+
+
+# ------------------------------------------------------------------------------ stage helpers
+
+
+def new_stage(path):
+    stage = pxr.Usd.Stage.CreateNew(str(path))
+    UsdGeom.SetStageUpAxis(stage, "Z")
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    return stage
+
+
+def quad(stage, path, x0=-1.0, x1=1.0, y0=-1.0, y1=1.0, z=0.0, material=None, st_name="st", st=None):
+    """A quad polygon with `st_name` = ((x-x0)/(x1-x0), (y-y0)/(y1-y0)) per vertex."""
+    pts = np.array([[x0, y0, z], [x1, y0, z], [x1, y1, z], [x0, y1, z]], np.float32)
+    mesh = UsdGeom.Mesh.Define(stage, path)
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(pts))
+    mesh.CreateFaceVertexCountsAttr([4])
+    mesh.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
+    uv = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float32) if st is None else np.asarray(st, np.float32)
+    pv = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar(st_name, Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex)
+    pv.Set(Vt.Vec2fArray.FromNumpy(uv))
+    if material is not None:
+        UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(material)
+    return mesh
+
+
+def top_camera(stage, width=2.0, height=3.0):
+    cam = UsdGeom.Camera.Define(stage, "/cam")
+    cam.CreateProjectionAttr("orthographic")
+    cam.CreateHorizontalApertureAttr(width * 10.0)
+    cam.CreateVerticalApertureAttr(width * 10.0)
+    cam.CreateClippingRangeAttr(Gf.Vec2f(0.01, 100.0))
+    cam.AddTranslateOp().Set(Gf.Vec3d(0, 0, height))
+    return cam
+
+
+def surface(stage, path, **constants):
+    mat = UsdShade.Material.Define(stage, path)
+    sh = UsdShade.Shader.Define(stage, path + "/Surface")
+    sh.CreateIdAttr("UsdPreviewSurface")
+    for k, v in constants.items():
+        ty = Sdf.ValueTypeNames.Color3f if isinstance(v, tuple) else Sdf.ValueTypeNames.Float
+        sh.CreateInput(k, ty).Set(Gf.Vec3f(*v) if isinstance(v, tuple) else v)
+    mat.CreateSurfaceOutput().ConnectToSource(sh.ConnectableAPI(), "surface")
+    return mat, sh
+
+
+def uv_texture(stage, path, file, st=None, **inputs):
+    tex = UsdShade.Shader.Define(stage, path)
+    tex.CreateIdAttr("UsdUVTexture")
+    tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(str(file))
+    types = {"scale": Sdf.ValueTypeNames.Float4, "bias": Sdf.ValueTypeNames.Float4, "fallback": Sdf.ValueTypeNames.Float4}
+    for k, v in inputs.items():
+        if k in types:
+            tex.CreateInput(k, types[k]).Set(Gf.Vec4f(*v))
+        else:
+            tex.CreateInput(k, Sdf.ValueTypeNames.Token).Set(v)
+    if st is not None:
+        tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(st)
+    return tex
+
+
+def primvar_reader(stage, path, varname):
+    r = UsdShade.Shader.Define(stage, path)
+    r.CreateIdAttr("UsdPrimvarReader_float2")
+    r.CreateInput("varname", Sdf.ValueTypeNames.Token).Set(varname)
+    return r.CreateOutput("result", Sdf.ValueTypeNames.Float2)
+
+
+def transform2d(stage, path, source, rotation, scale, translation):
+    t = UsdShade.Shader.Define(stage, path)
+    t.CreateIdAttr("UsdTransform2d")
+    t.CreateInput("in", Sdf.ValueTypeNames.Float2).ConnectToSource(source)
+    t.CreateInput("rotation", Sdf.ValueTypeNames.Float).Set(rotation)
+    t.CreateInput("scale", Sdf.ValueTypeNames.Float2).Set(Gf.Vec2f(*scale))
+    t.CreateInput("translation", Sdf.ValueTypeNames.Float2).Set(Gf.Vec2f(*translation))
+    return t.CreateOutput("result", Sdf.ValueTypeNames.Float2)
+
+
+def connect(shader, name, tex, output, ty=Sdf.ValueTypeNames.Color3f):
+    out_ty = Sdf.ValueTypeNames.Float3 if output == "rgb" else Sdf.ValueTypeNames.Float
+    shader.CreateInput(name, ty).ConnectToSource(tex.ConnectableAPI(), output, UsdShade.AttributeType.Output, out_ty)
+
+
+def read(path):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scene = usd.read_stage(path)
+    return scene, [str(w.message) for w in caught]
+
+
+# ---------------------------------------------------------------------------------- reference
+
+
+def srgb_decode(x):
+    x = np.asarray(x, np.float64)
+    return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)
+
+
+def wrap_index(i, n, mode):
+    """Texel index under a UsdUVTexture wrap mode (OpenGL REPEAT, MIRRORED_REPEAT,
+    CLAMP_TO_EDGE, CLAMP_TO_BORDER with black); -1 marks a black border texel."""
+    if mode == "repeat":
+        return np.mod(i, n)
+    if mode == "mirror":
+        m = np.mod(i, 2 * n)
+        return np.where(m < n, m, 2 * n - 1 - m)
+    if mode == "clamp":
+        return np.clip(i, 0, n - 1)
+    return np.where((i < 0) | (i >= n), -1, i)
+
+
+def bilinear(texels, u, v, wrap_s, wrap_t):
+    """texels (H, W, C), row 0 = the top of the image (v = 1); st (0, 0) is its lower left."""
+    h, w, c = texels.shape
+    x = u * w - 0.5
+    y = (1.0 - v) * h - 0.5
+    x0, y0 = np.floor(x).astype(int), np.floor(y).astype(int)
+    fx, fy = (x - x0)[..., None], (y - y0)[..., None]
+    padded = np.concatenate([texels, np.zeros((h, 1, c))], axis=1)
+    padded = np.concatenate([padded, np.zeros((1, w + 1, c))], axis=0)
+
+    def at(ix, iy):
+        ix, iy = wrap_index(ix, w, wrap_s), wrap_index(iy, h, wrap_t)
+        black = (ix < 0) | (iy < 0)
+        return padded[np.where(black, h, iy), np.where(black, w, ix)]
+
+    return at(x0, y0) * (1 - fx) * (1 - fy) + at(x0 + 1, y0) * fx * (1 - fy) + at(x0, y0 + 1) * (1 - fx) * fy + at(x0 + 1, y0 + 1) * fx * fy
+
+
+def transform_st(u, v, rotation_deg, scale, translation):
+    """UsdTransform2d: scale, then rotate counter-clockwise, then translate."""
+    su, sv = u * scale[0], v * scale[1]
+    a = math.radians(rotation_deg)
+    return (su * math.cos(a) - sv * math.sin(a) + translation[0], su * math.sin(a) + sv * math.cos(a) + translation[1])
+
+
+def footprint_mean(fn, n, width=2.0, samples=8):
+    """Mean of fn(x, y) (arrays → (..., 3)) over each pixel of an n×n ortho view `width` wide."""
+    s = (np.arange(samples) + 0.5) / samples
+    px = (np.arange(n)[:, None] + s[None, :]).ravel() / n * width - width / 2
+    py = width / 2 - (np.arange(n)[:, None] + s[None, :]).ravel() / n * width
+    x, y = np.meshgrid(px, py)
+    vals = fn(x, y)
+    return vals.reshape(n, samples, n, samples, -1).mean(axis=(1, 3))
+
+
+# ------------------------------------------------------------------------------------- tests
+
+
+TEXELS = np.array(
+    [
+        [[0.9, 0.2, 0.1], [0.2, 0.8, 0.3], [0.1, 0.3, 0.9], [0.7, 0.7, 0.2]],
+        [[0.3, 0.6, 0.6], [0.8, 0.4, 0.7], [0.5, 0.5, 0.5], [0.2, 0.1, 0.4]],
+        [[0.6, 0.9, 0.2], [0.1, 0.1, 0.1], [0.9, 0.6, 0.3], [0.4, 0.8, 0.9]],
+    ],
+    np.float64,
+)
+
+
+def emissive_stage(tmp_path, file, *, wrap_s, wrap_t, colour_space=None, output="rgb", scale=(1, 1, 1, 1), bias=(0, 0, 0, 0)):
+    path = tmp_path / f"emissive_{wrap_s}_{wrap_t}.usda"
+    stage = new_stage(path)
+    mat, sh = surface(stage, "/Looks/m", diffuseColor=(0.0, 0.0, 0.0))
+    st = primvar_reader(stage, "/Looks/m/st", "uvset")
+    st = transform2d(stage, "/Looks/m/xf", st, 30.0, (1.5, 0.75), (0.25, -0.1))
+    extra = {} if colour_space is None else {"sourceColorSpace": colour_space}
+    tex = uv_texture(stage, "/Looks/m/tex", file, st=st, wrapS=wrap_s, wrapT=wrap_t, scale=scale, bias=bias, **extra)
+    connect(sh, "emissiveColor", tex, output)
+    # "st" is a decoy: the network reads the UV set "uvset".
+    m = quad(stage, "/plane", material=mat, st_name="uvset")
+    UsdGeom.PrimvarsAPI(m).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex).Set(
+        Vt.Vec2fArray.FromNumpy(np.zeros((4, 2), np.float32))
+    )
+    top_camera(stage)
+    stage.Save()
+    return path
+
+
+def expected_emission(texels, wrap_s, wrap_t, n, scale=(1, 1, 1), bias=(0, 0, 0)):
+    def fn(x, y):
+        u, v = transform_st((x + 1) / 2, (y + 1) / 2, 30.0, (1.5, 0.75), (0.25, -0.1))
+        return bilinear(texels, u, v, wrap_s, wrap_t) * np.asarray(scale) + np.asarray(bias)
+
+    return footprint_mean(fn, n)
+
+
+N = 12
+
+
+def render_rgb(scene, samples=16):
+    r = pc.render(scene, width=N, height=N, samples=samples, max_bounces=1, seed=2)
+    assert r.stats["nonfinite_samples"] == 0
+    return r.rgba[..., :3].astype(np.float64)
+
+
+@pytest.mark.parametrize("wrap_s, wrap_t", [("repeat", "repeat"), ("mirror", "mirror"), ("mirror", "repeat"), ("clamp", "black")])
+def test_emissive_texture_through_transform2d_and_named_uv_set_equals_the_spec(tmp_path, wrap_s, wrap_t):
+    """Pixels of an unlit emissive plane = the texture sampled at R·(S·st) + T with the
+    wrap modes, × scale + bias (numpy bilinear reference)."""
+    file = tmp_path / "tex.exr"
+    write_exr(file, np.concatenate([TEXELS, np.ones((3, 4, 1))], axis=2).astype(np.float32))
+    scale, bias = (1.2, 0.8, 1.5, 1.0), (0.05, 0.1, 0.0, 0.0)
+    path = emissive_stage(tmp_path, file, wrap_s=wrap_s, wrap_t=wrap_t, scale=scale, bias=bias)
+    scene, warns = read(path)
+    assert not warns, warns
+    got = render_rgb(scene)
+    want = expected_emission(TEXELS, wrap_s, wrap_t, N, scale[:3], bias[:3])
+    err = np.abs(got - want)
+    assert np.median(err / np.maximum(want, 0.05)) < 0.02, np.median(err)
+    assert err.max() < 0.08, (err.max(), np.unravel_index(err.argmax(), err.shape))
+
+
+def test_srgb_png_and_raw_single_channel_outputs(tmp_path):
+    """An 8-bit RGB PNG under `auto` is sRGB; a grey (1-channel) PNG under `auto` is raw;
+    `raw` on an RGB PNG keeps the bytes / 255; the `g` output is the green channel."""
+    from PIL import Image
+
+    rgb8 = np.rint(TEXELS * 255).astype(np.uint8)
+    Image.fromarray(rgb8, "RGB").save(tmp_path / "rgb.png")
+    Image.fromarray(rgb8[..., 1], "L").save(tmp_path / "grey.png")
+    cases = [
+        ("rgb.png", None, "rgb", srgb_decode(rgb8 / 255.0)),
+        ("rgb.png", "raw", "rgb", rgb8 / 255.0),
+        ("grey.png", None, "rgb", np.repeat(rgb8[..., 1:2] / 255.0, 3, axis=2)),
+        ("rgb.png", "sRGB", "g", np.repeat(srgb_decode(rgb8[..., 1:2] / 255.0), 3, axis=2)),
+    ]
+    for k, (name, cs, output, texels) in enumerate(cases):
+        sub = tmp_path / str(k)
+        sub.mkdir()
+        path = emissive_stage(sub, tmp_path / name, wrap_s="repeat", wrap_t="repeat", colour_space=cs, output=output)
+        scene, warns = read(path)
+        assert not warns, (name, warns)
+        got = render_rgb(scene, samples=32)
+        want = expected_emission(texels, "repeat", "repeat", N)
+        err = np.abs(got - want)
+        assert np.median(err / np.maximum(want, 0.05)) < 0.025, (name, cs, np.median(err))
+
+
+def roughness_stage(path, roughness_file=None, roughness=None):
+    stage = new_stage(path)
+    mat, sh = surface(stage, "/Looks/m", diffuseColor=(0.9, 0.6, 0.3), metallic=1.0)
+    if roughness_file is not None:
+        tex = uv_texture(stage, "/Looks/m/tex", roughness_file, wrapS="clamp", wrapT="clamp")
+        connect(sh, "roughness", tex, "r", Sdf.ValueTypeNames.Float)
+    quad(stage, "/plane", -2, 2, -2, 2, material=mat)
+    cam = UsdGeom.Camera.Define(stage, "/cam")
+    cam.CreateFocalLengthAttr(3.5)
+    cam.CreateHorizontalApertureAttr(3.6)
+    cam.CreateVerticalApertureAttr(3.6)
+    cam.AddTranslateOp().Set(Gf.Vec3d(0, -3, 1.2))
+    cam.AddRotateXOp().Set(70.0)
+    sun = UsdLux.SphereLight.Define(stage, "/lamp")
+    sun.CreateRadiusAttr(0.3)
+    sun.CreateIntensityAttr(30.0)
+    sun.AddTranslateOp().Set(Gf.Vec3d(0, 2.5, 1.5))
+    stage.Save()
+
+
+def test_roughness_map_halves_match_constant_roughness_principled(tmp_path):
+    """A raw grey PNG (left 0.15, right 0.8) on `roughness` of a metal: each half of the
+    image equals the render of a Python-API Principled of that constant roughness."""
+    from PIL import Image
+
+    img = np.zeros((4, 16), np.uint8)
+    img[:, :8], img[:, 8:] = round(0.15 * 255), round(0.8 * 255)
+    Image.fromarray(img, "L").save(tmp_path / "rough.png")
+    roughness_stage(tmp_path / "mapped.usda", tmp_path / "rough.png")
+    scene, warns = read(tmp_path / "mapped.usda")
+    assert not warns, warns
+    assert isinstance(scene.materials[0], pc.NodeMaterial)
+    n = 24
+
+    def render(s):
+        return luminance(pc.render(s, width=n, height=n, samples=64, max_bounces=2, seed=5).rgba[..., :3])
+
+    mapped = render(scene)
+    refs = []
+    for r in (img[0, 0] / 255.0, img[0, 15] / 255.0):
+        ref_scene = usd.read_stage(tmp_path / "mapped.usda")
+        ref_scene.materials[0] = pc.Principled(pc.spectra.rgb(0.9, 0.6, 0.3), metallic=1.0, roughness=float(r))
+        refs.append(render(ref_scene))
+    # The texture's seam is x = 0 on the plane (image column n/2); compare away from it.
+    left, right = slice(0, n // 2 - 3), slice(n // 2 + 3, n)
+    for half, ref in ((left, refs[0]), (right, refs[1])):
+        a, b = mapped[:, half].mean(), ref[:, half].mean()
+        assert abs(a - b) < 0.03 * b + 1e-3, (a, b)
+    # ... and the two constant roughnesses differ clearly there.
+    assert abs(refs[0][:, left].mean() - refs[1][:, left].mean()) > 0.2 * refs[1][:, left].mean()
+
+
+def test_opacity_threshold_cuts_out_like_geometry(tmp_path):
+    """A black plane whose texture alpha is 0.2 on the left half and 1 on the right,
+    opacityThreshold 0.5, over an emissive floor: the same image as a plane that is only
+    the right half."""
+    from PIL import Image
+
+    rgba = np.zeros((4, 8, 4), np.uint8)
+    rgba[..., 3] = 255
+    rgba[:, :4, 3] = 51
+    Image.fromarray(rgba, "RGBA").save(tmp_path / "cut.png")
+
+    def stage_with(plane):
+        path = tmp_path / f"{plane}.usda"
+        stage = new_stage(path)
+        floor, _ = surface(stage, "/Looks/floor", diffuseColor=(0.0, 0.0, 0.0), emissiveColor=(0.8, 0.7, 0.6))
+        quad(stage, "/floor", -3, 3, -3, 3, -1.0, material=floor)
+        if plane == "cut":
+            mat, sh = surface(stage, "/Looks/m", diffuseColor=(0.0, 0.0, 0.0), opacityThreshold=0.5)
+            tex = uv_texture(stage, "/Looks/m/tex", tmp_path / "cut.png", wrapS="clamp", wrapT="clamp")
+            connect(sh, "opacity", tex, "a", Sdf.ValueTypeNames.Float)
+            quad(stage, "/plane", material=mat)
+        else:
+            mat, _ = surface(stage, "/Looks/m", diffuseColor=(0.0, 0.0, 0.0))
+            quad(stage, "/plane", 0.0, 1.0, material=mat)
+        top_camera(stage)
+        stage.Save()
+        scene, warns = read(path)
+        assert not warns, warns
+        return render_rgb(scene, samples=8)
+
+    cut, geometry = stage_with("cut"), stage_with("half")
+    assert geometry[:, : N // 2 - 1].mean() > 0.5 and geometry[:, N // 2 + 1 :].max() < 0.05
+    keep = np.r_[0 : N // 2 - 1, N // 2 + 1 : N]  # the seam's two pixel columns are filtered
+    assert np.abs(cut[:, keep] - geometry[:, keep]).max() < 0.02
+
+
+def test_missing_texture_on_any_input_warns_once_and_uses_its_fallback(tmp_path):
+    path = tmp_path / "missing.usda"
+    stage = new_stage(path)
+    mat, sh = surface(stage, "/Looks/m", diffuseColor=(0.0, 0.0, 0.0))
+    tex = uv_texture(stage, "/Looks/m/tex", "./gone.exr", fallback=(0.3, 0.2, 0.1, 1.0))
+    connect(sh, "emissiveColor", tex, "rgb")
+    rough = uv_texture(stage, "/Looks/m/rough", "./gone.exr", fallback=(0.25, 0.0, 0.0, 1.0))
+    connect(sh, "roughness", rough, "r", Sdf.ValueTypeNames.Float)
+    quad(stage, "/plane", material=mat)
+    top_camera(stage)
+    stage.Save()
+    scene, warns = read(path)
+    missing = [w for w in warns if "gone.exr" in w]
+    assert len(missing) == 2 and all("does not exist" in w for w in missing), warns
+    assert any("/Looks/m/tex" in w for w in missing) and any("/Looks/m/rough" in w for w in missing)
+    got = render_rgb(scene, samples=4)
+    assert np.allclose(got.mean(axis=(0, 1)), [0.3, 0.2, 0.1], rtol=0.03, atol=0.005)
+
+
+def test_display_color_per_face_and_per_vertex_under_a_white_dome(tmp_path):
+    """Unbound meshes with displayColor uniform (per face) and vertex: a Lambertian plane
+    under a uniform white dome of radiance 1 shows its albedo, interpolated."""
+    path = tmp_path / "display.usda"
+    stage = new_stage(path)
+    # Two quads side by side: per-face colours.
+    mesh = UsdGeom.Mesh.Define(stage, "/faces")
+    pts = np.array([[-1, -1, 0], [0, -1, 0], [0, 1, 0], [-1, 1, 0], [1, -1, 0], [1, 1, 0]], np.float32)
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(pts))
+    mesh.CreateFaceVertexCountsAttr([4, 4])
+    mesh.CreateFaceVertexIndicesAttr([0, 1, 2, 3, 1, 4, 5, 2])
+    faces = [(0.7, 0.2, 0.1), (0.1, 0.3, 0.6)]
+    mesh.CreateDisplayColorPrimvar(UsdGeom.Tokens.uniform).Set(faces)
+    dome = UsdLux.DomeLight.Define(stage, "/dome")
+    dome.CreateIntensityAttr(1.0)
+    top_camera(stage)
+    stage.Save()
+    scene, warns = read(path)
+    assert not warns, warns
+    got = render_rgb(scene, samples=64)
+    left, right = got[:, : N // 2 - 1].reshape(-1, 3).mean(axis=0), got[:, N // 2 + 1 :].reshape(-1, 3).mean(axis=0)
+    assert np.allclose(left, faces[0], rtol=0.04, atol=0.01), left
+    assert np.allclose(right, faces[1], rtol=0.04, atol=0.01), right
+
+    # Per vertex, varying along x only: barycentric = linear in x on both triangles.
+    mesh.GetDisplayColorPrimvar().SetInterpolation(UsdGeom.Tokens.vertex)
+    colours = np.array([[0.1, 0.1, 0.1], [0.5, 0.4, 0.3], [0.5, 0.4, 0.3], [0.1, 0.1, 0.1], [0.9, 0.7, 0.5], [0.9, 0.7, 0.5]])
+    mesh.GetDisplayColorPrimvar().Set(Vt.Vec3fArray.FromNumpy(colours.astype(np.float32)))
+    stage.Save()
+    scene, warns = read(path)
+    assert not warns, warns
+    got = render_rgb(scene, samples=64)
+    want = footprint_mean(lambda x, y: 0.1 + (x[..., None] + 1) / 2 * (np.array([0.9, 0.7, 0.5]) - 0.1), N)
+    # Column means (12 pixels each) against the linear ramp: noise ~0.01 at 64 samples.
+    err = np.abs(got.mean(axis=0) - want.mean(axis=0))
+    assert err.max() < 0.03, err.max()
