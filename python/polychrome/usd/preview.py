@@ -305,7 +305,10 @@ class Graph:
         if path is None:
             return None
         cs_in = shader.GetInput("sourceColorSpace")
+        if not (cs_in and cs_in.GetAttr().HasAuthoredValue()):
+            cs_in = shader.GetInput("isSRGB")  # its name in stages written before the 2.3 spec
         cs = str(cs_in.Get(self.r.time)) if cs_in and cs_in.Get(self.r.time) is not None else "auto"
+        cs = {"True": "sRGB", "False": "raw", "1": "sRGB", "0": "raw"}.get(cs, cs)
         if cs not in ("raw", "sRGB", "auto"):
             self.r.warn(f"colorspace:{key}", f"prim {key}: sourceColorSpace '{cs}' is not known; read as auto")
             cs = "auto"
@@ -459,9 +462,15 @@ def build(reader, material_prim, shader, name: str):
     for usd_name, (kind, fallback) in INPUTS.items():
         v = g.value(shader.GetInput(usd_name), kind)
         values[usd_name] = Const(fallback) if v is None else v
-    for unsupported, what in (("normal", "normal maps"), ("displacement", "displacement"), ("occlusion", "occlusion")):
+    # Warned when connected, or (displacement, occlusion) authored away from the fallback.
+    for unsupported, what, neutral in (
+        ("normal", "normal maps", None),
+        ("displacement", "displacement", 0.0),
+        ("occlusion", "occlusion", 1.0),
+    ):
         inp = shader.GetInput(unsupported)
-        if inp and (inp.HasConnectedSource() or (unsupported != "normal" and inp.GetAttr().HasAuthoredValue())):
+        authored = inp and neutral is not None and inp.GetAttr().HasAuthoredValue() and inp.Get(reader.time) not in (None, neutral)
+        if inp and (inp.HasConnectedSource() or authored):
             g.warn(f"unsupported:{unsupported}", f"{what} ({unsupported}) are not supported yet and are ignored")
     threshold = values["opacityThreshold"]
     if isinstance(threshold, Link):
