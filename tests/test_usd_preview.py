@@ -406,3 +406,35 @@ def test_display_color_per_face_and_per_vertex_under_a_white_dome(tmp_path):
     # Column means (12 pixels each) against the linear ramp: noise ~0.01 at 64 samples.
     err = np.abs(got.mean(axis=0) - want.mean(axis=0))
     assert err.max() < 0.03, err.max()
+
+
+def test_display_opacity_per_face_and_constant_is_coverage(tmp_path):
+    """An unbound black mesh over an emissive floor: displayOpacity 0 on the left face and
+    1 on the right shows the floor on the left only; a constant 0.4 lets 60 % through."""
+    path = tmp_path / "opacity.usda"
+    stage = new_stage(path)
+    floor, _ = surface(stage, "/Looks/floor", diffuseColor=(0.0, 0.0, 0.0), emissiveColor=(0.8, 0.7, 0.6))
+    quad(stage, "/floor", -3, 3, -3, 3, -1.0, material=floor)
+    mesh = UsdGeom.Mesh.Define(stage, "/faces")
+    pts = np.array([[-1, -1, 0], [0, -1, 0], [0, 1, 0], [-1, 1, 0], [1, -1, 0], [1, 1, 0]], np.float32)
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(pts))
+    mesh.CreateFaceVertexCountsAttr([4, 4])
+    mesh.CreateFaceVertexIndicesAttr([0, 1, 2, 3, 1, 4, 5, 2])
+    mesh.CreateDisplayColorPrimvar(UsdGeom.Tokens.constant).Set([(0.0, 0.0, 0.0)])
+    mesh.CreateDisplayOpacityPrimvar(UsdGeom.Tokens.uniform).Set([0.0, 1.0])
+    top_camera(stage)
+    stage.Save()
+    scene, warns = read(path)
+    assert not warns, warns
+    got = render_rgb(scene, samples=16)
+    floor_rgb = np.array([0.8, 0.7, 0.6])
+    assert np.allclose(got[:, : N // 2 - 1].reshape(-1, 3).mean(axis=0), floor_rgb, rtol=0.03)
+    assert got[:, N // 2 + 1 :].max() < 0.02
+
+    mesh.GetDisplayOpacityPrimvar().SetInterpolation(UsdGeom.Tokens.constant)
+    mesh.GetDisplayOpacityPrimvar().Set([0.4])
+    stage.Save()
+    scene, warns = read(path)
+    assert not warns, warns
+    got = render_rgb(scene, samples=64)
+    assert np.allclose(got.reshape(-1, 3).mean(axis=0), 0.6 * floor_rgb, rtol=0.04), got.reshape(-1, 3).mean(axis=0)

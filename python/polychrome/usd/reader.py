@@ -320,36 +320,67 @@ class _Reader:
             self.material_index[key] = self.add_material(self.read_material(mat_prim))
         return self.material_index[key]
 
+    def display_primvar(self, prim, name: str, width: int):
+        """(mean, varies) of a displayColor / displayOpacity primvar, or None."""
+        pv = self.UsdGeom.PrimvarsAPI(prim).GetPrimvar(name)
+        if not (pv and pv.HasValue()):
+            return None
+        c = pv.ComputeFlattened(self.time)
+        if c is None or not len(c):
+            return None
+        arr = np.asarray(c, np.float64).reshape(-1, width)
+        if not np.all(np.isfinite(arr)):
+            return None
+        varies = len(arr) > 1 and float(np.ptp(arr, axis=0).max()) > 0 and prim.GetTypeName() == "Mesh"
+        return tuple(float(x) for x in arr.mean(axis=0)), varies
+
     def default_material(self, prim) -> int:
+        """UsdPreviewSurface's fallback for an unbound gprim: a diffuse of its
+        ``displayColor`` (0.18 grey without) and coverage ``displayOpacity``, read per
+        vertex / face (the graph's Attribute node) when they vary over the mesh."""
         from ..spectra import rgb
 
-        colour = FALLBACK_GREY
-        pv = self.UsdGeom.PrimvarsAPI(prim).GetPrimvar("displayColor")
-        if pv and pv.HasValue():
-            c = pv.ComputeFlattened(self.time)
-            if c is not None and len(c):
-                arr = np.asarray(c, np.float64).reshape(-1, 3)
-                if np.all(np.isfinite(arr)):
-                    colour = tuple(float(x) for x in arr.mean(axis=0))
-                    if len(arr) > 1 and np.ptp(arr, axis=0).max() > 0 and prim.GetTypeName() == "Mesh":
-                        return self.display_colour_material()
-        if colour not in self.default_materials:
-            self.default_materials[colour] = self.add_material(Diffuse(rgb(*colour), name=f"displayColor {colour}"))
-        return self.default_materials[colour]
+        colour = self.display_primvar(prim, "displayColor", 3) or (FALLBACK_GREY, False)
+        opacity = self.display_primvar(prim, "displayOpacity", 1)
+        if opacity is not None and not opacity[1] and opacity[0][0] >= 1.0:
+            opacity = None
+        if not colour[1] and opacity is None:
+            c = colour[0]
+            if c not in self.default_materials:
+                self.default_materials[c] = self.add_material(Diffuse(rgb(*c), name=f"displayColor {c}"))
+            return self.default_materials[c]
+        key = (
+            "display",
+            colour[0] if not colour[1] else "varying",
+            None if opacity is None else opacity[0] if not opacity[1] else "varying",
+        )
+        if key not in self.default_materials:
+            self.default_materials[key] = self.add_material(self.display_material(colour, opacity))
+        return self.default_materials[key]
 
-    def display_colour_material(self) -> int:
-        """A diffuse of the mesh's ``displayColor`` primvar read per vertex / face (the
-        graph's Attribute node), shared by every unbound mesh whose colour varies."""
+    def display_material(self, colour, opacity):
         from ..scene import NodeMaterial
 
-        if "displayColor" not in self.default_materials:
+        nodes: list[dict[str, Any]] = []
+        if colour[1]:
             self.attribute_names.add("displayColor")
-            nodes = [
-                {"type": "ShaderNodeAttribute", "name": "displayColor", "props": {"attribute_name": "displayColor"}},
-                {"type": "ShaderNodeBsdfDiffuse", "name": "Diffuse", "inputs": {"Color": {"link": [0, "Color"]}}},
-            ]
-            self.default_materials["displayColor"] = self.add_material(NodeMaterial("displayColor", nodes, {"surface": [1, "BSDF"]}))
-        return self.default_materials["displayColor"]
+            nodes.append({"type": "ShaderNodeAttribute", "name": "displayColor", "props": {"attribute_name": "displayColor"}})
+            base: Any = {"link": [0, "Color"]}
+        else:
+            base = list(colour[0])
+        if opacity is None:
+            nodes.append({"type": "ShaderNodeBsdfDiffuse", "name": "Diffuse", "inputs": {"Color": base}})
+            return NodeMaterial("displayColor", nodes, {"surface": [len(nodes) - 1, "BSDF"]})
+        if opacity[1]:
+            self.attribute_names.add("displayOpacity")
+            nodes.append({"type": "ShaderNodeAttribute", "name": "displayOpacity", "props": {"attribute_name": "displayOpacity"}})
+            alpha: Any = {"link": [len(nodes) - 1, "Fac"]}
+        else:
+            alpha = float(opacity[0][0])
+        # A Lambertian base (no specular layer) whose coverage is the opacity.
+        inputs = {"Base Color": base, "Alpha": alpha, "Specular IOR Level": 0.0}
+        nodes.append({"type": "ShaderNodeBsdfPrincipled", "name": "displayColor", "inputs": inputs})
+        return NodeMaterial("displayColor, displayOpacity", nodes, {"surface": [len(nodes) - 1, "BSDF"]})
 
     def bound_material(self, prim) -> int:
         # The 'full' (final render) binding, falling back to the all-purpose one.
