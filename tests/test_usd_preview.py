@@ -263,12 +263,13 @@ def test_srgb_png_and_raw_single_channel_outputs(tmp_path):
         assert np.median(err / np.maximum(want, 0.05)) < 0.025, (name, cs, np.median(err))
 
 
-def roughness_stage(path, roughness_file=None, roughness=None):
+def lit_plane_stage(path, constants, mapped_input, file, scale):
+    """A plane under a sphere light seen at a glancing angle, `mapped_input` read from the
+    `r` channel of `file` × `scale`."""
     stage = new_stage(path)
-    mat, sh = surface(stage, "/Looks/m", diffuseColor=(0.9, 0.6, 0.3), metallic=1.0)
-    if roughness_file is not None:
-        tex = uv_texture(stage, "/Looks/m/tex", roughness_file, wrapS="clamp", wrapT="clamp")
-        connect(sh, "roughness", tex, "r", Sdf.ValueTypeNames.Float)
+    mat, sh = surface(stage, "/Looks/m", diffuseColor=(0.9, 0.6, 0.3), **constants)
+    tex = uv_texture(stage, "/Looks/m/tex", file, wrapS="clamp", wrapT="clamp", scale=(scale, scale, scale, 1.0))
+    connect(sh, mapped_input, tex, "r", Sdf.ValueTypeNames.Float)
     quad(stage, "/plane", -2, 2, -2, 2, material=mat)
     cam = UsdGeom.Camera.Define(stage, "/cam")
     cam.CreateFocalLengthAttr(3.5)
@@ -276,43 +277,60 @@ def roughness_stage(path, roughness_file=None, roughness=None):
     cam.CreateVerticalApertureAttr(3.6)
     cam.AddTranslateOp().Set(Gf.Vec3d(0, -3, 1.2))
     cam.AddRotateXOp().Set(70.0)
-    sun = UsdLux.SphereLight.Define(stage, "/lamp")
-    sun.CreateRadiusAttr(0.3)
-    sun.CreateIntensityAttr(30.0)
-    sun.AddTranslateOp().Set(Gf.Vec3d(0, 2.5, 1.5))
+    lamp = UsdLux.SphereLight.Define(stage, "/lamp")
+    lamp.CreateRadiusAttr(0.3)
+    lamp.CreateIntensityAttr(30.0)
+    lamp.AddTranslateOp().Set(Gf.Vec3d(0, 2.5, 1.5))
     stage.Save()
 
 
-def test_roughness_map_halves_match_constant_roughness_principled(tmp_path):
-    """A raw grey PNG (left 0.15, right 0.8) on `roughness` of a metal: each half of the
-    image equals the render of a Python-API Principled of that constant roughness."""
+MAPS = {
+    # USD input: (constant inputs, the two mapped values, texture scale, Principled kwargs)
+    "roughness": ({"metallic": 1.0}, (0.15, 0.8), 1.0, lambda v: {"metallic": 1.0, "roughness": v}),
+    "metallic": ({"roughness": 0.3}, (0.0, 1.0), 1.0, lambda v: {"metallic": v, "roughness": 0.3}),
+    "clearcoat": (
+        {"roughness": 0.9, "clearcoatRoughness": 0.05},
+        (0.0, 1.0),
+        1.0,
+        lambda v: {"roughness": 0.9, "coat_weight": v, "coat_roughness": 0.05},
+    ),
+    "ior": ({"roughness": 0.2}, (1.2, 2.2), 2.5, lambda v: {"roughness": 0.2, "ior": v}),
+}
+
+
+@pytest.mark.parametrize("mapped_input", sorted(MAPS))
+def test_input_map_halves_match_constant_principled(tmp_path, mapped_input):
+    """A raw grey PNG (two values, × the texture's scale) on one input: each half of the
+    image equals the render of a Python-API Principled with that constant value."""
     from PIL import Image
 
+    constants, values, scale, kwargs = MAPS[mapped_input]
     img = np.zeros((4, 16), np.uint8)
-    img[:, :8], img[:, 8:] = round(0.15 * 255), round(0.8 * 255)
-    Image.fromarray(img, "L").save(tmp_path / "rough.png")
-    roughness_stage(tmp_path / "mapped.usda", tmp_path / "rough.png")
+    img[:, :8], img[:, 8:] = (round(v / scale * 255) for v in values)
+    Image.fromarray(img, "L").save(tmp_path / "map.png")
+    lit_plane_stage(tmp_path / "mapped.usda", constants, mapped_input, tmp_path / "map.png", scale)
     scene, warns = read(tmp_path / "mapped.usda")
     assert not warns, warns
     assert isinstance(scene.materials[0], pc.NodeMaterial)
-    n = 24
+    n = 20
 
     def render(s):
-        return luminance(pc.render(s, width=n, height=n, samples=64, max_bounces=2, seed=5).rgba[..., :3])
+        return luminance(pc.render(s, width=n, height=n, samples=48, max_bounces=2, seed=5).rgba[..., :3])
 
     mapped = render(scene)
     refs = []
-    for r in (img[0, 0] / 255.0, img[0, 15] / 255.0):
+    for byte in (img[0, 0], img[0, 15]):
         ref_scene = usd.read_stage(tmp_path / "mapped.usda")
-        ref_scene.materials[0] = pc.Principled(pc.spectra.rgb(0.9, 0.6, 0.3), metallic=1.0, roughness=float(r))
+        ref_scene.materials[0] = pc.Principled(pc.spectra.rgb(0.9, 0.6, 0.3), **kwargs(byte / 255.0 * scale))
         refs.append(render(ref_scene))
     # The texture's seam is x = 0 on the plane (image column n/2); compare away from it.
     left, right = slice(0, n // 2 - 3), slice(n // 2 + 3, n)
     for half, ref in ((left, refs[0]), (right, refs[1])):
         a, b = mapped[:, half].mean(), ref[:, half].mean()
         assert abs(a - b) < 0.03 * b + 1e-3, (a, b)
-    # ... and the two constant roughnesses differ clearly there.
-    assert abs(refs[0][:, left].mean() - refs[1][:, left].mean()) > 0.2 * refs[1][:, left].mean()
+    # ... and the two constant values differ clearly there.
+    a, b = refs[0][:, left].mean(), refs[1][:, left].mean()
+    assert abs(a - b) > 0.1 * max(a, b), (a, b)
 
 
 def test_opacity_threshold_cuts_out_like_geometry(tmp_path):
