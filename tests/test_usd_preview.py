@@ -456,3 +456,35 @@ def test_display_opacity_per_face_and_constant_is_coverage(tmp_path):
     assert not warns, warns
     got = render_rgb(scene, samples=64)
     assert np.allclose(got.reshape(-1, 3).mean(axis=0), 0.6 * floor_rgb, rtol=0.04), got.reshape(-1, 3).mean(axis=0)
+
+
+def test_network_in_a_node_graph_driven_by_material_interface_inputs(tmp_path):
+    """A UsdUVTexture inside a NodeGraph whose `file` and wraps are connected to the
+    material's interface inputs, its output reaching emissiveColor through the graph's
+    output: read as if authored on the texture."""
+    file = tmp_path / "tex.exr"
+    write_exr(file, np.concatenate([TEXELS, np.ones((3, 4, 1))], axis=2).astype(np.float32))
+    path = tmp_path / "iface.usda"
+    stage = new_stage(path)
+    mat, sh = surface(stage, "/Looks/m", diffuseColor=(0.0, 0.0, 0.0))
+    graph = UsdShade.NodeGraph.Define(stage, "/Looks/m/graph")
+    tex = UsdShade.Shader.Define(stage, "/Looks/m/graph/tex")
+    tex.CreateIdAttr("UsdUVTexture")
+    file_in = mat.CreateInput("texfile", Sdf.ValueTypeNames.Asset)
+    file_in.Set(str(file))
+    tex.CreateInput("file", Sdf.ValueTypeNames.Asset).ConnectToSource(file_in)
+    wrap_in = mat.CreateInput("wrap", Sdf.ValueTypeNames.Token)
+    wrap_in.Set("mirror")
+    for w in ("wrapS", "wrapT"):
+        tex.CreateInput(w, Sdf.ValueTypeNames.Token).ConnectToSource(wrap_in)
+    out = graph.CreateOutput("color", Sdf.ValueTypeNames.Float3)
+    out.ConnectToSource(tex.CreateOutput("rgb", Sdf.ValueTypeNames.Float3))
+    sh.CreateInput("emissiveColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(out)
+    quad(stage, "/plane", material=mat)
+    top_camera(stage)
+    stage.Save()
+    scene, warns = read(path)
+    assert not warns, warns
+    got = render_rgb(scene)
+    want = footprint_mean(lambda x, y: bilinear(TEXELS, (x + 1) / 2, (y + 1) / 2, "mirror", "mirror"), N)
+    assert np.median(np.abs(got - want) / np.maximum(want, 0.05)) < 0.02

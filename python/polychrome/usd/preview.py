@@ -212,6 +212,16 @@ class Graph:
             return None
         return Const(self.plain(v, kind))
 
+    def raw(self, inp):
+        """The value of a non-connectable input (file, tokens), following connections to
+        a material's or node graph's interface inputs; None when nothing is authored."""
+        if not inp:
+            return None
+        attrs = inp.GetValueProducingAttributes()
+        if not attrs or self.r.UsdShade.Output.IsOutput(attrs[0]):
+            return None
+        return attrs[0].Get(self.r.time)
+
     def plain(self, v, kind: str):
         if isinstance(v, str) or kind == "string":
             return str(v)
@@ -296,18 +306,17 @@ class Graph:
         if key in self.r.textures:
             return self.r.textures[key]
         self.r.textures[key] = None  # warn once, whatever happens below
-        file_input = shader.GetInput("file")
-        value = file_input.Get(self.r.time) if file_input else None
+        value = self.raw(shader.GetInput("file"))
         if value is None or not (getattr(value, "path", "") or ""):
             self.r.warn(f"texfile:{key}", f"prim {key}: UsdUVTexture without a file; its fallback is used")
             return None
         path = self.r.asset_path(value, shader.GetPrim(), "texture file")
         if path is None:
             return None
-        cs_in = shader.GetInput("sourceColorSpace")
-        if not (cs_in and cs_in.GetAttr().HasAuthoredValue()):
-            cs_in = shader.GetInput("isSRGB")  # its name in stages written before the 2.3 spec
-        cs = str(cs_in.Get(self.r.time)) if cs_in and cs_in.Get(self.r.time) is not None else "auto"
+        cs = self.raw(shader.GetInput("sourceColorSpace"))
+        if cs is None:
+            cs = self.raw(shader.GetInput("isSRGB"))  # its name in stages written before the 2.3 spec
+        cs = "auto" if cs is None else str(cs)
         cs = {"True": "sRGB", "False": "raw", "1": "sRGB", "0": "raw"}.get(cs, cs)
         if cs not in ("raw", "sRGB", "auto"):
             self.r.warn(f"colorspace:{key}", f"prim {key}: sourceColorSpace '{cs}' is not known; read as auto")
@@ -324,8 +333,8 @@ class Graph:
         return texture
 
     def wrap(self, shader, which: str) -> str:
-        i = shader.GetInput(which)
-        w = str(i.Get(self.r.time)) if i and i.Get(self.r.time) is not None else "useMetadata"
+        w = self.raw(shader.GetInput(which))
+        w = "useMetadata" if w is None else str(w)
         if w not in WRAPS:
             if w != "useMetadata":
                 self.r.warn(f"wrap:{shader.GetPath()}", f"prim {shader.GetPath()}: {which} '{w}' is not known; repeat is used")
