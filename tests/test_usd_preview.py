@@ -488,3 +488,14 @@ def test_network_in_a_node_graph_driven_by_material_interface_inputs(tmp_path):
     got = render_rgb(scene)
     want = footprint_mean(lambda x, y: bilinear(TEXELS, (x + 1) / 2, (y + 1) / 2, "mirror", "mirror"), N)
     assert np.median(np.abs(got - want) / np.maximum(want, 0.05)) < 0.02
+
+
+def test_missing_uv_set_is_one_warning_naming_mesh_and_primvar(tmp_path):
+    file = tmp_path / "tex.exr"
+    write_exr(file, np.ones((2, 2, 4), np.float32))
+    path = emissive_stage(tmp_path, file, wrap_s="repeat", wrap_t="repeat")
+    stage = pxr.Usd.Stage.Open(str(path))
+    UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/plane")).RemovePrimvar("uvset")
+    stage.Save()
+    scene, warns = read(path)
+    assert len(warns) == 1 and "/plane" in warns[0] and "'uvset'" in warns[0] and "/Looks/m" in warns[0], warns

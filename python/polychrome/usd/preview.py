@@ -174,6 +174,7 @@ class Graph:
         self.shader = shader
         self.nodes: list[dict[str, Any]] = []
         self.memo: dict[tuple, Any] = {}
+        self.reads: set[tuple[str, str]] = set()  # ("uv" | "attr", primvar name)
 
     # -- plumbing ----------------------------------------------------------------------
     def add(self, kind: str, name: str, props=None, inputs=None) -> int:
@@ -278,8 +279,10 @@ class Graph:
             return fb if isinstance(fb, Const) else None
         if ty == "float2":
             self.r.uv_names.add(varname)
+            self.reads.add(("uv", varname))
             return Link(self.add("ShaderNodeUVMap", f"{shader.GetPath()}", {"uv_map": varname}), "UV")
         self.r.attribute_names.add(varname)
+        self.reads.add(("attr", varname))
         node = self.add("ShaderNodeAttribute", f"{shader.GetPath()}", {"attribute_name": varname, "attribute_type": "GEOMETRY"})
         if ty in ("float", "int"):
             return Link(node, "Fac")
@@ -535,4 +538,6 @@ def build(reader, material_prim, shader, name: str):
         # Spec: a transparent surface still has its specular response (clear glass).
         inputs["Transmission Weight"] = 1.0 - float(g.socket(opacity, "float"))
     principled = g.add("ShaderNodeBsdfPrincipled", str(shader.GetPath()), {}, inputs)
-    return NodeMaterial(name, g.nodes, {"surface": [principled, "BSDF"]}), None
+    material = NodeMaterial(name, g.nodes, {"surface": [principled, "BSDF"]})
+    material.usd_primvar_reads = frozenset(g.reads)  # checked against each bound mesh
+    return material, None

@@ -827,6 +827,14 @@ class _Reader:
         out_n, out_uv = out.get("normals"), out.get("uvs")
         uv_maps = {k[1]: v for k, v in out.items() if isinstance(k, tuple) and k[0] == "uv"} or None
         attrs = {k[1]: v for k, v in out.items() if isinstance(k, tuple) and k[0] == "attr"} or None
+        used = [material] if material is not None else sorted({int(m) for m in np.unique(material_ids)})
+        for m in used:
+            for kind, pv_name in sorted(getattr(self.materials[m], "usd_primvar_reads", ())):
+                if (kind, pv_name) not in extras:
+                    self.warn(
+                        f"noprimvar:{where}:{pv_name}",
+                        f"prim {where}: primvar '{pv_name}' read by material '{self.materials[m].name}' is missing; it reads 0",
+                    )
 
         return {
             "name": str(self.custom(prim, A.NAME, str(prim.GetPath()))),
