@@ -463,6 +463,11 @@ class Graph:
         return Link(self.memo[key], {"r": "Red", "g": "Green", "b": "Blue"}[name])
 
 
+def _triple(v) -> tuple[float, float, float]:
+    t = tuple(float(x) for x in v) if isinstance(v, tuple) else (float(v),) * 3
+    return (t + t[-1:] * 3)[:3]
+
+
 def build(reader, material_prim, shader, name: str):
     """(NodeMaterial, None) when some input of ``shader`` varies over the surface, else
     (None, {input: constant}) with every input of :data:`INPUTS` resolved (missing
@@ -498,7 +503,7 @@ def build(reader, material_prim, shader, name: str):
         kind = INPUTS[usd_name][0]
         inputs[socket] = g.socket(values[usd_name], kind)
     emissive = values["emissiveColor"]
-    if isinstance(emissive, Link) or max(emissive.value) > 0.0:
+    if isinstance(emissive, Link) or max(_triple(emissive.value)) > 0.0:
         inputs["Emission Color"] = g.socket(emissive, "color")
         inputs["Emission Strength"] = 1.0
     spec_wf = values["useSpecularWorkflow"]
@@ -512,7 +517,7 @@ def build(reader, material_prim, shader, name: str):
             g.warn("specular", "a textured specularColor tints the Fresnel of ior (approximated)")
             inputs["Specular Tint"] = g.socket(sc, "color")
         else:
-            c = [min(max(float(x), 0.0), 1.0) for x in sc.value]
+            c = [min(max(float(x), 0.0), 1.0) for x in _triple(sc.value)]
             m = max(c)
             if m <= 0.0:
                 inputs["Specular IOR Level"] = 0.0
