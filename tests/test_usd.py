@@ -446,8 +446,8 @@ def test_bad_subset_and_instancer_indices_raise_value_error(tmp_path):
 def test_unsupported_prim_warns_once_and_the_render_still_works(tmp_path):
     path = bad_mesh_stage(tmp_path / "extra.usda")
     stage = Usd.Stage.Open(str(path))
-    UsdGeom.Points.Define(stage, "/World/ball")
-    UsdGeom.BasisCurves.Define(stage, "/World/hair")
+    UsdGeom.NurbsPatch.Define(stage, "/World/ball")
+    UsdGeom.NurbsCurves.Define(stage, "/World/hair")
     UsdLux.CylinderLight.Define(stage, "/World/tube")
     stage.Save()
     with warnings.catch_warnings(record=True) as caught:
@@ -954,12 +954,12 @@ def test_unresolved_reference_is_one_warning_and_the_rest_renders(tmp_path, capf
 def test_cli_prints_each_stage_warning_on_one_line(tmp_path, capsys):
     path = bad_mesh_stage(tmp_path / "warn.usda")
     stage = Usd.Stage.Open(str(path))
-    UsdGeom.Points.Define(stage, "/World/dust")
+    UsdGeom.NurbsPatch.Define(stage, "/World/dust")
     stage.Save()
     assert cli.main(["render", str(path), "-o", str(tmp_path / "w.png"), "--samples", "1", "--quiet"]) == 0
     err = capsys.readouterr().err.splitlines()
     assert [line for line in err if "warning" in line] == [
-        f"polychrome render: warning: {path}: prim /World/dust: prim type 'Points' is not supported and is skipped"
+        f"polychrome render: warning: {path}: prim /World/dust: prim type 'NurbsPatch' is not supported and is skipped"
     ]
 
 

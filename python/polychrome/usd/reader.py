@@ -1,7 +1,8 @@
 """Reads any USD stage into a :class:`polychrome.Scene` (``read_stage``).
 
 What is read: UsdGeom meshes (polygons fan-triangulated, holes dropped, GeomSubsets per
-material, normals and ``st`` per vertex or face-varying), transforms
+material, normals and ``st`` per vertex or face-varying), the intrinsic shapes, BasisCurves
+and Points (tubes and spheres, ``basis.py``), transforms
 (``ComputeLocalToWorldTransform`` through an XformCache), instanceable prims and
 PointInstancers, one UsdGeom.Camera, UsdLux sphere / rect / disk / distant / dome lights,
 UsdPreviewSurface materials (networks of UsdUVTexture, UsdTransform2d and UsdPrimvarReader
@@ -52,6 +53,8 @@ _SILENT_TYPES = {
     "PhysicsScene",
     "Backdrop",
 }
+#: Prims the reader turns into triangle meshes.
+GEOMETRY_TYPES = ("Mesh", "Sphere", "Cube", "Cylinder", "Cone", "Capsule", "Capsule_1", "Plane", "BasisCurves", "Points")
 _LIGHTS_SKIPPED = {"CylinderLight", "GeometryLight", "PortalLight", "PluginLight", "MeshLight", "VolumeLight"}
 
 
@@ -624,7 +627,7 @@ class _Reader:
         return arr, ("corner" if interp == "faceVarying" else "vertex")
 
     def gprim_arrays(self, prim) -> dict[str, Any] | None:
-        """Triangles for the intrinsic UsdGeom shapes (Sphere, Cube, Cylinder, Cone, Plane)."""
+        """Triangles for the intrinsic UsdGeom shapes (Sphere, Cube, Cylinder, Cone, Capsule, Plane)."""
         t = str(prim.GetTypeName())
         attr = lambda name, default: float(self.get(prim.GetAttribute(name), default))  # noqa: E731
         normals = None
@@ -661,6 +664,30 @@ class _Reader:
             cap_t = np.stack([np.full(n, 2 * n + 1), n + k, n + k1], 1)
             tris = np.concatenate([side, cap_b] + ([cap_t] if t == "Cylinder" else []))
             dims = [r, height]
+        elif t in ("Capsule", "Capsule_1"):
+            # The spine of length ``height`` along the axis, capped by hemispheres of ``radius``.
+            if t == "Capsule":
+                r = attr("radius", 0.5)
+            else:
+                r_top, r_bottom = attr("radiusTop", 0.5), attr("radiusBottom", 0.5)
+                if r_top != r_bottom:
+                    self.warn(f"capsule:{prim.GetPath()}", f"prim {prim.GetPath()}: a capsule with two radii is read with their mean")
+                r = 0.5 * (r_top + r_bottom)
+            height = attr("height", 1.0)
+            half = GPRIM_RINGS // 2
+            theta = np.concatenate([np.linspace(0.0, math.pi / 2, half + 1), np.linspace(math.pi / 2, math.pi, half + 1)])
+            rings = len(theta) - 1
+            phi = np.linspace(0.0, 2 * math.pi, GPRIM_SEGMENTS + 1)
+            th, ph = np.meshgrid(theta, phi, indexing="ij")
+            unit = np.stack([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)], -1)
+            offset = np.where(np.arange(rings + 1) <= half, height / 2, -height / 2)
+            verts = (unit * r + np.stack([0 * offset, 0 * offset, offset], -1)[:, None, :]).reshape(-1, 3)
+            unit = unit.reshape(-1, 3)
+            segments = GPRIM_SEGMENTS
+            a = (np.arange(rings)[:, None] * (segments + 1) + np.arange(segments)[None, :]).ravel()
+            b = a + segments + 1
+            tris = np.concatenate([np.stack([a, b, a + 1], 1), np.stack([a + 1, b, b + 1], 1)])
+            normals, dims = unit, [r, height]
         elif t == "Plane":
             w, length = attr("width", 2.0) / 2, attr("length", 2.0) / 2
             verts = np.array([[-w, -length, 0], [w, -length, 0], [w, length, 0], [-w, length, 0]], np.float64)
@@ -686,8 +713,121 @@ class _Reader:
             "material": self.bound_material(prim),
         }
 
+    def finite_points(self, prim, attr, what: str):
+        raw = attr.Get(self.time)
+        if raw is None or len(raw) == 0:
+            return None
+        pts = np.asarray(raw, dtype=np.float64).reshape(-1, 3)
+        if not np.all(np.isfinite(pts)):
+            bad = int(np.argwhere(~np.all(np.isfinite(pts), axis=1))[0][0])
+            raise self.error(prim, f"{what} {bad} is not finite")
+        return pts
+
+    def widths(self, prim, schema, expected: dict[str, int], n_vertices: int):
+        """(widths, interpolation) of a Curves / Points prim: ``expected`` counts per
+        interpolation; unauthored widths are 1 scene unit (Hydra's fallback)."""
+        attr = schema.GetWidthsAttr()
+        raw = attr.Get(self.time) if attr and attr.HasAuthoredValue() else None
+        if raw is None or len(raw) == 0:
+            return np.ones(n_vertices), "vertex"
+        w = np.asarray(raw, dtype=np.float64).ravel()
+        interp = str(schema.GetWidthsInterpolation())
+        if interp not in expected:
+            interp = "vertex"
+        if len(w) == 1 and interp != "uniform":
+            interp = "constant"
+        if len(w) != expected.get(interp, -1) or not np.all(np.isfinite(w)) or w.min() < 0:
+            raise self.error(
+                prim, f"widths has {len(w)} values for {interp} interpolation; expected {expected.get(interp)} finite, non-negative ones"
+            )
+        return w, interp
+
+    def curves_arrays(self, prim) -> dict[str, Any] | None:
+        """UsdGeom.BasisCurves → tubes (``Scene.add_curves`` tessellation) along the
+        curves as the basis evaluates them (polychrome.usd.basis); width = diameter."""
+        from .. import curves as pc_curves
+        from . import basis as B
+
+        c = self.UsdGeom.BasisCurves(prim)
+        pts = self.finite_points(prim, c.GetPointsAttr(), "point")
+        counts_raw = c.GetCurveVertexCountsAttr().Get(self.time)
+        if pts is None or counts_raw is None or len(counts_raw) == 0:
+            return None
+        counts = np.asarray(counts_raw, dtype=np.int64)
+        if counts.min() < 0 or int(counts.sum()) != len(pts):
+            raise self.error(prim, f"curveVertexCounts add up to {int(counts.sum())} but there are {len(pts)} points")
+        ctype = str(self.get(c.GetTypeAttr(), "cubic"))
+        basis = str(self.get(c.GetBasisAttr(), "bezier"))
+        wrap = str(self.get(c.GetWrapAttr(), "nonperiodic"))
+        if ctype == "cubic" and basis not in B.CUBIC_BASES:
+            self.warn(f"basis:{prim.GetPath()}", f"prim {prim.GetPath()}: curve basis '{basis}' is not supported; read as catmullRom")
+            basis = "catmullRom"
+        if ctype not in ("linear", "cubic"):
+            ctype = "cubic"
+        if self.get(c.GetNormalsAttr()) is not None:
+            self.warn(f"ribbon:{prim.GetPath()}", f"prim {prim.GetPath()}: oriented curves (normals) are rendered as round tubes")
+        varying = [B.varying_count(int(n), ctype, basis, wrap) for n in counts]
+        w, interp = self.widths(prim, c, {"constant": 1, "uniform": len(counts), "vertex": len(pts), "varying": sum(varying)}, len(pts))
+        if interp == "constant":
+            w = np.full(len(pts), w[0])
+        elif interp == "uniform":
+            w = np.repeat(w, counts)
+        if ctype == "linear" and interp == "varying":
+            interp = "vertex"
+        starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        vstarts = np.concatenate([[0], np.cumsum(varying)[:-1]])
+        keys, radii, out_counts, skipped = [], [], [], 0
+        for i, (s, n) in enumerate(zip(starts, counts)):
+            wi = w[vstarts[i] : vstarts[i] + varying[i]] if interp == "varying" else w[s : s + n]
+            ev = B.evaluate_curve(pts[s : s + n], wi, interp == "varying", ctype, basis, wrap)
+            if ev is None:
+                skipped += 1
+                continue
+            keys.append(ev[0])
+            radii.append(ev[1] / 2.0)
+            out_counts.append(len(ev[0]))
+        if skipped:
+            self.warn(
+                f"short:{prim.GetPath()}",
+                f"prim {prim.GetPath()}: {skipped} curve(s) with too few vertices for a {ctype} {basis} segment are skipped",
+            )
+        if not keys:
+            return None
+        v, n, uv, t, _ = pc_curves.curves_mesh(
+            np.concatenate(keys), np.concatenate(radii), np.asarray(out_counts), subdivisions=1, linear=True, name=str(prim.GetPath())
+        )
+        return self.shape_dict(prim, v, t, n, uv)
+
+    def points_arrays(self, prim) -> dict[str, Any] | None:
+        """UsdGeom.Points → spheres of diameter ``widths`` (``Scene.add_points``)."""
+        from .. import curves as pc_curves
+
+        p = self.UsdGeom.Points(prim)
+        pts = self.finite_points(prim, p.GetPointsAttr(), "point")
+        if pts is None:
+            return None
+        w, _ = self.widths(prim, p, {"constant": 1, "vertex": len(pts), "varying": len(pts)}, len(pts))
+        v, n, uv, t, _ = pc_curves.points_mesh(pts, np.broadcast_to(w, (len(pts),)) / 2.0, name=str(prim.GetPath()))
+        return self.shape_dict(prim, v, t, n, uv)
+
+    def shape_dict(self, prim, v, t, n, uv) -> dict[str, Any]:
+        return {
+            "name": str(self.custom(prim, A.NAME, str(prim.GetPath()))),
+            "order": self.custom(prim, A.MESH_INDEX),
+            "vertices": np.asarray(v, np.float32).reshape(-1, 3),
+            "triangles": np.asarray(t, np.int64).reshape(-1, 3),
+            "normals": np.asarray(n, np.float32).reshape(-1, 3),
+            "uvs": np.asarray(uv, np.float32).reshape(-1, 2),
+            "material_ids": None,
+            "material": self.bound_material(prim),
+        }
+
     def mesh_arrays(self, prim) -> dict[str, Any] | None:
         UsdGeom = self.UsdGeom
+        if prim.GetTypeName() == "BasisCurves":
+            return self.curves_arrays(prim)
+        if prim.GetTypeName() == "Points":
+            return self.points_arrays(prim)
         if prim.GetTypeName() != "Mesh":
             return self.gprim_arrays(prim)
         mesh = UsdGeom.Mesh(prim)
@@ -909,7 +1049,7 @@ class _Reader:
             if len(which) == 0:
                 continue
             for sub in Usd.PrimRange(root, Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)):
-                if sub.GetTypeName() not in ("Mesh", "Sphere", "Cube", "Cylinder", "Cone", "Plane"):
+                if sub.GetTypeName() not in GEOMETRY_TYPES:
                     if sub.GetTypeName() not in _SILENT_TYPES:
                         self.warn(
                             f"proto:{sub.GetPath()}",
@@ -1318,7 +1458,7 @@ class _Reader:
             ):
                 it.PruneChildren()
                 continue
-            if t in ("Mesh", "Sphere", "Cube", "Cylinder", "Cone", "Plane"):
+            if t in GEOMETRY_TYPES:
                 self.read_mesh(prim)
             elif t == "PointInstancer":
                 self.read_point_instancer(prim)

@@ -1,0 +1,176 @@
+"""UsdGeom BasisCurves, Points, Capsule and transform motion read by polychrome.usd,
+against closed forms: an emissive prim over a black world seen by an orthographic camera
+covers its projected area (width × length for a curve, πd²/4 per point, 2rh + πr² for a
+capsule seen side-on), measured against an emissive reference square of known area in
+the same image; a square moving D over the shutter smears into the box ⊛ box profile."""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+pxr = pytest.importorskip("pxr")
+from pxr import Gf, Sdf, UsdGeom, UsdShade  # noqa: E402
+
+import polychrome as pc  # noqa: E402
+from polychrome import usd  # noqa: E402
+from polychrome.usd import basis  # noqa: E402
+from conftest import luminance  # noqa: E402
+from test_usd import floor_mesh, new_stage, top_camera  # noqa: E402
+
+N, VIEW = 96, 2.0  # pixels and metres across the orthographic view
+PIXEL_AREA = (VIEW / N) ** 2
+REF_CENTRE, REF_HALF = (-0.6, 0.6), 0.2
+
+
+def lamp(stage):
+    mat = UsdShade.Material.Define(stage, "/Looks/lamp")
+    sh = UsdShade.Shader.Define(stage, "/Looks/lamp/Surface")
+    sh.CreateIdAttr("UsdPreviewSurface")
+    sh.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(0, 0, 0))
+    sh.CreateInput("emissiveColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(1, 1, 1))
+    mat.CreateSurfaceOutput().ConnectToSource(sh.ConnectableAPI(), "surface")
+    return mat
+
+
+def bind(prim, mat):
+    UsdShade.MaterialBindingAPI.Apply(prim.GetPrim()).Bind(mat)
+
+
+def stage_with_reference(path):
+    """A stage with an emissive square of side 2·REF_HALF (the unit of coverage) and a top camera."""
+    stage = new_stage(path)
+    mat = lamp(stage)
+    ref = floor_mesh(stage, "/ref", REF_HALF, mat)
+    ref.AddTranslateOp().Set(Gf.Vec3d(*REF_CENTRE, 0))
+    cam = top_camera(stage, "/cam", 4.0, VIEW)
+    return stage, mat, cam
+
+
+def render(path, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        scene = usd.read_stage(path, **kw)
+    result = pc.render(scene, width=N, height=N, samples=32, max_bounces=0, seed=3)
+    assert result.stats["nonfinite_samples"] == 0
+    y = luminance(result.rgba)
+    # Coverage: the reference square's light per area is 1.
+    unit = region_sum(y, REF_CENTRE[0] - 0.3, REF_CENTRE[0] + 0.3, REF_CENTRE[1] - 0.3, REF_CENTRE[1] + 0.3) / (4 * REF_HALF**2)
+    return y / unit
+
+
+def centres():
+    c = (np.arange(N) + 0.5) / N * VIEW - VIEW / 2
+    return c, -c  # x of each column, y of each row (row 0 at the top)
+
+
+def region_sum(img, x0, x1, y0, y1):
+    """Area covered in the box (m²) of a coverage image, pixels by their centres."""
+    x, y = centres()
+    rows = (y > y0) & (y < y1)
+    cols = (x > x0) & (x < x1)
+    return float(img[np.ix_(rows, cols)].sum() * PIXEL_AREA)
+
+
+def test_basis_curves_follow_the_usd_bases():
+    p = np.array([[0, 0, 0], [1, 2, 0], [3, 2, 0], [4, 0, 0]], float)
+    w = np.array([1.0, 2.0, 3.0, 4.0])
+    bez, bw = basis.evaluate_curve(p, w, False, "cubic", "bezier", "nonperiodic")
+    assert np.allclose(bez[0], p[0]) and np.allclose(bez[-1], p[-1])
+    assert np.allclose(bez[len(bez) // 2], [2.0, 1.5, 0.0])  # B(½) = (P0 + 3P1 + 3P2 + P3)/8
+    assert np.allclose(bw[[0, -1]], [1.0, 4.0])
+    cr, _ = basis.evaluate_curve(p, w, False, "cubic", "catmullRom", "nonperiodic")
+    assert np.allclose(cr[[0, -1]], p[[1, 2]])  # through the inner vertices only
+    pinned, _ = basis.evaluate_curve(p, w, False, "cubic", "catmullRom", "pinned")
+    assert np.allclose(pinned[[0, -1]], p[[0, 3]])
+    assert any(np.allclose(q, p[1]) for q in pinned) and any(np.allclose(q, p[2]) for q in pinned)
+    bs, _ = basis.evaluate_curve(p, w, False, "cubic", "bspline", "nonperiodic")
+    assert np.allclose(bs[0], (p[0] + 4 * p[1] + p[2]) / 6)
+    bsp, _ = basis.evaluate_curve(p, w, False, "cubic", "bspline", "pinned")
+    assert np.allclose(bsp[[0, -1]], p[[0, 3]])
+    ring, _ = basis.evaluate_curve(p, w, False, "cubic", "bspline", "periodic")
+    assert np.allclose(ring[0], ring[-1]) and len(ring) == 4 * basis.SAMPLES_PER_SEGMENT + 1
+    assert basis.evaluate_curve(p[:3], w[:3], False, "cubic", "bezier", "nonperiodic") is None
+
+
+def test_curves_and_points_cover_width_times_length_and_their_disks(tmp_path):
+    path = tmp_path / "curves.usda"
+    stage, mat, _ = stage_with_reference(path)
+    linear = UsdGeom.BasisCurves.Define(stage, "/hair/linear")
+    linear.CreateTypeAttr("linear")
+    linear.CreatePointsAttr([(-0.8, -0.3, 0), (0.0, -0.3, 0), (0.8, -0.3, 0)])
+    linear.CreateCurveVertexCountsAttr([3])
+    linear.CreateWidthsAttr([0.06])
+    linear.SetWidthsInterpolation("constant")
+    bind(linear, mat)
+    # A straight Bézier (evenly spaced control points: linear in t) whose vertex widths
+    # grow linearly 0.04 → 0.12: its area is the mean width × length.
+    bez = UsdGeom.BasisCurves.Define(stage, "/hair/bezier")
+    bez.CreatePointsAttr([(x, -0.7, 0) for x in np.linspace(-0.8, 0.8, 4)])
+    bez.CreateCurveVertexCountsAttr([4])
+    bez.CreateWidthsAttr(list(np.linspace(0.04, 0.12, 4)))
+    bind(bez, mat)
+    pts = UsdGeom.Points.Define(stage, "/dust")
+    pts.CreatePointsAttr([(0.1, 0.5, 0), (0.4, 0.5, 0), (0.7, 0.5, 0)])
+    pts.CreateWidthsAttr([0.15, 0.15, 0.2])
+    bind(pts, mat)
+    stage.Save()
+    cover = render(path)
+
+    got_linear = region_sum(cover, -1, 1, -0.5, -0.1)
+    got_bezier = region_sum(cover, -1, 1, -0.95, -0.5)
+    got_points = region_sum(cover, -0.1, 1, 0.3, 0.7)
+    want_points = math.pi / 4 * (2 * 0.15**2 + 0.2**2)
+    print(
+        f"linear {got_linear:.5f} / {1.6 * 0.06:.5f}, bezier {got_bezier:.5f} / {1.6 * 0.08:.5f}, points {got_points:.5f} / {want_points:.5f}"
+    )
+    # Curves are 8-sided tubes whose mean projected width is the diameter (polychrome.curves):
+    # one view sees between cos(π/8) and 1 times their circumscribed width 2R = 1.026 w.
+    for got, want in ((got_linear, 1.6 * 0.06), (got_bezier, 1.6 * 0.08)):
+        assert 0.94 < got / want < 1.04, (got, want)
+    assert got_points == pytest.approx(want_points, rel=0.03)
+    # Where the geometry is: the linear curve's band is centred on y = −0.3.
+    x, y = centres()
+    band = cover[:, (x > -0.7) & (x < 0.7)].mean(axis=1)
+    sel = (y > -0.5) & (y < -0.1)
+    assert float((band[sel] * y[sel]).sum() / band[sel].sum()) == pytest.approx(-0.3, abs=0.005)
+
+
+def test_capsule_silhouette_is_two_r_h_plus_pi_r_squared(tmp_path):
+    path = tmp_path / "capsule.usda"
+    stage, mat, _ = stage_with_reference(path)
+    r, h = 0.15, 0.6
+    cap = UsdGeom.Capsule.Define(stage, "/pill")
+    cap.CreateRadiusAttr(r)
+    cap.CreateHeightAttr(h)
+    cap.CreateAxisAttr("X")
+    cap.AddTranslateOp().Set(Gf.Vec3d(0.2, -0.45, 0))
+    bind(cap, mat)
+    stage.Save()
+    cover = render(path)
+    got = region_sum(cover, -0.5, 1, -1, 0.0)
+    want = 2 * r * h + math.pi * r * r
+    x, _ = centres()
+    extent = x[cover[:, :].max(axis=0) > 0.5]
+    extent = extent[extent > -0.3]
+    print(f"capsule {got:.5f} / {want:.5f}, length {extent.max() - extent.min() + VIEW / N:.4f} / {h + 2 * r:.4f}")
+    assert got == pytest.approx(want, rel=0.02)
+    assert extent.max() - extent.min() + VIEW / N == pytest.approx(h + 2 * r, abs=1.5 * VIEW / N)
+
+
+def test_bad_curve_data_raises_value_error_naming_the_prim(tmp_path):
+    path = tmp_path / "bad_curves.usda"
+    stage, _, _ = stage_with_reference(path)
+    c = UsdGeom.BasisCurves.Define(stage, "/hair")
+    c.CreateTypeAttr("linear")
+    c.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (2, 0, 0)])
+    c.CreateCurveVertexCountsAttr([3])
+    c.CreateWidthsAttr([0.1, 0.2])
+    stage.Save()
+    with pytest.raises(ValueError, match=r"bad_curves\.usda: prim /hair: widths has 2 values for vertex interpolation; expected 3"):
+        usd.read_stage(path)
+    c.CreateCurveVertexCountsAttr([4])
+    stage.Save()
+    with pytest.raises(ValueError, match=r"prim /hair: curveVertexCounts add up to 4 but there are 3 points"):
+        usd.read_stage(path)
