@@ -380,6 +380,60 @@ def coordinate_cases():
     return cases
 
 
+def normal_cases():
+    """Normal Map and Bump outputs that are constant over a flat tile (compared per pixel
+    to TOL): Normal Map in every space and at several strengths (tangent space also on
+    the "Second" UV map, whose tangent is along y and mirrored), and Bump of heights
+    linear in the position (a constant gradient), with Strength, Distance, Invert and a
+    Normal Map on its Normal input."""
+    cases = []
+    colour = (0.7, 0.4, 0.9)
+    for space in ("TANGENT", "OBJECT", "WORLD", "BLENDER_OBJECT", "BLENDER_WORLD"):
+        for strength in (0.5, 1.0, 2.0):
+
+            def nm(nt, sp=space, s=strength):
+                return out(node(nt, "ShaderNodeNormalMap", {"space": sp}, Strength=s, Color=colour))
+
+            cases.append(("Normal Map", f"{space} strength {strength}", nm, TOL))
+    cases.append(
+        (
+            "Normal Map",
+            "TANGENT on UV map Second",
+            lambda nt: out(node(nt, "ShaderNodeNormalMap", {"space": "TANGENT", "uv_map": "Second"}, Strength=1.0, Color=colour)),
+            TOL,
+        )
+    )
+
+    def linear_height(nt, kx, ky):
+        sep = node(nt, "ShaderNodeSeparateXYZ", Vector=out(nt.nodes.new("ShaderNodeNewGeometry"), "Position"))
+        hx = node(nt, "ShaderNodeMath", {"operation": "MULTIPLY"}, Value=out(sep, "X"), Value_001=kx)
+        return out(node(nt, "ShaderNodeMath", {"operation": "MULTIPLY_ADD"}, Value=out(sep, "Y"), Value_001=ky, Value_002=out(hx)))
+
+    for label, strength, distance, invert in (
+        ("strength 1", 1.0, 0.5, False),
+        ("strength 0.4", 0.4, 0.5, False),
+        ("distance 2 inverted", 1.0, 2.0, True),
+    ):
+
+        def bump(nt, s=strength, d=distance, inv=invert):
+            return out(node(nt, "ShaderNodeBump", {"invert": inv}, Strength=s, Distance=d, Height=linear_height(nt, 0.8, -0.3)))
+
+        cases.append(("Bump", f"linear height, {label}", bump, TOL))
+
+    def bump_on_map(nt):
+        nm = node(nt, "ShaderNodeNormalMap", {"space": "TANGENT"}, Strength=1.0, Color=colour)
+        return out(node(nt, "ShaderNodeBump", Strength=1.0, Distance=0.5, Height=linear_height(nt, 0.8, -0.3), Normal=out(nm)))
+
+    cases.append(("Bump", "linear height over a Normal Map", bump_on_map, TOL))
+
+    def uv_height(nt):  # a height read through the UV map: its offsets move the UVs
+        sep = node(nt, "ShaderNodeSeparateXYZ", Vector=out(node(nt, "ShaderNodeUVMap", {"uv_map": "Second"}), "UV"))
+        return out(node(nt, "ShaderNodeBump", Strength=1.0, Distance=0.3, Height=out(sep, "X")))
+
+    cases.append(("Bump", "height from UV map Second", uv_height, TOL))
+    return cases
+
+
 def procedural_cases():
     cases = []
     textures = [
@@ -546,6 +600,8 @@ def environment_cases():
 
 
 IMAGE_CASES, ENVIRONMENT_CASES = image_cases()
+#: Normal Map and Bump through the emission oracle itself (per pixel, 1 sample).
+NORMAL_CASES = normal_cases()
 ALPHA_CASES = [c for c in IMAGE_CASES if c[0] == "Image Texture Alpha"]
 HIT_CASES = coordinate_cases() + procedural_cases() + [c for c in IMAGE_CASES if c[0] != "Image Texture Alpha"]
 #: Per-hit emission, compared per pixel (test_textured_emission_matches_cycles_per_pixel):

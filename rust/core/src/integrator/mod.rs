@@ -107,7 +107,19 @@ pub fn facing<'s>(
     if let Some(requests) = &material.hit_attributes {
         ctx.hit = scene.shading_point(ray, si, requests);
     }
-    Facing { wo, ng: if front { si.ng } else { -si.ng }, ns: if front { si.ns } else { -si.ns }, material }
+    let ng = if front { si.ng } else { -si.ng };
+    let mut ns = if front { si.ns } else { -si.ns };
+    if let Some(n) = &material.normal {
+        // The graph's normal (Normal Map, Bump) becomes the shading normal, bent towards
+        // ng until the mirror direction of wo is above the surface, as Cycles does to
+        // every closure's normal (ensure_valid_specular_reflection, bsdf_util.h). Light
+        // still cannot leak: `scatter` and `connection_side` keep requiring directions
+        // on the same side of ng and of this normal.
+        let n = glam::Vec3A::from(n.at(&ctx.hit));
+        ns =
+            glam::Vec3A::from(crate::shading::vector::ensure_valid_specular_reflection(ng.into(), wo.into(), n.into()));
+    }
+    Facing { wo, ng, ns, material }
 }
 
 /// How pixel samples and light paths are estimated: the direction's technique on the

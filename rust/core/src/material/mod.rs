@@ -198,4 +198,7 @@ pub struct Material {
     /// An emission that varies over the surface (a node graph), evaluated at each hit
     /// from `ShadingContext::hit`; `emission` is then None.
     pub graph_emission: Option<std::sync::Arc<crate::shading::emission::GraphEmission>>,
+    /// A shading normal from the graph (a linked Normal input), evaluated at each hit
+    /// from `ShadingContext::hit`; the walk shades in its frame (`integrator::facing`).
+    pub normal: Option<crate::scene::VaryingNormal>,
 }

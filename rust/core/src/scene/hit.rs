@@ -6,7 +6,7 @@ use crate::geometry::{Instance, Mesh, Ray};
 use crate::light::SurfaceEmission;
 use crate::sampling::uniform_triangle;
 use crate::shading::emission::GraphEmission;
-use crate::shading::program::{AttributeRequest, ShadingPoint, MAX_ATTRIBUTES};
+use crate::shading::program::{AttributeRequest, Delta, ShadingPoint, MAX_ATTRIBUTES};
 use crate::spectrum::SampledSpectrum;
 use crate::{Error, Result};
 use glam::{Mat3, Vec2, Vec3, Vec3A};
@@ -93,6 +93,7 @@ impl MeshShadingData {
             AttributeRequest::Generic(n) => Self::find(&self.attributes, n)
                 .or_else(|| Self::find(&self.colors, n))
                 .or_else(|| Self::find(&self.uv_maps, n)),
+            AttributeRequest::Differentials => None,
         }
     }
 }
@@ -167,7 +168,13 @@ pub(crate) fn shading_point_of(
             attributes[k] = lerp(v);
         }
     }
+    let diff = if requests.contains(&AttributeRequest::Differentials) {
+        differentials(inst, mesh, data, si, requests, ray.time)
+    } else {
+        [Delta::default(); 2]
+    };
     ShadingPoint {
+        diff,
         position: Vec3::from(si.p),
         object_position,
         generated,
@@ -189,6 +196,49 @@ pub(crate) fn shading_point_of(
         object_random: object_random(si.instance),
         attributes,
     }
+}
+
+/// Two steps across the hit's triangle for the Bump node (`ShadingPoint::diff`): along
+/// its edges p1 − p0 and p2 − p0 by 10⁻³ of the mesh's bounding-box diagonal (at most a
+/// quarter of the edge), with every interpolated quantity's change over that step (all
+/// are linear in the barycentrics on a triangle).
+fn differentials(
+    inst: &Instance,
+    mesh: &Mesh,
+    data: &MeshShadingData,
+    si: &SurfaceInteraction,
+    requests: &[AttributeRequest],
+    time: f32,
+) -> [Delta; 2] {
+    let [i0, i1, i2] = mesh.indices[si.triangle as usize].map(|i| i as usize);
+    let [p0, p1, p2] = mesh.triangle_at(si.triangle as usize, time);
+    let w = inst.transforms_at(time).0;
+    let (lo, hi) = data.bounds;
+    let size = hi - lo;
+    let step = 1e-3 * size.length();
+    std::array::from_fn(|k| {
+        let (i, p) = if k == 0 { (i1, p1) } else { (i2, p2) };
+        let e = p - p0;
+        let len = e.length();
+        if !(len > 0.0 && step > 0.0) {
+            return Delta::default();
+        }
+        let s = (step / len).min(0.25);
+        let de = Vec3::from(e) * s;
+        let mut d = Delta {
+            position: Vec3::from(w.transform_vector3a(e * s)),
+            object_position: de,
+            generated: Vec3::select(size.cmpgt(Vec3::ZERO), de / size, Vec3::ZERO),
+            uv: mesh.uvs.as_ref().map_or(Vec2::ZERO, |uv| (uv[i] - uv[i0]) * s),
+            attributes: [[0.0; 4]; MAX_ATTRIBUTES],
+        };
+        for (a, r) in d.attributes.iter_mut().zip(requests) {
+            if let Some(v) = data.lookup(r) {
+                *a = std::array::from_fn(|c| (v[i][c] - v[i0][c]) * s);
+            }
+        }
+        d
+    })
 }
 
 /// ∂p/∂u of the hit triangle from its default UVs, in world space.

@@ -111,6 +111,25 @@ pub struct VaryingPass {
     pub probability: crate::shading::closure::PassProbability,
 }
 
+/// A shading normal read from a program register at each hit (a linked Normal input:
+/// Normal Map, Bump), the program reduced to the ops it depends on.
+#[derive(Clone, Debug)]
+pub struct VaryingNormal {
+    pub program: crate::shading::Program,
+    pub reg: crate::shading::program::Reg,
+}
+
+impl VaryingNormal {
+    /// The unit normal at `sp` (the shading point's own normal where the graph's is 0).
+    pub fn at(&self, sp: &crate::shading::ShadingPoint) -> glam::Vec3 {
+        PASS_REGS.with(|regs| {
+            let mut regs = regs.borrow_mut();
+            self.program.run(sp, &mut regs);
+            regs[self.reg as usize].try_normalize().unwrap_or(sp.normal)
+        })
+    }
+}
+
 thread_local! {
     static PASS_REGS: std::cell::RefCell<Vec<glam::Vec3>> = const { std::cell::RefCell::new(Vec::new()) };
 }
@@ -301,6 +320,7 @@ impl Scene {
             let mut compiled_program = None;
             let opaque_rest;
             let mut graph_emission = None;
+            let mut normal = None;
             let (bsdf_desc, emission_desc) = match &m.bsdf {
                 BsdfDesc::Graph(g) => {
                     compiled = crate::shading::compile_material(&m.name, g, &textures)?;
@@ -330,6 +350,10 @@ impl Scene {
                     constant = compiled.constant_surface().unwrap_or(BsdfDesc::None);
                     if !compiled.template.is_constant() {
                         per_hit = Some(self::graph_bsdf(&m.name, &compiled, &grid, uplift.as_ref(), &textures)?);
+                        hit_attributes = Some(compiled.program.attributes.clone());
+                    }
+                    if let Some(reg) = compiled.normal {
+                        normal = Some(VaryingNormal { program: compiled.program.pruned_for(reg), reg });
                         hit_attributes = Some(compiled.program.attributes.clone());
                     }
                     transparency = compiled.transparency.clone();
@@ -452,6 +476,7 @@ impl Scene {
                 see_through: m.see_through,
                 hit_attributes,
                 graph_emission,
+                normal,
             });
             // A graph with a volume and no surface is volume-only (Cycles' SD_HAS_ONLY_VOLUME).
             null_surface.push(match &m.bsdf {
@@ -480,6 +505,7 @@ impl Scene {
                 see_through: false,
                 hit_attributes: None,
                 graph_emission: None,
+                normal: None,
             });
             material_medium.push(None);
             null_surface.push(false);

@@ -434,6 +434,9 @@ pub struct Lowering<'c, 'a> {
     pub c: &'c mut Compiler<'a>,
     /// Closure nodes on the current path, for cycles through shader links.
     path: Vec<usize>,
+    /// Each BSDF node's Normal: its register when linked, None when it keeps the
+    /// shading normal.
+    normals: Vec<(usize, Option<Reg>)>,
 }
 
 fn add_emission(material: &str, a: Option<Emission>, b: Option<Emission>) -> Result<Option<Emission>> {
@@ -478,7 +481,7 @@ fn weighted(e: Emission, r: Reg, first: bool) -> Option<Emission> {
 
 impl<'c, 'a> Lowering<'c, 'a> {
     pub fn new(c: &'c mut Compiler<'a>) -> Self {
-        Self { c, path: Vec::new() }
+        Self { c, path: Vec::new(), normals: Vec::new() }
     }
 
     fn per_hit_unsupported(&self, node: usize, id: &str, what: &str) -> Error {
@@ -519,12 +522,29 @@ impl<'c, 'a> Lowering<'c, 'a> {
         }
     }
 
-    /// A linked Normal input is not applied yet: warn.
-    fn default_normal(&mut self, node: usize, id: &str) -> Result<()> {
-        if self.c.linked(node, id).is_some() {
-            self.c.warn(node, format!("a linked {id} is not applied yet (the surface keeps its shading normal)"));
-        }
+    /// A BSDF's Normal input: a linked one becomes the shading normal at the hit
+    /// (`CompiledMaterial::normal`).
+    fn normal(&mut self, node: usize, id: &str) -> Result<()> {
+        let r = match self.c.linked(node, id) {
+            Some(_) => Some(self.c.input_reg(node, id)?),
+            None => None,
+        };
+        self.normals.push((node, r));
         Ok(())
+    }
+
+    /// The one shading normal of the material: the material's BSDFs share one frame,
+    /// so when they read different normals the first linked one is used for all (warned).
+    fn shading_normal(&mut self) -> Option<Reg> {
+        let first = self.normals.iter().find_map(|&(_, r)| r)?;
+        if let Some(&(node, _)) = self.normals.iter().find(|&&(_, r)| r != Some(first)) {
+            self.c.warn(
+                node,
+                "its Normal differs from another BSDF's in this material; one shading normal per material is \
+                 supported, so every BSDF here uses the first linked Normal",
+            );
+        }
+        Some(first)
     }
 
     /// Warns when an input this build ignores differs from Blender's default.
@@ -594,7 +614,7 @@ impl<'c, 'a> Lowering<'c, 'a> {
         let material = self.c.material;
         Ok(match kind {
             "ShaderNodeBsdfPrincipled" => {
-                self.default_normal(node, "Normal")?;
+                self.normal(node, "Normal")?;
                 let alpha = self.float(node, "Alpha", 0.0, 1.0)?;
                 for (id, default, what) in [
                     ("Subsurface Weight", 0.0, "no subsurface scattering yet"),
@@ -640,18 +660,18 @@ impl<'c, 'a> Lowering<'c, 'a> {
                 (t, emission)
             }
             "ShaderNodeBsdfDiffuse" => {
-                self.default_normal(node, "Normal")?;
+                self.normal(node, "Normal")?;
                 let color = self.color(node, "Color")?;
                 (Template::Diffuse { color, roughness: self.float(node, "Roughness", 0.0, 1.0)? }, None)
             }
             "ShaderNodeBsdfAnisotropic" | "ShaderNodeBsdfGlossy" => {
-                self.default_normal(node, "Normal")?;
+                self.normal(node, "Normal")?;
                 self.ignored(node, "Anisotropy", 0.0, "no anisotropy yet")?;
                 let color = self.color(node, "Color")?;
                 (Template::Glossy { color, roughness: self.float(node, "Roughness", 0.0, 1.0)? }, None)
             }
             "ShaderNodeBsdfGlass" | "ShaderNodeBsdfRefraction" => {
-                self.default_normal(node, "Normal")?;
+                self.normal(node, "Normal")?;
                 if kind == "ShaderNodeBsdfRefraction" {
                     self.c.warn(node, "Refraction BSDF is rendered as Glass (its reflection is kept)");
                 }
@@ -660,11 +680,11 @@ impl<'c, 'a> Lowering<'c, 'a> {
                 (Template::Glass { color, roughness, ior: self.ior(node, "IOR")? }, None)
             }
             "ShaderNodeBsdfTranslucent" => {
-                self.default_normal(node, "Normal")?;
+                self.normal(node, "Normal")?;
                 (Template::Translucent { color: self.color(node, "Color")? }, None)
             }
             "ShaderNodeBsdfSheen" => {
-                self.default_normal(node, "Normal")?;
+                self.normal(node, "Normal")?;
                 let color = self.color(node, "Color")?;
                 (Template::Sheen { color, roughness: self.float(node, "Roughness", 0.0, 1.0)? }, None)
             }
@@ -722,7 +742,13 @@ impl<'c, 'a> Lowering<'c, 'a> {
         if matches!(weight, F::C(w) if w <= 0.0) {
             return Ok(None);
         }
-        self.default_normal(node, "Coat Normal")?;
+        if self.c.linked(node, "Coat Normal").is_some() {
+            let coat = self.c.input_reg(node, "Coat Normal")?;
+            let base = self.c.linked(node, "Normal").map(|_| self.c.input_reg(node, "Normal")).transpose()?;
+            if base != Some(coat) {
+                self.c.warn(node, "a linked Coat Normal is not supported yet (the coat uses the surface's Normal)");
+            }
+        }
         Ok(Some(CoatT {
             weight,
             roughness: self.float(node, "Coat Roughness", 0.0, 1.0)?,
@@ -808,14 +834,16 @@ impl<'c, 'a> Lowering<'c, 'a> {
 pub fn lower_surface(
     c: &mut Compiler,
     surface: Option<&(usize, String)>,
-) -> Result<(Template, Option<SpectrumDesc>, Option<Vec<EmissionTerm>>)> {
-    let Some((node, out)) = surface else { return Ok((Template::Fixed(BsdfDesc::None), None, None)) };
+) -> Result<(Template, Option<SpectrumDesc>, Option<Vec<EmissionTerm>>, Option<Reg>)> {
+    let Some((node, out)) = surface else { return Ok((Template::Fixed(BsdfDesc::None), None, None, None)) };
     let mut l = Lowering::new(c);
     let (t, emission) = l.closure(*node, out, 0)?;
-    Ok(match emission {
+    let normal = l.shading_normal();
+    let (t, e, v) = match emission {
         None => (t, None, None),
         Some(Emission::Rgb(c)) => (t, Some(SpectrumDesc::new(SpectrumKind::Rgb { rgb: c.to_array() })), None),
         Some(Emission::Spectrum(d)) => (t, Some(d), None),
         Some(Emission::Varying(terms)) => (t, None, Some(terms)),
-    })
+    };
+    Ok((t, e, v, normal))
 }

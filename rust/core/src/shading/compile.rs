@@ -11,7 +11,7 @@ use super::program::{AttributeRequest, Convert, Instr, Kernel, Program, Reg};
 use super::props::Props;
 use super::sockets::{self, Implicit, SocketType};
 use super::texture::{Image, Interpolation, ProceduralNode, ProceduralSlot};
-use super::vector::{MappingType, NormalMapSpace, VectorOp};
+use super::vector::{Bump, MappingType, NormalMapSpace, VectorOp};
 use crate::material::texture::{Texture, Wrap};
 use crate::material::IorDesc;
 use crate::procedural::Procedural;
@@ -383,17 +383,27 @@ impl<'a> Compiler<'a> {
                         ("TANGENT", Tangent),
                         ("OBJECT", Object),
                         ("WORLD", World),
-                        ("BLENDER_OBJECT", Object),
-                        ("BLENDER_WORLD", World),
+                        ("BLENDER_OBJECT", BlenderObject),
+                        ("BLENDER_WORLD", BlenderWorld),
                     ],
                     Tangent,
                 )?;
                 Kernel::Vector(VectorOp::NormalMap(s))
             }
             "ShaderNodeBump" => {
-                self.warn(node, "Bump is not evaluated yet; its Normal input passes through");
-                let r = self.input_reg(node, "Normal")?;
-                return Ok(vec![r]);
+                // The height's derivative from the height program at offset points
+                // (vector::Bump); a constant height leaves the Normal input as it is.
+                let invert = p.boolean("invert", false)?;
+                let strength = self.input_reg(node, "Strength")?;
+                let distance = self.input_reg(node, "Distance")?;
+                let height = self.input_reg(node, "Height")?;
+                let normal = self.input_reg(node, "Normal")?;
+                if self.const_of(height).is_some() {
+                    return Ok(vec![normal]);
+                }
+                self.attribute(node, AttributeRequest::Differentials)?;
+                let bump = Bump { height: self.program.pruned_for(height), reg: height, invert };
+                return Ok(self.emit(Kernel::Bump(Box::new(bump)), vec![strength, distance, normal], 1));
             }
             "ShaderNodeTexImage" | "ShaderNodeTexEnvironment" => Kernel::Image(Box::new(self.image(node, &p)?)),
             k if k.starts_with("ShaderNodeTex") => {

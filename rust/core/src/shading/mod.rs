@@ -35,6 +35,9 @@ pub struct CompiledMaterial {
     /// An emission that varies over the surface: RGB terms over the program's
     /// registers, evaluated per hit (`emission::GraphEmission`).
     pub varying_emission: Option<Vec<closure::EmissionTerm>>,
+    /// The register of a linked Normal input (Normal Map, Bump, any vector): the
+    /// shading normal at each hit, in world space facing the ray's side.
+    pub normal: Option<program::Reg>,
     pub program: Program,
     pub warnings: Vec<String>,
 }
@@ -53,7 +56,8 @@ pub fn compile_material(name: &str, graph: &GraphDesc, textures: &[Arc<Texture>]
     if graph.output.volume.is_some() || graph.output.displacement.is_some() {
         c.warnings.push(format!("material '{name}': volume and displacement outputs are not supported yet (ignored)"));
     }
-    let (mut template, emission, varying_emission) = closure::lower_surface(&mut c, graph.output.surface.as_ref())?;
+    let (mut template, emission, varying_emission, normal) =
+        closure::lower_surface(&mut c, graph.output.surface.as_ref())?;
     let mut transparency = None;
     if let Some((p, color, rest)) = template.split_transparent() {
         transparency = Some((p, color));
@@ -69,6 +73,7 @@ pub fn compile_material(name: &str, graph: &GraphDesc, textures: &[Arc<Texture>]
         template,
         emission,
         varying_emission,
+        normal,
         transparency,
         program: c.program,
         warnings: c.warnings,

@@ -45,6 +45,41 @@ pub struct ShadingPoint {
     /// The values of the program's attribute slots (`Program::attributes`) at this hit,
     /// RGBA (UV maps in .xy, scalars in .x).
     pub attributes: [[f32; 4]; MAX_ATTRIBUTES],
+    /// Two small steps across the surface (filled only for a program that requests
+    /// [`AttributeRequest::Differentials`], the Bump node's): how every interpolated
+    /// quantity above changes when the point moves by a step within its triangle.
+    pub diff: [Delta; 2],
+}
+
+/// The change of a shading point's interpolated data over one step across the surface
+/// (`ShadingPoint::diff`), in the same spaces as the fields it offsets.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Delta {
+    pub position: Vec3,
+    pub object_position: Vec3,
+    pub generated: Vec3,
+    pub uv: Vec2,
+    pub attributes: [[f32; 4]; MAX_ATTRIBUTES],
+}
+
+impl ShadingPoint {
+    /// The shading point `s` steps `diff[k]` away (the Bump node's offset evaluations,
+    /// in the spirit of Cycles' `svm_node_tex_coord_bump_dx`/`_dy`, which offset the
+    /// point by its ray differential).
+    pub fn offset(&self, k: usize, s: f32) -> ShadingPoint {
+        let d = &self.diff[k];
+        let mut o = *self;
+        o.position += s * d.position;
+        o.object_position += s * d.object_position;
+        o.generated += s * d.generated;
+        o.uv += s * d.uv;
+        for (a, da) in o.attributes.iter_mut().zip(&d.attributes) {
+            for (x, dx) in a.iter_mut().zip(da) {
+                *x += s * dx;
+            }
+        }
+        o
+    }
 }
 
 /// Most per-vertex attributes one material reads.
@@ -73,6 +108,7 @@ impl Default for ShadingPoint {
             material_index: 0.0,
             object_random: 0.0,
             attributes: [[0.0; 4]; MAX_ATTRIBUTES],
+            diff: [Delta::default(); 2],
         }
     }
 }
@@ -86,6 +122,8 @@ pub enum AttributeRequest {
     Color(String),
     /// A generic attribute (Attribute node).
     Generic(String),
+    /// Not mesh data: asks the walk to fill `ShadingPoint::diff` (Bump). Its slot reads 0.
+    Differentials,
 }
 
 /// Value conversions Blender applies on links between sockets of different types.
@@ -115,6 +153,7 @@ pub enum Kernel {
     Vector(vector::VectorOp),
     Image(Box<texture::Image>),
     Procedural(Box<texture::ProceduralNode>),
+    Bump(Box<vector::Bump>),
 }
 
 impl Kernel {
@@ -123,6 +162,7 @@ impl Kernel {
         match self {
             Kernel::Input(_) => true,
             Kernel::Vector(v) => v.varying(),
+            Kernel::Bump(_) => true,
             _ => false,
         }
     }
@@ -148,6 +188,7 @@ impl Kernel {
             Kernel::Vector(k) => k.eval(i, o, sp),
             Kernel::Image(k) => k.eval(i, o),
             Kernel::Procedural(k) => k.eval(i, o),
+            Kernel::Bump(k) => k.eval(i, o, sp),
         }
     }
 }

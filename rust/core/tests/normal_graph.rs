@@ -1,0 +1,137 @@
+//! A graph's Normal input shades the surface (docs/shading.md, "Normal Map and Bump"):
+//! closed forms for a Lambertian plane under a sun whose shading normal is tilted by a
+//! Normal Map or by the Bump of a linear height, and no light through the back.
+
+mod common;
+
+use common::*;
+use polychrome_core::camera::{CameraDesc, Projection};
+use polychrome_core::render::{render, RenderControl, ResolvedSettings};
+use polychrome_core::scene::{BsdfDesc, Buffer, LightDesc, MaterialDesc, SceneDesc};
+use polychrome_core::spectrum::SpectrumDesc;
+use serde_json::json;
+
+/// A Diffuse BSDF (grey 0.5) whose Normal is linked from `normal` (nodes before it).
+fn diffuse_with_normal(mut nodes: Vec<serde_json::Value>) -> BsdfDesc {
+    let mut bsdf = json!({"type": "ShaderNodeBsdfDiffuse", "name": "D", "inputs": {"Color": [0.5, 0.5, 0.5, 1.0]}});
+    if !nodes.is_empty() {
+        bsdf["inputs"]["Normal"] = json!({"link": [nodes.len() - 1, "Normal"]});
+    }
+    nodes.push(bsdf);
+    let surface = nodes.len() - 1;
+    BsdfDesc::Graph(serde_json::from_value(json!({"nodes": nodes, "output": {"surface": [surface, "BSDF"]}})).unwrap())
+}
+
+/// Mean luminance of a plane z = 0 under a sun shining along `sun`, seen from above.
+fn plane_under_sun(bsdf: BsdfDesc, sun: [f32; 3]) -> f64 {
+    let mut desc = SceneDesc::default();
+    let mut buffers: Vec<Buffer> = Vec::new();
+    desc.materials.push(MaterialDesc {
+        name: "plane".into(),
+        bsdf,
+        emission: None,
+        volume: None,
+        one_sided: false,
+        see_through: false,
+    });
+    let s = 4.0;
+    add_mesh(
+        &mut desc,
+        &mut buffers,
+        "plane",
+        vec![-s, -s, 0.0, s, -s, 0.0, s, s, 0.0, -s, s, 0.0],
+        vec![0, 1, 2, 0, 2, 3],
+        0,
+    );
+    desc.lights.push(LightDesc::Distant {
+        name: "sun".into(),
+        direction: sun,
+        irradiance: SpectrumDesc::constant(2.0),
+        angle: 0.0,
+        visibility: Default::default(),
+    });
+    desc.camera = CameraDesc {
+        projection: Projection::Orthographic,
+        ortho_scale: 2.0,
+        to_world: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 5.0], [0.0, 0.0, 0.0, 1.0]],
+        ..Default::default()
+    };
+    let settings = ResolvedSettings { width: 8, height: 8, samples: 2, max_bounces: 1, ..Default::default() };
+    let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
+    assert_eq!(out.stats.nonfinite_samples, 0);
+    let (mean, _) = mean_and_standard_error(&out.images.rgba);
+    mean
+}
+
+/// A world-space Normal Map of a constant colour: the unit normal (sin t, 0, cos t).
+fn world_normal_map(t: f32) -> Vec<serde_json::Value> {
+    let c = [0.5 + 0.5 * t.sin(), 0.5, 0.5 + 0.5 * t.cos(), 1.0];
+    vec![json!({"type": "ShaderNodeNormalMap", "name": "NM", "props": {"space": "WORLD"}, "inputs": {"Color": c}})]
+}
+
+/// A sun straight down on a Lambertian plane with shading normal tilted by t gives
+/// L = ρ/π · E · cos t: the tilted plane over the untilted one is cos t (t < π/4: seen
+/// from straight above, a larger tilt would mirror the view below the surface, and the
+/// normal is bent back, as in Cycles).
+#[test]
+fn a_tilted_normal_scales_the_radiance_by_the_cosine() {
+    let flat = plane_under_sun(diffuse_with_normal(vec![]), [0.0, 0.0, -1.0]);
+    // Untilted: ρ/π · E with the grey 0.5 uplifted (a flat reflectance of 0.5).
+    let expected = 0.5 / std::f64::consts::PI * 2.0;
+    assert!((flat - expected).abs() < 1e-2 * expected, "flat {flat} vs {expected}");
+    for t in [0.3f32, 0.5, 0.75] {
+        let tilted = plane_under_sun(diffuse_with_normal(world_normal_map(t)), [0.0, 0.0, -1.0]);
+        let ratio = tilted / flat;
+        assert!((ratio - f64::from(t.cos())).abs() < 2e-3, "tilt {t}: ratio {ratio} vs cos {}", t.cos());
+    }
+}
+
+/// Bump of the height h = k·x (Geometry › Position › X × k) at Distance 1 tilts the
+/// normal to (−k, 0, 1)/√(1 + k²) (Cycles svm_node_set_bump in the limit): a sun
+/// straight down gives cos = 1/√(1 + k²), Invert the same, Strength 0 the flat plane.
+#[test]
+fn bump_of_a_linear_height_tilts_the_normal_by_its_gradient() {
+    let flat = plane_under_sun(diffuse_with_normal(vec![]), [0.0, 0.0, -1.0]);
+    let k = 0.75f32;
+    let bump = |strength: f32, invert: bool| {
+        vec![
+            json!({"type": "ShaderNodeNewGeometry", "name": "G"}),
+            json!({"type": "ShaderNodeSeparateXYZ", "name": "S", "inputs": {"Vector": {"link": [0, "Position"]}}}),
+            json!({"type": "ShaderNodeMath", "name": "K", "props": {"operation": "MULTIPLY"},
+                   "inputs": {"Value": {"link": [1, "X"]}, "Value_001": k}}),
+            json!({"type": "ShaderNodeBump", "name": "B", "props": {"invert": invert},
+                   "inputs": {"Strength": strength, "Distance": 1.0, "Height": {"link": [2, "Value"]}}}),
+        ]
+    };
+    let expected = 1.0 / (1.0 + f64::from(k * k)).sqrt();
+    for invert in [false, true] {
+        let r = plane_under_sun(diffuse_with_normal(bump(1.0, invert)), [0.0, 0.0, -1.0]) / flat;
+        assert!((r - expected).abs() < 2e-3, "invert {invert}: ratio {r} vs {expected}");
+    }
+    // The tilt's direction: a sun from +x (towards −x) lights the normal that leans to −x
+    // less than the flat plane, and the inverted bump more.
+    let sun = [-0.5f32.sin(), 0.0, -0.5f32.cos()];
+    let lean = |invert| plane_under_sun(diffuse_with_normal(bump(1.0, invert)), sun);
+    let n = glam::Vec3::new(-k, 0.0, 1.0).normalize();
+    let l = glam::Vec3::new(0.5f32.sin(), 0.0, 0.5f32.cos());
+    let flat_sun = plane_under_sun(diffuse_with_normal(vec![]), sun);
+    let want = f64::from(n.dot(l) / l.z);
+    assert!((lean(false) / flat_sun - want).abs() < 3e-3, "{} vs {want}", lean(false) / flat_sun);
+    let n_inv = glam::Vec3::new(k, 0.0, 1.0).normalize();
+    let want_inv = f64::from(n_inv.dot(l) / l.z);
+    assert!((lean(true) / flat_sun - want_inv).abs() < 3e-3, "{} vs {want_inv}", lean(true) / flat_sun);
+    let r0 = plane_under_sun(diffuse_with_normal(bump(0.0, false)), [0.0, 0.0, -1.0]) / flat;
+    assert!((r0 - 1.0).abs() < 1e-3, "strength 0: {r0}");
+}
+
+/// No light leaks: a sun below the plane, with the shading normal tilted towards it
+/// (so that the light is above the shading normal's horizon), leaves the top black.
+#[test]
+fn a_tilted_normal_does_not_let_light_through_the_back() {
+    let t = 1.2f32;
+    // Light travelling up and towards −x: it comes from below, at 0.45 rad from the
+    // horizon, where the tilted normal (sin 1.2, 0, cos 1.2) sees it above its horizon.
+    let sun = [-(0.45f32.cos()), 0.0, 0.45f32.sin()];
+    let l = plane_under_sun(diffuse_with_normal(world_normal_map(t)), sun);
+    assert_eq!(l, 0.0, "light leaked through the plane: {l}");
+}
