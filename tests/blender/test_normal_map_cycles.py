@@ -49,8 +49,8 @@ def test_normal_mapped_and_bumped_spheres_match_cycles(tmp_path):
         return nm.outputs['Normal']
 
     def bump():
-        noise = nt.nodes.new('ShaderNodeTexNoise'); noise.inputs['Scale'].default_value = 2.5
-        b = nt.nodes.new('ShaderNodeBump'); b.inputs['Distance'].default_value = 0.15
+        noise = nt.nodes.new('ShaderNodeTexNoise'); noise.inputs['Scale'].default_value = 3.0
+        b = nt.nodes.new('ShaderNodeBump'); b.inputs['Distance'].default_value = 0.5
         nt.links.new(noise.outputs['Fac'], b.inputs['Height'])
         return b.outputs['Normal']
 
