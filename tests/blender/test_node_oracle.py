@@ -207,7 +207,7 @@ def test_normal_map_and_bump_match_cycles_per_pixel(tmp_path):
     bad_warnings = [w for w in r["warnings"] if "not supported" in w or "(ShaderNodeBump)" in w or "(ShaderNodeNormalMap)" in w]
     assert not bad_warnings, bad_warnings
     rows = errors(r)
-    for f, label, e, tol, c, p in rows:
+    for f, label, e, _tol, c, p in rows:
         print(f"{f} {label}: error {e:.3g} (Cycles {c}, Polychrome {p})")
     bad = [f"{f} {label}: error {e:.3g} > {tol:g} (Cycles {c}, Polychrome {p})" for f, label, e, tol, c, p in rows if not e <= tol]
     assert not bad, "\n".join(bad)
