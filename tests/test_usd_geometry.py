@@ -48,15 +48,16 @@ def stage_with_reference(path):
     return stage, mat, cam
 
 
-def render(path, **kw):
+def render(path, samples=32, unit_box=None, **kw):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         scene = usd.read_stage(path, **kw)
-    result = pc.render(scene, width=N, height=N, samples=32, max_bounces=0, seed=3)
+    result = pc.render(scene, width=N, height=N, samples=samples, max_bounces=0, seed=3)
     assert result.stats["nonfinite_samples"] == 0
     y = luminance(result.rgba)
     # Coverage: the reference square's light per area is 1.
-    unit = region_sum(y, REF_CENTRE[0] - 0.3, REF_CENTRE[0] + 0.3, REF_CENTRE[1] - 0.3, REF_CENTRE[1] + 0.3) / (4 * REF_HALF**2)
+    box = unit_box or (REF_CENTRE[0] - 0.3, REF_CENTRE[0] + 0.3, REF_CENTRE[1] - 0.3, REF_CENTRE[1] + 0.3)
+    unit = region_sum(y, *box) / (4 * REF_HALF**2)
     return y / unit
 
 
@@ -174,3 +175,74 @@ def test_bad_curve_data_raises_value_error_naming_the_prim(tmp_path):
     stage.Save()
     with pytest.raises(ValueError, match=r"prim /hair: curveVertexCounts add up to 4 but there are 3 points"):
         usd.read_stage(path)
+
+
+W, D, X0, Y = 0.2, 0.8, -0.5, -0.5  # a square of side W at (X0, Y) travels D along +x over the shutter
+
+
+def moving_square_stage(path, how, shutter=(0.0, 1.0)):
+    stage, mat, cam = stage_with_reference(path)
+    cam.CreateShutterOpenAttr(shutter[0])
+    cam.CreateShutterCloseAttr(shutter[1])
+    sq = floor_mesh(stage, "/square", W / 2, mat)
+    if how == "xform":
+        op = sq.AddTranslateOp()
+        op.Set(Gf.Vec3d(X0, Y, 0), 0.0)
+        op.Set(Gf.Vec3d(X0 + D, Y, 0), 1.0)
+    elif how == "camera":  # the camera moves −D: the still square moves +D in the image
+        sq.AddTranslateOp().Set(Gf.Vec3d(X0, Y, 0))
+        op = cam.GetOrderedXformOps()[0]
+        op.Set(Gf.Vec3d(0, 0, 4), 0.0)
+        op.Set(Gf.Vec3d(-D, 0, 4), 1.0)
+    else:  # deformation: the points themselves are time-sampled
+        pts = np.array(sq.GetPointsAttr().Get(), float)
+        sq.GetPointsAttr().Set([tuple(p) for p in pts + [X0, Y, 0]], 0.0)
+        sq.GetPointsAttr().Set([tuple(p) for p in pts + [X0 + D, Y, 0]], 1.0)
+    stage.Save()
+    return path
+
+
+def smear(x):
+    """Share of the shutter for which x is covered: |[x − W/2, x + W/2] ∩ [X0, X0 + D]| / D."""
+    lo, hi = np.maximum(x - W / 2, X0), np.minimum(x + W / 2, X0 + D)
+    return np.clip(hi - lo, 0.0, None) / D
+
+
+@pytest.mark.parametrize("how", ["xform", "points", "camera"])
+def test_moving_square_smears_into_its_analytic_streak(tmp_path, how):
+    path = moving_square_stage(tmp_path / f"moving_{how}.usda", how)
+    # (The reference square smears too when the camera moves: its whole streak is the unit.)
+    cover = render(path, samples=128, unit_box=(-0.95, 0.95, 0.3, 0.9), time=0)
+    x, y = centres()
+    rows = np.abs(y - Y) < W / 2 - VIEW / N  # rows wholly inside the square's band
+    profile = cover[rows][:, x > -0.9].mean(axis=0)
+    xs = x[x > -0.9]
+    fine = (np.arange(16) + 0.5) / 16 * VIEW / N - VIEW / N / 2
+    want = np.array([smear(c + fine).mean() for c in xs])
+    err = float(np.abs(profile - want).max())
+    # The streak's length at half its height: D for a trapezoid of ramps W < D.
+    above = np.nonzero(profile > 0.5 * W / D)[0]
+    i, j = above[0], above[-1]
+    half = 0.5 * W / D
+    left = xs[i - 1] + (half - profile[i - 1]) / (profile[i] - profile[i - 1]) * (xs[i] - xs[i - 1])
+    right = xs[j] + (profile[j] - half) / (profile[j] - profile[j + 1]) * (xs[j + 1] - xs[j])
+    length = float(right - left)
+    plateau = float(profile[np.abs(xs - (X0 + D / 2)) < (D - W) / 2 - 0.02].mean())
+    area = region_sum(cover, -0.9, 1, -1, -0.2)
+    print(
+        f"{how}: max |profile − analytic| {err:.4f}, streak (at half height) {length:.4f} / {D:.4f}, plateau {plateau:.4f} / {W / D:.4f}, area {area:.5f} / {W * W:.5f}"
+    )
+    assert err < 0.06
+    assert length == pytest.approx(D, abs=0.5 * VIEW / N)
+    assert plateau == pytest.approx(W / D, abs=0.015)
+    assert area == pytest.approx(W * W, rel=0.03)
+
+
+def test_closed_shutter_reads_one_sample(tmp_path):
+    """No shutter (close = open): the earliest sample, sharp — where the square starts."""
+    path = moving_square_stage(tmp_path / "still.usda", "xform", shutter=(0.0, 0.0))
+    scene = usd.read_stage(path)
+    desc, _ = scene.description()
+    square = [i for i in desc["instances"] if i["name"] == "/square"][0]
+    assert not square.get("motion")
+    assert np.allclose(np.asarray(square["transform"])[:3, 3], [X0, Y, 0])

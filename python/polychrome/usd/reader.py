@@ -232,7 +232,9 @@ class _Reader:
         self.material_index: dict[str, int] = {}
         self.default_materials: dict[Any, int] = {}
         self.meshes: dict[str, dict[str, Any]] = {}
-        self.instances: list[tuple[str, np.ndarray, str]] = []
+        self.instances: list[tuple] = []  # (mesh key, matrix, name[, visibility[, prim that moves]])
+        self.mesh_prims: dict[str, Any] = {}
+        self.key_caches: dict[float, Any] = {}
         self.lights: list[Any] = []
         self.world = None
         self.world_texture: dict[str, Any] | None = None
@@ -994,6 +996,7 @@ class _Reader:
         if key not in self.meshes:
             arrays = self.mesh_arrays(prim)
             self.meshes[key] = arrays  # type: ignore[assignment]
+            self.mesh_prims[key] = prim
         return key if self.meshes[key] is not None else None
 
     def instance_name(self, prim) -> str:
@@ -1011,7 +1014,7 @@ class _Reader:
         key = self.mesh_key(prim)
         if key is None:
             return
-        self.instances.append((key, self.world_matrix(prim), self.instance_name(prim)))
+        self.instances.append((key, self.world_matrix(prim), self.instance_name(prim), None, prim))
 
     def read_point_instancer(self, prim) -> None:
         UsdGeom, Usd = self.UsdGeom, self.Usd
@@ -1435,6 +1438,119 @@ class _Reader:
             **dof,
         )
 
+    # -- motion ---------------------------------------------------------------------------
+    def shutter_times(self, cam_prim, settings: dict[str, Any]) -> tuple[float, float] | None:
+        """The shutter in time codes: the camera's ``shutter:open`` / ``shutter:close``
+        (offsets from the frame, UsdGeomCamera) around the frame read — the ``time``
+        asked for, else the stage's ``startTimeCode`` (0 when unauthored) — or None when it
+        does not open (close ≤ open, no camera, or the render settings'
+        ``disableMotionBlur`` / ``instantaneousShutter``)."""
+        if cam_prim is None:
+            return None
+        sp = self.stage.GetPrimAtPath(settings["_settings_prim"]) if settings.get("_settings_prim") else None
+        if sp:
+            for name in ("disableMotionBlur", "instantaneousShutter"):
+                if self.get(sp.GetAttribute(name), False):
+                    return None
+        cam = self.UsdGeom.Camera(cam_prim)
+        t_open = float(self.get(cam.GetShutterOpenAttr(), 0.0))
+        t_close = float(self.get(cam.GetShutterCloseAttr(), 0.0))
+        if not (math.isfinite(t_open) and math.isfinite(t_close)):
+            raise self.error(cam_prim, "shutter:open / shutter:close is not finite")
+        if not t_close > t_open:
+            return None
+        if self.time.IsEarliestTime():
+            base = float(self.stage.GetStartTimeCode()) if self.stage.HasAuthoredTimeCodeRange() else 0.0
+        else:
+            base = float(self.time.GetValue())
+        return base + t_open, base + t_close
+
+    @staticmethod
+    def key_count(sample_times, t0: float, t1: float) -> int:
+        """Keys evenly spaced over the shutter: 3 (as Cycles' camera), two more per time
+        sample inside it, at most 17."""
+        inside = sum(1 for t in sample_times if t0 < t < t1)
+        return min(17, 3 + 2 * inside)
+
+    def key_matrix(self, prim, t: float) -> np.ndarray:
+        if t not in self.key_caches:
+            self.key_caches[t] = self.UsdGeom.XformCache(self.Usd.TimeCode(t))
+        m = np.array(self.key_caches[t].GetLocalToWorldTransform(prim), dtype=np.float64).T
+        if not self.identity_correction:
+            m = self.correction @ m
+        if not np.all(np.isfinite(m)):
+            raise self.error(prim, f"its transform at time {t:g} is not finite")
+        return m
+
+    def transform_motion(self, prim, shutter) -> list[np.ndarray] | None:
+        """Object → world keys over the shutter when the prim's (or an ancestor's) local
+        transform is time-sampled; None when it stands still."""
+        times: set[float] = set()
+        varying = False
+        interval = self.Gf.Interval(shutter[0], shutter[1])
+        p = prim
+        while p and p.IsValid() and not p.IsPseudoRoot():
+            x = self.UsdGeom.Xformable(p)
+            if x:
+                for op in x.GetOrderedXformOps():
+                    attr = op.GetAttr()
+                    if attr.ValueMightBeTimeVarying():
+                        varying = True
+                        times.update(attr.GetTimeSamplesInInterval(interval))
+                if x.GetResetXformStack():
+                    break
+            p = p.GetParent()
+        if not varying:
+            return None
+        k = self.key_count(times, *shutter)
+        keys = [self.key_matrix(prim, t) for t in np.linspace(shutter[0], shutter[1], k)]
+        if all(np.allclose(keys[0], m, rtol=0, atol=1e-9) for m in keys[1:]):
+            return None
+        return keys
+
+    def deformation(self, key: str, shutter) -> dict[str, np.ndarray] | None:
+        """motion_vertices (and motion_normals) of a mesh whose own attributes (points,
+        widths, radius, ...) are time-sampled: the shape re-read at each key; None when it
+        keeps its shape, or (one warning) when its topology changes over the shutter."""
+        prim = self.mesh_prims.get(key)
+        base = self.meshes[key]
+        if prim is None or base is None:
+            return None
+        interval = self.Gf.Interval(shutter[0], shutter[1])
+        times: set[float] = set()
+        varying = False
+        for attr in prim.GetAttributes():
+            name = attr.GetName()
+            if name.startswith("xformOp") or name in ("visibility", "purpose", "extent") or name.startswith("primvars:display"):
+                continue
+            if attr.ValueMightBeTimeVarying():
+                varying = True
+                times.update(attr.GetTimeSamplesInInterval(interval))
+        if not varying:
+            return None
+        frame = self.time
+        shapes = []
+        try:
+            for t in np.linspace(shutter[0], shutter[1], self.key_count(times, *shutter)):
+                self.time = self.Usd.TimeCode(float(t))
+                shapes.append(self.mesh_arrays(prim))
+        finally:
+            self.time = frame
+        n = len(base["vertices"])
+        if any(a is None or len(a["vertices"]) != n or len(a["triangles"]) != len(base["triangles"]) for a in shapes):
+            self.warn(
+                f"topology:{prim.GetPath()}",
+                f"prim {prim.GetPath()}: its topology changes over the shutter; its deformation is not blurred",
+            )
+            return None
+        verts = np.stack([a["vertices"] for a in shapes])
+        if np.array_equal(verts.min(axis=0), verts.max(axis=0)):
+            return None
+        out = {"motion_vertices": verts}
+        if base["normals"] is not None and all(a["normals"] is not None and a["normals"].shape == base["normals"].shape for a in shapes):
+            out["motion_normals"] = np.stack([a["normals"] for a in shapes])
+        return out
+
     # -- the whole stage ------------------------------------------------------------------
     def read(self):
         from ..scene import Camera, Scene
@@ -1501,6 +1617,14 @@ class _Reader:
         else:
             self.warn("camera", "the stage has no UsdGeom.Camera; the default camera at the origin looking down −Z is used")
             scene.camera = Camera()
+        # Motion blur over the camera's shutter (docs/usd.md, "Motion").
+        shutter = self.shutter_times(cam_prim, settings)
+        if shutter is not None:
+            cam_keys = self.transform_motion(cam_prim, shutter)
+            if cam_keys is not None:
+                for m in cam_keys:  # camera scale does not change the view (read_camera)
+                    m[:3, :3] /= np.linalg.norm(m[:3, :3], axis=0)
+                scene.camera.motion = cam_keys
 
         order = sorted(
             self.meshes,
@@ -1525,9 +1649,13 @@ class _Reader:
                 place=False,
                 uv_maps=m.get("uv_maps"),
                 attributes=m.get("attributes"),
+                **((shutter and self.deformation(key, shutter)) or {}),
             )
-        for key, matrix, name, *visibility in self.instances:
-            scene.add_instance(index[key], matrix, name, visibility=visibility[0] if visibility else None)
+        for key, matrix, name, *rest in self.instances:
+            visibility = rest[0] if rest else None
+            moving = rest[1] if len(rest) > 1 else None
+            motion = self.transform_motion(moving, shutter) if moving is not None and shutter is not None else None
+            scene.add_instance(index[key], matrix, name, visibility=visibility, motion=motion)
         for light in self.lights:
             scene.add_light(light)
         if self.world_texture is not None:
