@@ -246,3 +246,46 @@ def test_closed_shutter_reads_one_sample(tmp_path):
     square = [i for i in desc["instances"] if i["name"] == "/square"][0]
     assert not square.get("motion")
     assert np.allclose(np.asarray(square["transform"])[:3, 3], [X0, Y, 0])
+
+
+def test_two_full_turns_over_the_shutter_smear_into_a_disk(tmp_path):
+    """A clock hand of length a and width b turning 720° about its end (two rotateZ
+    samples, 0° and 720°, whose transforms are equal: keys are added until neighbours
+    turn ≤ 45°) covers radius ρ for a share asin(b / 2ρ) / π of the shutter (b/2 < ρ < a),
+    the same in every direction."""
+    a, b, centre = 0.35, 0.04, (0.4, -0.5)
+    path = tmp_path / "spin.usda"
+    stage, mat, cam = stage_with_reference(path)
+    cam.CreateShutterOpenAttr(0.0)
+    cam.CreateShutterCloseAttr(1.0)
+    bar = UsdGeom.Mesh.Define(stage, "/bar")
+    bar.CreatePointsAttr([(0, -b / 2, 0), (a, -b / 2, 0), (a, b / 2, 0), (0, b / 2, 0)])
+    bar.CreateFaceVertexCountsAttr([4])
+    bar.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
+    bind(bar, mat)
+    bar.AddTranslateOp().Set(Gf.Vec3d(*centre, 0))
+    spin = bar.AddRotateZOp()
+    spin.Set(0.0, 0.0)
+    spin.Set(720.0, 1.0)
+    stage.Save()
+    cover = render(path, samples=128, time=0)
+    x, y = centres()
+    gx, gy = np.meshgrid(x - centre[0], y - centre[1])
+    rho = np.hypot(gx, gy)
+    want = np.arcsin(np.clip(b / (2 * np.maximum(rho, 1e-9)), 0, 1)) / math.pi
+    errs = []
+    for r0 in np.arange(0.06, a - 0.03, 0.03):  # the formula holds inside ρ < a
+        ring = (rho >= r0) & (rho < r0 + 0.03)
+        errs.append(abs(float(cover[ring].mean() - want[ring].mean())))
+    near = (rho > b) & (rho < a - 0.02)
+    quadrants = [
+        float(cover[q].sum() / want[q].sum())
+        for q in (near & (np.sign(gx) == sx) & (np.sign(gy) == sy) for sx in (-1, 1) for sy in (-1, 1))
+    ]
+    area = region_sum(cover, -0.1, 1, -1, 0.0)
+    print(
+        f"spin: max ring |coverage − analytic| {max(errs):.4f}, quadrants / analytic {np.round(quadrants, 3)}, area {area:.5f} / {a * b:.5f}"
+    )
+    assert max(errs) < 0.01
+    assert all(abs(q - 1) < 0.05 for q in quadrants)
+    assert area == pytest.approx(a * b, rel=0.03)

@@ -53,6 +53,10 @@ _SILENT_TYPES = {
     "PhysicsScene",
     "Backdrop",
 }
+#: Motion keys over the shutter: at most this many, and enough that neighbours turn by
+#: at most MAX_KEY_TURN (radians).
+MAX_MOTION_KEYS = 33
+MAX_KEY_TURN = math.pi / 4
 #: Prims the reader turns into triangle meshes.
 GEOMETRY_TYPES = ("Mesh", "Sphere", "Cube", "Cylinder", "Cone", "Capsule", "Capsule_1", "Plane", "BasisCurves", "Points")
 _LIGHTS_SKIPPED = {"CylinderLight", "GeometryLight", "PortalLight", "PluginLight", "MeshLight", "VolumeLight"}
@@ -1468,7 +1472,7 @@ class _Reader:
     @staticmethod
     def key_count(sample_times, t0: float, t1: float) -> int:
         """Keys evenly spaced over the shutter: 3 (as Cycles' camera), two more per time
-        sample inside it, at most 17."""
+        sample inside it, at most 17 (transform_motion adds keys for fast turns)."""
         inside = sum(1 for t in sample_times if t0 < t < t1)
         return min(17, 3 + 2 * inside)
 
@@ -1488,6 +1492,7 @@ class _Reader:
         times: set[float] = set()
         varying = False
         interval = self.Gf.Interval(shutter[0], shutter[1])
+        angles = []  # time-varying rotateX/Y/Z/XYZ/... ops: USD interpolates their angles
         p = prim
         while p and p.IsValid() and not p.IsPseudoRoot():
             x = self.UsdGeom.Xformable(p)
@@ -1497,13 +1502,29 @@ class _Reader:
                     if attr.ValueMightBeTimeVarying():
                         varying = True
                         times.update(attr.GetTimeSamplesInInterval(interval))
+                        if op.GetOpName().split(":")[1].startswith("rotate"):
+                            angles.append(attr)
                 if x.GetResetXformStack():
                     break
             p = p.GetParent()
         if not varying:
             return None
+
+        def op_turn(ta: float, tb: float) -> float:  # the largest change of an authored angle (radians)
+            turns = [np.abs(np.subtract(a.Get(tb), a.Get(ta), dtype=np.float64)).max() for a in angles]
+            return math.radians(float(max(turns, default=0.0)))
+
         k = self.key_count(times, *shutter)
-        keys = [self.key_matrix(prim, t) for t in np.linspace(shutter[0], shutter[1], k)]
+        while True:
+            ts = np.linspace(shutter[0], shutter[1], k)
+            keys = [self.key_matrix(prim, t) for t in ts]
+            # The core interpolates decomposed transforms between keys (the shorter way
+            # round): keys are added until no two neighbours turn by more than MAX_KEY_TURN,
+            # as matrices or as the angles USD interpolates (a 360° spin between two samples).
+            turn = max(max(_turn(a, b), op_turn(ta, tb)) for a, b, ta, tb in zip(keys, keys[1:], ts, ts[1:]))
+            if k >= MAX_MOTION_KEYS or turn <= MAX_KEY_TURN * (1 + 1e-9):
+                break
+            k = min(2 * k - 1, MAX_MOTION_KEYS)
         if all(np.allclose(keys[0], m, rtol=0, atol=1e-9) for m in keys[1:]):
             return None
         return keys
@@ -1663,6 +1684,16 @@ class _Reader:
         elif self.world is not None:
             scene.set_world(self.world)
         return scene
+
+
+def _turn(a: np.ndarray, b: np.ndarray) -> float:
+    """The angle (radians) by which the rotation of transform b differs from a's (scale removed)."""
+    ra, rb = a[:3, :3], b[:3, :3]
+    na, nb = np.linalg.norm(ra, axis=0), np.linalg.norm(rb, axis=0)
+    if not (np.all(na > 0) and np.all(nb > 0)):
+        return 0.0
+    r = (ra / na).T @ (rb / nb)
+    return math.acos(max(-1.0, min(1.0, (float(np.trace(r)) - 1.0) / 2.0)))
 
 
 def _blackbody_white(temperature: float):
