@@ -184,6 +184,19 @@ def moving_square_stage(path, how, shutter=(0.0, 1.0)):
     stage, mat, cam = stage_with_reference(path)
     cam.CreateShutterOpenAttr(shutter[0])
     cam.CreateShutterCloseAttr(shutter[1])
+    if how in ("instancer", "velocities"):  # a PointInstancer's time-sampled positions, or its velocities
+        pi = UsdGeom.PointInstancer.Define(stage, "/swarm")
+        floor_mesh(stage, "/swarm/proto", W / 2, mat)
+        pi.CreatePrototypesRel().AddTarget("/swarm/proto")
+        pi.CreateProtoIndicesAttr([0])
+        if how == "instancer":
+            pi.CreatePositionsAttr().Set([(X0, Y, 0)], 0.0)
+            pi.GetPositionsAttr().Set([(X0 + D, Y, 0)], 1.0)
+        else:  # units per second; 24 time codes per second (the stage's fallback)
+            pi.CreatePositionsAttr().Set([(X0, Y, 0)], 0.0)
+            pi.CreateVelocitiesAttr().Set([(D * 24.0, 0, 0)], 0.0)
+        stage.Save()
+        return path
     sq = floor_mesh(stage, "/square", W / 2, mat)
     if how == "xform":
         op = sq.AddTranslateOp()
@@ -208,7 +221,7 @@ def smear(x):
     return np.clip(hi - lo, 0.0, None) / D
 
 
-@pytest.mark.parametrize("how", ["xform", "points", "camera"])
+@pytest.mark.parametrize("how", ["xform", "points", "camera", "instancer", "velocities"])
 def test_moving_square_smears_into_its_analytic_streak(tmp_path, how):
     path = moving_square_stage(tmp_path / f"moving_{how}.usda", how)
     # (The reference square smears too when the camera moves: its whole streak is the unit.)

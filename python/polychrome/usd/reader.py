@@ -239,6 +239,8 @@ class _Reader:
         self.instances: list[tuple] = []  # (mesh key, matrix, name[, visibility[, prim that moves]])
         self.mesh_prims: dict[str, Any] = {}
         self.key_caches: dict[float, Any] = {}
+        # PointInstancer placements: (instancer, first instance, instance ids, prototype-relative matrix).
+        self.instancer_runs: list[tuple] = []
         self.lights: list[Any] = []
         self.world = None
         self.world_texture: dict[str, Any] | None = None
@@ -1072,6 +1074,7 @@ class _Reader:
                 mats = np.transpose(mats, (0, 2, 1))
                 if not self.identity_correction:
                     mats = self.correction[None] @ mats
+                self.instancer_runs.append((prim, len(self.instances), which, rel))
                 for j, m in zip(which, mats):
                     self.instances.append((key, m, f"{prim.GetPath()}[{int(j)}]{str(sub.GetPath())[len(str(root.GetPath())) :]}"))
 
@@ -1467,6 +1470,7 @@ class _Reader:
             base = float(self.stage.GetStartTimeCode()) if self.stage.HasAuthoredTimeCodeRange() else 0.0
         else:
             base = float(self.time.GetValue())
+        self.frame = base
         return base + t_open, base + t_close
 
     @staticmethod
@@ -1477,9 +1481,7 @@ class _Reader:
         return min(17, 3 + 2 * inside)
 
     def key_matrix(self, prim, t: float) -> np.ndarray:
-        if t not in self.key_caches:
-            self.key_caches[t] = self.UsdGeom.XformCache(self.Usd.TimeCode(t))
-        m = np.array(self.key_caches[t].GetLocalToWorldTransform(prim), dtype=np.float64).T
+        m = np.array(self.key_matrix_row(prim, t), dtype=np.float64).T
         if not self.identity_correction:
             m = self.correction @ m
         if not np.all(np.isfinite(m)):
@@ -1528,6 +1530,62 @@ class _Reader:
         if all(np.allclose(keys[0], m, rtol=0, atol=1e-9) for m in keys[1:]):
             return None
         return keys
+
+    def instancer_motion(self, shutter) -> dict[int, list[np.ndarray]]:
+        """Instance index → keys of PointInstancer instances that move over the shutter:
+        ``ComputeInstanceTransformsAtTimes`` (positions, orientations and scales
+        interpolated, velocities and angular velocities extrapolated from the frame) and the
+        instancer's own transform at each key."""
+        PI = self.UsdGeom.PointInstancer
+        out: dict[int, list[np.ndarray]] = {}
+        computed: dict[str, Any] = {}
+        interval = self.Gf.Interval(shutter[0], shutter[1])
+        for prim, start, which, rel in self.instancer_runs:
+            path = str(prim.GetPath())
+            if path not in computed:
+                pi = PI(prim)
+                times: set[float] = set()
+                for attr in (pi.GetPositionsAttr(), pi.GetOrientationsAttr(), pi.GetScalesAttr()):
+                    times.update(attr.GetTimeSamplesInInterval(interval))
+                k = self.key_count(times, *shutter)
+                while True:
+                    ts = [float(t) for t in np.linspace(shutter[0], shutter[1], k)]
+                    xf = pi.ComputeInstanceTransformsAtTimes(ts, self.frame, PI.IncludeProtoXform, PI.IgnoreMask)
+                    if xf is None or len(xf) != k or any(len(x) != len(xf[0]) for x in xf):
+                        self.warn(
+                            f"pimotion:{path}", f"prim {path}: its instance motion cannot be computed; instances are placed at the frame"
+                        )
+                        computed[path] = None
+                        break
+                    inst = np.stack([np.asarray(x, dtype=np.float64).reshape(-1, 4, 4) for x in xf])  # (K, n, 4, 4) row vectors
+                    r = inst[:, :, :3, :3] / np.maximum(np.linalg.norm(inst[:, :, :3, :3], axis=3, keepdims=True), 1e-300)
+                    cos = (np.einsum("knij,knij->kn", r[:-1], r[1:]) - 1.0) / 2.0
+                    if k >= MAX_MOTION_KEYS or float(np.arccos(np.clip(cos, -1, 1)).max(initial=0.0)) <= MAX_KEY_TURN * (1 + 1e-9):
+                        worlds = [np.array(self.key_matrix_row(prim, t)) for t in ts]
+                        computed[path] = (inst, worlds)
+                        break
+                    k = min(2 * k - 1, MAX_MOTION_KEYS)
+            if computed[path] is None:
+                continue
+            inst, worlds = computed[path]
+            if len(inst[0]) <= int(np.max(which, initial=-1)):
+                continue
+            keys = np.stack([rel[None] @ inst[i][which] @ w[None] for i, w in enumerate(worlds)])  # (K, m, 4, 4)
+            keys = np.transpose(keys, (0, 1, 3, 2))
+            if not self.identity_correction:
+                keys = self.correction[None, None] @ keys
+            if not np.all(np.isfinite(keys)):
+                raise self.error(prim, "its instance positions, orientations, scales or velocities over the shutter are not finite")
+            for j in range(len(which)):
+                ks = keys[:, j]
+                if not np.allclose(ks[0], ks[1:], rtol=0, atol=1e-9):
+                    out[start + j] = list(ks)
+        return out
+
+    def key_matrix_row(self, prim, t: float):
+        if t not in self.key_caches:
+            self.key_caches[t] = self.UsdGeom.XformCache(self.Usd.TimeCode(t))
+        return self.key_caches[t].GetLocalToWorldTransform(prim)
 
     def deformation(self, key: str, shutter) -> dict[str, np.ndarray] | None:
         """motion_vertices (and motion_normals) of a mesh whose own attributes (points,
@@ -1672,10 +1730,11 @@ class _Reader:
                 attributes=m.get("attributes"),
                 **((shutter and self.deformation(key, shutter)) or {}),
             )
-        for key, matrix, name, *rest in self.instances:
+        instanced = self.instancer_motion(shutter) if shutter is not None and self.instancer_runs else {}
+        for i, (key, matrix, name, *rest) in enumerate(self.instances):
             visibility = rest[0] if rest else None
             moving = rest[1] if len(rest) > 1 else None
-            motion = self.transform_motion(moving, shutter) if moving is not None and shutter is not None else None
+            motion = self.transform_motion(moving, shutter) if moving is not None and shutter is not None else instanced.get(i)
             scene.add_instance(index[key], matrix, name, visibility=visibility, motion=motion)
         for light in self.lights:
             scene.add_light(light)
