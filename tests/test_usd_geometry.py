@@ -302,3 +302,45 @@ def test_two_full_turns_over_the_shutter_smear_into_a_disk(tmp_path):
     assert max(errs) < 0.01
     assert all(abs(q - 1) < 0.05 for q in quadrants)
     assert area == pytest.approx(a * b, rel=0.03)
+
+
+def test_display_color_per_curve_and_per_point(tmp_path):
+    """Unbound curves and points with a displayColor per curve / point: diffuse of that
+    colour; a convex diffuse body under a uniform white dome of radiance 1 has radiance ρ."""
+    from pxr import UsdLux
+
+    path = tmp_path / "colours.usda"
+    stage = new_stage(path)
+    top_camera(stage, "/cam", 4.0, VIEW)
+    dome = UsdLux.DomeLight.Define(stage, "/dome")
+    dome.CreateIntensityAttr(1.0)
+    colours = [(0.7, 0.2, 0.1), (0.1, 0.6, 0.2)]
+    c = UsdGeom.BasisCurves.Define(stage, "/hair")
+    c.CreateTypeAttr("linear")
+    c.CreatePointsAttr([(-0.8, -0.3, 0), (0.8, -0.3, 0), (-0.8, -0.7, 0), (0.8, -0.7, 0)])
+    c.CreateCurveVertexCountsAttr([2, 2])
+    c.CreateWidthsAttr([0.12])
+    c.SetWidthsInterpolation("constant")
+    pv = c.CreateDisplayColorPrimvar(UsdGeom.Tokens.uniform)
+    pv.Set(colours)
+    p = UsdGeom.Points.Define(stage, "/dust")
+    p.CreatePointsAttr([(-0.4, 0.5, 0), (0.4, 0.5, 0)])
+    p.CreateWidthsAttr([0.3, 0.3])
+    p.CreateDisplayColorPrimvar(UsdGeom.Tokens.vertex).Set(colours[::-1])
+    stage.Save()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        scene = usd.read_stage(path)
+    rgba = pc.render(scene, width=N, height=N, samples=64, max_bounces=4, seed=5).rgba
+    x, y = centres()
+
+    def at(px, py, half):  # mean over the pixels within `half` in x and one pixel in y of (px, py)
+        rows = np.abs(y - py) < VIEW / N
+        cols = np.abs(x - px) < half
+        return rgba[np.ix_(rows, cols)][..., :3].reshape(-1, 3).mean(axis=0)
+
+    got = {"curve 0": at(0.0, -0.3, 0.5), "curve 1": at(0.0, -0.7, 0.5), "point 0": at(-0.4, 0.5, 0.03), "point 1": at(0.4, 0.5, 0.03)}
+    want = {"curve 0": colours[0], "curve 1": colours[1], "point 0": colours[1], "point 1": colours[0]}
+    print({k: np.round(v, 3) for k, v in got.items()})
+    for k in got:
+        assert np.allclose(got[k], want[k], atol=0.03), (k, got[k], want[k])

@@ -342,7 +342,7 @@ class _Reader:
         arr = np.asarray(c, np.float64).reshape(-1, width)
         if not np.all(np.isfinite(arr)):
             return None
-        varies = len(arr) > 1 and float(np.ptp(arr, axis=0).max()) > 0 and prim.GetTypeName() == "Mesh"
+        varies = len(arr) > 1 and float(np.ptp(arr, axis=0).max()) > 0 and prim.GetTypeName() in ("Mesh", "BasisCurves", "Points")
         return tuple(float(x) for x in arr.mean(axis=0)), varies
 
     def default_material(self, prim) -> int:
@@ -801,10 +801,11 @@ class _Reader:
             )
         if not keys:
             return None
-        v, n, uv, t, _ = pc_curves.curves_mesh(
+        v, n, uv, t, owner = pc_curves.curves_mesh(
             np.concatenate(keys), np.concatenate(radii), np.asarray(out_counts), subdivisions=1, linear=True, name=str(prim.GetPath())
         )
-        return self.shape_dict(prim, v, t, n, uv)
+        kept = np.array([i for i, (s, n_) in enumerate(zip(starts, counts)) if B.segment_count(int(n_), ctype, basis, wrap) > 0])
+        return self.shape_dict(prim, v, t, n, uv, owner, kept[np.asarray(owner, np.int64)] if len(kept) else None, counts)
 
     def points_arrays(self, prim) -> dict[str, Any] | None:
         """UsdGeom.Points → spheres of diameter ``widths`` (``Scene.add_points``)."""
@@ -815,19 +816,53 @@ class _Reader:
         if pts is None:
             return None
         w, _ = self.widths(prim, p, {"constant": 1, "vertex": len(pts), "varying": len(pts)}, len(pts))
-        v, n, uv, t, _ = pc_curves.points_mesh(pts, np.broadcast_to(w, (len(pts),)) / 2.0, name=str(prim.GetPath()))
-        return self.shape_dict(prim, v, t, n, uv)
+        v, n, uv, t, owner = pc_curves.points_mesh(pts, np.broadcast_to(w, (len(pts),)) / 2.0, name=str(prim.GetPath()))
+        return self.shape_dict(prim, v, t, n, uv, owner, np.asarray(owner, np.int64), np.ones(len(pts), np.int64))
 
-    def shape_dict(self, prim, v, t, n, uv) -> dict[str, Any]:
+    def element_attributes(self, prim, tris, element_of_tri, counts, n_vertices) -> dict[str, np.ndarray] | None:
+        """displayColor / displayOpacity of curves or points that vary per curve or point
+        (uniform, or vertex / varying averaged over each curve): per tessellated vertex,
+        for the display material's Attribute nodes."""
+        out = {}
+        for name, width in (("displayColor", 3), ("displayOpacity", 1)):
+            if name not in self.attribute_names:
+                continue
+            pv = self.UsdGeom.PrimvarsAPI(prim).GetPrimvar(name)
+            value = pv.ComputeFlattened(self.time) if pv and pv.HasValue() else None
+            if value is None or len(value) == 0:
+                continue
+            arr = np.asarray(value, np.float64).reshape(-1, width)
+            if len(arr) == len(counts):
+                per_element = arr
+            elif len(arr) == int(counts.sum()):
+                per_element = np.add.reduceat(arr, np.concatenate([[0], np.cumsum(counts)[:-1]])) / np.maximum(counts, 1)[:, None]
+            elif len(arr) == 1:
+                per_element = np.repeat(arr, len(counts), axis=0)
+            else:
+                self.warn(f"display:{prim.GetPath()}:{name}", f"prim {prim.GetPath()}: {name} has {len(arr)} values; its mean is used")
+                per_element = np.repeat(arr.mean(axis=0, keepdims=True), len(counts), axis=0)
+            vert = np.zeros((n_vertices, width), np.float32)
+            vert[tris.ravel()] = np.repeat(per_element[element_of_tri], 3, axis=0)
+            out[name] = vert if width > 1 else vert[:, 0]
+        return out or None
+
+    def shape_dict(self, prim, v, t, n, uv, owner=None, element_of_tri=None, counts=None) -> dict[str, Any]:
+        material = self.bound_material(prim)
+        tris = np.asarray(t, np.int64).reshape(-1, 3)
+        verts = np.asarray(v, np.float32).reshape(-1, 3)
+        attrs = None
+        if element_of_tri is not None and counts is not None:
+            attrs = self.element_attributes(prim, tris, element_of_tri, np.asarray(counts, np.int64), len(verts))
         return {
             "name": str(self.custom(prim, A.NAME, str(prim.GetPath()))),
             "order": self.custom(prim, A.MESH_INDEX),
-            "vertices": np.asarray(v, np.float32).reshape(-1, 3),
-            "triangles": np.asarray(t, np.int64).reshape(-1, 3),
+            "vertices": verts,
+            "triangles": tris,
             "normals": np.asarray(n, np.float32).reshape(-1, 3),
             "uvs": np.asarray(uv, np.float32).reshape(-1, 2),
+            "attributes": attrs,
             "material_ids": None,
-            "material": self.bound_material(prim),
+            "material": material,
         }
 
     def mesh_arrays(self, prim) -> dict[str, Any] | None:
