@@ -1,5 +1,6 @@
-"""Media through the Python API (docs/media.md): ``pc.Medium`` on a material and as a
-volume-only ``pc.Volume``, checked against Beer–Lambert computed here, and bad input."""
+"""Media through the Python API (docs/media.md): ``pc.Medium`` on a material, as a
+volume-only ``pc.Volume`` and as the world's volume, checked against Beer–Lambert
+computed here (also with the camera inside a medium), and bad input."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import pytest
 
 import polychrome as pc
 
-from test_materials import luminance, slab_scene
+from test_materials import box, luminance, slab_scene
 
 
 def test_grey_absorbing_volume_is_beer_lambert():
@@ -55,3 +56,28 @@ def test_medium_descriptions_and_bad_input():
     bad.density = float("nan")
     with pytest.raises(Exception, match="ink"):
         pc.render(slab_scene(pc.Volume(bad, name="ink")), width=4, height=4, samples=1)
+
+
+def test_world_volume_and_a_camera_inside_a_box_are_beer_lambert():
+    """The camera (z = 5, looking down at an emitter at z = −1 through a clear slab) inside
+    an absorbing world σa = 0.1 (6 units: exp(−0.6)), inside a volume-only box z ∈ [4, 6]
+    with σa = 0.5 (1 unit: exp(−0.5)), and inside both (they add)."""
+    clear = luminance(pc.render(slab_scene(pc.Volume(pc.Medium())), width=4, height=4, samples=1).rgba)
+    for world, box_medium, tau in [(0.1, None, 0.6), (None, 0.5, 0.5), (0.1, 0.5, 1.1)]:
+        scene = slab_scene(pc.Volume(pc.Medium()))
+        if world is not None:
+            scene.world_volume = pc.Medium(absorption=world)
+        if box_medium is not None:
+            v, t = box(4.0, 6.0, 3.0)
+            scene.add_mesh("tank", v, t, material=pc.Volume(pc.Medium(absorption=box_medium), name="tank"))
+        out = pc.render(scene, width=4, height=4, samples=1)
+        assert np.allclose(luminance(out.rgba) / clear, math.exp(-tau), rtol=1e-4), (world, box_medium)
+    scene = slab_scene(pc.Volume(pc.Medium()))
+    scene.world_volume = 0.5
+    with pytest.raises(TypeError, match="World"):
+        scene.description()
+    bad = pc.Medium(absorption=1.0)
+    bad.density = float("nan")
+    scene.world_volume = bad
+    with pytest.raises(Exception, match="world.volume"):
+        pc.render(scene, width=4, height=4, samples=1)

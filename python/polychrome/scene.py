@@ -785,6 +785,9 @@ class Scene:
         self.lights: list[Any] = []
         self.world: Spectrum | None = None
         self.world_texture: dict[str, Any] | None = None
+        #: A :class:`Medium` filling all space (Blender's World > Volume): it adds to the
+        #: media of closed meshes and surrounds the camera (docs/media.md).
+        self.world_volume: Medium | None = None
 
     # -- materials -------------------------------------------------------------
     def add_material(self, material: Material) -> int:
@@ -1036,7 +1039,11 @@ class Scene:
             "lights": [light.to_dict() for light in self.lights],
             "world": None if self.world is None else {"radiance": self.world.to_dict()},
         }
-        return self._resolve_textures(desc, self._buffers)
+        desc, buffers = self._resolve_textures(desc, self._buffers)
+        volume = _medium(self.world_volume, "World")
+        if volume is not None:
+            desc["world"] = {**(desc["world"] or {}), "volume": volume.to_dict()}
+        return desc, buffers
 
     def _resolve_textures(self, desc: dict[str, Any], buffers: list[np.ndarray]) -> tuple[dict[str, Any], list[np.ndarray]]:
         """Replaces Texture objects in the description by indices into a ``textures``

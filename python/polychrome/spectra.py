@@ -105,14 +105,21 @@ def tinted(spectrum: Spectrum, r: float, g: float, b: float) -> Spectrum:
     (``color`` × ``colorTemperature``) define it: the product is taken in linear Rec.709
     (the spectrum's colour through the CIE 1931 observer, RGB white ↔ D65) and becomes an
     RGB colour uplifted as an illuminant. A white tint returns ``spectrum`` unchanged."""
-    import json
-
-    from . import _core
-
     if (r, g, b) == (1.0, 1.0, 1.0):
         return spectrum
     if not all(np.isfinite(c) and c >= 0.0 for c in (r, g, b)):
         raise ValueError(f"tint {(r, g, b)} must be finite and non-negative")
+    own = rec709(spectrum)
+    return rgb(float(r * own[0]), float(g * own[1]), float(b * own[2]))
+
+
+def rec709(spectrum: Spectrum) -> tuple[float, float, float]:
+    """The linear Rec.709 colour of an emitted ``spectrum`` (CIE 1931 observer, RGB white
+    ↔ D65), as :func:`tinted` measures it."""
+    import json
+
+    from . import _core
+
     xyz = np.array(_core.spectrum_xyz(json.dumps(spectrum.to_dict()), _TINT_SETTINGS), dtype=np.float64)
     own = _XYZ_TO_REC709 @ xyz
-    return rgb(float(r * own[0]), float(g * own[1]), float(b * own[2]))
+    return float(own[0]), float(own[1]), float(own[2])

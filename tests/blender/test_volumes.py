@@ -3,6 +3,7 @@ against Cycles' closure definitions (docs/media.md), warnings for what is not re
 and a glass of coloured liquid and a scattering cube against Cycles CPU."""
 
 import numpy as np
+import polychrome as pc
 import pytest
 
 from .bhelper import check, run_bpy
@@ -53,7 +54,7 @@ def test_volume_nodes_export_as_cycles_defines_them(tmp_path):
     dg = bpy.context.evaluated_depsgraph_get()
     scene, warns = export_scene(dg)
     desc, _ = scene.description()
-    emit(m={x['name']: x for x in desc['materials']}, warns=warns)
+    emit(m={x['name']: x for x in desc['materials']}, world=desc['world'], warns=warns)
     """,
     )
     r = check(proc, res)[0]
@@ -74,10 +75,18 @@ def test_volume_nodes_export_as_cycles_defines_them(tmp_path):
     assert np.allclose(coeff(smoke["scattering"]), 0.5 * c)
     # svm_node_principled_volume: σt = (c + max(1 − c, 0)·max(1 − √a, 0))·ρ.
     assert np.allclose(coeff(smoke["absorption"]), 0.5 * (1 - c) * (1 - np.sqrt(a)), atol=1e-6)
-    assert np.allclose(coeff(smoke["emission"]), 2.0 * np.array([1.0, 0.5, 0.0]))
+    # Emission Strength × Color plus the blackbody (intensity 1 at the default 1000 K):
+    # σ_SB·10⁻⁶/π·T⁴ × the blackbody's luminance-1 colour (svm_node_principled_volume).
+    from polychrome_blender.export.lights import blackbody_white
+
+    bb = 5.670373e-8 * 1e-6 / np.pi * 1000.0**4 * np.array(pc.spectra.rec709(blackbody_white(1000.0)))
+    assert np.allclose(coeff(smoke["emission"]), 2.0 * np.array([1.0, 0.5, 0.0]) + bb, rtol=1e-5)
     assert smoke["anisotropy"] == pytest.approx(-0.2)
+    # The world's Volume Scatter (defaults: colour 0.8, density 1) fills all space.
+    world = r["world"]["volume"]
+    assert np.allclose(coeff(world["scattering"]), [0.8, 0.8, 0.8]) and "absorption" not in world
     # One warning per unsupported feature, naming the material and the node.
-    expected = [("'Smoke'", "blackbody"), ("'Cloud'", "FOURNIER_FORAND"), ("'Cloud'", "Density"), ("'W'", "Volume")]
+    expected = [("'Cloud'", "FOURNIER_FORAND"), ("'Cloud'", "Density")]
     for who, what in expected:
         assert any(who in w and what in w for w in warns), (who, what, warns)
     assert len(warns) == len(expected), warns
@@ -176,4 +185,122 @@ def test_scattering_cube_matches_cycles(tmp_path):
     """,
     )
     print("fog cube vs Cycles:", r)
+    assert r["mean"] <= 1.5 and r["without_volume"] > 3.0 * max(r["mean"], 1.0), r
+
+
+MEDIA = """
+    sc = empty_scene(40, 30)
+    w = bpy.data.worlds.new('W'); w.use_nodes = True; sc.world = w
+    bg = w.node_tree.nodes['Background']; bg.inputs['Color'].default_value = (0.6, 0.7, 0.9, 1); bg.inputs['Strength'].default_value = 0.5
+    bpy.ops.mesh.primitive_plane_add(size=10)
+    bpy.context.object.data.materials.append(diffuse_material('Floor', (0.8, 0.8, 0.75)))
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=0.4, location=(0.5, 0.4, 0.4))
+    bpy.context.object.data.materials.append(diffuse_material('Ball', (0.2, 0.5, 0.8)))
+    ld = bpy.data.lights.new('Area', 'AREA'); ld.energy = 400.0; ld.size = 2.0
+    lo = bpy.data.objects.new('Area', ld); sc.collection.objects.link(lo); lo.location = (1.0, -1.0, 3.5)
+    def fresh(name):
+        m = bpy.data.materials.new(name); m.use_nodes = True; nt = m.node_tree
+        for n in list(nt.nodes):
+            if n.type != 'OUTPUT_MATERIAL': nt.nodes.remove(n)
+        return m, nt
+    def volume(tree, node, output):
+        tree.links.new(node.outputs[0], tree.nodes[output].inputs['Volume'])
+    {objects}
+    add_camera(sc, (0.0, -2.4, 1.0), (0, 0, 0.55), lens=40)
+    sc.render.image_settings.file_format = 'OPEN_EXR'
+    c = sc.cycles; c.device = 'CPU'; c.samples = {spp}; c.use_denoising = False; c.use_adaptive_sampling = False
+    c.filter_width = 0.01; c.max_bounces = 16; c.diffuse_bounces = 16; c.glossy_bounces = 16
+    c.transmission_bounces = 16; c.volume_bounces = 16; c.transparent_max_bounces = 16
+    c.sample_clamp_indirect = 0.0; c.sample_clamp_direct = 0.0
+    sc.polychrome.samples = {spp}; sc.polychrome.max_bounces = 16
+    A = render_rgb(sc, 'CYCLES', 'cycles')
+    B = render_rgb(sc, 'POLYCHROME', 'poly')
+    err, warn = Engine.last_error, Engine.last_warnings
+    # Every Volume output (materials and world) unlinked: how far off ignoring them is.
+    for tree in [m.node_tree for m in bpy.data.materials] + [x.node_tree for x in bpy.data.worlds]:
+        if tree is not None:
+            for link in list(tree.links):
+                if link.to_socket.name == 'Volume':
+                    tree.links.remove(link)
+    N = render_rgb(sc, 'POLYCHROME', 'novolume')
+    emit(mean=mean_de00(A, B, 5), p90=float(np.percentile(block_de00(A, B, 5), 90)), without_volume=mean_de00(A, N, 5),
+         err=err, warn=warn, ma=A.mean(axis=(0, 1)).tolist(), mb=B.mean(axis=(0, 1)).tolist())
+"""
+
+
+def _media_vs_cycles(tmp_path, objects, spp=256):
+    proc, res = run_bpy(tmp_path, MEDIA.replace("{objects}", objects).replace("{spp}", str(spp)), timeout=600)
+    r = check(proc, res)[0]
+    assert r["err"] is None and r["warn"] == [], r
+    return r
+
+
+def test_world_fog_matches_cycles(tmp_path):
+    """World > Volume: a Volume Scatter fog (with some absorption) filling all space,
+    the camera inside it, the floor and a ball under an area light; the background is lost
+    in the fog in both. Mean CIEDE2000 over 5×5-pixel blocks ≤ 1.5."""
+    r = _media_vs_cycles(
+        tmp_path,
+        """
+    s = w.node_tree.nodes.new('ShaderNodeVolumeScatter')
+    s.inputs['Color'].default_value = (0.9, 0.8, 0.7, 1); s.inputs['Density'].default_value = 0.25
+    s.inputs['Anisotropy'].default_value = 0.2
+    a = w.node_tree.nodes.new('ShaderNodeVolumeAbsorption')
+    a.inputs['Color'].default_value = (0.7, 0.8, 0.9, 1); a.inputs['Density'].default_value = 0.1
+    add = w.node_tree.nodes.new('ShaderNodeAddShader')
+    w.node_tree.links.new(s.outputs[0], add.inputs[0]); w.node_tree.links.new(a.outputs[0], add.inputs[1])
+    volume(w.node_tree, add, 'World Output')
+    """,
+    )
+    print("world fog vs Cycles:", r)
+    assert r["mean"] <= 1.5 and r["without_volume"] > 3.0 * max(r["mean"], 1.0), r
+
+
+def test_camera_inside_an_absorbing_box_matches_cycles(tmp_path):
+    """The camera, the light and the ball inside a box of Volume Absorption (no surface)
+    that the floor crosses: Cycles starts camera paths inside it
+    (integrator_volume_stack_init), so must Polychrome. Mean CIEDE2000 ≤ 1.5."""
+    r = _media_vs_cycles(
+        tmp_path,
+        """
+    m, nt = fresh('Water')
+    a = nt.nodes.new('ShaderNodeVolumeAbsorption')
+    a.inputs['Color'].default_value = (0.5, 0.75, 0.9, 1); a.inputs['Density'].default_value = 0.5
+    volume(nt, a, 'Material Output')
+    bpy.ops.mesh.primitive_cube_add(size=7.0, location=(0, 0, 1.0))
+    bpy.context.object.data.materials.append(m)
+    """,
+    )
+    print("camera in absorbing box vs Cycles:", r)
+    assert r["mean"] <= 1.5 and r["without_volume"] > 3.0 * max(r["mean"], 1.0), r
+
+
+def test_volume_emission_matches_cycles(tmp_path):
+    """Volume emission: a cube of Principled Volume (black colour: absorption only,
+    blackbody at 2500 K, intensity 1) and a sphere whose Volume is an Emission node
+    beside Volume Absorption, glowing onto the floor. Mean CIEDE2000 ≤ 1.5."""
+    r = _media_vs_cycles(
+        tmp_path,
+        """
+    ld.energy = 40.0
+    m, nt = fresh('Flame')
+    p = nt.nodes.new('ShaderNodeVolumePrincipled')
+    p.inputs['Color'].default_value = (0, 0, 0, 1); p.inputs['Density'].default_value = 1.5
+    p.inputs['Blackbody Intensity'].default_value = 1.0; p.inputs['Temperature'].default_value = 2500.0
+    volume(nt, p, 'Material Output')
+    bpy.ops.mesh.primitive_cube_add(size=0.7, location=(-0.5, 0.2, 0.36))
+    bpy.context.object.data.materials.append(m)
+    m, nt = fresh('Glow')
+    e = nt.nodes.new('ShaderNodeEmission')
+    e.inputs['Color'].default_value = (0.2, 0.9, 0.4, 1); e.inputs['Strength'].default_value = 1.5
+    a = nt.nodes.new('ShaderNodeVolumeAbsorption')
+    a.inputs['Color'].default_value = (0.5, 0.5, 0.5, 1); a.inputs['Density'].default_value = 2.0
+    add = nt.nodes.new('ShaderNodeAddShader')
+    nt.links.new(e.outputs[0], add.inputs[0]); nt.links.new(a.outputs[0], add.inputs[1])
+    volume(nt, add, 'Material Output')
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=0.3, location=(0.0, -0.6, 0.9), segments=32, ring_count=16)
+    bpy.context.object.data.materials.append(m)
+    """,
+    )
+    print("volume emission vs Cycles:", r)
     assert r["mean"] <= 1.5 and r["without_volume"] > 3.0 * max(r["mean"], 1.0), r

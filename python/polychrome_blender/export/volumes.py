@@ -8,12 +8,17 @@ kernel/closure/volume.h):
 * Volume Scatter: σs = density·colour (Henyey–Greenstein phase only);
 * Principled Volume: σs = density·colour, σa = density·max(1 − colour, 0)·
   max(1 − √(absorption colour), 0), emission strength × colour per unit length;
+* Principled Volume's blackbody: Blackbody Tint × σ_SB·10⁻⁶/π·mix(1, T⁴, Blackbody
+  Intensity) × the blackbody colour of T at luminance 1 (Stefan–Boltzmann, as
+  ``svm_node_principled_volume``), exported as Planck's spectrum (a tint or other
+  emission beside it makes it an RGB colour, as ``spectra.tinted``);
 * Emission on the Volume socket: emission per unit length;
 * Add Shader sums, Mix Shader (constant factor) blends coefficients.
 
-Linked inputs (attributes, textures: heterogeneous media), blackbody emission and other
-phase functions are not rendered: one warning each naming the material and the node,
-and the input's own value is used."""
+The world's Volume output is the same (``export_world_volume``): a medium filling all
+space. Linked inputs (attributes, textures: heterogeneous media) and other phase
+functions are not rendered: one warning each naming the material (or world) and the
+node, and the input's own value is used."""
 
 import math
 
@@ -44,6 +49,8 @@ class _Coefficients:
         self.g_weight = 0.0
         self.g_sum = 0.0
         self.gs = set()
+        # Blackbody emission: (temperature K, RGB tint × Stefan–Boltzmann intensity).
+        self.bb = []
 
     def add(self, other, w):
         for k in range(3):
@@ -53,6 +60,7 @@ class _Coefficients:
         self.g_weight += w * other.g_weight
         self.g_sum += w * other.g_sum
         self.gs |= other.gs
+        self.bb += [(t, [w * x for x in k]) for t, k in other.bb]
 
     def scatter(self, rgb, g):
         for k in range(3):
@@ -64,10 +72,14 @@ class _Coefficients:
             self.gs.add(round(g, 6))
 
 
+#: Stefan–Boltzmann σ·10⁻⁶/π, Cycles' blackbody intensity factor (svm_node_principled_volume).
+SIGMA_SB = 5.670373e-8 * 1e-6 / math.pi
+
+
 class VolumeExport:
-    def __init__(self, mat, warnings):
+    def __init__(self, mat, warnings, kind="material"):
         self.mat, self.warnings = mat, warnings
-        self.owner = f"material '{mat.name}'"
+        self.owner = f"{kind} '{mat.name}'"
 
     def value(self, node, name, default=0.0):
         sock = node.inputs.get(name)
@@ -139,11 +151,13 @@ class VolumeExport:
         if strength > 0.0:
             ec = self.value(node, "Emission Color")
             c.em = [strength * max(x, 0.0) for x in ec]
-        if self.value(node, "Blackbody Intensity") > 0.0 and self.value(node, "Temperature") > 0.0:
-            self.warnings.add(
-                ("volume-blackbody", self.mat.name, node.name),
-                f"{self.owner}: '{node.name}' blackbody emission is not supported yet and is ignored",
-            )
+        blackbody = self.value(node, "Blackbody Intensity")
+        if blackbody > 0.0:
+            t = max(self.value(node, "Temperature"), 0.0)
+            intensity = SIGMA_SB * ((1.0 - blackbody) + blackbody * t**4)
+            tint = [max(x, 0.0) for x in self.value(node, "Blackbody Tint", [1.0, 1.0, 1.0])]
+            if t > 0.0 and intensity > 0.0 and max(tint) > 0.0:
+                c.bb.append((t, [intensity * x for x in tint]))
 
     def medium(self):
         node = volume_node(self.mat)
@@ -155,7 +169,7 @@ class VolumeExport:
                 ("volume-g", self.mat.name),
                 f"{self.owner}: scattering volumes of different anisotropy are combined with their mean anisotropy",
             )
-        if max(c.sa + c.ss + c.em) <= 0.0:
+        if max(c.sa + c.ss + c.em) <= 0.0 and not c.bb:
             return None
         g = c.g_sum / c.g_weight if c.g_weight > 0.0 else 0.0
 
@@ -165,8 +179,25 @@ class VolumeExport:
             peak = max(rgb)
             return None if peak <= 0.0 else pc.spectra.rgb(*(x / peak for x in rgb)) * peak
 
-        em = None if max(c.em) <= 0.0 else pc.spectra.rgb(*c.em)
+        em = _emission(c)
         return pc.Medium(colour(c.sa), colour(c.ss), anisotropy=min(max(g, -0.999), 0.999), emission=em)
+
+
+def _emission(c):
+    """The emission spectrum: RGB, or Planck's spectrum for a lone untinted blackbody;
+    several terms are summed as linear Rec.709 colours (a blackbody's own through the CIE
+    observer, as ``spectra.tinted``)."""
+    from .lights import blackbody_white
+
+    rgb = list(c.em)
+    if not any(x > 0.0 for x in rgb) and len(c.bb) == 1 and len(set(c.bb[0][1])) == 1:
+        t, k = c.bb[0]
+        return blackbody_white(t) * k[0]
+    for t, k in c.bb:
+        own = pc.spectra.rec709(blackbody_white(t))
+        for j in range(3):
+            rgb[j] += k[j] * own[j]
+    return None if max(rgb) <= 0.0 else pc.spectra.rgb(*rgb)
 
 
 def export_volume(mat, warnings):
@@ -176,11 +207,8 @@ def export_volume(mat, warnings):
     return VolumeExport(mat, warnings).medium()
 
 
-def warn_world_volume(world, warnings):
-    """The world's Volume output is not rendered yet: one warning."""
-    if world is None or not world.use_nodes or world.node_tree is None:
-        return
-    out = world.node_tree.get_output_node("ALL") or world.node_tree.get_output_node("CYCLES")
-    sock = None if out is None else out.inputs.get("Volume")
-    if sock is not None and sock.is_linked:
-        warnings.add(("world-volume", world.name), f"world '{world.name}': the world Volume (fog) is not supported yet and is ignored")
+def export_world_volume(world, warnings):
+    """The medium of the world's Volume output (fog filling all space), or None."""
+    if world is None or volume_node(world) is None:
+        return None
+    return VolumeExport(world, warnings, "world").medium()

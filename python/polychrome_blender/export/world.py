@@ -1,10 +1,11 @@
 """Blender world → the scene's world: Background colour × strength (uniform radiance),
-or an Environment Texture (equirectangular HDRI, Z rotation of a Mapping node)."""
+or an Environment Texture (equirectangular HDRI, Z rotation of a Mapping node), and the
+world's Volume output as a medium filling all space (``export/volumes.py``)."""
 
 import numpy as np
 import polychrome as pc
 
-from .volumes import warn_world_volume
+from .volumes import export_world_volume
 
 
 def _hdri(scene, world, env, strength, warnings, textures):
@@ -33,9 +34,10 @@ def export_world(depsgraph, scene, warnings, textures):
     """Sets ``scene``'s world from the depsgraph's; images come from ``textures`` (a
     :class:`~.textures.TextureCache`)."""
     world = depsgraph.scene.world
+    scene.world_volume = None
     if world is None:
         return
-    warn_world_volume(world, warnings)
+    scene.world_volume = export_world_volume(world, warnings)
     colour = tuple(float(c) for c in world.color[:3])
     strength = 1.0
     if world.use_nodes and world.node_tree is not None:

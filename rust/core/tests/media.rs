@@ -374,3 +374,103 @@ fn extreme_and_invalid_densities() {
         render(&desc, &buffers, &forward, &RenderControl::new()).err().expect("FORWARD refuses media").to_string();
     assert!(err.contains("BACKWARD") && err.contains("syrup"), "{err}");
 }
+
+/// The slab scene's emitter spectrum, the camera's distance to it (y = −4 → 3) and a
+/// table's coefficients on `grid`.
+fn on_grid(pairs: &[(f32, f32)], grid: &WavelengthGrid, role: SpectrumRole) -> Vec<f32> {
+    tabulated(pairs, 1.0).evaluate(grid, role, &NoRgb).unwrap()
+}
+
+/// A camera inside media (Cycles' `integrator_volume_stack_init`): inside an absorbing
+/// box y ∈ [−5, 0.8] (4.8 of it towards the emitter), inside the world's absorbing
+/// medium (all 7 units to the emitter), and inside both, Beer–Lambert per wavelength.
+#[test]
+fn camera_inside_media_beer_lambert() {
+    let n = 13;
+    let grid = WavelengthGrid::uniform(n, 380.0, 780.0).unwrap();
+    let le = on_grid(&[(380.0, 0.5), (780.0, 2.0)], &grid, SpectrumRole::Illuminant);
+    let sa = on_grid(&SIGMA_A, &grid, SpectrumRole::Reflectance);
+    let sb = on_grid(&SIGMA_B, &grid, SpectrumRole::Reflectance);
+    for (in_box, in_world) in [(true, false), (false, true), (true, true)] {
+        let (mut desc, mut buffers) = slab_scene(material("air", BsdfDesc::Null, None), None);
+        if in_box {
+            desc.materials.push(material("fog box", BsdfDesc::Null, Some(absorbing(tabulated(&SIGMA_A, 0.5)))));
+            let (v, t) = cuboid([-5.0, -5.0, -5.0], [5.0, 0.8, 5.0]);
+            let m = desc.materials.len() as u32 - 1;
+            add_mesh(&mut desc, &mut buffers, "box", v, t, m);
+        }
+        if in_world {
+            let mut w = world(SpectrumDesc::constant(0.0));
+            w.volume = Some(absorbing(tabulated(&SIGMA_B, 0.1)));
+            desc.world = Some(w);
+        }
+        let out = render(&desc, &buffers, &settings(n, 2), &RenderControl::new()).unwrap();
+        let got = mean_spectrum(out.images.spectral.as_ref().unwrap(), n);
+        for i in 0..n {
+            let tau = if in_box { 0.5 * sa[i] as f64 * 4.8 } else { 0.0 }
+                + if in_world { 0.1 * sb[i] as f64 * 7.0 } else { 0.0 };
+            let expected = le[i] as f64 * (-tau).exp();
+            assert!(
+                (got[i].0 - expected).abs() < 1e-3 * expected,
+                "box {in_box}, world {in_world}, λ {}: {} vs Beer–Lambert {expected}",
+                grid.lambdas()[i],
+                got[i].0
+            );
+        }
+        assert_eq!(out.stats.nonfinite_samples, 0);
+    }
+}
+
+/// An emissive absorbing slab (thickness 1) in front of nothing: L = Le/σa·(1 − e^{−σa d})
+/// per wavelength; and an emissive absorbing world seen to the emitter 7 away, adding its
+/// own glow to the attenuated emitter.
+#[test]
+fn volume_emission_closed_form() {
+    let n = 13;
+    let grid = WavelengthGrid::uniform(n, 380.0, 780.0).unwrap();
+    let le = on_grid(&[(380.0, 0.5), (780.0, 2.0)], &grid, SpectrumRole::Illuminant);
+    let sa = on_grid(&SIGMA_A, &grid, SpectrumRole::Reflectance);
+    const GLOW: [(f32, f32); 2] = [(380.0, 1.0), (780.0, 0.2)];
+    let ge = on_grid(&GLOW, &grid, SpectrumRole::Illuminant);
+    let glowing = VolumeDesc { emission: Some(tabulated(&GLOW, 1.0)), ..absorbing(tabulated(&SIGMA_A, 1.0)) };
+    for in_world in [false, true] {
+        let (mut desc, buffers) = if in_world {
+            let (mut desc, buffers) = slab_scene(material("air", BsdfDesc::Null, None), None);
+            let mut w = world(SpectrumDesc::constant(0.0));
+            w.volume = Some(VolumeDesc { absorption: Some(tabulated(&SIGMA_A, 0.2)), ..glowing.clone() });
+            desc.world = Some(w);
+            (desc, buffers)
+        } else {
+            slab_scene(material("glow", BsdfDesc::Null, Some(glowing.clone())), None)
+        };
+        if !in_world {
+            desc.materials[0].emission = None; // nothing behind the slab
+        }
+        let out = render(&desc, &buffers, &settings(n, 2), &RenderControl::new()).unwrap();
+        let got = mean_spectrum(out.images.spectral.as_ref().unwrap(), n);
+        for i in 0..n {
+            let (s, d) = if in_world { (0.2 * sa[i] as f64, 7.0) } else { (sa[i] as f64, 1.0) };
+            let t = (-s * d).exp();
+            let expected = ge[i] as f64 / s * (1.0 - t) + if in_world { le[i] as f64 * t } else { 0.0 };
+            assert!(
+                (got[i].0 - expected).abs() < 1e-3 * expected,
+                "world {in_world}, λ {}: {} vs Le/σa·(1 − e^(−σa d)) {expected}",
+                grid.lambdas()[i],
+                got[i].0
+            );
+        }
+    }
+}
+
+/// A NaN or negative world volume is an error naming the world.
+#[test]
+fn invalid_world_volume_is_an_error() {
+    for scale in [f32::NAN, -1.0, f32::INFINITY] {
+        let (mut desc, buffers) = slab_scene(material("air", BsdfDesc::Null, None), None);
+        let mut w = world(SpectrumDesc::constant(0.0));
+        w.volume = Some(absorbing(SpectrumDesc { kind: SpectrumKind::Constant { value: 1.0 }, scale }));
+        desc.world = Some(w);
+        let err = render(&desc, &buffers, &settings(5, 1), &RenderControl::new()).err().expect("an error").to_string();
+        assert!(err.contains("World") && err.contains("volume absorption"), "{err}");
+    }
+}

@@ -34,7 +34,7 @@ fn camera_looking(dir: [f32; 3], focal_length: f32) -> CameraDesc {
 }
 
 fn world_texture(texture: usize, strength: f32, rotation: f32, importance_sampling: bool) -> WorldDesc {
-    WorldDesc { radiance: None, texture: Some(texture), strength, rotation, importance_sampling }
+    WorldDesc { radiance: None, texture: Some(texture), strength, rotation, importance_sampling, volume: None }
 }
 
 fn add_texture(desc: &mut SceneDesc, buffers: &mut Vec<Buffer>, name: &str, w: u32, h: u32, rgb: Vec<f32>) -> usize {
@@ -153,6 +153,7 @@ fn white_sphere_vanishes_under_a_uniform_world() {
                 strength: 1.0,
                 rotation: 0.0,
                 importance_sampling: true,
+                volume: None,
             },
             None,
         ),

@@ -234,7 +234,7 @@ pub fn from_settings(scene: &Scene, settings: &ResolvedSettings) -> crate::Resul
         return Err(Error::setting(
             "direction",
             format!(
-                "participating media are rendered by BACKWARD only for now (material '{m}' has a volume, no surface or transparency)"
+                "participating media are rendered by BACKWARD only for now ('{m}' has a volume, no surface or transparency)"
             ),
         ));
     }

@@ -409,7 +409,7 @@ pub fn trace_camera<W: Wavelengths, M: CameraMis>(
     // allocation per camera path.
     let mut beta = wl.unit(scene.grid.len(), &mut scratch.spare);
     let mut gathered = beta.zero_like_in(&mut scratch.spare);
-    let start = PathState::start(ray);
+    let start = PathState::start_in(ray, scene.camera_media);
     let mut aux = FirstHit::new(depth, normal, albedo);
     if let Some(i) = wl.single() {
         // One wavelength from the camera on: the chain is weighed grid-wide from here.

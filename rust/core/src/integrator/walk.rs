@@ -47,7 +47,8 @@ pub struct PathState {
 }
 
 impl PathState {
-    /// A path starting along `ray` (from the camera or a light).
+    /// A path starting along `ray` (from the camera or a light) outside every medium;
+    /// [`Self::start_in`] inside some.
     pub fn start(ray: Ray) -> Self {
         Self {
             ray,
@@ -58,6 +59,11 @@ impl PathState {
             media: MediumStack::default(),
             traveled: 0.0,
         }
+    }
+
+    /// A path starting along `ray` inside `media` (the camera's: [`Scene::camera_media`]).
+    pub fn start_in(ray: Ray, media: MediumStack) -> Self {
+        Self { media, ..Self::start(ray) }
     }
 
     /// The state after the BSDF at `v` (reached with `self`) was sampled (`sc`): a

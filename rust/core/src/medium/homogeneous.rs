@@ -50,6 +50,10 @@ impl HomogeneousMedium {
 /// for many objects; nested liquids in glass need a handful).
 pub const STACK_SIZE: usize = 8;
 
+/// The instance of the world's medium on a stack (no mesh has it): its entry is
+/// (WORLD_INSTANCE, index into the scene's media), which no boundary crossing removes.
+pub const WORLD_INSTANCE: u32 = u32::MAX;
+
 /// The media around a point of a path: (instance, material) of every closed mesh with a
 /// volume the path entered and has not left. Copy, so path states stay plain values.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -65,6 +69,13 @@ impl MediumStack {
     /// The (instance, material) entries.
     pub fn entries(&self) -> &[(u32, u32)] {
         &self.entries[..self.len as usize]
+    }
+    /// Adds `entry` unless present or the stack is full (the camera's starting media).
+    pub fn push(&mut self, entry: (u32, u32)) {
+        if !self.entries().contains(&entry) && (self.len as usize) < STACK_SIZE {
+            self.entries[self.len as usize] = entry;
+            self.len += 1;
+        }
     }
     /// Crossing a boundary of `instance` with `material` (which has a volume): entering
     /// when the path arrived on the front face (from outside a closed mesh), leaving

@@ -316,6 +316,7 @@ mod tests {
             strength: 1.0,
             rotation: 0.0,
             importance_sampling: true,
+            volume: None,
         };
         vec![
             ("F11 × smooth", scene(vec![material(diffuse(ramp()))], vec![point(f11.clone())])),
@@ -437,8 +438,14 @@ mod tests {
     /// An HDRI world is RGB data: its grid is the one an RGB surface gets under D65.
     #[test]
     fn hdri_world_is_rgb_data() {
-        let world =
-            WorldDesc { radiance: None, texture: Some(0), strength: 1.0, rotation: 0.0, importance_sampling: true };
+        let world = WorldDesc {
+            radiance: None,
+            texture: Some(0),
+            strength: 1.0,
+            rotation: 0.0,
+            importance_sampling: true,
+            volume: None,
+        };
         let hdri = SceneDesc { world: Some(world), ..scene(vec![material(diffuse(ramp()))], vec![]) };
         let twin =
             scene(vec![material(diffuse(ramp())), material(diffuse(SpectrumKind::Rgb { rgb: [0.5; 3] }))], vec![]);

@@ -534,6 +534,10 @@ pub struct WorldDesc {
     /// Sample the image ∝ luminance × sin θ (default); false samples uniformly.
     #[serde(default = "yes")]
     pub importance_sampling: bool,
+    /// A homogeneous medium filling all space (Blender's World > Volume): it adds to the
+    /// media of closed meshes, as Cycles keeps the world's volume on every path's stack.
+    #[serde(default)]
+    pub volume: Option<VolumeDesc>,
 }
 
 fn one_f32() -> f32 {
@@ -725,11 +729,14 @@ impl LightDesc {
 }
 
 impl WorldDesc {
-    /// The world's radiance, and its image (an HDRI) as RGB data.
+    /// The world's radiance, its image (an HDRI) as RGB data, and its medium.
     pub fn for_each_spectrum(&self, f: &mut dyn FnMut(SpectralItem)) {
-        let WorldDesc { radiance, texture, strength: _, rotation: _, importance_sampling: _ } = self;
+        let WorldDesc { radiance, texture, strength: _, rotation: _, importance_sampling: _, volume } = self;
         if let Some(r) = radiance {
             f(SpectralItem::Spectrum(SpectrumUse::Emitter, r));
+        }
+        if let Some(v) = volume {
+            v.for_each_spectrum(f);
         }
         if texture.is_some() {
             f(SpectralItem::RgbData);

@@ -4,7 +4,7 @@
 
 use super::{Scene, VolumeDesc};
 use crate::geometry::{offset_ray_origin, Ray};
-use crate::medium::homogeneous::transmittance;
+use crate::medium::homogeneous::{transmittance, WORLD_INSTANCE};
 use crate::medium::{HomogeneousMedium, MediumStack};
 use crate::spectrum::named::SpectrumRole;
 use crate::spectrum::{SampledSpectrum, SpectrumDesc};
@@ -15,11 +15,12 @@ use glam::{Vec2, Vec3A};
 /// VOLUME_BOUNDS_MAX, intern/cycles/kernel/integrator/intersect_volume_stack.h).
 pub const VOLUME_BOUNDS_MAX: usize = 1024;
 
-/// The medium of material `name`, or None when it neither absorbs, scatters nor emits.
+/// The medium of material (or world, `kind`) `name`, or None when it neither absorbs, scatters nor emits.
 /// `spectrum` evaluates a description on the render's grid. Coefficients that are not
 /// finite or negative are an error naming the material (a NaN density never reaches an
 /// image).
 pub fn build_medium(
+    kind: &'static str,
     name: &str,
     v: &VolumeDesc,
     spectrum: impl Fn(&SpectrumDesc, SpectrumRole, &str) -> Result<SampledSpectrum>,
@@ -29,7 +30,7 @@ pub fn build_medium(
         let s = spectrum(d, role, &format!("volume {what}"))?;
         if let Some(bad) = s.values().iter().find(|x| !(x.is_finite() && **x >= 0.0)) {
             return Err(Error::object(
-                "material",
+                kind,
                 name,
                 format!("volume {what} {bad} (scale {}) must be finite and non-negative", d.scale),
             ));
@@ -40,7 +41,7 @@ pub fn build_medium(
     let sigma_s = coefficient(&v.scattering, SpectrumRole::Reflectance, "scattering")?;
     let emission = coefficient(&v.emission, SpectrumRole::Illuminant, "emission")?;
     if !v.anisotropy.is_finite() {
-        return Err(Error::object("material", name, format!("volume anisotropy {} must be finite", v.anisotropy)));
+        return Err(Error::object(kind, name, format!("volume anisotropy {} must be finite", v.anisotropy)));
     }
     if sigma_a.is_none() && sigma_s.is_none() && emission.is_none() {
         return Ok(None);
@@ -88,8 +89,11 @@ impl Scene {
         !self.media.is_empty() || self.null_surface.iter().any(|&b| b) || self.pass_through.iter().any(Option::is_some)
     }
 
-    /// The medium of stack entry (instance, material).
-    fn entry_medium(&self, (_, m): (u32, u32)) -> Option<&HomogeneousMedium> {
+    /// The medium of stack entry (instance, material), or (WORLD_INSTANCE, medium).
+    fn entry_medium(&self, (i, m): (u32, u32)) -> Option<&HomogeneousMedium> {
+        if i == WORLD_INSTANCE {
+            return self.media.get(m as usize);
+        }
         self.material_medium.get(m as usize).copied().flatten().map(|k| &self.media[k as usize])
     }
 
@@ -188,6 +192,39 @@ impl Scene {
             out.set(i, if s > 0.0 { out.get(i) / s } else { 0.0 });
         }
         pdf
+    }
+
+    /// The media a path starting at `p` is inside (the camera's, Cycles'
+    /// `integrator_volume_stack_init` in kernel/integrator/intersect_volume_stack.h): the
+    /// world's medium, and every closed mesh with a medium whose first crossing along a
+    /// fixed ray from `p` (+Z, as Cycles) leaves it — a back face, not entered on the way.
+    pub fn media_at(&self, p: Vec3A, time: f32) -> MediumStack {
+        let mut stack = MediumStack::default();
+        if let Some(k) = self.world_medium {
+            stack.push((WORLD_INSTANCE, k));
+        }
+        if !self.material_medium.iter().any(Option::is_some) {
+            return stack;
+        }
+        let mut entered: Vec<(u32, u32)> = Vec::new();
+        let mut ray = Ray::new(p, Vec3A::Z).with_time(time);
+        for _ in 0..VOLUME_BOUNDS_MAX {
+            let Some(h) = self.intersect(&ray) else { break };
+            let si = self.interaction(&ray, &h);
+            let key = (si.instance, si.material);
+            let front = si.ng.dot(ray.direction) < 0.0;
+            if self.material_medium[si.material as usize].is_some() && !entered.contains(&key) {
+                if front {
+                    entered.push(key);
+                } else {
+                    stack.push(key);
+                    entered.push(key); // counted once
+                }
+            }
+            let origin = offset_ray_origin(si.p, if front { -si.ng } else { si.ng });
+            ray = Ray { origin, tmin: 0.0, tmax: f32::INFINITY, ..ray };
+        }
+        stack
     }
 
     /// Transmittance per grid lane along `ray` (up to `ray.tmax`) starting inside

@@ -180,6 +180,10 @@ pub struct Scene {
     /// meshes that use it.
     pub media: Vec<crate::medium::HomogeneousMedium>,
     pub material_medium: Vec<Option<u32>>,
+    /// The world's medium (index into `media`): fills all space, outside and inside meshes.
+    pub world_medium: Option<u32>,
+    /// The media around the camera, where camera paths start ([`Scene::media_at`]).
+    pub camera_media: crate::medium::MediumStack,
     /// Per material: no surface, rays pass straight through (`BsdfDesc::Null`).
     pub null_surface: Vec<bool>,
     /// Per material: stochastic transparency (a top-level Transparent BSDF, Principled
@@ -485,7 +489,7 @@ impl Scene {
                 _ => false,
             });
             material_medium.push(match &m.volume {
-                Some(v) => media::build_medium(&m.name, v, |d, role, what| {
+                Some(v) => media::build_medium("material", &m.name, v, |d, role, what| {
                     Ok(SampledSpectrum::from_slice(&rgb.evaluate(d, &grid, role, "material", &m.name, what)?))
                 })?
                 .map(|medium| {
@@ -822,12 +826,23 @@ impl Scene {
             },
         };
         light_visibility.resize(lights.len(), crate::geometry::visibility::ALL);
+        // The world's medium (Blender's World > Volume), validated as a material's.
+        let world_medium = match desc.world.as_ref().and_then(|w| w.volume.as_ref()) {
+            Some(v) => media::build_medium("world", "World", v, |d, role, what| {
+                Ok(SampledSpectrum::from_slice(&rgb.evaluate(d, &grid, role, "world", "World", what)?))
+            })?
+            .map(|medium| {
+                media.push(medium);
+                media.len() as u32 - 1
+            }),
+            None => None,
+        };
         let texture_bytes = textures.iter().map(|t| t.bytes()).sum::<usize>()
             + environment.as_ref().and_then(|e| e.image.as_ref()).map_or(0, |i| i.bytes() - i.texture.bytes());
         let powers: Vec<f64> = lights.iter().map(|l| l.power(grid.weights())).collect();
         let light_distribution = Distribution1D::new(&powers);
 
-        Ok(Self {
+        let mut scene = Self {
             observer: Observer::new(&grid),
             grid,
             space: opts.space,
@@ -852,7 +867,13 @@ impl Scene {
             pass_through,
             mesh_data,
             light_visibility,
-        })
+            world_medium,
+            camera_media: crate::medium::MediumStack::default(),
+        };
+        if scene.has_media() {
+            scene.camera_media = scene.media_at(scene.camera.position(), 0.5);
+        }
+        Ok(scene)
     }
 
     /// Anything in the scene moves over the shutter (rays carry times).
