@@ -35,32 +35,39 @@ def segment_count(n: int, ctype: str, basis: str, wrap: str) -> int:
 def evaluate_curve(p: np.ndarray, w: np.ndarray, w_varying: bool, ctype: str, basis: str, wrap: str):
     """One curve's vertices ``p`` (n, 3) and widths ``w`` (per vertex, or per segment end
     when ``w_varying``) → (polyline (m, 3), widths (m,)); None when it has too few vertices."""
-    n = len(p)
+    out = evaluate_curves(p[None], w[None], w_varying, ctype, basis, wrap)
+    return None if out is None else (out[0][0], out[1][0])
+
+
+def evaluate_curves(p: np.ndarray, w: np.ndarray, w_varying: bool, ctype: str, basis: str, wrap: str):
+    """A batch of curves with the same vertex count: ``p`` (c, n, 3), ``w`` (c, n) or
+    (c, ends) → (polylines (c, m, 3), widths (c, m)); None when n is too few."""
+    n = p.shape[1]
     nseg = segment_count(n, ctype, basis, wrap)
     if nseg == 0:
         return None
     if ctype == "linear":
         if wrap == "periodic":
-            return np.concatenate([p, p[:1]]), np.concatenate([w, w[:1]])
+            return np.concatenate([p, p[:, :1]], 1), np.concatenate([w, w[:, :1]], 1)
         return p, w
     m, vstep = CUBIC_BASES[basis]
     if wrap == "pinned" and basis != "bezier":  # phantom points 2·P0 − P1 and 2·Pn−1 − Pn−2
-        p = np.concatenate([2 * p[:1] - p[1:2], p, 2 * p[-1:] - p[-2:-1]])
+        p = np.concatenate([2 * p[:, :1] - p[:, 1:2], p, 2 * p[:, -1:] - p[:, -2:-1]], 1)
         if not w_varying:
-            w = np.concatenate([2 * w[:1] - w[1:2], w, 2 * w[-1:] - w[-2:-1]])
-    idx = (np.arange(nseg)[:, None] * vstep + np.arange(4)[None, :]) % len(p)
+            w = np.concatenate([2 * w[:, :1] - w[:, 1:2], w, 2 * w[:, -1:] - w[:, -2:-1]], 1)
+    idx = (np.arange(nseg)[:, None] * vstep + np.arange(4)[None, :]) % p.shape[1]
     t = np.linspace(0.0, 1.0, SAMPLES_PER_SEGMENT + 1)
     weights = np.stack([t**3, t**2, t, np.ones_like(t)], 1) @ m  # (S+1, 4)
-    pts = np.einsum("sk,nkd->nsd", weights, p[idx])
+    pts = np.einsum("sk,cnkd->cnsd", weights, p[:, idx])
     if w_varying:  # one width per segment end, linear along the segment
-        ws = w[:-1, None] * (1 - t)[None] + w[1:, None] * t[None] if len(w) == nseg + 1 else None
-        if ws is None:  # periodic: nseg ends, the last segment closes onto the first
-            ws = w[:, None] * (1 - t)[None] + np.roll(w, -1)[:, None] * t[None]
+        ends = w if w.shape[1] == nseg + 1 else np.concatenate([w, w[:, :1]], 1)  # periodic: closes onto the first
+        ws = ends[:, :-1, None] * (1 - t)[None, None] + ends[:, 1:, None] * t[None, None]
     else:
-        ws = np.einsum("sk,nk->ns", weights, w[idx])
+        ws = np.einsum("sk,cnk->cns", weights, w[:, idx])
     keep = np.ones((nseg, SAMPLES_PER_SEGMENT + 1), bool)
     keep[:-1, -1] = False  # segment ends are the next segment's starts
-    return pts[keep], np.maximum(ws[keep], 0.0)
+    c = len(p)
+    return pts[:, keep].reshape(c, -1, 3), np.maximum(ws[:, keep].reshape(c, -1), 0.0)
 
 
 def varying_count(n: int, ctype: str, basis: str, wrap: str) -> int:

@@ -774,7 +774,8 @@ class _Reader:
             ctype = "cubic"
         if self.get(c.GetNormalsAttr()) is not None:
             self.warn(f"ribbon:{prim.GetPath()}", f"prim {prim.GetPath()}: oriented curves (normals) are rendered as round tubes")
-        varying = [B.varying_count(int(n), ctype, basis, wrap) for n in counts]
+        by_count = {int(n): B.varying_count(int(n), ctype, basis, wrap) for n in np.unique(counts)}
+        varying = [by_count[int(n)] for n in counts]
         w, interp = self.widths(prim, c, {"constant": 1, "uniform": len(counts), "vertex": len(pts), "varying": sum(varying)}, len(pts))
         if interp == "constant":
             w = np.full(len(pts), w[0])
@@ -783,17 +784,26 @@ class _Reader:
         if ctype == "linear" and interp == "varying":
             interp = "vertex"
         starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        varying = np.asarray(varying, np.int64)
         vstarts = np.concatenate([[0], np.cumsum(varying)[:-1]])
-        keys, radii, out_counts, skipped = [], [], [], 0
-        for i, (s, n) in enumerate(zip(starts, counts)):
-            wi = w[vstarts[i] : vstarts[i] + varying[i]] if interp == "varying" else w[s : s + n]
-            ev = B.evaluate_curve(pts[s : s + n], wi, interp == "varying", ctype, basis, wrap)
+        # Curves of the same vertex count are evaluated together (hair: usually all).
+        keys, radii, out_counts, kept, skipped = [], [], [], [], 0
+        for n_vertices in np.unique(counts):
+            which = np.nonzero(counts == n_vertices)[0]
+            gather = starts[which][:, None] + np.arange(n_vertices)[None, :]
+            if interp == "varying":
+                nv = int(varying[which[0]])
+                wi = w[vstarts[which][:, None] + np.arange(nv)[None, :]]
+            else:
+                wi = w[gather]
+            ev = B.evaluate_curves(pts[gather], wi, interp == "varying", ctype, basis, wrap)
             if ev is None:
-                skipped += 1
+                skipped += len(which)
                 continue
-            keys.append(ev[0])
-            radii.append(ev[1] / 2.0)
-            out_counts.append(len(ev[0]))
+            keys.append(ev[0].reshape(-1, 3))
+            radii.append(ev[1].ravel() / 2.0)
+            out_counts.append(np.full(len(which), ev[0].shape[1]))
+            kept.append(which)
         if skipped:
             self.warn(
                 f"short:{prim.GetPath()}",
@@ -802,10 +812,10 @@ class _Reader:
         if not keys:
             return None
         v, n, uv, t, owner = pc_curves.curves_mesh(
-            np.concatenate(keys), np.concatenate(radii), np.asarray(out_counts), subdivisions=1, linear=True, name=str(prim.GetPath())
+            np.concatenate(keys), np.concatenate(radii), np.concatenate(out_counts), subdivisions=1, linear=True, name=str(prim.GetPath())
         )
-        kept = np.array([i for i, (s, n_) in enumerate(zip(starts, counts)) if B.segment_count(int(n_), ctype, basis, wrap) > 0])
-        return self.shape_dict(prim, v, t, n, uv, owner, kept[np.asarray(owner, np.int64)] if len(kept) else None, counts)
+        kept = np.concatenate(kept)
+        return self.shape_dict(prim, v, t, n, uv, owner, kept[owner] if len(kept) else None, counts)
 
     def points_arrays(self, prim) -> dict[str, Any] | None:
         """UsdGeom.Points → spheres of diameter ``widths`` (``Scene.add_points``)."""
@@ -817,7 +827,7 @@ class _Reader:
             return None
         w, _ = self.widths(prim, p, {"constant": 1, "vertex": len(pts), "varying": len(pts)}, len(pts))
         v, n, uv, t, owner = pc_curves.points_mesh(pts, np.broadcast_to(w, (len(pts),)) / 2.0, name=str(prim.GetPath()))
-        return self.shape_dict(prim, v, t, n, uv, owner, np.asarray(owner, np.int64), np.ones(len(pts), np.int64))
+        return self.shape_dict(prim, v, t, n, uv, owner, owner, np.ones(len(pts), np.int64))
 
     def element_attributes(self, prim, tris, element_of_tri, counts, n_vertices) -> dict[str, np.ndarray] | None:
         """displayColor / displayOpacity of curves or points that vary per curve or point
@@ -848,7 +858,7 @@ class _Reader:
 
     def shape_dict(self, prim, v, t, n, uv, owner=None, element_of_tri=None, counts=None) -> dict[str, Any]:
         material = self.bound_material(prim)
-        tris = np.asarray(t, np.int64).reshape(-1, 3)
+        tris = np.asarray(t).reshape(-1, 3)  # uint32 from the core, as add_mesh wants them
         verts = np.asarray(v, np.float32).reshape(-1, 3)
         attrs = None
         if element_of_tri is not None and counts is not None:
