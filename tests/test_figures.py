@@ -243,12 +243,18 @@ def pixel_u(g):
     return ((np.arange(PRISM_W) + 0.5) / PRISM_W - 0.5) * 2 * half
 
 
-@pytest.fixture(scope="module", params=["FORWARD", "BIDIRECTIONAL"])
+@pytest.fixture(
+    scope="module",
+    params=[("FORWARD", "AUTO"), ("BIDIRECTIONAL", "AUTO"), ("FORWARD", "STRATIFIED"), ("BIDIRECTIONAL", "SPLIT"), ("FORWARD", "ENERGY")],
+    ids=lambda p: "-".join(p),
+)
 def prism_render(request):
     """N-BK7 prism, D65 cone light, the camera facing the screen, traced FORWARD or
     BIDIRECTIONAL (whose light-tracing part takes this caustic of a delta light); light
     paths stop at the screen (max_bounces 3: entry, exit, screen) so no
-    inter-reflection lands elsewhere."""
+    inter-reflection lands elsewhere. Each wavelength choice at the collapse (setting
+    `collapse`, tests/test_collapse.py) must put the rainbow where Snell puts it."""
+    direction, collapse = request.param
     scene, g = fig06.build_scene(spectra.d65(), glass="N-BK7", camera="screen", table=False, spot_deg=SPOT_DEG)
     result = pc.render(
         scene,
@@ -256,13 +262,14 @@ def prism_render(request):
         height=PRISM_H,
         samples=48,
         wavelength_count=41,
-        direction=request.param,
+        direction=direction,
+        collapse=collapse,
         max_bounces=3,
         spectral_output=True,
         seed=11,
         **FIXED,
     )
-    assert result.stats["direction"] == request.param
+    assert result.stats["direction"] == direction
     return result, g
 
 

@@ -9,7 +9,7 @@ use glam::{Vec2, Vec3A};
 use polychrome_core::color::{Observer, RgbSpace};
 use polychrome_core::material::{Bsdf, BsdfFlags, BsdfSample, ShadingContext};
 use polychrome_core::render::{
-    render, render_scene, Direction, Method, RenderControl, RenderSettings, ResolvedSettings,
+    render, render_scene, Collapse, Direction, Method, RenderControl, RenderSettings, ResolvedSettings,
 };
 use polychrome_core::sampling::cosine_hemisphere;
 use polychrome_core::scene::{BsdfDesc, Buffer, BuildOptions, MaterialDesc, Scene, SceneDesc, WorldDesc};
@@ -549,6 +549,53 @@ fn dispersive_glass_sphere_vanishes_in_a_uniform_environment() {
             assert!(
                 (m - expected[c]).abs() < 5.0 * se + 5e-3 * expected[c].abs(),
                 "{method:?} split={splitting} channel {c}: {m} vs {} (se {se})",
+                expected[c]
+            );
+        }
+        assert_eq!(out.stats.nonfinite_samples, 0);
+    }
+}
+
+/// The glass furnace with the other wavelength choices at the collapse (setting
+/// `collapse`): STRATIFIED and SPLIT (k = 3, and k = 40 above the grid's 21) keep the
+/// dispersive sphere invisible against the environment's colour, backward and
+/// bidirectional (whose light paths collapse stratified).
+#[test]
+fn every_collapse_strategy_keeps_the_glass_furnace_at_the_closed_form() {
+    let mut desc = SceneDesc::default();
+    let mut buffers = Vec::new();
+    desc.materials.push(glass("flint"));
+    let (v, t) = uv_sphere([0.0, 0.0, -4.0], 1.5, 24, 48);
+    add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
+    let env = SpectrumDesc { kind: SpectrumKind::Blackbody { temperature: 2500.0 }, scale: 1.0 };
+    desc.world = Some(world(&env));
+    for (collapse, k, direction, samples) in [
+        (Collapse::Stratified, 4, Direction::Backward, 64),
+        (Collapse::Split, 3, Direction::Backward, 32),
+        (Collapse::Split, 40, Direction::Backward, 4),
+        (Collapse::Stratified, 4, Direction::Bidirectional, 32),
+        (Collapse::Split, 3, Direction::Bidirectional, 16),
+    ] {
+        let settings = ResolvedSettings {
+            width: 12,
+            height: 12,
+            samples,
+            max_bounces: 64,
+            collapse,
+            collapse_k: k,
+            direction,
+            grid: WavelengthGrid::uniform(21, 380.0, 780.0).unwrap(),
+            ..Default::default()
+        };
+        let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
+        let env_values = env.evaluate(&settings.grid, SpectrumRole::Illuminant, &NoRgb).unwrap();
+        let expected = RgbSpace::rec709().xyz_to_rgb(Observer::new(&settings.grid).xyz(&env_values));
+        let means = channel_means(&out.images.rgba);
+        for c in 0..3 {
+            let (m, se) = means[c];
+            assert!(
+                (m - expected[c]).abs() < 5.0 * se + 5e-3 * expected[c].abs(),
+                "{collapse:?} k={k} {direction:?} channel {c}: {m} vs {} (se {se})",
                 expected[c]
             );
         }

@@ -18,7 +18,7 @@ pub mod walk;
 pub mod wavelengths;
 
 use crate::film::PixelSample;
-use crate::render::{Direction, Method, ResolvedSettings};
+use crate::render::{Collapse, Direction, Method, ResolvedSettings};
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::spectrum::SampledSpectrum;
@@ -180,6 +180,9 @@ pub struct Scratch {
     pub phase: SampledSpectrum,
     /// Storage of camera paths' throughput and gathered radiance, reused path to path.
     pub spare: throughput::Spare,
+    /// The stratum of the sample being traced (set by the driver: camera samples by
+    /// pixel and pass, light paths by pass and index), for COLLAPSE STRATIFIED and SPLIT.
+    pub strata: Option<crate::sampling::Strata>,
 }
 
 impl Scratch {
@@ -195,6 +198,7 @@ impl Scratch {
             tr: z(),
             phase: z(),
             spare: throughput::Spare::default(),
+            strata: None,
         }
     }
 }
@@ -219,6 +223,15 @@ pub struct Integrator {
 pub fn from_settings(scene: &Scene, settings: &ResolvedSettings) -> crate::Result<Integrator> {
     if settings.dispersion_splitting && settings.method != Method::Polychromatic {
         return Err(Error::setting("dispersion_splitting", "applies to the POLYCHROMATIC method only"));
+    }
+    if settings.dispersion_splitting && !matches!(settings.collapse, Collapse::Auto | Collapse::Energy) {
+        return Err(Error::setting(
+            "dispersion_splitting",
+            format!(
+                "splits into every wavelength and cannot be combined with collapse {} (use collapse SPLIT with collapse_k for k wavelengths)",
+                settings.collapse.name()
+            ),
+        ));
     }
     if settings.method == Method::Rgb && scene.grid.len() != 3 {
         return Err(Error::setting("method", "RGB needs the three-channel grid"));
@@ -248,11 +261,16 @@ pub fn from_settings(scene: &Scene, settings: &ResolvedSettings) -> crate::Resul
 
 /// The direction's technique on wavelengths `policy`.
 fn with_policy<P: WavelengthPolicy>(settings: &ResolvedSettings, policy: P) -> Integrator {
+    // The wavelength choice at a dispersive surface (eq. 9). Light paths never split.
+    let collapse = settings.collapse.resolved();
+    let split = settings.dispersion_splitting || collapse == Collapse::Split;
     let camera = Walk {
         medium_sampling: settings.medium_sampling,
-        ..Walk::camera(settings.max_bounces, settings.dispersion_splitting)
+        split_k: (collapse == Collapse::Split && !settings.dispersion_splitting).then_some(settings.collapse_k),
+        stratified_collapse: collapse == Collapse::Stratified,
+        ..Walk::camera(settings.max_bounces, split)
     };
-    let light = Walk::light(settings.max_bounces);
+    let light = Walk { stratified_collapse: collapse != Collapse::Energy, ..Walk::light(settings.max_bounces) };
     let rounds = policy.rounds();
     let backward = path::PathTracing { wavelengths: policy.clone(), walk: camera };
     let forward = |part| forward::LightTracing { wavelengths: policy.clone(), walk: light, part };

@@ -454,6 +454,10 @@ fn continue_single_wavelength<T: Throughput>(
         // Deterministic (splitting) mode: one sub-path per wavelength that still carries
         // energy, each scattering the vertex at its own wavelength. The aux chain follows
         // the sub-path of the most energy (β·quadrature weight), drawing nothing random.
+        End::Split { vertex: v, state } if walk.split_k.is_some() => {
+            let k = walk.split_k.unwrap_or(1);
+            split_k(scene, walk, k, ctx, &v, &state, beta, gathered, aux, rng, scratch);
+        }
         End::Split { vertex: v, state } => {
             let weights = scene.grid.weights();
             let follow = (0..scene.grid.len())
@@ -481,6 +485,60 @@ fn continue_single_wavelength<T: Throughput>(
         }
     }
 }
+
+/// COLLAPSE SPLIT at dispersive vertex `v` (reached with `state`, whole-spectrum
+/// throughput `beta`): `k` sub-paths, sub-path j taking the lane where u_j = (j + ξ)/k
+/// falls in the CDF of the arriving energy e_i = β_i·w_i (w: quadrature weights), each
+/// weighted by 1/(k·p_i) with p_i = e_i/Σe. Each u_j is uniform on its stratum, so
+/// Σ_j f(i_j)/(k·p(i_j)) has expectation ∫₀¹ f(i(u))/p(i(u)) du = Σ_i f_i: unbiased, with
+/// duplicates allowed. ξ is the sample's stratified number (dimension above the bounce
+/// dimensions), so the k·spp choices of a pixel are stratified together. The first-hit
+/// passes follow the first sub-path.
+#[allow(clippy::too_many_arguments)]
+fn split_k<T: Throughput>(
+    scene: &Scene,
+    walk: &Walk,
+    k: u32,
+    ctx: &mut ShadingContext,
+    v: &Vertex,
+    state: &PathState,
+    beta: &T,
+    gathered: &mut T,
+    aux: Option<FirstHit>,
+    rng: &mut Rng,
+    scratch: &mut Scratch,
+) {
+    let weights = scene.grid.weights();
+    let energy: Vec<f32> =
+        (0..scene.grid.len()).map(|i| beta.collapse(i).map_or(0.0, |b| b.value.max(0.0) * weights[i])).collect();
+    let total: f32 = energy.iter().sum();
+    let Some(last) = energy.iter().rposition(|&e| e > 0.0) else { return };
+    if !total.is_finite() {
+        return;
+    }
+    let xi = match scratch.strata {
+        Some(s) => s.uniform(SPLIT_DIMENSION),
+        None => rng.uniform(),
+    };
+    let mut aux = aux;
+    let (mut lane, mut acc) = (0usize, 0.0f32);
+    for j in 0..k {
+        let target = (j as f32 + xi) / k as f32 * total;
+        // The lane whose CDF interval holds target (the u_j ascend: one pass over the
+        // lanes; zero-energy lanes are never chosen, rounding falls on the last one).
+        while lane < last && (energy[lane] <= 0.0 || acc + energy[lane] <= target) {
+            acc += energy[lane];
+            lane += 1;
+        }
+        let Some(mut b) = beta.collapse(lane) else { return };
+        b.value *= total / (k as f32 * energy[lane]);
+        let l = scatter_single(scene, walk, ctx, v, state, b, false, aux.take(), rng, scratch);
+        gathered.add_at(lane, l);
+    }
+}
+
+/// The stratified dimension of COLLAPSE SPLIT's offset (bounce dimensions are depths).
+const SPLIT_DIMENSION: u32 = 1 << 16;
 
 /// The radiance gathered by a single-wavelength camera path that scatters at `v` (reached
 /// with `state`) on its wavelength and continues from there; `roulette`: Russian

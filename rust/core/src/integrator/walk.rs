@@ -207,6 +207,13 @@ pub struct Walk {
     /// Deterministic mode: stop at the first dispersive surface of a whole-spectrum
     /// path ([`End::Split`]) instead of letting the BSDF collapse it.
     pub split_dispersion: bool,
+    /// With `split_dispersion`: continue `k` wavelengths stratified over the energy CDF
+    /// (each weighted 1/(k·p)) instead of every wavelength (COLLAPSE SPLIT).
+    pub split_k: Option<u32>,
+    /// The BSDF's collapse draws its uniform number from [`Scratch::strata`] (the
+    /// sample's stratum, dimension = the vertex's depth) instead of the path's random
+    /// stream (COLLAPSE STRATIFIED).
+    pub stratified_collapse: bool,
     /// How whole-spectrum paths sample distances in scattering media.
     pub medium_sampling: MediumSampling,
 }
@@ -222,6 +229,8 @@ impl Walk {
             rr_depth: RR_DEPTH,
             scatter_below: max_bounces,
             split_dispersion,
+            split_k: None,
+            stratified_collapse: false,
             medium_sampling: MediumSampling::default(),
         }
     }
@@ -232,6 +241,8 @@ impl Walk {
             rr_depth: RR_DEPTH,
             scatter_below: max_bounces.saturating_sub(1),
             split_dispersion: false,
+            split_k: None,
+            stratified_collapse: false,
             medium_sampling: MediumSampling::default(),
         }
     }
@@ -396,8 +407,13 @@ impl Walk {
                 if let Some(index) = beta.hero() {
                     return End::Terminated { index, vertex: v, state: st };
                 }
+                if self.stratified_collapse {
+                    ctx.collapse_u = scratch.strata.map(|s| s.uniform(st.depth));
+                }
             }
-            let Some(sc) = beta.scatter(&v, ctx, rng, &mut scratch.tp) else {
+            let scattered = beta.scatter(&v, ctx, rng, &mut scratch.tp);
+            ctx.collapse_u = None;
+            let Some(sc) = scattered else {
                 return End::Done;
             };
             if !beta.is_alive() {

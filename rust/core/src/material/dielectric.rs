@@ -131,6 +131,7 @@ impl Bsdf for Dielectric {
         if !(energy > 0.0) {
             return None;
         }
+        let uc = ctx.collapse_u.unwrap_or(uc);
         let r_mean = (energy_r / energy).clamp(0.0, 1.0);
         if uc < r_mean {
             for (i, v) in throughput.values_mut().iter_mut().enumerate() {
@@ -346,6 +347,7 @@ impl Bsdf for RoughDielectric {
         if !(energy > 0.0) {
             return None;
         }
+        let uc = ctx.collapse_u.unwrap_or(uc);
         let r_mean = (energy_r / energy).clamp(0.0, 1.0);
         if uc < r_mean {
             let wi = reflect(wo, wm);

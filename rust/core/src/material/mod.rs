@@ -74,6 +74,10 @@ pub struct ShadingContext<'a> {
     pub mode: TransportMode,
     /// What a shading graph reads at this hit (set only for materials with one).
     pub hit: crate::shading::ShadingPoint,
+    /// At a dispersive surface of a whole-spectrum path: the uniform number the collapse
+    /// (eq. 9: the reflection/refraction choice, then the wavelength) uses instead of the
+    /// `uc` it is given, stratified across the pixel's samples (COLLAPSE STRATIFIED).
+    pub collapse_u: Option<f32>,
 }
 
 /// Which quantity a path transports, for the non-symmetric scattering of refraction.
@@ -96,6 +100,7 @@ impl<'a> ShadingContext<'a> {
             front_face: true,
             mode: TransportMode::Radiance,
             hit: Default::default(),
+            collapse_u: None,
         }
     }
 }

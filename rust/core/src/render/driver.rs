@@ -14,7 +14,7 @@ use super::{RenderControl, RenderOutput, RenderStats, ResolvedSettings, PREVIEW_
 use crate::film::{Film, FilmBuffer, PixelSample, PixelSums};
 use crate::integrator::forward::Splat;
 use crate::integrator::{self, CameraSample, Integrator, Scratch};
-use crate::sampling::Rng;
+use crate::sampling::{mix64, Rng, Strata};
 use crate::scene::Scene;
 use crate::spectrum::named;
 use crate::spectrum::SampledSpectrum;
@@ -31,6 +31,8 @@ const TILE: u32 = 16;
 const LIGHT_CHUNK: u64 = 1024;
 /// Seeds light-path streams apart from the camera streams of the same seed.
 const LIGHT_STREAM: u64 = 0x4c49_4748_545f_5041;
+/// Salt of a pixel's stratified set of samples (`Scratch::strata`).
+const PIXEL_STRATA: u64 = 0x5354_5241_5441_5f50;
 
 /// A rectangle of pixels: (x0, y0, width, height).
 #[derive(Clone, Copy, Debug)]
@@ -422,6 +424,7 @@ impl<'a> Driver<'a> {
                 for g in passes.clone() {
                     ps.reset();
                     let mut rng = Rng::for_sample(self.settings.seed, pixel, g as u64);
+                    scratch.strata = Some(Strata::new(mix64(self.settings.seed ^ mix64(pixel ^ PIXEL_STRATA)), g));
                     let jitter = rng.uniform2();
                     let film = glam::Vec2::new(x as f32 + jitter.x, y as f32 + jitter.y);
                     let cs = CameraSample { film, pixel, pass: g };
@@ -455,6 +458,9 @@ impl<'a> Driver<'a> {
                 for k in c * LIGHT_CHUNK..end {
                     let path = first + k;
                     let mut rng = Rng::for_sample(self.settings.seed ^ LIGHT_STREAM, path, 0);
+                    // A pass's light paths are one stratified set (COLLAPSE STRATIFIED).
+                    let key = mix64(self.settings.seed ^ LIGHT_STREAM ^ mix64(path / pixels));
+                    scratch.strata = Some(Strata::new(key, (path % pixels) as u32));
                     self.integrator.technique.light_path(
                         self.scene,
                         (path / pixels) as u32,

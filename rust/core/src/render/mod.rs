@@ -59,6 +59,44 @@ pub enum MediumSampling {
     Collapse,
 }
 
+/// How a whole-spectrum path chooses the wavelength it continues with at a dispersive
+/// surface (the paper's eq. 9; docs/methods.md, "Wavelength choice at the collapse").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "SCREAMING_SNAKE_CASE")]
+pub enum Collapse {
+    /// The measured winner for the scene (see [`Collapse::resolved`]).
+    #[default]
+    Auto,
+    /// One wavelength ∝ the ray's energy, from an independent uniform number (eq. 9).
+    Energy,
+    /// One wavelength ∝ energy, the uniform number stratified across the pixel's samples
+    /// (a base-2 (0,1) sequence over the sample index, shuffled per bounce, with a
+    /// Cranley–Patterson rotation per pixel and bounce).
+    Stratified,
+    /// `collapse_k` wavelengths, stratified over the energy CDF, each weighted 1/(k·p).
+    Split,
+}
+
+impl Collapse {
+    /// The setting's value as written in JSON, Python, the CLI and Blender.
+    pub fn name(self) -> &'static str {
+        match self {
+            Collapse::Auto => "AUTO",
+            Collapse::Energy => "ENERGY",
+            Collapse::Stratified => "STRATIFIED",
+            Collapse::Split => "SPLIT",
+        }
+    }
+    /// What AUTO stands for: ENERGY until bench/caustics.py has measured a winner
+    /// (docs/BENCHMARKS.md, "Dispersive glass").
+    pub fn resolved(self) -> Collapse {
+        match self {
+            Collapse::Auto => Collapse::Energy,
+            c => c,
+        }
+    }
+}
+
 /// Where paths start.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "SCREAMING_SNAKE_CASE")]

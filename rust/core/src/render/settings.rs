@@ -14,7 +14,7 @@
 //!   generated (see `docs/architecture.md`, "Where a new setting goes").
 
 use super::quality::{self, Quality};
-use super::{Direction, MediumSampling, Method};
+use super::{Collapse, Direction, MediumSampling, Method};
 use crate::color::uplift::UpliftMethod;
 use crate::scene::SceneDesc;
 use crate::spectrum::grid::{LAMBDA_MAX, LAMBDA_MIN, MAX_SAMPLES, MIN_SAMPLES};
@@ -316,6 +316,25 @@ settings! {
         "At the first dispersive surface continue one monochromatic path per wavelength instead of choosing one (the paper's deterministic mode)",
         Kind::Bool,
     ).applies_when("method", "POLYCHROMATIC");
+    /// How a whole-spectrum path chooses its wavelength at a dispersive surface (eq. 9).
+    collapse: copy Collapse = Collapse::Auto => Spec::new(
+        "Spectrum",
+        "Collapse",
+        "How a path carrying the whole spectrum chooses the wavelength it continues with at a dispersive surface (the paper's eq. 9)",
+        Kind::Enum { items: vec![
+            item(Collapse::Auto, "Auto", "The measured fastest to converge (docs/BENCHMARKS.md, Dispersive glass): Energy"),
+            item(Collapse::Energy, "Energy", "One wavelength chosen in proportion to the ray's energy with an independent random number (the paper's eq. 9)"),
+            item(Collapse::Stratified, "Stratified", "One wavelength chosen in proportion to energy, each of a pixel's samples drawing from a different stratum of the distribution"),
+            item(Collapse::Split, "Split", "Continue with Collapse Split Count wavelengths, stratified over the energy distribution, each weighted by 1/(k p)"),
+        ]},
+    ).applies_when("method", "POLYCHROMATIC").see("methods.md");
+    /// SPLIT: how many wavelengths a path continues with at a dispersive surface.
+    collapse_k: copy u32 = 4 => Spec::new(
+        "Spectrum",
+        "Collapse Split Count",
+        "Wavelengths a path continues with at a dispersive surface when Collapse is Split (stratified over the energy distribution)",
+        int(2, MAX_SAMPLES as i64),
+    ).applies_when("collapse", "SPLIT");
     /// How whole-spectrum paths sample free-flight distances in scattering media.
     medium_sampling: copy MediumSampling = MediumSampling::SpectralMis => Spec::new(
         "Spectrum",
@@ -678,10 +697,18 @@ mod tests {
             }
             assert!(all("uplift").contains(&name(json!(u))));
         }
+        for c in [Collapse::Auto, Collapse::Energy, Collapse::Stratified, Collapse::Split] {
+            match c {
+                Collapse::Auto | Collapse::Energy | Collapse::Stratified | Collapse::Split => {}
+            }
+            assert!(all("collapse").contains(&name(json!(c))));
+            assert_eq!(name(json!(c)), c.name());
+        }
         assert_eq!(
             (all("method").len(), all("direction").len(), all("quality").len(), all("uplift").len()),
             (5, 3, 4, 2)
         );
+        assert_eq!(all("collapse").len(), 4);
     }
 
     #[test]

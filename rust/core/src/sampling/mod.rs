@@ -48,6 +48,54 @@ impl Rng {
     }
 }
 
+/// Laine–Karras style hash permutation (Burley 2020, "Practical Hash-based Owen
+/// Scrambling", JCGT 9(4), listing 2): bit j of the result depends on bits ≤ j of `x`
+/// only, so applied to reversed bits it permutes aligned power-of-two blocks.
+#[inline]
+fn laine_karras(mut x: u32, seed: u32) -> u32 {
+    x = x.wrapping_add(seed);
+    x ^= x.wrapping_mul(0x6c50_b47c);
+    x ^= x.wrapping_mul(0xb82f_1e52);
+    x ^= x.wrapping_mul(0xc7af_e638);
+    x ^= x.wrapping_mul(0x8d22_f6e6);
+    x
+}
+
+/// Burley's nested uniform scramble of an index: indices `0..2^m` map to a permutation of
+/// an aligned block of `2^m` indices.
+#[inline]
+fn shuffle_index(i: u32, seed: u32) -> u32 {
+    laine_karras(i.reverse_bits(), seed).reverse_bits()
+}
+
+/// Stratification of one uniform number per dimension across a set of samples (a pixel's
+/// samples, or a pass's light paths): sample `index` of the set `key` draws the
+/// `index`-th point of the base-2 van der Corput sequence (a (0,1) sequence: every
+/// prefix of 2^m samples has one point in each interval of width 2^-m), the index
+/// shuffled per dimension (Burley 2020) so dimensions do not correlate, plus a
+/// Cranley–Patterson rotation per set and dimension (Cranley & Patterson 1976). Each
+/// draw is uniform on [0, 1) on its own, so estimators stay unbiased.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Strata {
+    pub key: u64,
+    pub index: u32,
+}
+
+impl Strata {
+    pub fn new(key: u64, index: u32) -> Self {
+        Self { key, index }
+    }
+    /// The stratified uniform in [0, 1) of dimension `dim`.
+    pub fn uniform(&self, dim: u32) -> f32 {
+        let h = mix64(self.key ^ mix64(dim as u64 ^ 0x5851_f42d_4c95_7f2d));
+        let i = shuffle_index(self.index, h as u32);
+        let v = i.reverse_bits() as f64 / 4_294_967_296.0;
+        let r = (h >> 32) as f64 / 4_294_967_296.0;
+        let x = (v + r).fract() as f32;
+        x.min(1.0 - f32::EPSILON / 2.0)
+    }
+}
+
 /// Cosine-weighted direction about +z (Malley's method); pdf = cos θ / π.
 pub fn cosine_hemisphere(u: Vec2) -> Vec3A {
     let d = concentric_disk(u);
@@ -186,6 +234,36 @@ mod tests {
         assert_eq!(d.sample(0.9999), Some(2));
         assert_eq!(d.pmf(2), 0.75);
         assert!(Distribution1D::new(&[0.0, 0.0]).sample(0.5).is_none());
+    }
+
+    /// Every prefix of 2^m samples of a set has one point in each interval of width
+    /// 2^-m (rotated), per dimension; dimensions and sets differ; the mean is 1/2.
+    #[test]
+    fn strata_stratify_every_power_of_two_prefix() {
+        for key in [0u64, 7, 123_456_789] {
+            for dim in 0..6 {
+                let u: Vec<f32> = (0..64).map(|i| Strata::new(key, i).uniform(dim)).collect();
+                assert!(u.iter().all(|&x| (0.0..1.0).contains(&x)));
+                for m in 0..=6u32 {
+                    let n = 1usize << m;
+                    // Undo the rotation: the first point's offset within its stratum.
+                    let off = (u[0] as f64 * n as f64).fract();
+                    let mut seen = vec![false; n];
+                    for &x in &u[..n] {
+                        let s = ((x as f64 * n as f64 - off + 1e-4).floor() as i64).rem_euclid(n as i64) as usize;
+                        assert!(!seen[s], "key {key} dim {dim} prefix {n}: stratum {s} twice");
+                        seen[s] = true;
+                    }
+                }
+            }
+        }
+        let a: Vec<f32> = (0..8).map(|i| Strata::new(1, i).uniform(0)).collect();
+        let b: Vec<f32> = (0..8).map(|i| Strata::new(1, i).uniform(1)).collect();
+        let c: Vec<f32> = (0..8).map(|i| Strata::new(2, i).uniform(0)).collect();
+        assert!(a != b && a != c);
+        let n = 4096;
+        let mean: f64 = (0..n).map(|k| Strata::new(k as u64, 3).uniform(2) as f64).sum::<f64>() / n as f64;
+        assert!((mean - 0.5).abs() < 0.02, "{mean}");
     }
 
     #[test]
