@@ -37,6 +37,31 @@ def _register():
         _registered = True
 
 
+def add_floor_sun_world(sc, size: float, location) -> None:
+    """What every glTF bench scene is lit by (this file and bench/gltf_vs_cycles.py): a
+    grey rough floor plane of `size` at `location`, a sun of 3 W/m² (10° wide) from the
+    upper left and a dim sky-grey world (soft shadows, indirect light on the floor)."""
+    import bpy
+
+    bpy.ops.mesh.primitive_plane_add(size=size, location=tuple(location))
+    floor = bpy.context.object
+    mat = bpy.data.materials.new("Floor")
+    mat.use_nodes = True
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = (0.5, 0.5, 0.5, 1.0)
+    bsdf.inputs["Roughness"].default_value = 1.0
+    floor.data.materials.append(mat)
+    sun = bpy.data.lights.new("Sun", "SUN")
+    sun.energy, sun.angle = 3.0, math.radians(10)
+    so = bpy.data.objects.new("Sun", sun)
+    sc.collection.objects.link(so)
+    so.rotation_euler = (math.radians(50), 0.0, math.radians(-35))
+    world = bpy.data.worlds.new("World")
+    world.use_nodes = True
+    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.25, 0.27, 0.3, 1.0)
+    sc.world = world
+
+
 def build_scene(path: Path = GLTF):
     """(scene, warnings): the glTF file imported by Blender and exported by the add-on."""
     import bpy
@@ -57,25 +82,7 @@ def build_scene(path: Path = GLTF):
     for o in imported:  # a quarter turn about z so three faces show
         o.rotation_mode = "XYZ"
         o.rotation_euler.z += math.radians(25)
-    # A grey floor under the unit cube (its faces at ±0.5).
-    bpy.ops.mesh.primitive_plane_add(size=8, location=(0, 0, -0.5))
-    floor = bpy.context.object
-    mat = bpy.data.materials.new("Floor")
-    mat.use_nodes = True
-    bsdf = mat.node_tree.nodes["Principled BSDF"]
-    bsdf.inputs["Base Color"].default_value = (0.5, 0.5, 0.5, 1.0)
-    bsdf.inputs["Roughness"].default_value = 1.0
-    floor.data.materials.append(mat)
-    # A sun from the upper left and a dim world: soft shadows, indirect light on the floor.
-    sun = bpy.data.lights.new("Sun", "SUN")
-    sun.energy, sun.angle = 3.0, math.radians(10)
-    so = bpy.data.objects.new("Sun", sun)
-    sc.collection.objects.link(so)
-    so.rotation_euler = (math.radians(50), 0.0, math.radians(-35))
-    world = bpy.data.worlds.new("World")
-    world.use_nodes = True
-    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.25, 0.27, 0.3, 1.0)
-    sc.world = world
+    add_floor_sun_world(sc, size=8.0, location=(0.0, 0.0, -0.5))  # the unit cube's faces at ±0.5
     cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
     sc.collection.objects.link(cam)
     cam.location = (2.6, -2.6, 1.9)

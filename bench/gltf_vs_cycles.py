@@ -8,12 +8,16 @@ grey floor; then rendered by Cycles CPU and by Polychrome through the add-on (sa
 the add-on's warnings, the two render times.
 
     python bench/gltf_vs_cycles.py [--models A,B] [--size 128] [--samples 64]
-        [--cache ~/.cache/polychrome/gltf] [--write-docs]
+        [--cache ~/.cache/polychrome/gltf] [--fetch [--source DIR]] [--out DIR]
 
-Models are looked up as CACHE/<Name>/<Name>.gltf or .glb (glTF-Embedded or glTF-Binary
-variants of KhronosGroup/glTF-Sample-Assets, fetched there by hand: they are not
-vendored, except BoxTextured in tests/data/gltf). A missing model is listed as such.
-Needs `bpy` (numpy < 2) and OpenEXR in the venv.
+Models are looked up as tests/data/gltf/<Name>/ (only BoxTextured is vendored) or
+CACHE/<Name>/<Name>.gltf|.glb (CACHE: --cache, else $POLYCHROME_GLTF_CACHE, else
+~/.cache/polychrome/gltf). They are never committed. `--fetch` fills the cache with the
+variant MODELS names for each model (Models/<Name>/<variant>/ of
+KhronosGroup/glTF-Sample-Assets): from GitHub (raw.githubusercontent.com, the .glb, or the
+.gltf and the buffers and images it names), or with `--source DIR` from a local clone of
+that repository (a work tree, or a bare git directory). A model still missing is listed as
+such. Needs `bpy` (numpy < 2) and OpenEXR in the venv.
 """
 
 from __future__ import annotations
@@ -29,23 +33,29 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 VENDORED = ROOT / "tests" / "data" / "gltf"
 DEFAULT_CACHE = Path(os.environ.get("POLYCHROME_GLTF_CACHE", Path.home() / ".cache" / "polychrome" / "gltf"))
-MODELS = [
-    "BoxTextured",
-    "BoxVertexColors",
-    "TextureTransformTest",
-    "AlphaBlendModeTest",
-    "MetalRoughSpheres",
-    "NormalTangentTest",
-    "EmissiveStrengthTest",
-    "DamagedHelmet",
-    "ClearCoatTest",
-    "SheenCloth",
-    "TransmissionTest",
-    "IridescenceLamp",
-    "Avocado",
-    "Lantern",
-    "WaterBottle",
-]
+# Model → the KhronosGroup/glTF-Sample-Assets variant `--fetch` takes (glTF-Binary where the
+# repository has one whole, else glTF: a .gltf with its .bin and images beside it). Chosen to
+# cover issue 12's list: base colour / metallic-roughness / normal / occlusion / emissive maps,
+# alpha blend and mask, vertex colours, texture transforms and coordinates, clearcoat, sheen,
+# transmission, iridescence, anisotropy.
+MODELS = {
+    "BoxTextured": "glTF-Embedded",  # vendored in tests/data/gltf
+    "BoxVertexColors": "glTF-Binary",
+    "VertexColorTest": "glTF-Binary",
+    "TextureTransformTest": "glTF",
+    "TextureCoordinateTest": "glTF-Binary",
+    "AlphaBlendModeTest": "glTF-Binary",
+    "MetalRoughSpheresNoTextures": "glTF-Binary",
+    "NormalTangentTest": "glTF-Binary",
+    "EmissiveStrengthTest": "glTF-Binary",
+    "DamagedHelmet": "glTF-Binary",
+    "ClearCoatTest": "glTF-Binary",
+    "SheenCloth": "glTF",
+    "TransmissionTest": "glTF-Binary",
+    "IridescenceSuzanne": "glTF-Binary",
+    "AnisotropyStrengthTest": "glTF-Binary",
+}
+RAW = "https://raw.githubusercontent.com/KhronosGroup/glTF-Sample-Assets/main/Models"
 
 
 def find_model(name: str, cache: Path) -> Path | None:
@@ -57,9 +67,66 @@ def find_model(name: str, cache: Path) -> Path | None:
     return None
 
 
+def _fetch_files(name: str, variant: str, source: str | None) -> dict[str, bytes]:
+    """{file name: bytes} of Models/<name>/<variant>/ from a local glTF-Sample-Assets clone
+    (a work tree or a bare git directory) or, with `source` None, from GitHub."""
+    import json
+    import subprocess
+    import urllib.parse
+    import urllib.request
+
+    sub = f"Models/{name}/{variant}/"
+    if source is not None:
+        src = Path(source).expanduser()
+        if (src / sub).is_dir():  # a checked-out work tree
+            return {f.name: f.read_bytes() for f in (src / sub).iterdir() if f.is_file()}
+        git = ["git", "--git-dir", str(src / ".git" if (src / ".git").exists() else src)]
+        names = subprocess.run([*git, "ls-tree", "--name-only", "HEAD", sub], capture_output=True, text=True, check=True)
+        files = {}
+        for path in names.stdout.split():
+            blob = subprocess.run([*git, "cat-file", "blob", f"HEAD:{path}"], capture_output=True)
+            if blob.returncode != 0:
+                raise FileNotFoundError(f"{name}: '{path}' is listed in {src} but its content is missing")
+            files[Path(path).name] = blob.stdout
+        return files
+
+    def get(fname):
+        url = f"{RAW}/{name}/{variant}/{urllib.parse.quote(fname)}"
+        with urllib.request.urlopen(url, timeout=120) as r:  # noqa: S310 - a fixed https host
+            return r.read()
+
+    main = f"{name}.glb" if variant == "glTF-Binary" else f"{name}.gltf"
+    files = {main: get(main)}
+    if main.endswith(".gltf"):  # the buffers and images a .gltf names beside it
+        doc = json.loads(files[main])
+        for item in doc.get("buffers", []) + doc.get("images", []):
+            uri = item.get("uri")
+            if uri and not uri.startswith("data:"):
+                files[urllib.parse.unquote(uri)] = get(urllib.parse.unquote(uri))
+    return files
+
+
+def fetch_model(name: str, cache: Path, source: str | None = None) -> Path:
+    """Puts model `name` into CACHE/<name>/ (see the module docstring) and returns its path."""
+    have = find_model(name, cache)
+    if have is not None:
+        return have
+    if name not in MODELS:
+        raise KeyError(f"glTF model '{name}': not in bench/gltf_vs_cycles.py's MODELS, so no variant to fetch")
+    files = _fetch_files(name, MODELS[name], source)
+    if not any(f in files for f in (f"{name}.gltf", f"{name}.glb")):
+        raise FileNotFoundError(f"glTF model '{name}': no {name}.gltf/.glb in {MODELS[name]} of {source or RAW}")
+    d = cache / name
+    d.mkdir(parents=True, exist_ok=True)
+    for fname, data in files.items():
+        (d / fname).write_bytes(data)
+    return find_model(name, cache)
+
+
 def setup_scene(path: Path, size: int, samples: int):
     """Imports `path` into an empty scene, adds floor, sun, world and a framing camera."""
     import bpy
+    from gltf_scene import add_floor_sun_world
     from mathutils import Vector
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -77,23 +144,7 @@ def setup_scene(path: Path, size: int, samples: int):
     lo = Vector([min(p[i] for p in pts) for i in range(3)])
     hi = Vector([max(p[i] for p in pts) for i in range(3)])
     centre, radius = (lo + hi) / 2, max((hi - lo).length / 2, 1e-3)
-    bpy.ops.mesh.primitive_plane_add(size=radius * 20, location=(centre.x, centre.y, lo.z))
-    floor = bpy.context.object
-    mat = bpy.data.materials.new("Floor")
-    mat.use_nodes = True
-    bsdf = mat.node_tree.nodes["Principled BSDF"]
-    bsdf.inputs["Base Color"].default_value = (0.5, 0.5, 0.5, 1.0)
-    bsdf.inputs["Roughness"].default_value = 1.0
-    floor.data.materials.append(mat)
-    sun = bpy.data.lights.new("Sun", "SUN")
-    sun.energy, sun.angle = 3.0, math.radians(10)
-    so = bpy.data.objects.new("Sun", sun)
-    sc.collection.objects.link(so)
-    so.rotation_euler = (math.radians(50), 0.0, math.radians(-35))
-    world = bpy.data.worlds.new("World")
-    world.use_nodes = True
-    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.25, 0.27, 0.3, 1.0)
-    sc.world = world
+    add_floor_sun_world(sc, size=radius * 20, location=(centre.x, centre.y, lo.z))
     cd = bpy.data.cameras.new("Camera")
     cd.lens = 50.0
     cam = bpy.data.objects.new("Camera", cd)
@@ -170,6 +221,8 @@ def main() -> int:
     ap.add_argument("--size", type=int, default=128)
     ap.add_argument("--samples", type=int, default=64)
     ap.add_argument("--cache", type=Path, default=DEFAULT_CACHE)
+    ap.add_argument("--fetch", action="store_true", help="fetch models missing from the cache (see --source)")
+    ap.add_argument("--source", default=None, help="a local glTF-Sample-Assets clone to fetch from (default: GitHub)")
     ap.add_argument("--out", type=Path, default=None, help="directory for the EXRs (default: a temp dir)")
     args = ap.parse_args()
     import atexit
@@ -181,6 +234,11 @@ def main() -> int:
     rows = []
     for name in args.models.split(","):
         p = find_model(name, args.cache)
+        if p is None and args.fetch:
+            try:
+                p = fetch_model(name, args.cache, args.source)
+            except Exception as e:  # noqa: BLE001 - one model failing must not stop the table
+                print(f"{name}: fetch failed: {e}", flush=True)
         if p is None:
             rows.append(f"| {name} | – | – | not in {args.cache} | – | – |")
             print(rows[-1], flush=True)
