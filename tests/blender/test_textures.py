@@ -69,3 +69,29 @@ def test_image_texture_and_hdri_world(tmp_path):
     for got, want in ((r["left"], srgb_to_linear([0.8, 0.3, 0.2])), (r["right"], srgb_to_linear([0.1, 0.4, 0.9]))):
         assert np.allclose(got, want, rtol=0.03, atol=0.005), (got, want.tolist())
     assert np.allclose(r["sky"], [0.4, 0.8, 1.6], rtol=0.03), r["sky"]
+
+
+def test_graph_pixels_replace_non_finite_values(tmp_path):
+    """A float image's NaN and ±inf pixels read 0 in the graph texture (export/textures.py
+    `finite`); finite pixels and 8-bit images are passed through unchanged."""
+    proc, res = run_bpy(
+        tmp_path,
+        """
+    from polychrome_blender.export.textures import graph_rgba, finite
+    from polychrome_blender.export.warnings import Warnings
+    img = bpy.data.images.new('F', 4, 1, float_buffer=True)
+    px = np.array([[0.5, 2.0, 0.25, 1.0], [np.nan, 1.0, 0.0, 1.0], [np.inf, -np.inf, 3.0, 0.5], [0.1, 0.2, 0.3, 0.4]], np.float32)
+    img.pixels.foreach_set(px.ravel())
+    got, enc = graph_rgba(img, 'material M', Warnings())
+    b = bpy.data.images.new('B', 2, 1)
+    b.pixels.foreach_set(np.array([0.2, 0.4, 0.6, 1.0, 1.0, 0.0, 0.5, 0.5], np.float32))
+    gb, encb = graph_rgba(b, 'material M', Warnings())
+    same = np.arange(6, dtype=np.float32)
+    emit(got=got.reshape(-1, 4).tolist(), enc=enc, gb=gb.reshape(-1, 4).tolist(), encb=encb, same=finite(same) is same)
+    """,
+    )
+    r = check(proc, res)[0]
+    assert r["enc"] == "linear" and r["encb"] == "srgb", r
+    assert np.allclose(r["got"], [[0.5, 2.0, 0.25, 1.0], [0.0, 1.0, 0.0, 1.0], [0.0, 0.0, 3.0, 0.5], [0.1, 0.2, 0.3, 0.4]]), r
+    assert np.array_equal(r["gb"], [[51, 102, 153, 255], [255, 0, 128, 128]]), r
+    assert r["same"] is True

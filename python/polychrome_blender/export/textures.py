@@ -31,6 +31,16 @@ def image_pixels(img):
     return buf.reshape(h, w, c)[::-1]
 
 
+def finite(px):
+    """``px`` with NaN and ±inf replaced by 0. One ``isfinite`` pass when every value is
+    finite (always for 8-bit images) instead of ``np.nan_to_num``'s copy and three
+    passes, which took 27 of DamagedHelmet's 43 s of export under cProfile (five 2048²
+    images, loaded machine): 0.12 s against 1.47 s per 2048² RGBA float32 image."""
+    if np.isfinite(px).all():
+        return px
+    return np.nan_to_num(px, nan=0.0, posinf=0.0, neginf=0.0)
+
+
 def blender_texture(node, owner, warnings):
     """A Texture for an Image (or Environment) Texture node, or None (with a warning) if
     it cannot be used."""
@@ -46,7 +56,7 @@ def blender_texture(node, owner, warnings):
     if wrap is None:
         warnings.add(("wrap", img.name), f"{owner}: image '{img.name}': extension {extension} is not supported; REPEAT is used")
         wrap = "REPEAT"
-    px = np.nan_to_num(px[:, :, :3], nan=0.0, posinf=0.0, neginf=0.0)
+    px = finite(px[:, :, :3])
     srgb = (not img.is_float) and img.colorspace_settings.name in ("sRGB", "sRGB EOTF")
     return pc.Texture.from_array(px, "srgb" if srgb else "linear", wrap, img.name)
 
@@ -85,7 +95,7 @@ def graph_rgba(img, owner, warnings):
         rgb = np.repeat(px[:, :, :1], 3, axis=2) if px.shape[2] < 3 else px[:, :, :3]
         alpha = px[:, :, 1:2] if px.shape[2] == 2 else np.ones_like(px[:, :, :1])
         px = np.concatenate([rgb, alpha], axis=2)
-    px = np.nan_to_num(px, nan=0.0, posinf=0.0, neginf=0.0)
+    px = finite(px)
     space = img.colorspace_settings.name
     if img.is_float or img.colorspace_settings.is_data or space in LINEAR_BYTES:
         return px, "linear"
@@ -98,7 +108,7 @@ def graph_rgba(img, owner, warnings):
         return np.rint(np.clip(px, 0.0, 1.0) * 255.0).astype(np.uint8), "srgb"
     buf = np.ascontiguousarray(px, np.float32)
     proc.applyRGBA(buf)
-    return np.nan_to_num(buf, nan=0.0, posinf=0.0, neginf=0.0), "linear"
+    return finite(buf), "linear"
 
 
 def graph_texture(node, owner, node_name, warnings, cache, user=None, associate=False, ignore_alpha=False):
