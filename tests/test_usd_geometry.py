@@ -344,3 +344,14 @@ def test_display_color_per_curve_and_per_point(tmp_path):
     print({k: np.round(v, 3) for k, v in got.items()})
     for k in got:
         assert np.allclose(got[k], want[k], atol=0.03), (k, got[k], want[k])
+
+
+def test_a_prim_still_over_a_later_shutter_is_placed_where_the_shutter_sees_it(tmp_path):
+    """Samples at 0 (X0) and 1 (X0 + D); the shutter is open over [2, 3] (frame 0): the
+    square is held at its last sample there, not at the earliest one, and does not blur."""
+    path = moving_square_stage(tmp_path / "late.usda", "xform", shutter=(2.0, 3.0))
+    scene = usd.read_stage(path)
+    desc, _ = scene.description()
+    square = [i for i in desc["instances"] if i["name"] == "/square"][0]
+    assert not square.get("motion")
+    assert np.allclose(np.asarray(square["transform"])[:3, 3], [X0 + D, Y, 0])

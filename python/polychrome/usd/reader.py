@@ -1535,7 +1535,8 @@ class _Reader:
 
     def transform_motion(self, prim, shutter) -> list[np.ndarray] | None:
         """Object → world keys over the shutter when the prim's (or an ancestor's) local
-        transform is time-sampled; None when it stands still."""
+        transform is time-sampled; None when it is not; one key (its placement during the
+        exposure) when it is time-sampled but stands still over the shutter."""
         times: set[float] = set()
         varying = False
         interval = self.Gf.Interval(shutter[0], shutter[1])
@@ -1573,7 +1574,7 @@ class _Reader:
                 break
             k = min(2 * k - 1, MAX_MOTION_KEYS)
         if all(np.allclose(keys[0], m, rtol=0, atol=1e-9) for m in keys[1:]):
-            return None
+            return keys[:1]
         return keys
 
     def instancer_motion(self, shutter) -> dict[int, list[np.ndarray]]:
@@ -1748,7 +1749,10 @@ class _Reader:
             if cam_keys is not None:
                 for m in cam_keys:  # camera scale does not change the view (read_camera)
                     m[:3, :3] /= np.linalg.norm(m[:3, :3], axis=0)
-                scene.camera.motion = cam_keys
+                if len(cam_keys) > 1:
+                    scene.camera.motion = cam_keys
+                else:
+                    scene.camera.to_world = cam_keys[0]
 
         order = sorted(
             self.meshes,
@@ -1780,6 +1784,8 @@ class _Reader:
             visibility = rest[0] if rest else None
             moving = rest[1] if len(rest) > 1 else None
             motion = self.transform_motion(moving, shutter) if moving is not None and shutter is not None else instanced.get(i)
+            if motion is not None and len(motion) == 1:  # animated, but still while the shutter is open
+                matrix, motion = motion[0], None
             scene.add_instance(index[key], matrix, name, visibility=visibility, motion=motion)
         for light in self.lights:
             scene.add_light(light)
