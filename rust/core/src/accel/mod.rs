@@ -32,7 +32,9 @@ pub struct Hit {
     pub b2: f32,
 }
 
+/// One BVH over (a chunk of) a mesh's triangles.
 struct MeshBvh {
+    /// `bvh.primitive_indices` holds the mesh's triangle index of each leaf slot.
     bvh: CwBvh,
     /// Triangles in BVH leaf order, so traversal reads them without indirection.
     triangles: Vec<[Vec3A; 3]>,
@@ -53,13 +55,52 @@ impl MeshBvh {
             }
         }
     }
+
+    /// The BVH over the mesh's triangles `ids` (all of them when None), built with
+    /// `params`.
+    fn build(m: &Mesh, ids: Option<&[u32]>, params: BvhBuildParams) -> Self {
+        let count = ids.map_or(m.indices.len(), |v| v.len());
+        let mesh_index = |k: usize| ids.map_or(k, |v| v[k] as usize);
+        let keys = m.motion.as_ref().map_or(0, |v| v.key_count());
+        let aabbs: Vec<Aabb> = (0..count)
+            .map(|k| {
+                let i = mesh_index(k);
+                let [a, b, c] = m.triangle(i);
+                let mut bb = Aabb::new(a.min(b).min(c), a.max(b).max(c));
+                for k in 0..keys {
+                    for p in m.triangle_at(i, k as f32 / (keys - 1) as f32) {
+                        bb.extend(p);
+                    }
+                }
+                bb
+            })
+            .collect();
+        let mut bvh = build_cwbvh(&aabbs, params, &mut Duration::default());
+        drop(aabbs);
+        for p in &mut bvh.primitive_indices {
+            *p = mesh_index(*p as usize) as u32;
+        }
+        let triangles = bvh.primitive_indices.iter().map(|&i| m.triangle(i as usize)).collect();
+        let motion = m.motion.as_ref().map(|v| {
+            (0..v.key_count())
+                .map(|k| {
+                    bvh.primitive_indices
+                        .iter()
+                        .map(|&i| m.indices[i as usize].map(|j| v.positions[k][j as usize]))
+                        .collect()
+                })
+                .collect()
+        });
+        MeshBvh { bvh, triangles, motion }
+    }
 }
 
 pub struct Accel {
-    meshes: Vec<Option<MeshBvh>>,
-    /// Over instances whose mesh has triangles; leaf ids index `tlas_instances`.
+    /// Per mesh, its BVHs: one, or one per chunk of [`CHUNK`] triangles for larger meshes.
+    meshes: Vec<Vec<MeshBvh>>,
+    /// Over (instance, chunk) pairs whose mesh has triangles; leaf ids index `tlas_instances`.
     tlas: Option<CwBvh>,
-    tlas_instances: Vec<u32>,
+    tlas_instances: Vec<(u32, u32)>,
 }
 
 /// Large meshes use obvhs's fast preset: on 1M triangles it builds about twice as fast
@@ -73,47 +114,79 @@ fn build_params_for(primitives: usize) -> BvhBuildParams {
     }
 }
 
+/// Triangles per BVH of a large mesh. obvhs's build holds about 250 bytes per
+/// triangle while it runs (boxes, the binary BVH, the wide-BVH conversion's 7 cost
+/// decisions per binary node) on top of the 60 it keeps, so a mesh with more triangles
+/// is cut into chunks of consecutive centroid Morton order and each chunk gets its own
+/// BVH, a few at a time: the transient memory stays bounded by the chunk size, and
+/// the top-level BVH sees each chunk as an instance. Meshes up to this size build as
+/// one BVH, exactly as before chunking.
+pub const CHUNK: usize = 1 << 19;
+
+/// The mesh's triangles in runs of at most `chunk`, in the Morton order of their
+/// centroids (10 bits per axis over the mesh's bounds), so each run is spatially compact.
+fn chunks(m: &Mesh, chunk: usize) -> Vec<Vec<u32>> {
+    let n = m.indices.len();
+    let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
+    for p in &m.positions {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    let scale = Vec3A::splat(1023.0) / (hi - lo).max(Vec3A::splat(f32::MIN_POSITIVE));
+    let spread = |v: u32| {
+        // Bits of a 10-bit integer spread to every third bit.
+        let mut x = v & 0x3ff;
+        x = (x | (x << 16)) & 0x0300_00ff;
+        x = (x | (x << 8)) & 0x0300_f00f;
+        x = (x | (x << 4)) & 0x030c_30c3;
+        (x | (x << 2)) & 0x0924_9249
+    };
+    let mut keys: Vec<u64> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let [a, b, c] = m.triangle(i);
+            let q = ((a + b + c) * (1.0 / 3.0) - lo) * scale;
+            let code = spread(q.x as u32) | (spread(q.y as u32) << 1) | (spread(q.z as u32) << 2);
+            ((code as u64) << 32) | i as u64
+        })
+        .collect();
+    keys.par_sort_unstable();
+    keys.chunks(chunk).map(|c| c.iter().map(|&k| k as u32).collect()).collect()
+}
+
 impl Accel {
     pub fn build(meshes: &[Mesh], instances: &[Instance]) -> Self {
-        let mesh_bvhs: Vec<Option<MeshBvh>> = meshes
+        Self::build_chunked(meshes, instances, CHUNK)
+    }
+
+    /// [`Accel::build`] with meshes of more than `chunk` triangles cut into chunks.
+    fn build_chunked(meshes: &[Mesh], instances: &[Instance], chunk: usize) -> Self {
+        let threads = rayon::current_num_threads().max(1);
+        let mesh_bvhs: Vec<Vec<MeshBvh>> = meshes
             .par_iter()
             .map(|m| {
-                if m.indices.is_empty() {
-                    return None;
+                let n = m.indices.len();
+                let params = build_params_for(n);
+                if n == 0 {
+                    return Vec::new();
                 }
-                let keys = m.motion.as_ref().map_or(0, |v| v.key_count());
-                let aabbs: Vec<Aabb> = (0..m.indices.len())
-                    .map(|i| {
-                        let [a, b, c] = m.triangle(i);
-                        let mut bb = Aabb::new(a.min(b).min(c), a.max(b).max(c));
-                        for k in 0..keys {
-                            for p in m.triangle_at(i, k as f32 / (keys - 1) as f32) {
-                                bb.extend(p);
-                            }
-                        }
-                        bb
-                    })
-                    .collect();
-                let bvh = build_cwbvh(&aabbs, build_params_for(aabbs.len()), &mut Duration::default());
-                let triangles = bvh.primitive_indices.iter().map(|&i| m.triangle(i as usize)).collect();
-                let motion = m.motion.as_ref().map(|v| {
-                    (0..v.key_count())
-                        .map(|k| {
-                            bvh.primitive_indices
-                                .iter()
-                                .map(|&i| m.indices[i as usize].map(|j| v.positions[k][j as usize]))
-                                .collect()
-                        })
-                        .collect()
-                });
-                Some(MeshBvh { bvh, triangles, motion })
+                if n <= chunk {
+                    return vec![MeshBvh::build(m, None, params)];
+                }
+                let parts = chunks(m, chunk);
+                let mut out = Vec::with_capacity(parts.len());
+                // A few chunks at a time, so at most `threads` builds hold their transient memory.
+                for batch in parts.chunks(threads) {
+                    out.extend(batch.par_iter().map(|ids| MeshBvh::build(m, Some(ids), params)).collect::<Vec<_>>());
+                }
+                out
             })
             .collect();
         let mut tlas_instances = Vec::new();
         let mut boxes = Vec::new();
         for (k, inst) in instances.iter().enumerate() {
-            if let Some(mb) = &mesh_bvhs[inst.mesh as usize] {
-                tlas_instances.push(k as u32);
+            for (c, mb) in mesh_bvhs[inst.mesh as usize].iter().enumerate() {
+                tlas_instances.push((k as u32, c as u32));
                 boxes.push(transform_aabb(&mb.bvh.total_aabb, inst));
             }
         }
@@ -129,6 +202,24 @@ impl Accel {
         Self { meshes: mesh_bvhs, tlas, tlas_instances }
     }
 
+    /// Bytes the structure holds (nodes, leaf order, triangle copies), for benchmarks.
+    pub fn bytes(&self) -> usize {
+        let bvh = |b: &CwBvh| {
+            b.nodes.len() * std::mem::size_of::<obvhs::cwbvh::node::CwBvhNode>() + b.primitive_indices.len() * 4
+        };
+        let meshes: usize = self
+            .meshes
+            .iter()
+            .flatten()
+            .map(|m: &MeshBvh| {
+                bvh(&m.bvh)
+                    + std::mem::size_of_val(m.triangles.as_slice())
+                    + m.motion.as_ref().map_or(0, |k| k.iter().map(|v| std::mem::size_of_val(v.as_slice())).sum())
+            })
+            .sum();
+        meshes + self.tlas.as_ref().map_or(0, bvh) + self.tlas_instances.len() * 8
+    }
+
     /// Closest hit along `ray` within (tmin, tmax).
     pub fn intersect(&self, instances: &[Instance], ray: &Ray) -> Option<Hit> {
         let tlas = self.tlas.as_ref()?;
@@ -136,12 +227,12 @@ impl Accel {
         let mut hit = RayHit::none();
         let world_ray = bvh_ray(ray.origin, ray.direction, ray.tmin, ray.tmax);
         tlas.ray_traverse(world_ray, &mut hit, |r, slot| {
-            let inst_id = self.tlas_instances[slot];
+            let (inst_id, chunk) = self.tlas_instances[slot];
             let inst = &instances[inst_id as usize];
             if !visibility::sees(inst.visibility, ray.kind) {
                 return f32::INFINITY; // the ray goes on through instances its kind does not see
             }
-            let mb = self.meshes[inst.mesh as usize].as_ref().expect("tlas holds meshes with triangles");
+            let mb = &self.meshes[inst.mesh as usize][chunk as usize];
             // Object space: the direction is not renormalised, so t is the same in both spaces.
             let to_object = inst.to_object_at(ray.time);
             let o = to_object.transform_point3a(r.origin);
@@ -182,11 +273,12 @@ impl Accel {
         let Some(tlas) = self.tlas.as_ref() else { return false };
         let world_ray = bvh_ray(ray.origin, ray.direction, ray.tmin, ray.tmax);
         !tlas.ray_traverse_miss(world_ray, |r, slot| {
-            let inst = &instances[self.tlas_instances[slot] as usize];
+            let (inst_id, chunk) = self.tlas_instances[slot];
+            let inst = &instances[inst_id as usize];
             if !visibility::sees(inst.visibility, ray.kind) {
                 return f32::INFINITY;
             }
-            let mb = self.meshes[inst.mesh as usize].as_ref().expect("tlas holds meshes with triangles");
+            let mb = &self.meshes[inst.mesh as usize][chunk as usize];
             let to_object = inst.to_object_at(ray.time);
             let o = to_object.transform_point3a(r.origin);
             let d = to_object.transform_vector3a(r.direction);
@@ -288,6 +380,60 @@ mod tests {
         let ray = Ray::new(Vec3A::new(0.1, 0.2, 5.0), Vec3A::new(-0.0, -0.0, -1.0));
         assert!(accel.intersect(&instances, &ray).is_some());
         assert!(accel.occluded(&instances, &ray));
+    }
+
+    #[test]
+    fn a_mesh_cut_into_chunks_gives_the_same_hits() {
+        // A displaced 40 × 40 grid (3042 triangles), placed twice; chunks of 500.
+        let n = 40;
+        let mut pos = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let (x, y) = (i as f32 / (n - 1) as f32, j as f32 / (n - 1) as f32);
+                pos.extend_from_slice(&[x * 2.0 - 1.0, y * 2.0 - 1.0, 0.1 * (7.0 * x).sin() * (5.0 * y).cos()]);
+            }
+        }
+        let mut idx = Vec::new();
+        for j in 0..n - 1 {
+            for i in 0..n - 1 {
+                let a = (i + n * j) as u32;
+                let n = n as u32;
+                idx.extend_from_slice(&[a, a + 1, a + n + 1, a, a + n + 1, a + n]);
+            }
+        }
+        let ids = vec![0; idx.len() / 3];
+        let meshes = vec![Mesh::from_buffers("grid", &pos, &idx, None, None, &ids).unwrap()];
+        let instances = vec![
+            Instance::new("a", 0, Affine3A::IDENTITY).unwrap(),
+            Instance::new("b", 0, Affine3A::from_translation(glam::Vec3::new(0.5, 0.0, -0.5))).unwrap(),
+        ];
+        let whole = Accel::build_chunked(&meshes, &instances, usize::MAX);
+        let cut = Accel::build_chunked(&meshes, &instances, 500);
+        assert_eq!(whole.tlas_instances.len(), 2);
+        assert_eq!(cut.tlas_instances.len(), 2 * 7);
+        let mut state = 12345u32;
+        let mut rnd = || {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            state as f32 / u32::MAX as f32
+        };
+        let mut hits = 0;
+        for _ in 0..2000 {
+            let o = Vec3A::new(rnd() * 3.0 - 1.5, rnd() * 3.0 - 1.5, 2.0);
+            let d = (Vec3A::new(rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, -0.5) - o).normalize();
+            let ray = Ray::new(o, d);
+            let (a, b) = (whole.intersect(&instances, &ray), cut.intersect(&instances, &ray));
+            assert_eq!(a.is_some(), b.is_some());
+            if let (Some(a), Some(b)) = (a, b) {
+                hits += 1;
+                assert_eq!((a.t, a.instance, a.triangle), (b.t, b.instance, b.triangle));
+                assert_eq!((a.b1, a.b2), (b.b1, b.b2));
+            }
+            let seg = Ray::segment(o, d, 1.5);
+            assert_eq!(whole.occluded(&instances, &seg), cut.occluded(&instances, &seg));
+        }
+        assert!(hits > 500, "{hits}");
     }
 
     #[test]
