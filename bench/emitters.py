@@ -38,33 +38,23 @@ polychrome_blender.register()
 Engine = polychrome_blender.engine.PolychromeRenderEngine
 
 
-def diffuse(name, rgb):
+def empty_material(name):
+    """A node material with only its Material Output."""
     m = bpy.data.materials.new(name)
     m.use_nodes = True
     nt = m.node_tree
     for n in list(nt.nodes):
         if n.type != "OUTPUT_MATERIAL":
             nt.nodes.remove(n)
+    return m, nt
+
+
+def diffuse(name, rgb):
+    m, nt = empty_material(name)
     d = nt.nodes.new("ShaderNodeBsdfDiffuse")
     d.inputs["Color"].default_value = (*rgb, 1.0)
     nt.links.new(d.outputs["BSDF"], nt.nodes["Material Output"].inputs["Surface"])
     return m
-
-
-captured = []
-
-
-def capture_exports():
-    """Records what each export sends to the core (meshes, triangles, graph materials)."""
-    eng = polychrome_blender.engine
-    original = eng.export_scene
-
-    def wrapped(*a, **k):
-        scene, warnings = original(*a, **k)
-        captured.append(scene)
-        return scene, warnings
-
-    eng.export_scene = wrapped
 
 
 def stats_row(label, wall, st):
@@ -102,12 +92,7 @@ def big_emitter(triangles):
     px = np.ones((256, 256, 4), np.float32)
     px[..., :3] = rng.random((256, 256, 3), dtype=np.float32)
     img.pixels.foreach_set(px.ravel())
-    m = bpy.data.materials.new("Textured lamp")
-    m.use_nodes = True
-    nt = m.node_tree
-    for n in list(nt.nodes):
-        if n.type != "OUTPUT_MATERIAL":
-            nt.nodes.remove(n)
+    m, nt = empty_material("Textured lamp")
     tex = nt.nodes.new("ShaderNodeTexImage")
     tex.image = img
     em = nt.nodes.new("ShaderNodeEmission")
@@ -136,7 +121,6 @@ def main():
     ap.add_argument("--label", default="this build")
     ap.add_argument("--write", type=Path)
     args = ap.parse_args()
-    capture_exports()
     rows = []
     wall, st = preview()
     rows.append(stats_row(f"material preview ({args.label})", wall, st))

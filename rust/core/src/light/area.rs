@@ -4,7 +4,7 @@
 use super::{EmissionSample, Light, LightSample};
 use crate::geometry::Frame;
 use crate::sampling::cosine_hemisphere;
-use crate::sampling::uniform_triangle;
+use crate::sampling::uniform_triangle_point;
 use crate::spectrum::SampledSpectrum;
 use glam::{Vec2, Vec3A};
 use std::f32::consts::PI;
@@ -64,15 +64,8 @@ impl Light for AreaTriangle {
         faces * PI as f64 * self.area as f64 * self.radiance.dot(weights) as f64
     }
     fn sample_li(&self, p: Vec3A, u: Vec2, le: &mut SampledSpectrum) -> Option<LightSample> {
-        let (b1, b2) = uniform_triangle(u);
-        let q = self.p[0] * (1.0 - b1 - b2) + self.p[1] * b1 + self.p[2] * b2;
-        let d = q - p;
-        let d2 = d.length_squared();
-        if d2 <= 0.0 || !d2.is_finite() {
-            return None;
-        }
-        let distance = d2.sqrt();
-        let wi = d / distance;
+        let (_, _, q) = uniform_triangle_point(&self.p, u);
+        let (wi, distance, _) = super::direction_to(p, q)?;
         if !self.lit_from(wi) {
             return None; // behind a one-sided emitter
         }
@@ -87,8 +80,7 @@ impl Light for AreaTriangle {
         self.pdf_solid_angle(wi, distance)
     }
     fn sample_le(&self, u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
-        let (b1, b2) = uniform_triangle(u_pos);
-        let origin = self.p[0] * (1.0 - b1 - b2) + self.p[1] * b1 + self.p[2] * b2;
+        let (_, _, origin) = uniform_triangle_point(&self.p, u_pos);
         // Both faces: pick one with probability 1/2 (reusing u_dir.x), cosine about it;
         // one-sided: the front, cosine about it.
         let (side, ux, faces) = if self.one_sided {

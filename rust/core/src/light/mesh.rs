@@ -8,7 +8,7 @@
 
 use super::{EmissionSample, LeDensity, Light, LightSample};
 use crate::geometry::Frame;
-use crate::sampling::{cosine_hemisphere, uniform_triangle, Distribution1D};
+use crate::sampling::{cosine_hemisphere, uniform_triangle_point, Distribution1D};
 use crate::spectrum::SampledSpectrum;
 use glam::{Vec2, Vec3A};
 use std::f32::consts::PI;
@@ -107,12 +107,6 @@ impl MeshLight {
         let (n, area) = normal_area(&self.p[i])?;
         Some((n, self.distribution.pmf(i) / area))
     }
-
-    fn point(&self, i: usize, u: Vec2) -> (f32, f32, Vec3A) {
-        let (b1, b2) = uniform_triangle(u);
-        let p = &self.p[i];
-        (b1, b2, p[0] * (1.0 - b1 - b2) + p[1] * b1 + p[2] * b2)
-    }
 }
 
 impl Light for MeshLight {
@@ -122,14 +116,8 @@ impl Light for MeshLight {
     }
     fn sample_li(&self, p: Vec3A, u: Vec2, le: &mut SampledSpectrum) -> Option<LightSample> {
         let (i, ux) = self.distribution.sample_remapped(u.x)?;
-        let (b1, b2, q) = self.point(i, Vec2::new(ux, u.y));
-        let d = q - p;
-        let d2 = d.length_squared();
-        if d2 <= 0.0 || !d2.is_finite() {
-            return None;
-        }
-        let distance = d2.sqrt();
-        let wi = d / distance;
+        let (b1, b2, q) = uniform_triangle_point(&self.p[i], Vec2::new(ux, u.y));
+        let (wi, distance, d2) = super::direction_to(p, q)?;
         let (n, pdf_area) = self.pdf_area(i)?;
         let cos = n.dot(wi).abs();
         let pdf = pdf_area * d2 / cos;
@@ -153,7 +141,7 @@ impl Light for MeshLight {
     }
     fn sample_le(&self, u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
         let (i, ux) = self.distribution.sample_remapped(u_pos.x)?;
-        let (b1, b2, origin) = self.point(i, Vec2::new(ux, u_pos.y));
+        let (b1, b2, origin) = uniform_triangle_point(&self.p[i], Vec2::new(ux, u_pos.y));
         let (normal, pdf_pos) = self.pdf_area(i)?;
         // Both faces: pick one with probability 1/2 (reusing u_dir.x), cosine about it.
         let (side, ux) = if u_dir.x < 0.5 { (1.0, u_dir.x * 2.0) } else { (-1.0, (u_dir.x - 0.5) * 2.0) };

@@ -120,6 +120,18 @@ pub fn sample_uniform_cone(u: Vec2, one_minus_cos_max: f32) -> (Vec3A, f32) {
     (Vec3A::new(sin * phi.cos(), sin * phi.sin(), cos), 1.0 / (2.0 * std::f32::consts::PI * one_minus_cos_max))
 }
 
+/// The unit direction from `p` to `q`, the distance and its square; None when the
+/// points coincide or are not finite (no light sample then).
+pub(crate) fn direction_to(p: Vec3A, q: Vec3A) -> Option<(Vec3A, f32, f32)> {
+    let d = q - p;
+    let d2 = d.length_squared();
+    if d2 <= 0.0 || !d2.is_finite() {
+        return None;
+    }
+    let distance = d2.sqrt();
+    Some((d / distance, distance, d2))
+}
+
 /// Samples the cone a sphere (`center`, `radius` > 0) subtends at `p`, uniformly in
 /// solid angle, as pbrt-v4's `Sphere::Sample(ctx, u)` and Cycles' sphere lights
 /// (intern/cycles/kernel/light/point.h, `point_light_sample`, Blender 4.x) do: the unit

@@ -46,15 +46,10 @@ pub(crate) fn sample_point_or_sphere(
         // Not hittable by BSDF rays: weight 1 (delta), the pdf still divides.
         return Some(LightSample { wi, distance, pdf, delta: true, part: 0 });
     }
-    let d = center - p;
-    let d2 = d.length_squared();
-    if d2 <= 0.0 || !d2.is_finite() {
-        return None;
-    }
-    let distance = d2.sqrt();
+    let (wi, distance, d2) = super::direction_to(p, center)?;
     le.copy_from(intensity);
     le.scale(scale / d2);
-    Some(LightSample { wi: d / distance, distance, pdf: 1.0, delta: true, part: 0 })
+    Some(LightSample { wi, distance, pdf: 1.0, delta: true, part: 0 })
 }
 
 /// A ray leaving a sphere light: a uniform point of the sphere and a cosine-weighted

@@ -62,12 +62,8 @@ impl Light for SpotLight {
         2.0 * PI as f64 * (1.0 - self.cos_half_angle as f64) * self.intensity.dot(weights) as f64
     }
     fn sample_li(&self, p: Vec3A, u: Vec2, le: &mut SampledSpectrum) -> Option<LightSample> {
-        let d = self.position - p;
-        let d2 = d.length_squared();
-        if d2 <= 0.0 || !d2.is_finite() {
-            return None;
-        }
-        let fall = self.falloff(-d / d2.sqrt());
+        let (wi, _, _) = super::direction_to(p, self.position)?;
+        let fall = self.falloff(-wi);
         if fall <= 0.0 {
             return None;
         }

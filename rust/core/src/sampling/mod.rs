@@ -121,6 +121,12 @@ pub fn uniform_sphere(u: Vec2) -> Vec3A {
     Vec3A::new(r * phi.cos(), r * phi.sin(), z)
 }
 
+/// A uniform point of triangle `p`: its barycentrics (b1, b2) and position.
+pub fn uniform_triangle_point(p: &[Vec3A; 3], u: Vec2) -> (f32, f32, Vec3A) {
+    let (b1, b2) = uniform_triangle(u);
+    (b1, b2, p[0] * (1.0 - b1 - b2) + p[1] * b1 + p[2] * b2)
+}
+
 /// Uniform point on a triangle as barycentrics (b1, b2) (Heitz 2019, low distortion).
 pub fn uniform_triangle(u: Vec2) -> (f32, f32) {
     let (b0, b1) = if u.x < u.y {
