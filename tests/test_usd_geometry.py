@@ -355,3 +355,37 @@ def test_a_prim_still_over_a_later_shutter_is_placed_where_the_shutter_sees_it(t
     square = [i for i in desc["instances"] if i["name"] == "/square"][0]
     assert not square.get("motion")
     assert np.allclose(np.asarray(square["transform"])[:3, 3], [X0 + D, Y, 0])
+
+
+def test_hermite_curves_follow_their_tangents(tmp_path):
+    """UsdGeomHermiteCurves: P0 = (0, 0, 0), P1 = (1, 0, 0), T0 = (0, 2, 0), T1 = (0, −2, 0):
+    H(½) = (P0 + P1)/2 + (T0 − T1)/8 = (0.5, 0.5, 0), the curve's highest point; a straight
+    one covers width × length."""
+    path = tmp_path / "hermite.usda"
+    stage, mat, _ = stage_with_reference(path)
+    arc = UsdGeom.HermiteCurves.Define(stage, "/arc")
+    arc.CreatePointsAttr([(0, 0, 0), (1, 0, 0)])
+    arc.CreateTangentsAttr([(0, 2, 0), (0, -2, 0)])
+    arc.CreateCurveVertexCountsAttr([2])
+    arc.CreateWidthsAttr([0.02])
+    arc.SetWidthsInterpolation("constant")
+    arc.AddTranslateOp().Set(Gf.Vec3d(5, 5, 0))  # out of view
+    line = UsdGeom.HermiteCurves.Define(stage, "/line")
+    line.CreatePointsAttr([(-0.8, -0.3, 0), (0.0, -0.3, 0), (0.8, -0.3, 0)])
+    line.CreateTangentsAttr([(0.8, 0, 0)] * 3)
+    line.CreateCurveVertexCountsAttr([3])
+    line.CreateWidthsAttr([0.06] * 3)
+    bind(line, mat)
+    stage.Save()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        scene = usd.read_stage(path)
+    desc, buffers = scene.description()
+    v = {m["name"]: np.asarray(buffers[m["vertices"]]).reshape(-1, 3) for m in desc["meshes"]}["/arc"]
+    r = 0.01  # w/2; the tube's octagon reaches 0.948…1.026 × w/2 from the axis
+    assert 0.5 + 0.94 * r < v[:, 1].max() < 0.5 + 1.04 * r, v[:, 1].max()
+    assert v[:, 0].min() == pytest.approx(0.0, abs=0.011) and v[:, 0].max() == pytest.approx(1.0, abs=0.011)
+    cover = render(path)
+    got = region_sum(cover, -1, 1, -0.5, -0.1)
+    print(f"hermite: top {v[:, 1].max():.4f} (0.5 + w/2 = 0.51), straight coverage {got:.5f} / {1.6 * 0.06:.5f}")
+    assert 0.94 < got / (1.6 * 0.06) < 1.04

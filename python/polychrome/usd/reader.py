@@ -58,7 +58,7 @@ _SILENT_TYPES = {
 MAX_MOTION_KEYS = 33
 MAX_KEY_TURN = math.pi / 4
 #: Prims the reader turns into triangle meshes.
-GEOMETRY_TYPES = ("Mesh", "Sphere", "Cube", "Cylinder", "Cone", "Capsule", "Capsule_1", "Plane", "BasisCurves", "Points")
+GEOMETRY_TYPES = ("Mesh", "Sphere", "Cube", "Cylinder", "Cone", "Capsule", "Capsule_1", "Plane", "BasisCurves", "HermiteCurves", "Points")
 _LIGHTS_SKIPPED = {"CylinderLight", "GeometryLight", "PortalLight", "PluginLight", "MeshLight", "VolumeLight"}
 
 
@@ -756,7 +756,8 @@ class _Reader:
         from .. import curves as pc_curves
         from . import basis as B
 
-        c = self.UsdGeom.BasisCurves(prim)
+        hermite = prim.GetTypeName() == "HermiteCurves"
+        c = self.UsdGeom.HermiteCurves(prim) if hermite else self.UsdGeom.BasisCurves(prim)
         pts = self.finite_points(prim, c.GetPointsAttr(), "point")
         counts_raw = c.GetCurveVertexCountsAttr().Get(self.time)
         if pts is None or counts_raw is None or len(counts_raw) == 0:
@@ -764,9 +765,12 @@ class _Reader:
         counts = np.asarray(counts_raw, dtype=np.int64)
         if counts.min() < 0 or int(counts.sum()) != len(pts):
             raise self.error(prim, f"curveVertexCounts add up to {int(counts.sum())} but there are {len(pts)} points")
-        ctype = str(self.get(c.GetTypeAttr(), "cubic"))
-        basis = str(self.get(c.GetBasisAttr(), "bezier"))
-        wrap = str(self.get(c.GetWrapAttr(), "nonperiodic"))
+        if hermite:
+            ctype, basis, wrap = "cubic", "bezier", "nonperiodic"  # converted below
+        else:
+            ctype = str(self.get(c.GetTypeAttr(), "cubic"))
+            basis = str(self.get(c.GetBasisAttr(), "bezier"))
+            wrap = str(self.get(c.GetWrapAttr(), "nonperiodic"))
         if ctype == "cubic" and basis not in B.CUBIC_BASES:
             self.warn(f"basis:{prim.GetPath()}", f"prim {prim.GetPath()}: curve basis '{basis}' is not supported; read as catmullRom")
             basis = "catmullRom"
@@ -776,13 +780,18 @@ class _Reader:
             self.warn(f"ribbon:{prim.GetPath()}", f"prim {prim.GetPath()}: oriented curves (normals) are rendered as round tubes")
         by_count = {int(n): B.varying_count(int(n), ctype, basis, wrap) for n in np.unique(counts)}
         varying = [by_count[int(n)] for n in counts]
+        if hermite:  # one value per point for vertex and varying alike (a segment per point pair)
+            varying = [int(n) for n in counts]
         w, interp = self.widths(prim, c, {"constant": 1, "uniform": len(counts), "vertex": len(pts), "varying": sum(varying)}, len(pts))
         if interp == "constant":
             w = np.full(len(pts), w[0])
         elif interp == "uniform":
             w = np.repeat(w, counts)
-        if ctype == "linear" and interp == "varying":
+        if (ctype == "linear" or hermite) and interp == "varying":
             interp = "vertex"
+        if hermite:
+            pts, w, counts = self.hermite_to_bezier(prim, c, pts, w, counts)
+            varying = [B.varying_count(int(n), ctype, basis, wrap) for n in counts]
         starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
         varying = np.asarray(varying, np.int64)
         vstarts = np.concatenate([[0], np.cumsum(varying)[:-1]])
@@ -816,6 +825,35 @@ class _Reader:
         )
         kept = np.concatenate(kept)
         return self.shape_dict(prim, v, t, n, uv, owner, kept[owner] if len(kept) else None, counts)
+
+    def hermite_to_bezier(self, prim, c, pts, w, counts):
+        """UsdGeomHermiteCurves: the segment from P_k to P_k+1 with tangents T_k, T_k+1 is
+        the Bézier P_k, P_k + T_k/3, P_k+1 − T_k+1/3, P_k+1; widths linear along it."""
+        raw = c.GetTangentsAttr().Get(self.time)
+        tan = np.asarray(raw, np.float64).reshape(-1, 3) if raw is not None else np.zeros((0, 3))
+        if tan.shape != pts.shape or not np.all(np.isfinite(tan)):
+            raise self.error(prim, f"tangents has {len(tan)} values; expected {len(pts)} finite ones (one per point)")
+        out_p, out_w, out_c = [], [], []
+        start = 0
+        for n in counts:
+            p, t, wi = pts[start : start + n], tan[start : start + n], w[start : start + n]
+            start += n
+            if n < 2:
+                continue
+            bez = np.empty((3 * (n - 1) + 1, 3))
+            bez[0::3] = p
+            bez[1::3] = p[:-1] + t[:-1] / 3.0
+            bez[2::3] = p[1:] - t[1:] / 3.0
+            bw = np.empty(3 * (n - 1) + 1)
+            bw[0::3] = wi
+            bw[1::3] = (2 * wi[:-1] + wi[1:]) / 3.0
+            bw[2::3] = (wi[:-1] + 2 * wi[1:]) / 3.0
+            out_p.append(bez)
+            out_w.append(bw)
+            out_c.append(len(bez))
+        if not out_p:
+            return np.zeros((0, 3)), np.zeros(0), np.zeros(0, np.int64)
+        return np.concatenate(out_p), np.concatenate(out_w), np.asarray(out_c, np.int64)
 
     def points_arrays(self, prim) -> dict[str, Any] | None:
         """UsdGeom.Points → spheres of diameter ``widths`` (``Scene.add_points``)."""
@@ -877,7 +915,7 @@ class _Reader:
 
     def mesh_arrays(self, prim) -> dict[str, Any] | None:
         UsdGeom = self.UsdGeom
-        if prim.GetTypeName() == "BasisCurves":
+        if prim.GetTypeName() in ("BasisCurves", "HermiteCurves"):
             return self.curves_arrays(prim)
         if prim.GetTypeName() == "Points":
             return self.points_arrays(prim)
