@@ -389,3 +389,27 @@ def test_hermite_curves_follow_their_tangents(tmp_path):
     got = region_sum(cover, -1, 1, -0.5, -0.1)
     print(f"hermite: top {v[:, 1].max():.4f} (0.5 + w/2 = 0.51), straight coverage {got:.5f} / {1.6 * 0.06:.5f}")
     assert 0.94 < got / (1.6 * 0.06) < 1.04
+
+
+def test_instance_and_camera_motion_round_trip_through_write_stage(tmp_path):
+    """write_stage writes motion keys as time samples 0 … 1 with a shutter open from 0 to 1;
+    read_stage reads exactly those keys back (their grid spans the shutter)."""
+
+    def rz(deg, x):
+        c, s_ = math.cos(math.radians(deg)), math.sin(math.radians(deg))
+        return np.array([[c, -s_, 0, x], [s_, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]], float)
+
+    scene = pc.Scene()
+    keys = [rz(0, 0.0), rz(30, 0.2), rz(60, 0.5)]
+    scene.add_mesh("quad", [(0, 0, 0), (1, 0, 0), (1, 1, 0)], [(0, 1, 2)], transform=keys[0], motion=keys)
+    cam_keys = [np.eye(4) + np.array([[0, 0, 0, x], [0, 0, 0, 0], [0, 0, 0, 5], [0, 0, 0, 0]]) for x in (0.0, 0.1)]
+    scene.camera = pc.Camera(to_world=cam_keys[0], motion=cam_keys)
+    path = tmp_path / "motion.usda"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        usd.write_stage(scene, path)
+        back = usd.read_stage(path)
+    desc, _ = back.description()
+    got = np.asarray(desc["instances"][0]["motion"])
+    assert got.shape == (3, 4, 4) and np.allclose(got, keys, atol=1e-12)
+    assert np.allclose(np.asarray(desc["camera"]["motion"]), cam_keys, atol=1e-12)

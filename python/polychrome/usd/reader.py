@@ -1600,7 +1600,16 @@ class _Reader:
             turns = [np.abs(np.subtract(a.Get(tb), a.Get(ta), dtype=np.float64)).max() for a in angles]
             return math.radians(float(max(turns, default=0.0)))
 
-        k = self.key_count(times, *shutter)
+        grid = np.array(sorted(times))
+        if (
+            len(grid) >= 2
+            and np.isclose(grid[0], shutter[0])
+            and np.isclose(grid[-1], shutter[1])
+            and np.allclose(np.diff(grid), grid[1] - grid[0])
+        ):
+            k = len(grid)  # samples evenly spaced over the shutter (write_stage's motion): the keys themselves
+        else:
+            k = self.key_count(times, *shutter)
         while True:
             ts = np.linspace(shutter[0], shutter[1], k)
             keys = [self.key_matrix(prim, t) for t in ts]

@@ -189,6 +189,16 @@ class _Names:
 # --------------------------------------------------------------------------- writer
 
 
+def _write_motion(Gf, Usd, op, keys) -> bool:
+    """Motion keys (evenly spaced over the shutter) as time samples 0 … 1 of ``op``
+    (the frame's transform stays its default value); whether there were any."""
+    if not keys:
+        return False
+    for k, m in enumerate(keys):
+        op.Set(_matrix_to_usd(Gf, m), Usd.TimeCode(k / (len(keys) - 1)))
+    return True
+
+
 def _matrix_to_usd(Gf, m) -> Any:
     """polychrome's column-vector 4×4 (translation in the last column) → USD's row-vector matrix."""
     return Gf.Matrix4d(np.asarray(m, dtype=np.float64).T.tolist())
@@ -396,7 +406,7 @@ def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path
     for key, value in desc.items():
         if key not in ("camera", "materials", "meshes", "instances", "lights", "world", "textures") and value:
             warnings.warn(f"{path}: the scene's '{key}' cannot be written to USD yet and is left out", stacklevel=2)
-    for what, entries, field in (("instance", desc["instances"], "motion"), ("mesh", desc["meshes"], "motion_vertices")):
+    for what, entries, field in (("mesh", desc["meshes"], "motion_vertices"),):
         for e in entries:
             if e.get(field):
                 warnings.warn(
@@ -595,6 +605,7 @@ def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path
             fill_mesh(root.AppendChild("mesh"), index)
             proto_paths[index] = root
 
+    moving = False
     for k, inst in enumerate(instances):
         index = int(inst["mesh"])
         if k in area:
@@ -607,13 +618,22 @@ def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path
             xformable = xf
         else:
             xformable = fill_mesh(ip, index)
-        xformable.AddTransformOp().Set(_matrix_to_usd(Gf, inst["transform"]))
+        op = xformable.AddTransformOp()
+        op.Set(_matrix_to_usd(Gf, inst["transform"]))
+        moving |= _write_motion(Gf, Usd, op, inst.get("motion"))
         xformable.GetPrim().CreateAttribute(A.INSTANCE_NAME, Sdf.ValueTypeNames.String).Set(str(inst.get("name", "")))
 
     # -- camera ---------------------------------------------------------------------
     cam = desc["camera"]
     camera = UsdGeom.Camera.Define(stage, "/World/Camera")
-    camera.AddTransformOp().Set(_matrix_to_usd(Gf, cam["to_world"]))
+    op = camera.AddTransformOp()
+    op.Set(_matrix_to_usd(Gf, cam["to_world"]))
+    moving |= _write_motion(Gf, Usd, op, cam.get("motion"))
+    if moving:  # motion keys are time samples 0 … 1, over a shutter open from 0 to 1
+        camera.CreateShutterOpenAttr(0.0)
+        camera.CreateShutterCloseAttr(1.0)
+        stage.SetStartTimeCode(0.0)
+        stage.SetEndTimeCode(1.0)
     ortho = cam["projection"] == "ORTHOGRAPHIC"
     camera.CreateProjectionAttr(UsdGeom.Tokens.orthographic if ortho else UsdGeom.Tokens.perspective)
     # Lens and filmback are in tenths of a scene unit (UsdGeomCamera, "Units of Measure
