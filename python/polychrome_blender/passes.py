@@ -1,4 +1,5 @@
-"""Render passes: Combined (RGBA), Depth (Z), Normal (XYZ, world space), Albedo (RGB) and,
+"""Render passes: Combined (RGBA), Depth (Z), Normal (XYZ, world space: the shading normal, a Normal Map's or
+Bump's where linked, facing the view, as Cycles'), Albedo (RGB) and,
 with ``scene.polychrome.spectral_output``, one 1-channel pass per wavelength. With
 ``scene.polychrome.denoise`` Combined is denoised and Cycles' names carry the rest: Noisy
 Image (RGBA) and the Denoising Data passes Denoising Albedo (RGB) and Denoising Normal

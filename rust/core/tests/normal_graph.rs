@@ -24,6 +24,14 @@ fn diffuse_with_normal(mut nodes: Vec<serde_json::Value>) -> BsdfDesc {
 
 /// Mean luminance of a plane z = 0 under a sun shining along `sun`, seen from above.
 fn plane_under_sun(bsdf: BsdfDesc, sun: [f32; 3]) -> f64 {
+    let out = render_plane(bsdf, sun, false);
+    let (mean, _) = mean_and_standard_error(&out.images.rgba);
+    mean
+}
+
+/// A plane z = 0 under a sun shining along `sun`, seen straight down from above (or
+/// straight up from below) by an orthographic camera, 8², 2 spp.
+fn render_plane(bsdf: BsdfDesc, sun: [f32; 3], from_below: bool) -> polychrome_core::render::RenderOutput {
     let mut desc = SceneDesc::default();
     let mut buffers: Vec<Buffer> = Vec::new();
     desc.materials.push(MaterialDesc {
@@ -53,14 +61,17 @@ fn plane_under_sun(bsdf: BsdfDesc, sun: [f32; 3]) -> f64 {
     desc.camera = CameraDesc {
         projection: Projection::Orthographic,
         ortho_scale: 2.0,
-        to_world: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 5.0], [0.0, 0.0, 0.0, 1.0]],
+        to_world: if from_below {
+            [[1.0, 0.0, 0.0, 0.0], [0.0, -1.0, 0.0, 0.0], [0.0, 0.0, -1.0, -5.0], [0.0, 0.0, 0.0, 1.0]]
+        } else {
+            [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 5.0], [0.0, 0.0, 0.0, 1.0]]
+        },
         ..Default::default()
     };
     let settings = ResolvedSettings { width: 8, height: 8, samples: 2, max_bounces: 1, ..Default::default() };
     let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
     assert_eq!(out.stats.nonfinite_samples, 0);
-    let (mean, _) = mean_and_standard_error(&out.images.rgba);
-    mean
+    out
 }
 
 /// A world-space Normal Map of a constant colour: the unit normal (sin t, 0, cos t).
@@ -134,4 +145,30 @@ fn a_tilted_normal_does_not_let_light_through_the_back() {
     let sun = [-(0.45f32.cos()), 0.0, 0.45f32.sin()];
     let l = plane_under_sun(diffuse_with_normal(world_normal_map(t)), sun);
     assert_eq!(l, 0.0, "light leaked through the plane: {l}");
+}
+
+/// The Normal pass is the shading normal the BSDF used, facing the ray, as Cycles' is
+/// (surface_shader_average_normal about sd->N, flipped for a back face): a world-space
+/// Normal Map of constant tilt t gives (sin t, 0, cos t) at every pixel, the unlinked
+/// plane (0, 0, 1) from above and (0, 0, −1) from below.
+#[test]
+fn the_normal_pass_is_the_perturbed_shading_normal() {
+    let pass = |bsdf, from_below| {
+        let out = render_plane(bsdf, [0.0, 0.0, -1.0], from_below);
+        let n = out.images.normal;
+        assert_eq!(n.len(), 8 * 8 * 3);
+        n
+    };
+    let check = |n: &[f32], want: glam::Vec3, what: &str| {
+        let worst =
+            n.chunks_exact(3).map(|p| (glam::Vec3::from_slice(p) - want).abs().max_element()).fold(0.0, f32::max);
+        println!("{what}: worst |pass - n| {worst:e}");
+        assert!(worst < 1e-5, "{what}: worst {worst} from {want}");
+    };
+    for t in [0.3f32, 0.5, 0.75] {
+        let n = pass(diffuse_with_normal(world_normal_map(t)), false);
+        check(&n, glam::Vec3::new(t.sin(), 0.0, t.cos()), &format!("tilt {t}"));
+    }
+    check(&pass(diffuse_with_normal(vec![]), false), glam::Vec3::Z, "flat, from above");
+    check(&pass(diffuse_with_normal(vec![]), true), -glam::Vec3::Z, "flat, from below");
 }

@@ -199,7 +199,11 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
             }
             // The first hit, and after perfect mirrors and glass the first other surface.
             if st.depth == 0 || v.flags.smooth || !v.flags.specular {
-                *out.normal = v.si.ns;
+                // The shading normal the BSDF used (a Normal Map's or Bump's, made valid),
+                // facing the ray, as Cycles' Normal pass: the closures' average normal
+                // (surface_shader_average_normal, kernel/film/data_passes.h) about sd->N,
+                // which shader_setup_from_ray flips for a back face.
+                *out.normal = v.ns;
                 // The albedo pass is grid-wide whatever the path carries.
                 let single = ctx.single_wavelength.take();
                 v.material.bsdf.albedo(ctx, out.albedo);
