@@ -172,3 +172,58 @@ fn the_normal_pass_is_the_perturbed_shading_normal() {
     check(&pass(diffuse_with_normal(vec![]), false), glam::Vec3::Z, "flat, from above");
     check(&pass(diffuse_with_normal(vec![]), true), -glam::Vec3::Z, "flat, from below");
 }
+
+/// A mesh given without tangents gets smooth per-vertex tangents of its UVs with the
+/// bitangent's sign (docs/shading.md): on a plane whose UVs are mirrored (u = −x,
+/// v = y) a tangent-space Normal Map of colour (0.5 + sin t/2, 0.5, 0.5 + cos t/2)
+/// leans along ∂p/∂u = −x and one of (0.5, 0.5 + sin t/2, 0.5 + cos t/2) along
+/// ∂p/∂v = +y: the Normal pass is (−sin t, 0, cos t) and (0, sin t, cos t).
+#[test]
+fn a_mesh_without_tangents_uses_its_uvs_with_the_bitangent_sign() {
+    let t = 0.5f32;
+    for (c, want) in [
+        ([0.5 + 0.5 * t.sin(), 0.5, 0.5 + 0.5 * t.cos(), 1.0], glam::Vec3::new(-t.sin(), 0.0, t.cos())),
+        ([0.5, 0.5 + 0.5 * t.sin(), 0.5 + 0.5 * t.cos(), 1.0], glam::Vec3::new(0.0, t.sin(), t.cos())),
+    ] {
+        let nm = vec![
+            json!({"type": "ShaderNodeNormalMap", "name": "NM", "props": {"space": "TANGENT"}, "inputs": {"Color": c}}),
+        ];
+        let mut desc = SceneDesc::default();
+        let mut buffers: Vec<Buffer> = Vec::new();
+        desc.materials.push(MaterialDesc {
+            name: "plane".into(),
+            bsdf: diffuse_with_normal(nm),
+            emission: None,
+            volume: None,
+            one_sided: false,
+            see_through: false,
+        });
+        let s = 4.0;
+        let m = add_mesh(
+            &mut desc,
+            &mut buffers,
+            "plane",
+            vec![-s, -s, 0.0, s, -s, 0.0, s, s, 0.0, -s, s, 0.0],
+            vec![0, 1, 2, 0, 2, 3],
+            0,
+        );
+        buffers.push(Buffer::F32(vec![1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0]));
+        desc.meshes[m].uvs = Some(buffers.len() - 1);
+        desc.camera = CameraDesc {
+            projection: Projection::Orthographic,
+            ortho_scale: 2.0,
+            to_world: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 5.0], [0.0, 0.0, 0.0, 1.0]],
+            ..Default::default()
+        };
+        let settings = ResolvedSettings { width: 8, height: 8, samples: 2, max_bounces: 1, ..Default::default() };
+        let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
+        let worst = out
+            .images
+            .normal
+            .chunks_exact(3)
+            .map(|p| (glam::Vec3::from_slice(p) - want).abs().max_element())
+            .fold(0.0, f32::max);
+        println!("colour {c:?}: worst |pass - n| {worst:e}");
+        assert!(worst < 1e-5, "colour {c:?}: worst {worst} from {want}");
+    }
+}

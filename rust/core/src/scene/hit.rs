@@ -19,7 +19,8 @@ pub struct MeshShadingData {
     pub uv_maps: Vec<(String, Vec<[f32; 4]>)>,
     pub colors: Vec<(String, Vec<[f32; 4]>)>,
     pub attributes: Vec<(String, Vec<[f32; 4]>)>,
-    /// Tangent xyz and bitangent sign per vertex (MikkTSpace from the front end).
+    /// Tangent xyz and bitangent sign per vertex (MikkTSpace from the front end, else
+    /// [`smooth_tangents`] when a material perturbs the normal).
     pub tangents: Option<Vec<[f32; 4]>>,
 }
 
@@ -150,12 +151,17 @@ pub(crate) fn shading_point_of(
     let size = hi - lo;
     let generated = Vec3::select(size.cmpgt(Vec3::ZERO), (object_position - lo) / size, Vec3::ZERO);
     let n2w = Mat3::from(normal_to_world);
-    // Tangent: the mesh's MikkTSpace tangent, else the triangle's ∂p/∂u.
+    // Tangent: the mesh's MikkTSpace tangent or smooth_tangents', else the triangle's ∂p/∂u.
     let (tangent, tangent_sign) = match &data.tangents {
         Some(t) => {
             let t = lerp(t);
             let w = inst.transforms_at(ray.time).0;
             let tw = Vec3::from(w.transform_vector3a(Vec3A::new(t[0], t[1], t[2])));
+            let tw = if tw.length_squared() > 1e-12 {
+                tw
+            } else {
+                uv_tangent(inst, mesh, si, ray.time).unwrap_or_else(|| any_tangent(normal))
+            };
             (tw, if t[3] < 0.0 { -1.0 } else { 1.0 })
         }
         None => (uv_tangent(inst, mesh, si, ray.time).unwrap_or_else(|| any_tangent(normal)), 1.0),
@@ -254,6 +260,51 @@ fn uv_tangent(inst: &Instance, mesh: &Mesh, si: &SurfaceInteraction, time: f32) 
     let t = ((p1 - p0) * d2.y - (p2 - p0) * d1.y) / det;
     let w = inst.transforms_at(time).0;
     Some(Vec3::from(w.transform_vector3a(t)))
+}
+
+/// Smooth per-vertex tangents (object space) and bitangent signs of a mesh's default
+/// UVs, for a mesh given without tangents: each triangle's ∂p/∂u and ∂p/∂v, weighted by
+/// the triangle's angle at the vertex, summed onto its vertices; the sum made orthogonal
+/// to the vertex normal (Gram–Schmidt) and the sign that of (n × t) · Σ ∂p/∂v. Like
+/// MikkTSpace (Mikkelsen 2008, the angle-weighted accumulation) but over the mesh's own
+/// vertices: no splitting of vertices where tangents disagree, and triangles with
+/// degenerate UVs add nothing (a vertex with no tangent reads the triangle's ∂p/∂u).
+pub(crate) fn smooth_tangents(mesh: &Mesh) -> Option<Vec<[f32; 4]>> {
+    let uvs = mesh.uvs.as_ref()?;
+    let n = mesh.positions.len();
+    let (mut ts, mut bs, mut ns) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+    for tri in &mesh.indices {
+        let idx = tri.map(|i| i as usize);
+        let p = idx.map(|i| Vec3::from(mesh.positions[i]));
+        let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
+        let (d1, d2) = (uvs[idx[1]] - uvs[idx[0]], uvs[idx[2]] - uvs[idx[0]]);
+        let det = d1.x * d2.y - d1.y * d2.x;
+        let face = e1.cross(e2);
+        if det.abs() < 1e-12 || face.length_squared() == 0.0 {
+            continue;
+        }
+        let t = ((e1 * d2.y - e2 * d1.y) / det).normalize_or_zero();
+        let b = ((e2 * d1.x - e1 * d2.x) / det).normalize_or_zero();
+        for k in 0..3 {
+            let (a, c) = (p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]);
+            let angle = a.angle_between(c);
+            if angle.is_finite() {
+                ts[idx[k]] += t * angle;
+                bs[idx[k]] += b * angle;
+                ns[idx[k]] += face.normalize() * angle;
+            }
+        }
+    }
+    Some(
+        (0..n)
+            .map(|i| {
+                let normal = mesh.normals.as_ref().map_or(ns[i], |v| Vec3::from(v[i])).normalize_or_zero();
+                let t = (ts[i] - normal * normal.dot(ts[i])).normalize_or_zero();
+                let sign = if normal.cross(t).dot(bs[i]) < 0.0 { -1.0 } else { 1.0 };
+                [t.x, t.y, t.z, sign]
+            })
+            .collect(),
+    )
 }
 
 fn any_tangent(n: Vec3) -> Vec3 {

@@ -553,7 +553,18 @@ impl Scene {
             } else if !md.motion_normals.is_empty() {
                 return Err(Error::object("mesh", name, "motion_normals given without motion_vertices"));
             }
-            mesh_data.push(hit::MeshShadingData::new(md, &mesh, buffers)?);
+            let mut data = hit::MeshShadingData::new(md, &mesh, buffers)?;
+            // A mesh without tangents whose materials perturb the normal: smooth per-vertex
+            // tangents of its default UVs (docs/shading.md, "Normal Map and Bump").
+            if data.tangents.is_none()
+                && mesh
+                    .material_ids
+                    .iter()
+                    .any(|&m| materials.get(m as usize).is_some_and(|t: &Material| t.normal.is_some()))
+            {
+                data.tangents = hit::smooth_tangents(&mesh);
+            }
+            mesh_data.push(data);
             meshes.push(mesh);
         }
 
