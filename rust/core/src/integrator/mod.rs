@@ -224,6 +224,7 @@ pub fn from_settings(scene: &Scene, settings: &ResolvedSettings) -> crate::Resul
     if settings.dispersion_splitting && settings.method != Method::Polychromatic {
         return Err(Error::setting("dispersion_splitting", "applies to the POLYCHROMATIC method only"));
     }
+    // dispersion_splitting (into every wavelength) overrides AUTO.
     if settings.dispersion_splitting && !matches!(settings.collapse, Collapse::Auto | Collapse::Energy) {
         return Err(Error::setting(
             "dispersion_splitting",
@@ -262,11 +263,18 @@ pub fn from_settings(scene: &Scene, settings: &ResolvedSettings) -> crate::Resul
 /// The direction's technique on wavelengths `policy`.
 fn with_policy<P: WavelengthPolicy>(settings: &ResolvedSettings, policy: P) -> Integrator {
     // The wavelength choice at a dispersive surface (eq. 9). Light paths never split.
-    let collapse = settings.collapse.resolved();
-    let split = settings.dispersion_splitting || collapse == Collapse::Split;
+    let collapse = match settings.collapse {
+        Collapse::Auto if settings.dispersion_splitting => Collapse::Energy,
+        c => c.resolved(),
+    };
+    // SPLIT is a POLYCHROMATIC choice (HERO ends its secondary wavelengths at a
+    // dispersive surface instead; RGB collapses to one of its three channels).
+    let split_k =
+        (collapse == Collapse::Split && settings.method == Method::Polychromatic).then_some(settings.collapse_k);
+    let split = settings.dispersion_splitting || split_k.is_some();
     let camera = Walk {
         medium_sampling: settings.medium_sampling,
-        split_k: (collapse == Collapse::Split && !settings.dispersion_splitting).then_some(settings.collapse_k),
+        split_k: split_k.filter(|_| !settings.dispersion_splitting),
         stratified_collapse: collapse == Collapse::Stratified,
         ..Walk::camera(settings.max_bounces, split)
     };
