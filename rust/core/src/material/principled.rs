@@ -59,16 +59,78 @@ const ALBEDO_STRATA: usize = 24;
 const KEY_COSINES: [f64; 8] = [0.001, 0.05, 0.13, 0.27, 0.42, 0.6, 0.81, 1.0];
 /// Tables kept per thread (the memo is cleared when full).
 const MEMO_TABLES: usize = 512;
+/// Roughness steps (r = j/(WEIGHT_ROUGH − 1), α = r²) of the shared isotropic weight table.
+const WEIGHT_ROUGH: usize = 65;
+/// Nodes c_k = k/(WEIGHT_COS − 1) over cos θ_h at which the weight table reads a Fresnel.
+const WEIGHT_COS: usize = 129;
 
 thread_local! {
     static ALBEDO_MEMO: std::cell::RefCell<std::collections::HashMap<[u64; 11], Vec<f32>>> =
         std::cell::RefCell::new(std::collections::HashMap::new());
 }
 
+/// E(μ) of an isotropic GGX lobe is linear in its Fresnel f: the stratified estimate of
+/// `compute_albedo_table` is Σ_s g_s·f(c_s) (g_s = G2/G1 of sample s, c_s = cos θ_h). With
+/// f interpolated linearly between nodes c_k, E(μ_i) = Σ_k W[j][i][k]·f(c_k), where W
+/// splats each sample's g_s onto its two nearest nodes — the same samples, computed once
+/// per process for each of WEIGHT_ROUGH roughnesses (a row when first read). A table
+/// then costs WEIGHT_COS Fresnel evaluations and two dot products per μ instead of
+/// ALBEDO_MU × ALBEDO_STRATA² microfacet evaluations, which matters when the roughness varies from hit to hit (a
+/// metallic-roughness texture: every glTF asset), where the memo below never hits.
+/// Cycles likewise reads precomputed E(μ, roughness[, IOR]) tables
+/// (intern/cycles/kernel/closure/bsdf_microfacet.h, `microfacet_ggx_preserve_energy`).
+fn albedo_weights(j: usize) -> &'static [f32] {
+    // One row per roughness, built when first read (a constant roughness builds two).
+    static W: [std::sync::OnceLock<Vec<f32>>; WEIGHT_ROUGH] = [const { std::sync::OnceLock::new() }; WEIGHT_ROUGH];
+    W[j].get_or_init(|| {
+        let (n, k_max) = (ALBEDO_STRATA, (WEIGHT_COS - 1) as f64);
+        let mut w = vec![0.0f64; ALBEDO_MU * WEIGHT_COS];
+        let r = j as f32 / (WEIGHT_ROUGH - 1) as f32;
+        let g = Ggx::isotropic((r * r).max(1e-4));
+        for i in 0..ALBEDO_MU {
+            let mu = (i as f64 / (ALBEDO_MU - 1) as f64).max(1e-3);
+            let wo = Vec3A::new((1.0 - mu * mu).sqrt() as f32, 0.0, mu as f32);
+            let g1 = g.g1(wo) as f64;
+            let row = &mut w[i * WEIGHT_COS..][..WEIGHT_COS];
+            for a in 0..n {
+                for b in 0..n {
+                    let u = Vec2::new((a as f32 + 0.5) / n as f32, (b as f32 + 0.5) / n as f32);
+                    let wm = g.sample_wm(wo, u);
+                    let wi = reflect(wo, wm);
+                    if wi.z <= 0.0 {
+                        continue;
+                    }
+                    let v = g.g(wo, wi) as f64 / g1 / (n * n) as f64;
+                    let x = wo.dot(wm).clamp(0.0, 1.0) as f64 * k_max;
+                    let k = (x.floor() as usize).min(WEIGHT_COS - 2);
+                    let t = x - k as f64;
+                    row[k] += v * (1.0 - t);
+                    row[k + 1] += v * t;
+                }
+            }
+        }
+        w.into_iter().map(|x| x as f32).collect()
+    })
+}
+
+/// `compute_albedo_table` of an isotropic rough lobe through `albedo_weights`, linear
+/// between the two neighbouring roughness rows (α = r²).
+fn albedo_table_from_weights(alpha: f32, f: &dyn Fn(f64) -> f64) -> Vec<f32> {
+    let fk: Vec<f32> = (0..WEIGHT_COS).map(|k| f(k as f64 / (WEIGHT_COS - 1) as f64) as f32).collect();
+    let x = alpha.max(0.0).sqrt().min(1.0) * (WEIGHT_ROUGH - 1) as f32;
+    let j = (x.floor() as usize).min(WEIGHT_ROUGH - 2);
+    let t = x - j as f32;
+    let (w0, w1) = (albedo_weights(j), albedo_weights(j + 1));
+    let dot =
+        |w: &[f32], i: usize| -> f32 { w[i * WEIGHT_COS..][..WEIGHT_COS].iter().zip(&fk).map(|(a, b)| a * b).sum() };
+    (0..ALBEDO_MU).map(|i| ((1.0 - t) * dot(w0, i) + t * dot(w1, i)).clamp(0.0, 1.0)).collect()
+}
+
 /// The directional albedo E(μ) of a GGX reflection lobe with Fresnel `f(cos θ_h)`, for
 /// μ = i/(ALBEDO_MU − 1); `smooth` lobes reflect exactly F(μ).
 ///
-/// Memoised per thread: a material whose graph varies per hit (docs/shading.md) builds
+/// Isotropic lobes read the shared weight table (`albedo_weights`). Anisotropic ones are
+/// memoised per thread: a material whose graph varies per hit (docs/shading.md) builds
 /// its Principled at every hit, mostly with the same roughness and index (a texture on
 /// Base Color), and a table costs ALBEDO_MU × ALBEDO_STRATA² microfacet evaluations. The
 /// key is the roughness, `smooth` and `f` at eight cosines (the Fresnel functions used
@@ -76,6 +138,9 @@ thread_local! {
 fn albedo_table(g: &Ggx, smooth: bool, f: &dyn Fn(f64) -> f64) -> Vec<f32> {
     if smooth {
         return compute_albedo_table(g, smooth, f);
+    }
+    if g.alpha_x == g.alpha_y {
+        return albedo_table_from_weights(g.alpha_x, f);
     }
     let mut key = [0u64; 11];
     key[0] = g.alpha_x.to_bits() as u64;
@@ -777,7 +842,8 @@ mod tests {
 
     #[test]
     fn memoised_albedo_tables_are_the_computed_ones() {
-        let g = Ggx::from_roughness(0.4);
+        // Anisotropic: the memo, exactly the computed tables.
+        let g = Ggx { alpha_x: 0.16, alpha_y: 0.3 };
         for n in [1.45, 1.5, 1.45] {
             let f = |c: f64| fresnel_dielectric_f64(c, n);
             assert_eq!(albedo_table(&g, false, &f), compute_albedo_table(&g, false, &f), "n {n}");
@@ -787,8 +853,32 @@ mod tests {
             albedo_table(&g, false, &|c| fresnel_dielectric_f64(c, 1.5)),
         );
         assert_ne!(a, b);
-        let rougher = albedo_table(&Ggx::from_roughness(0.5), false, &|c| fresnel_dielectric_f64(c, 1.45));
+        let rougher = albedo_table(&Ggx { alpha_x: 0.25, alpha_y: 0.3 }, false, &|c| fresnel_dielectric_f64(c, 1.45));
         assert_ne!(a, rougher);
+    }
+
+    /// The shared weight table (isotropic lobes) against the direct stratified estimate
+    /// at roughnesses between its rows, for the Fresnels the Principled uses: dielectric,
+    /// F = 1 (metal energy compensation) and a thin film's (fast in cos θ).
+    #[test]
+    fn weight_table_albedo_matches_the_direct_estimate() {
+        let film = |c: f64| thin_film_reflectance(c, 550.0, 800.0, 1.33, 1.5, 0.0);
+        let fresnels: [(&str, &dyn Fn(f64) -> f64); 4] = [
+            ("n 1.45", &|c| fresnel_dielectric_f64(c, 1.45)),
+            ("n 2.4", &|c| fresnel_dielectric_f64(c, 2.4)),
+            ("F = 1", &|_| 1.0),
+            ("film 800 nm", &film),
+        ];
+        for r in [0.05f32, 0.137, 0.33, 0.5, 0.777, 0.99] {
+            let g = Ggx::from_roughness(r);
+            for (what, f) in fresnels {
+                let (lut, direct) = (albedo_table(&g, false, f), compute_albedo_table(&g, false, f));
+                let err = lut.iter().zip(&direct).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+                assert!(err < 2e-3, "roughness {r}, {what}: max |ΔE| {err}\n{lut:?}\n{direct:?}");
+                let (ea, eb) = (albedo_average(&lut), albedo_average(&direct));
+                assert!((ea - eb).abs() < 1e-3, "roughness {r}, {what}: E_avg {ea} vs {eb}");
+            }
+        }
     }
 
     pub(super) fn principled(
