@@ -267,8 +267,11 @@ mod tests {
             for &zk in &[5usize, 9] {
                 let z = zk as f32 / 15.0;
                 let eta = (1.0 + z * z) / (1.0 - z * z);
-                let glass =
-                    RoughDielectric { ior: IndexOfRefraction::constant(4, eta), distribution: Ggx::from_roughness(r) };
+                let glass = RoughDielectric {
+                    ior: IndexOfRefraction::constant(4, eta),
+                    distribution: Ggx::from_roughness(r),
+                    multiscatter: false,
+                };
                 for &front in &[true, false] {
                     ctx.front_face = front;
                     let rel = if front { eta } else { 1.0 / eta };

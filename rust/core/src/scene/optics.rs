@@ -49,7 +49,7 @@ pub fn build_dielectric(material: &str, ior: &IorDesc, roughness: f32, grid: &Wa
     Ok(if distribution.effectively_smooth() {
         Box::new(Dielectric { ior })
     } else {
-        Box::new(RoughDielectric { ior, distribution })
+        Box::new(RoughDielectric::new(ior, distribution))
     })
 }
 
