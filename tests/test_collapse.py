@@ -15,23 +15,7 @@ import pytest
 import polychrome as pc
 from polychrome import spectra
 
-
-def quad(a, b, c, d):
-    return np.array([a, b, c, d], dtype=np.float32), np.array([[0, 1, 2], [0, 2, 3]])
-
-
-def uv_sphere(center, radius, rings=12, segments=24):
-    th = np.linspace(0, np.pi, rings + 1)[:, None]
-    ph = np.linspace(0, 2 * np.pi, segments + 1)[None, :]
-    v = np.stack([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th) + 0 * ph], -1).reshape(-1, 3)
-    v = v * radius + np.asarray(center)
-    row = segments + 1
-    t = []
-    for r in range(rings):
-        for s in range(segments):
-            a = r * row + s
-            t += [[a, a + row, a + 1], [a + 1, a + row, a + row + 1]]
-    return v.astype(np.float32), np.array(t)
+from meshes import quad, uv_sphere
 
 
 class Glass(pc.Material):
@@ -62,7 +46,7 @@ def glass_box() -> pc.Scene:
     scene.add_mesh("front", *quad((-s, -s, -s), (-s, -s, s), (s, -s, s), (s, -s, -s)), material=white)
     l = 0.6
     scene.add_mesh("lamp", *quad((-l, -l, 0.98), (l, -l, 0.98), (l, l, 0.98), (-l, l, 0.98)), material=lamp)
-    scene.add_mesh("ball", *uv_sphere((0.0, 0.1, -0.3), 0.45), material=glass)
+    scene.add_mesh("ball", *uv_sphere((0.0, 0.1, -0.3), 0.45, rings=12, segments=24), material=glass)
     scene.camera = pc.Camera.looking_at((0.0, -0.95, 0.0), (0.0, 1.0, -0.3), focal_length=16.0)
     return scene
 

@@ -12,23 +12,7 @@ import polychrome as pc
 from polychrome import spectra
 from polychrome.colordiff import delta_e_stats, image_delta_e
 
-
-def quad(a, b, c, d):
-    return np.array([a, b, c, d], dtype=np.float32), np.array([[0, 1, 2], [0, 2, 3]])
-
-
-def uv_sphere(center, radius, rings=16, segments=32):
-    th = np.linspace(0, np.pi, rings + 1)[:, None]
-    ph = np.linspace(0, 2 * np.pi, segments + 1)[None, :]
-    v = np.stack([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th) + 0 * ph], -1).reshape(-1, 3)
-    v = v * radius + np.asarray(center)
-    row = segments + 1
-    t = []
-    for r in range(rings):
-        for s in range(segments):
-            a = r * row + s
-            t += [[a, a + row, a + 1], [a + 1, a + row, a + row + 1]]
-    return v.astype(np.float32), np.array(t)
+from meshes import quad, uv_sphere
 
 
 def closed_box() -> pc.Scene:

@@ -12,6 +12,8 @@ import pytest
 
 import polychrome as pc
 
+from meshes import pole_sphere
+
 
 def luminance(rgba: np.ndarray) -> np.ndarray:
     return 0.2126 * rgba[..., 0] + 0.7152 * rgba[..., 1] + 0.0722 * rgba[..., 2]
@@ -76,34 +78,12 @@ def test_thin_film_interference_is_spectral():
     assert np.allclose(bare.spectral, 0.04, atol=1e-5)
 
 
-def sphere(radius: float = 1.0, rings: int = 24, segments: int = 48) -> tuple[np.ndarray, np.ndarray]:
-    v = [[0.0, 0.0, radius]]
-    for i in range(1, rings):
-        th = math.pi * i / rings
-        for j in range(segments):
-            ph = 2 * math.pi * j / segments
-            v.append([radius * math.sin(th) * math.cos(ph), radius * math.sin(th) * math.sin(ph), radius * math.cos(th)])
-    v.append([0.0, 0.0, -radius])
-    t = []
-    for j in range(segments):
-        t.append([0, 1 + j, 1 + (j + 1) % segments])
-    for i in range(rings - 2):
-        for j in range(segments):
-            a, b = 1 + i * segments + j, 1 + i * segments + (j + 1) % segments
-            t += [[a, a + segments, b + segments], [a, b + segments, b]]
-    last = len(v) - 1
-    for j in range(segments):
-        a, b = 1 + (rings - 2) * segments + j, 1 + (rings - 2) * segments + (j + 1) % segments
-        t.append([a, last, b])
-    return np.array(v, dtype=np.float32), np.array(t)
-
-
 def convex_scene(material: pc.Material) -> pc.Scene:
     """A sphere filling the view under a uniform white (D65-shaped, luminance 1) world:
     a convex object sees only the world, so its radiance is (directional albedo) × world."""
     scene = pc.Scene()
     scene.camera = pc.Camera.looking_at((0, -6, 0), (0, 0, 0), focal_length=200.0)  # the sphere fills the frame
-    v, t = sphere()
+    v, t = pole_sphere(rings=24, segments=48)
     scene.add_mesh("ball", v, t, material=material)
     scene.set_world((1.0, 1.0, 1.0))
     return scene

@@ -16,25 +16,7 @@ import pytest
 
 import polychrome as pc
 
-
-def sphere(radius: float = 1.0, rings: int = 16, segments: int = 32) -> tuple[np.ndarray, np.ndarray]:
-    v = [[0.0, 0.0, radius]]
-    for i in range(1, rings):
-        th = math.pi * i / rings
-        for j in range(segments):
-            ph = 2 * math.pi * j / segments
-            v.append([radius * math.sin(th) * math.cos(ph), radius * math.sin(th) * math.sin(ph), radius * math.cos(th)])
-    v.append([0.0, 0.0, -radius])
-    t = [[0, 1 + j, 1 + (j + 1) % segments] for j in range(segments)]
-    for i in range(rings - 2):
-        for j in range(segments):
-            a, b = 1 + i * segments + j, 1 + i * segments + (j + 1) % segments
-            t += [[a, a + segments, b + segments], [a, b + segments, b]]
-    last = len(v) - 1
-    for j in range(segments):
-        a, b = 1 + (rings - 2) * segments + j, 1 + (rings - 2) * segments + (j + 1) % segments
-        t.append([a, last, b])
-    return np.array(v, dtype=np.float32), np.array(t)
+from meshes import pole_sphere
 
 
 def furnace(material: pc.Material, **kw) -> tuple[np.ndarray, np.ndarray, dict]:
@@ -42,7 +24,7 @@ def furnace(material: pc.Material, **kw) -> tuple[np.ndarray, np.ndarray, dict]:
     frame), and the render's stats."""
     scene = pc.Scene()
     scene.camera = pc.Camera.looking_at((0, -6, 0), (0, 0, 0), focal_length=200.0)
-    v, t = sphere()
+    v, t = pole_sphere(rings=16, segments=32)
     scene.add_mesh("ball", v, t, material=material)
     scene.set_world((1.0, 1.0, 1.0))
     out = pc.render(scene, width=12, height=12, max_bounces=64, **kw)
