@@ -115,6 +115,31 @@ fn quadrant_means(rgba: &[f32], w: usize, h: usize) -> Vec<(f64, f64)> {
     out
 }
 
+/// A furnace whose object vanishes: every channel's mean over the image equals the
+/// environment `env` through the CIE observer on `grid` (or as RGB on an RGB grid), within
+/// five standard errors plus `rel` of the value; and no sample is non-finite.
+fn assert_image_is_the_environment(
+    images: &[f32],
+    nonfinite: u64,
+    env: &SpectrumDesc,
+    grid: &WavelengthGrid,
+    rel: f64,
+    what: &str,
+) {
+    let env_values = env.evaluate(grid, SpectrumRole::Illuminant, &NoRgb).unwrap();
+    let expected = RgbSpace::rec709().xyz_to_rgb(Observer::new(grid).xyz(&env_values));
+    let means = channel_means(images);
+    for c in 0..3 {
+        let (m, se) = means[c];
+        assert!(
+            (m - expected[c]).abs() < 5.0 * se + rel * expected[c].abs(),
+            "{what} channel {c}: {m} vs {} (se {se})",
+            expected[c]
+        );
+    }
+    assert_eq!(nonfinite, 0, "{what}");
+}
+
 fn assert_close(a: &[(f64, f64)], b: &[(f64, f64)], what: &str) {
     for (k, (&(ma, sa), &(mb, sb))) in a.iter().zip(b).enumerate() {
         let se = (sa * sa + sb * sb).sqrt();
@@ -439,19 +464,8 @@ fn dispersive_white_sphere_vanishes_in_a_uniform_environment_in_every_method() {
             ..Default::default()
         };
         let out = render_scene(&scene, &settings, &RenderControl::new()).unwrap();
-        // Reference: the environment's colour through the CIE observer (or as RGB).
-        let env_values = env.evaluate(&g, SpectrumRole::Illuminant, &NoRgb).unwrap();
-        let expected = RgbSpace::rec709().xyz_to_rgb(Observer::new(&g).xyz(&env_values));
-        let means = channel_means(&out.images.rgba);
-        for c in 0..3 {
-            let (m, se) = means[c];
-            assert!(
-                (m - expected[c]).abs() < 5.0 * se + 2e-3 * expected[c].abs(),
-                "{method:?} split={splitting} channel {c}: {m} vs {} (se {se})",
-                expected[c]
-            );
-        }
-        assert_eq!(out.stats.nonfinite_samples, 0);
+        let what = format!("{method:?} split={splitting}");
+        assert_image_is_the_environment(&out.images.rgba, out.stats.nonfinite_samples, &env, &g, 2e-3, &what);
     }
 }
 
@@ -541,18 +555,8 @@ fn dispersive_glass_sphere_vanishes_in_a_uniform_environment() {
         let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
         let g = settings.grid.clone();
         let g = if method == Method::Rgb { WavelengthGrid::rgb_channels(&g, &RgbSpace::rec709()).unwrap() } else { g };
-        let env_values = env.evaluate(&g, SpectrumRole::Illuminant, &NoRgb).unwrap();
-        let expected = RgbSpace::rec709().xyz_to_rgb(Observer::new(&g).xyz(&env_values));
-        let means = channel_means(&out.images.rgba);
-        for c in 0..3 {
-            let (m, se) = means[c];
-            assert!(
-                (m - expected[c]).abs() < 5.0 * se + 5e-3 * expected[c].abs(),
-                "{method:?} split={splitting} channel {c}: {m} vs {} (se {se})",
-                expected[c]
-            );
-        }
-        assert_eq!(out.stats.nonfinite_samples, 0);
+        let what = format!("{method:?} split={splitting}");
+        assert_image_is_the_environment(&out.images.rgba, out.stats.nonfinite_samples, &env, &g, 5e-3, &what);
     }
 }
 
@@ -588,18 +592,15 @@ fn every_collapse_strategy_keeps_the_glass_furnace_at_the_closed_form() {
             ..Default::default()
         };
         let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
-        let env_values = env.evaluate(&settings.grid, SpectrumRole::Illuminant, &NoRgb).unwrap();
-        let expected = RgbSpace::rec709().xyz_to_rgb(Observer::new(&settings.grid).xyz(&env_values));
-        let means = channel_means(&out.images.rgba);
-        for c in 0..3 {
-            let (m, se) = means[c];
-            assert!(
-                (m - expected[c]).abs() < 5.0 * se + 5e-3 * expected[c].abs(),
-                "{collapse:?} k={k} {direction:?} channel {c}: {m} vs {} (se {se})",
-                expected[c]
-            );
-        }
-        assert_eq!(out.stats.nonfinite_samples, 0);
+        let what = format!("{collapse:?} k={k} {direction:?}");
+        assert_image_is_the_environment(
+            &out.images.rgba,
+            out.stats.nonfinite_samples,
+            &env,
+            &settings.grid,
+            5e-3,
+            &what,
+        );
     }
 }
 
