@@ -273,15 +273,7 @@ fn spot_light_on_a_plane_is_inverse_square_inside_and_black_outside() {
     let mut desc = SceneDesc::default();
     let mut buffers = Vec::new();
     desc.materials.push(material("plane", BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(rho) }));
-    let s = 4.0;
-    add_mesh(
-        &mut desc,
-        &mut buffers,
-        "plane",
-        vec![-s, -s, 0.0, s, -s, 0.0, s, s, 0.0, -s, s, 0.0],
-        vec![0, 1, 2, 0, 2, 3],
-        0,
-    );
+    add_square(&mut desc, &mut buffers, "plane", 4.0, 0);
     // Cone of full angle 60°: radius h·tan 30° ≈ 1.155 on the plane; no blend.
     desc.lights.push(LightDesc::Spot {
         name: "spot".into(),
@@ -335,15 +327,7 @@ fn sun_on_a_plane_gives_irradiance_times_cosine() {
     let mut desc = SceneDesc::default();
     let mut buffers = Vec::new();
     desc.materials.push(material("plane", BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(rho) }));
-    let s = 4.0;
-    add_mesh(
-        &mut desc,
-        &mut buffers,
-        "plane",
-        vec![-s, -s, 0.0, s, -s, 0.0, s, s, 0.0, -s, s, 0.0],
-        vec![0, 1, 2, 0, 2, 3],
-        0,
-    );
+    add_square(&mut desc, &mut buffers, "plane", 4.0, 0);
     let theta = 0.6f32;
     desc.lights.push(LightDesc::Distant {
         name: "sun".into(),
@@ -404,15 +388,7 @@ fn sun_through_a_glass_slab_is_found_by_forward_tracing() {
     let mut buffers = Vec::new();
     desc.materials.push(material("floor", BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(rho) }));
     desc.materials.push(glass("slab", IorDesc::Constant { ior: n as f64 }));
-    let s = 2.0;
-    add_mesh(
-        &mut desc,
-        &mut buffers,
-        "floor",
-        vec![-s, -s, 0.0, s, -s, 0.0, s, s, 0.0, -s, s, 0.0],
-        vec![0, 1, 2, 0, 2, 3],
-        0,
-    );
+    add_square(&mut desc, &mut buffers, "floor", 2.0, 0);
     // Slab x ∈ [−1.5, 1.5], y ∈ [−2, 2], z ∈ [1, 1.3], wound outwards.
     let (x0, x1, y0, y1, z0, z1) = (-1.5f32, 1.5f32, -2.0f32, 2.0f32, 1.0f32, 1.3f32);
     let mut v = Vec::new();

@@ -42,15 +42,7 @@ fn render_plane(bsdf: BsdfDesc, sun: [f32; 3], from_below: bool) -> polychrome_c
         one_sided: false,
         see_through: false,
     });
-    let s = 4.0;
-    add_mesh(
-        &mut desc,
-        &mut buffers,
-        "plane",
-        vec![-s, -s, 0.0, s, -s, 0.0, s, s, 0.0, -s, s, 0.0],
-        vec![0, 1, 2, 0, 2, 3],
-        0,
-    );
+    add_square(&mut desc, &mut buffers, "plane", 4.0, 0);
     desc.lights.push(LightDesc::Distant {
         name: "sun".into(),
         direction: sun,

@@ -58,15 +58,7 @@ fn point_light_on_diffuse_plane_matches_inverse_square_cosine_law() {
     let mut desc = SceneDesc::default();
     let mut buffers: Vec<Buffer> = Vec::new();
     desc.materials.push(diffuse("plane", rho, None));
-    let s = 4.0;
-    add_mesh(
-        &mut desc,
-        &mut buffers,
-        "plane",
-        vec![-s, -s, 0.0, s, -s, 0.0, s, s, 0.0, -s, s, 0.0],
-        vec![0, 1, 2, 0, 2, 3],
-        0,
-    );
+    add_square(&mut desc, &mut buffers, "plane", 4.0, 0);
     desc.lights.push(LightDesc::Point {
         name: "lamp".into(),
         position: [0.0, 0.0, h],

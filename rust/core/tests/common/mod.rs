@@ -29,6 +29,19 @@ pub fn uv_sphere(center: [f32; 3], radius: f32, rings: u32, segments: u32) -> (V
     (v, t)
 }
 
+/// Adds the square [-half, half]² in the plane z = 0, facing +z, as a mesh.
+pub fn add_square(desc: &mut SceneDesc, buffers: &mut Vec<Buffer>, name: &str, half: f32, material: u32) -> usize {
+    let s = half;
+    add_mesh(
+        desc,
+        buffers,
+        name,
+        vec![-s, -s, 0.0, s, -s, 0.0, s, s, 0.0, -s, s, 0.0],
+        vec![0, 1, 2, 0, 2, 3],
+        material,
+    )
+}
+
 /// Adds a mesh to the description, returning its index.
 pub fn add_mesh(
     desc: &mut SceneDesc,
