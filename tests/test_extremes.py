@@ -16,6 +16,7 @@ import pytest
 import polychrome as pc
 from polychrome import _core, spectra
 from conftest import luminance
+from meshes import box, uv_sphere
 
 # Explicit grid and bounces: the tests must not depend on quality presets.
 SMALL = dict(width=12, height=10, samples=4, wavelength_count=41, max_bounces=8)
@@ -83,27 +84,6 @@ def quad(size, z=0.0, center=(0.0, 0.0)):
     return np.array(v, dtype=np.float64), np.array([[0, 1, 2], [0, 2, 3]])
 
 
-def uv_sphere(radius=1.0, rings=24, segments=48, center=(0.0, 0.0, 0.0)):
-    theta = np.linspace(0, np.pi, rings + 1)
-    phi = np.linspace(0, 2 * np.pi, segments + 1)
-    t, p = np.meshgrid(theta, phi, indexing="ij")
-    v = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], -1).reshape(-1, 3) * radius
-    v += np.asarray(center)
-    row = segments + 1
-    r, s = np.meshgrid(np.arange(rings), np.arange(segments), indexing="ij")
-    a = (r * row + s).ravel()
-    b = a + row
-    tris = np.concatenate([np.stack([a, b, a + 1], 1), np.stack([a + 1, b, b + 1], 1)])
-    return v, tris
-
-
-def box(lo, hi):
-    (x0, y0, z0), (x1, y1, z1) = lo, hi
-    v = np.array([[x0, y0, z0], [x1, y0, z0], [x1, y1, z0], [x0, y1, z0], [x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]], float)
-    f = [[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4], [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]]
-    return v, np.array(f)
-
-
 # --- grazing incidence -------------------------------------------------------------------
 
 
@@ -164,7 +144,7 @@ def test_camera_inside_glass_sphere_sees_n_squared_radiance():
     n = 1.5
     scene = pc.Scene()
     scene.add_material(pc.Dielectric(n, name="glass"))
-    v, t = uv_sphere(1.0, 48, 96)
+    v, t = uv_sphere(radius=1.0, rings=48, segments=96)
     scene.add_mesh("ball", v, t)
     scene.camera = pc.Camera.looking_at((0, 0, 0), (1, 0.2, 0.1))
     scene.set_world(spectra.equal_energy(1.0))
@@ -206,7 +186,7 @@ def test_dielectric_sphere_in_uniform_world_is_invisible(ior, roughness):
     camera ray (white furnace): Y = L for index 1.0001 and 4.0 (and a dispersive one)."""
     scene = pc.Scene()
     scene.add_material(pc.Dielectric(ior, roughness=roughness, name="glass"))
-    v, t = uv_sphere(1.0)
+    v, t = uv_sphere(radius=1.0, rings=24, segments=48)
     scene.add_mesh("ball", v, t)
     scene.camera = pc.Camera.looking_at((0, -4, 0), (0, 0, 0))
     scene.set_world(spectra.equal_energy(1.0))
@@ -261,7 +241,7 @@ def test_explicit_grid_360_to_830():
     grid = [360.0] + list(np.arange(380.0, 781.0, 20.0)) + [800.0, 830.0]
     scene = pc.Scene()
     scene.add_material(pc.Diffuse(0.0, emission=spectra.equal_energy(1.0), name="glow"))
-    v, t = uv_sphere(2.0)
+    v, t = uv_sphere(radius=2.0, rings=24, segments=48)
     scene.add_mesh("inside", v, t)
     scene.camera = pc.Camera.looking_at((0, 0, 0), (1, 0, 0))
     for key, r in render_all(scene, methods=ALL_METHODS[:3] + ALL_METHODS[4:6], wavelengths=grid).items():
@@ -525,7 +505,7 @@ def room(offset):
     lamp = scene.add_material(pc.Emitter((1, 1, 1), strength=4.0, name="lamp"))
     v, t = box((-100, -100, 0), (100, 100, 200))
     scene.add_mesh("room", v + o, t, material=wall)
-    v, t = uv_sphere(40.0, center=(20.0, 10.0, 40.0))
+    v, t = uv_sphere((20.0, 10.0, 40.0), 40.0, rings=24, segments=48)
     scene.add_mesh("ball", v + o, t, material=ball)
     v, t = quad(30.0, z=199.0)
     scene.add_mesh("lamp", v + o, t[:, ::-1], material=lamp)

@@ -10,33 +10,11 @@ import pytest
 
 import polychrome as pc
 from polychrome import ior
+from meshes import box, square
 
 
 def luminance(rgba: np.ndarray) -> np.ndarray:
     return 0.2126 * rgba[..., 0] + 0.7152 * rgba[..., 1] + 0.0722 * rgba[..., 2]
-
-
-def quad(z: float, half: float) -> tuple[np.ndarray, np.ndarray]:
-    v = np.array([[-half, -half, z], [half, -half, z], [half, half, z], [-half, half, z]], dtype=np.float32)
-    return v, np.array([[0, 1, 2], [0, 2, 3]])
-
-
-def box(z0: float, z1: float, half: float) -> tuple[np.ndarray, np.ndarray]:
-    """An axis-aligned slab, wound outwards."""
-    v = np.array([[x, y, z] for z in (z0, z1) for y in (-half, half) for x in (-half, half)], dtype=np.float32)
-    # Vertex index: x + 2y + 4z (0/1 each).
-    faces = [
-        (0, 2, 3, 1),  # bottom (−z)
-        (4, 5, 7, 6),  # top (+z)
-        (0, 1, 5, 4),  # −y
-        (2, 6, 7, 3),  # +y
-        (0, 4, 6, 2),  # −x
-        (1, 3, 7, 5),  # +x
-    ]
-    t = []
-    for a, b, c, d in faces:
-        t += [[a, b, c], [a, c, d]]
-    return v, np.array(t)
 
 
 def top_camera(width: float) -> pc.Camera:
@@ -48,9 +26,9 @@ def top_camera(width: float) -> pc.Camera:
 def slab_scene(glass: pc.Material) -> pc.Scene:
     scene = pc.Scene()
     scene.camera = top_camera(1.0)
-    v, t = box(0.0, 0.5, 2.0)
+    v, t = box((-2.0, -2.0, 0.0), (2.0, 2.0, 0.5))
     scene.add_mesh("slab", v, t, material=glass)
-    v, t = quad(-1.0, 4.0)
+    v, t = square(4.0, -1.0)
     scene.add_mesh("lamp", v, t, material=pc.Emitter(pc.spectra.constant(1.0)))
     return scene
 
@@ -85,7 +63,7 @@ def test_metal_mirror_reflects_conductor_fresnel():
     n, k = 0.2, 3.0
     scene = pc.Scene()
     scene.camera = top_camera(1.0)
-    v, t = quad(0.0, 2.0)
+    v, t = square(2.0, 0.0)
     scene.add_mesh("mirror", v, t, material=pc.Conductor(eta=n, k=k))
     scene.set_world(pc.spectra.constant(1.0))
     out = pc.render(scene, width=4, height=4, samples=2, max_bounces=4)
@@ -96,7 +74,7 @@ def test_metal_mirror_reflects_conductor_fresnel():
 def test_gold_is_yellow_and_glossy_white_is_a_mirror():
     scene = pc.Scene()
     scene.camera = top_camera(1.0)
-    v, t = quad(0.0, 2.0)
+    v, t = square(2.0, 0.0)
     scene.add_mesh("gold", v, t, material=pc.Conductor("gold"))
     scene.set_world(pc.spectra.constant(1.0))
     out = pc.render(scene, width=4, height=4, samples=1, max_bounces=4)
@@ -113,7 +91,7 @@ def test_spot_light_matches_blender_power_convention():
     rho, power, h = 0.6, 50.0, 2.0
     scene = pc.Scene()
     scene.camera = top_camera(4.0)
-    v, t = quad(0.0, 4.0)
+    v, t = square(4.0, 0.0)
     scene.add_mesh("floor", v, t, material=pc.Diffuse(pc.spectra.constant(rho)))
     scene.add_light(
         pc.SpotLight((0, 0, h), (0, 0, -1), power=power, color=pc.spectra.constant(1.0), spot_size=math.radians(40), spot_blend=0.0)
@@ -129,7 +107,7 @@ def test_sun_irradiance():
     rho, e, theta = 0.5, 3.0, 0.4
     scene = pc.Scene()
     scene.camera = top_camera(1.0)
-    v, t = quad(0.0, 2.0)
+    v, t = square(2.0, 0.0)
     scene.add_mesh("floor", v, t, material=pc.Diffuse(pc.spectra.constant(rho)))
     scene.add_light(pc.SunLight((math.sin(theta), 0.0, -math.cos(theta)), strength=e, color=pc.spectra.constant(1.0)))
     out = pc.render(scene, width=4, height=4, samples=1, max_bounces=1)

@@ -19,12 +19,9 @@ import pytest
 import polychrome as pc
 from polychrome.colordiff import image_delta_e
 from polychrome.render import QUALITIES
+from meshes import quad
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples"))
-
-
-def quad(a, b, c, d):
-    return np.array([a, b, c, d], dtype=np.float32), np.array([[0, 1, 2], [0, 2, 3]])
 
 
 def lit_corner() -> pc.Scene:

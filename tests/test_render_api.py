@@ -8,25 +8,13 @@ import pytest
 
 import polychrome as pc
 from conftest import luminance
-
-
-def uv_sphere(radius=1.0, rings=16, segments=32):
-    theta = np.linspace(0, np.pi, rings + 1)
-    phi = np.linspace(0, 2 * np.pi, segments + 1)
-    t, p = np.meshgrid(theta, phi, indexing="ij")
-    v = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], -1).reshape(-1, 3) * radius
-    row = segments + 1
-    r, s = np.meshgrid(np.arange(rings), np.arange(segments), indexing="ij")
-    a = (r * row + s).ravel()
-    b = a + row
-    tris = np.concatenate([np.stack([a, b, a + 1], 1), np.stack([a + 1, b, b + 1], 1)])
-    return v, tris
+from meshes import uv_sphere
 
 
 def furnace_scene(emission, albedo):
     scene = pc.Scene()
     scene.add_material(pc.Diffuse(albedo, emission=emission))
-    v, t = uv_sphere(3.0)
+    v, t = uv_sphere(radius=3.0)
     scene.add_mesh("furnace", v, t)
     scene.camera = pc.Camera.looking_at((0, 0, 0), (1, 0, 0))
     return scene
@@ -71,7 +59,7 @@ def small_scene():
     scene = pc.Scene()
     scene.add_material(pc.Diffuse((0.8, 0.3, 0.2), name="red"))
     scene.add_material(pc.Emitter(pc.spectra.blackbody(4000), strength=20, name="lamp"))
-    v, t = uv_sphere(1.0, 8, 16)
+    v, t = uv_sphere(radius=1.0, rings=8, segments=16)
     scene.add_mesh("ball", v, t, material=0)
     scene.add_mesh("lamp", v * 0.3 + [1.5, -1.0, 1.5], t, material=1)
     scene.camera = pc.Camera.looking_at((0, -5, 1), (0, 0, 0))

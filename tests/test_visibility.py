@@ -9,13 +9,9 @@ import pytest
 
 import polychrome as pc
 from conftest import luminance
+from meshes import square
 
 RHO, E = 0.5, 2.0
-
-
-def quad(half, z):
-    v = np.array([[-half, -half, z], [half, -half, z], [half, half, z], [-half, half, z]], np.float32)
-    return v, np.array([[0, 1, 2], [0, 2, 3]], np.uint32)
 
 
 def floor_scene(card_visibility=None, card_material=None, sun=True):
@@ -23,10 +19,10 @@ def floor_scene(card_visibility=None, card_material=None, sun=True):
     between them that covers the whole view."""
     scene = pc.Scene()
     grey = scene.add_material(pc.Diffuse(RHO, name="grey"))
-    v, t = quad(10.0, 0.0)
+    v, t = square(10.0, 0.0)
     scene.add_mesh("floor", v, t, material=grey)
     card = scene.add_material(card_material or pc.Diffuse(0.0, name="black card"))
-    v, t = quad(1.0, 0.0)
+    v, t = square(1.0, 0.0)
     m = scene.add_mesh("card", v, t, material=card, place=False)
     placed = np.eye(4)
     placed[2, 3] = 1.0
@@ -106,7 +102,7 @@ def test_instance_no_ray_sees_changes_nothing():
 
 def test_bad_visibility_raises_naming_the_instance():
     scene = pc.Scene()
-    m = scene.add_mesh("m", *quad(1.0, 0.0), material=scene.add_material(pc.Diffuse(0.5)), place=False)
+    m = scene.add_mesh("m", *square(1.0, 0.0), material=scene.add_material(pc.Diffuse(0.5)), place=False)
     with pytest.raises(ValueError, match="instance 'x'.*camra"):
         scene.add_instance(m, np.eye(4), "x", visibility={"camra": False})
     with pytest.raises(ValueError, match="instance 'x'.*True or False"):
@@ -124,12 +120,12 @@ def lamp_scene(floor_material, light_visibility=None, panel_visibility=None, poi
     emissive square of half-width 1 at height 1), seen from above (orthographic)."""
     scene = pc.Scene()
     floor = scene.add_material(floor_material)
-    scene.add_mesh("floor", *quad(10.0, 0.0), material=floor)
+    scene.add_mesh("floor", *square(10.0, 0.0), material=floor)
     if point:
         scene.add_light(pc.PointLight((0, 0, 1.0), power=40.0, name="lamp", visibility=light_visibility))
     else:
         panel = scene.add_material(pc.Emitter(3.0, name="panel"))
-        m = scene.add_mesh("panel", *quad(1.0, 0.0), material=panel, place=False)
+        m = scene.add_mesh("panel", *square(1.0, 0.0), material=panel, place=False)
         placed = np.eye(4)
         placed[2, 3] = 1.0
         scene.add_instance(m, placed, "panel", visibility={"camera": False, **(panel_visibility or {})})
@@ -178,12 +174,12 @@ def test_card_invisible_to_glossy_rays_is_not_in_the_mirror():
 
     def scene(card_visibility):
         s = pc.Scene()
-        s.add_mesh("mirror", *quad(10.0, 0.0), material=s.add_material(pc.Conductor(eta=1.0, k=1e4, name="mirror")))
+        s.add_mesh("mirror", *square(10.0, 0.0), material=s.add_material(pc.Conductor(eta=1.0, k=1e4, name="mirror")))
         for name, z, mat, vis in (
             ("card", 1.0, pc.Diffuse(0.0, name="card"), card_visibility),
             ("panel", 2.0, pc.Emitter(L, name="panel"), {"camera": False}),
         ):
-            m = s.add_mesh(name, *quad(2.0, 0.0), material=s.add_material(mat), place=False)
+            m = s.add_mesh(name, *square(2.0, 0.0), material=s.add_material(mat), place=False)
             placed = np.eye(4)
             placed[2, 3] = z
             s.add_instance(m, placed, name, visibility=vis)
