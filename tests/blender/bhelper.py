@@ -52,6 +52,16 @@ def exr_channels(path):
     import OpenEXR
     return {k: np.asarray(v.pixels, np.float64) for k, v in OpenEXR.File(path, separate_channels=True).channels().items()}
 
+# An EXR's RGB as (H, W, 3).
+def exr_rgb(path):
+    ch = exr_channels(path)
+    return np.stack([ch[k] for k in 'RGB'], -1)
+
+# Means of block x block pixels (the comparisons' unit), (H // block, W // block, 3).
+def block_means(a, block=2):
+    h, w = a.shape[0] // block, a.shape[1] // block
+    return a[:block * h, :block * w].reshape(h, block, w, block, 3).mean(axis=(1, 3))
+
 # Renders `sc` with `engine` ('CYCLES', 'POLYCHROME') to tag.exr; its RGB as (H, W, 3).
 def render_rgb(sc, engine, tag):
     sc.render.engine = engine

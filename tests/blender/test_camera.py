@@ -16,12 +16,6 @@ pytestmark = pytest.mark.blender
 
 COMMON = """
 import polychrome.colordiff as cd
-def rgb(path):
-    ch = exr_channels(path)
-    return np.stack([ch['R'], ch['G'], ch['B']], -1)
-def blocks(a):
-    h, w = a.shape[0] // 2, a.shape[1] // 2
-    return a[:2 * h, :2 * w].reshape(h, 2, w, 2, 3).mean(axis=(1, 3))
 def emission(name, rgb, strength=1.0):
     m = bpy.data.materials.new(name); m.use_nodes = True; nt = m.node_tree
     for n in list(nt.nodes):
@@ -38,9 +32,9 @@ def setup_engines(sc, spp):
 def render(sc, engine, name):
     sc.render.engine = engine; sc.render.filepath = os.path.abspath(name + '.exr')
     bpy.ops.render.render(write_still=True)
-    return rgb(name + '.exr')
+    return exr_rgb(name + '.exr')
 def compare(a, b, white=1.0):
-    return float(cd.image_delta_e(blocks(a), blocks(b), white_luminance=white).mean())
+    return float(cd.image_delta_e(block_means(a), block_means(b), white_luminance=white).mean())
 """
 
 
@@ -123,7 +117,7 @@ def test_bokeh_shape_follows_blades_rotation_and_ratio(tmp_path):
     d.aperture_blades = 5; d.aperture_rotation = 0.4; d.aperture_ratio = 1.6
     setup_engines(sc, 1024)
     a = render(sc, 'CYCLES', 'c')
-    white = float(blocks(a)[..., 1].max())
+    white = float(block_means(a)[..., 1].max())
     same = compare(a, render(sc, 'POLYCHROME', 'p'), white); err, warn = Engine.last_error, Engine.last_warnings
     d.aperture_rotation = 0.4 + math.pi / 5
     rotated = compare(a, render(sc, 'POLYCHROME', 'q'), white)

@@ -15,12 +15,6 @@ pytestmark = pytest.mark.blender
 COMMON = """
 import polychrome.colordiff as cd
 from mathutils import Vector
-def rgb(path):
-    ch = exr_channels(path)
-    return np.stack([ch['R'], ch['G'], ch['B']], -1)
-def blocks(a):
-    h, w = a.shape[0] // 2, a.shape[1] // 2
-    return a[:2 * h, :2 * w].reshape(h, 2, w, 2, 3).mean(axis=(1, 3))
 def material(name, rgb, emit):
     m = bpy.data.materials.new(name); m.use_nodes = True; nt = m.node_tree
     for n in list(nt.nodes):
@@ -81,10 +75,10 @@ def compare(sc, name):
     out = {}
     for eng in ('CYCLES', 'POLYCHROME'):
         sc.render.engine = eng; sc.render.filepath = os.path.abspath(f'{name}-{eng}.exr'); bpy.ops.render.render(write_still=True)
-        out[eng] = rgb(f'{name}-{eng}.exr')
+        out[eng] = exr_rgb(f'{name}-{eng}.exr')
     a, b = out['CYCLES'], out['POLYCHROME']
     white = float(np.percentile(a[..., 1], 99))
-    de = float(cd.image_delta_e(blocks(a), blocks(b), white_luminance=white).mean())
+    de = float(cd.image_delta_e(block_means(a), block_means(b), white_luminance=white).mean())
     return dict(de=de, ratio=(b.mean(axis=(0, 1)) / np.maximum(a.mean(axis=(0, 1)), 1e-9)).tolist(),
                 err=Engine.last_error, warn=Engine.last_warnings)
 """
@@ -115,8 +109,8 @@ def test_hair_curves_particle_hair_and_points_cover_what_cycles_covers(tmp_path)
     sc.render.engine = 'CYCLES'; sc.render.filepath = os.path.abspath('ref.exr'); bpy.ops.render.render(write_still=True)
     c.attributes['radius'].data.foreach_set('value', r * 0.7)
     sc.render.engine = 'POLYCHROME'; sc.render.filepath = os.path.abspath('thin.exr'); bpy.ops.render.render(write_still=True)
-    a, b = rgb('ref.exr'), rgb('thin.exr')
-    control = float(cd.image_delta_e(blocks(a), blocks(b), white_luminance=float(np.percentile(a[..., 1], 99))).mean())
+    a, b = exr_rgb('ref.exr'), exr_rgb('thin.exr')
+    control = float(cd.image_delta_e(block_means(a), block_means(b), white_luminance=float(np.percentile(a[..., 1], 99))).mean())
     sc = stage(True, 64); hair_curves(sc, True, poly=True); out['poly curves'] = compare(sc, 'poly')
     sc = stage(True, 64); particle_hair(sc, True); out['particle hair'] = compare(sc, 'particles')
     sc = stage(True, 64); point_cloud(sc, True); out['point cloud'] = compare(sc, 'points')
