@@ -62,6 +62,24 @@ def block_means(a, block=2):
     h, w = a.shape[0] // block, a.shape[1] // block
     return a[:block * h, :block * w].reshape(h, block, w, block, 3).mean(axis=(1, 3))
 
+# Cycles CPU as the reference: no denoising, adaptivity, clamping or glossy blur (none of
+# which Polychrome has), a near-box pixel filter, `bounces` for every ray type.
+def cycles_cpu(sc, samples, bounces=8):
+    sc.render.engine = 'CYCLES'
+    c = sc.cycles; c.device = 'CPU'; c.samples = samples; c.use_denoising = False; c.use_adaptive_sampling = False
+    c.filter_width = 0.01; c.max_bounces = c.diffuse_bounces = c.glossy_bounces = bounces; c.blur_glossy = 0.0
+    c.sample_clamp_indirect = 0.0; c.sample_clamp_direct = 0.0
+
+# Renders `sc` with Cycles CPU and with Polychrome at the same samples and bounces; their
+# RGB (H, W, 3) from cycles.exr and poly.exr.
+def cycles_and_polychrome(sc, samples, bounces=8):
+    sc.render.image_settings.file_format = 'OPEN_EXR'
+    cycles_cpu(sc, samples, bounces)
+    sc.render.filepath = os.path.abspath('cycles.exr'); bpy.ops.render.render(write_still=True)
+    sc.render.engine = 'POLYCHROME'; sc.polychrome.samples = samples; sc.polychrome.max_bounces = bounces
+    sc.render.filepath = os.path.abspath('poly.exr'); bpy.ops.render.render(write_still=True)
+    return exr_rgb('cycles.exr'), exr_rgb('poly.exr')
+
 # Renders `sc` with `engine` ('CYCLES', 'POLYCHROME') to tag.exr; its RGB as (H, W, 3).
 def render_rgb(sc, engine, tag):
     sc.render.engine = engine

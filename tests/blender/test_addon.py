@@ -129,18 +129,8 @@ def test_diffuse_scene_matches_cycles(tmp_path):
     pd = bpy.data.lights.new('Point', 'POINT'); pd.energy = 150.0; pd.shadow_soft_size = 0.0; pd.color = (1.0, 0.9, 0.8)
     po = bpy.data.objects.new('Point', pd); sc.collection.objects.link(po); po.location = (-2.0, -1.0, 2.0)
     add_camera(sc, (4.0, -4.0, 3.0), (0, 0, 0.4), lens=35)
-    sc.render.image_settings.file_format = 'OPEN_EXR'
-    sc.render.engine = 'CYCLES'
-    c = sc.cycles; c.device = 'CPU'; c.samples = 128; c.use_denoising = False; c.use_adaptive_sampling = False
-    c.filter_width = 0.01; c.max_bounces = 8; c.diffuse_bounces = 8
-    c.sample_clamp_indirect = 0.0; c.sample_clamp_direct = 0.0
-    sc.render.filepath = os.path.abspath('cycles.exr'); bpy.ops.render.render(write_still=True)
-    sc.render.engine = 'POLYCHROME'
-    sc.polychrome.samples = 128; sc.polychrome.max_bounces = 8
-    sc.render.filepath = os.path.abspath('poly.exr'); bpy.ops.render.render(write_still=True)
-    a, b = exr_channels('cycles.exr'), exr_channels('poly.exr')
+    A, B = cycles_and_polychrome(sc, 128)
     import polychrome.colordiff as cd
-    A = np.stack([a['R'], a['G'], a['B']], -1); B = np.stack([b['R'], b['G'], b['B']], -1)
     white = float(np.percentile(A[..., 1], 99))
     de = cd.image_delta_e(A, B, white_luminance=white)
     emit(mean=float(de.mean()), err=Engine.last_error, warn=Engine.last_warnings,
@@ -410,17 +400,8 @@ def test_emissive_mesh_with_blackbody_matches_cycles(tmp_path):
     nt.links.new(e.outputs[0], nt.nodes['Material Output'].inputs['Surface'])
     lamp.data.materials.append(m)
     add_camera(sc, (4.0, -4.0, 3.0), (0, 0, 0.4), lens=35)
-    sc.render.image_settings.file_format = 'OPEN_EXR'
-    sc.render.engine = 'CYCLES'
-    c = sc.cycles; c.device = 'CPU'; c.samples = 128; c.use_denoising = False; c.use_adaptive_sampling = False
-    c.filter_width = 0.01; c.max_bounces = 8; c.diffuse_bounces = 8; c.sample_clamp_indirect = 0.0; c.sample_clamp_direct = 0.0
-    sc.render.filepath = os.path.abspath('cycles.exr'); bpy.ops.render.render(write_still=True)
-    sc.render.engine = 'POLYCHROME'
-    sc.polychrome.samples = 128; sc.polychrome.max_bounces = 8
-    sc.render.filepath = os.path.abspath('poly.exr'); bpy.ops.render.render(write_still=True)
-    a, b = exr_channels('cycles.exr'), exr_channels('poly.exr')
+    A, B = cycles_and_polychrome(sc, 128)
     import polychrome.colordiff as cd
-    A = np.stack([a['R'], a['G'], a['B']], -1); B = np.stack([b['R'], b['G'], b['B']], -1)
     de = cd.image_delta_e(A, B, white_luminance=float(np.percentile(A[..., 1], 99)))
     emit(mean=float(de.mean()), err=Engine.last_error, warn=Engine.last_warnings,
          ya=float((A.mean(axis=(0, 1)) @ [0.2126, 0.7152, 0.0722])), yb=float((B.mean(axis=(0, 1)) @ [0.2126, 0.7152, 0.0722])))

@@ -139,18 +139,8 @@ def test_default_principled_cube_matches_cycles(tmp_path):
     pd = bpy.data.lights.new('Point', 'POINT'); pd.energy = 150.0; pd.shadow_soft_size = 0.0; pd.color = (1.0, 0.9, 0.8)
     po = bpy.data.objects.new('Point', pd); sc.collection.objects.link(po); po.location = (-2.0, -1.0, 2.0)
     add_camera(sc, (4.0, -4.0, 3.0), (0, 0, 0.4), lens=35)
-    sc.render.image_settings.file_format = 'OPEN_EXR'
-    sc.render.engine = 'CYCLES'
-    c = sc.cycles; c.device = 'CPU'; c.samples = 128; c.use_denoising = False; c.use_adaptive_sampling = False
-    c.filter_width = 0.01; c.max_bounces = 8; c.diffuse_bounces = 8; c.glossy_bounces = 8
-    c.sample_clamp_indirect = 0.0; c.sample_clamp_direct = 0.0
-    sc.render.filepath = os.path.abspath('cycles.exr'); bpy.ops.render.render(write_still=True)
-    sc.render.engine = 'POLYCHROME'
-    sc.polychrome.samples = 128; sc.polychrome.max_bounces = 8
-    sc.render.filepath = os.path.abspath('poly.exr'); bpy.ops.render.render(write_still=True)
-    a, b = exr_channels('cycles.exr'), exr_channels('poly.exr')
+    A, B = cycles_and_polychrome(sc, 128)
     import polychrome.colordiff as cd
-    A = np.stack([a['R'], a['G'], a['B']], -1); B = np.stack([b['R'], b['G'], b['B']], -1)
     white = float(np.percentile(A[..., 1], 99))
     de = cd.image_delta_e(A, B, white_luminance=white)
     emit(mean=float(de.mean()), err=Engine.last_error, warn=Engine.last_warnings,
@@ -234,20 +224,10 @@ def test_metal_and_thin_film_principled_match_cycles(tmp_path):
     ld = bpy.data.lights.new('Area', 'AREA'); ld.energy = 400.0; ld.size = 2.0
     lo = bpy.data.objects.new('Area', ld); sc.collection.objects.link(lo); lo.location = (0.5, -2.0, 4.0)
     add_camera(sc, (0.0, -6.0, 2.0), (0, 0, 0.5), lens=35)
-    sc.render.image_settings.file_format = 'OPEN_EXR'
-    sc.render.engine = 'CYCLES'
-    c = sc.cycles; c.device = 'CPU'; c.samples = 256; c.use_denoising = False; c.use_adaptive_sampling = False
-    c.filter_width = 0.01; c.max_bounces = 8; c.diffuse_bounces = 8; c.glossy_bounces = 8; c.blur_glossy = 0.0
-    c.sample_clamp_indirect = 0.0; c.sample_clamp_direct = 0.0
-    sc.render.filepath = os.path.abspath('cycles.exr'); bpy.ops.render.render(write_still=True)
-    sc.render.engine = 'POLYCHROME'
-    sc.polychrome.samples = 256; sc.polychrome.max_bounces = 8
-    sc.render.filepath = os.path.abspath('poly.exr'); bpy.ops.render.render(write_still=True)
-    a, b = exr_channels('cycles.exr'), exr_channels('poly.exr')
+    A, B = cycles_and_polychrome(sc, 256)
     import polychrome.colordiff as cd
-    A = np.stack([a['R'], a['G'], a['B']], -1); B = np.stack([b['R'], b['G'], b['B']], -1)
     # 2×2 pixel blocks: the comparison is about the materials, not the caustic noise on the floor
-    A = A.reshape(18, 2, 32, 2, 3).mean(axis=(1, 3)); B = B.reshape(18, 2, 32, 2, 3).mean(axis=(1, 3))
+    A, B = block_means(A), block_means(B)
     white = float(np.percentile(A[..., 1], 99))
     de = cd.image_delta_e(A, B, white_luminance=white)
     emit(mean=float(de.mean()), err=Engine.last_error, warn=Engine.last_warnings,
@@ -293,19 +273,9 @@ def test_fresnel_and_layer_weight_mixes_match_cycles(tmp_path):
     ld = bpy.data.lights.new('Area', 'AREA'); ld.energy = 400.0; ld.size = 2.0
     lo = bpy.data.objects.new('Area', ld); sc.collection.objects.link(lo); lo.location = (0.5, -2.0, 4.0)
     add_camera(sc, (0.0, -6.0, 2.0), (0, 0, 0.5), lens=35)
-    sc.render.image_settings.file_format = 'OPEN_EXR'
-    sc.render.engine = 'CYCLES'
-    c = sc.cycles; c.device = 'CPU'; c.samples = 256; c.use_denoising = False; c.use_adaptive_sampling = False
-    c.filter_width = 0.01; c.max_bounces = 8; c.diffuse_bounces = 8; c.glossy_bounces = 8; c.blur_glossy = 0.0
-    c.sample_clamp_indirect = 0.0; c.sample_clamp_direct = 0.0
-    sc.render.filepath = os.path.abspath('cycles.exr'); bpy.ops.render.render(write_still=True)
-    sc.render.engine = 'POLYCHROME'
-    sc.polychrome.samples = 256; sc.polychrome.max_bounces = 8
-    sc.render.filepath = os.path.abspath('poly.exr'); bpy.ops.render.render(write_still=True)
-    a, b = exr_channels('cycles.exr'), exr_channels('poly.exr')
+    A, B = cycles_and_polychrome(sc, 256)
     import polychrome.colordiff as cd
-    A = np.stack([a['R'], a['G'], a['B']], -1); B = np.stack([b['R'], b['G'], b['B']], -1)
-    A = A.reshape(18, 2, 32, 2, 3).mean(axis=(1, 3)); B = B.reshape(18, 2, 32, 2, 3).mean(axis=(1, 3))
+    A, B = block_means(A), block_means(B)
     white = float(np.percentile(A[..., 1], 99))
     de = cd.image_delta_e(A, B, white_luminance=white)
     emit(mean=float(de.mean()), err=Engine.last_error, warn=Engine.last_warnings,
