@@ -499,3 +499,36 @@ def test_missing_uv_set_is_one_warning_naming_mesh_and_primvar(tmp_path):
     stage.Save()
     scene, warns = read(path)
     assert len(warns) == 1 and "/plane" in warns[0] and "'uvset'" in warns[0] and "/Looks/m" in warns[0], warns
+
+
+def test_normal_map_becomes_a_tangent_normal_map_and_another_uv_set_warns(tmp_path):
+    """A `normal` fed by a UsdUVTexture (scale 2, bias -1) becomes a tangent-space Normal
+    Map on the Principled Normal and Coat Normal, its colour ½·n + ½ (the renders are
+    compared with Cycles in tests/blender/test_usd_preview_cycles.py). The core derives
+    tangents from the mesh's default UV set: a map read through another UV set is one
+    warning naming the mesh and the set."""
+    file = tmp_path / "n.exr"
+    write_exr(file, np.tile(np.array([0.6, 0.5, 0.9, 1.0], np.float32), (2, 2, 1)))
+    path = tmp_path / "nm.usda"
+    stage = new_stage(path)
+    mat, sh = surface(stage, "/Looks/m", diffuseColor=(0.5, 0.5, 0.5))
+    st = primvar_reader(stage, "/Looks/m/uv", "second")
+    tex = uv_texture(stage, "/Looks/m/tex", file, st=st, scale=(2, 2, 2, 1), bias=(-1, -1, -1, 0), sourceColorSpace="raw")
+    connect(sh, "normal", tex, "rgb", Sdf.ValueTypeNames.Normal3f)
+    mesh = quad(stage, "/plane", material=mat)
+    pv = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar("second", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex)
+    pv.Set(Vt.Vec2fArray.FromNumpy(np.array([[0, 0], [0, 1], [1, 1], [1, 0]], np.float32)))
+    top_camera(stage)
+    stage.Save()
+    scene, warns = read(path)
+    assert len(warns) == 1 and "/plane" in warns[0] and "'second'" in warns[0] and "'st'" in warns[0], warns
+    (m,) = [m for m in scene.materials if isinstance(m, pc.NodeMaterial)]
+    nodes = m.nodes
+    (nm,) = [n for n in nodes if n["type"] == "ShaderNodeNormalMap"]
+    assert nm["props"] == {"space": "TANGENT", "uv_map": "second"}
+    colour = nodes[nm["inputs"]["Color"]["link"][0]]
+    assert colour["props"]["operation"] == "MULTIPLY_ADD" and colour["inputs"]["Vector_001"] == [0.5, 0.5, 0.5]
+    (principled,) = [n for n in nodes if n["type"] == "ShaderNodeBsdfPrincipled"]
+    index = nodes.index(nm)
+    assert principled["inputs"]["Normal"] == {"link": [index, "Normal"]} == principled["inputs"]["Coat Normal"]
+    render_rgb(scene, samples=1)  # the core compiles it

@@ -269,6 +269,23 @@ class Graph:
         )
         return None
 
+    def uv_set_of(self, link) -> str:
+        """The UV set the nodes upstream of ``link`` read ("" = the default set): the
+        first UV Map met walking back through their inputs."""
+        seen, stack = set(), [link.node] if isinstance(link, Link) else []
+        while stack:
+            i = stack.pop()
+            if i in seen:
+                continue
+            seen.add(i)
+            node = self.nodes[i]
+            if node["type"] == "ShaderNodeUVMap":
+                return str(node["props"].get("uv_map", ""))
+            if node["type"] == "ShaderNodeTexImage" and "Vector" not in node["inputs"]:
+                return ""
+            stack += [v["link"][0] for v in node["inputs"].values() if isinstance(v, dict) and "link" in v]
+        return ""
+
     # -- nodes -------------------------------------------------------------------------
     def primvar_reader(self, shader, ty: str, kind: str):
         var = self.value(shader.GetInput("varname"), "string")
@@ -479,9 +496,15 @@ def build(reader, material_prim, shader, name: str):
     for usd_name, (kind, fallback) in INPUTS.items():
         v = g.value(shader.GetInput(usd_name), kind)
         values[usd_name] = Const(fallback) if v is None else v
+    normal = g.value(shader.GetInput("normal"), "vector")
+    if isinstance(normal, Const):
+        # A constant tangent-space normal other than +Z tilts the whole surface: rare, not supported.
+        n = _triple(normal.value)
+        if n != (0.0, 0.0, 1.0):
+            g.warn("unsupported:normal", f"a constant normal {n} is not supported and is ignored")
+        normal = None
     # Warned when connected, or (displacement, occlusion) authored away from the fallback.
     for unsupported, what, neutral in (
-        ("normal", "normal maps", None),
         ("displacement", "displacement", 0.0),
         ("occlusion", "occlusion", 1.0),
     ):
@@ -494,7 +517,7 @@ def build(reader, material_prim, shader, name: str):
         g.warn("threshold", "a connected opacityThreshold is not supported; 0 is used")
         threshold = Const(0.0)
     thr = float(threshold.value if not isinstance(threshold.value, tuple) else threshold.value[0])
-    varying = any(isinstance(v, Link) for v in values.values())
+    varying = normal is not None or any(isinstance(v, Link) for v in values.values())
     if not varying and thr <= 0.0:
         return None, {k: v.value for k, v in values.items()}
 
@@ -542,7 +565,30 @@ def build(reader, material_prim, shader, name: str):
     elif float(g.socket(opacity, "float")) < 1.0:
         # Spec: a transparent surface still has its specular response (clear glass).
         inputs["Transmission Weight"] = 1.0 - float(g.socket(opacity, "float"))
+    tangent_uv = None
+    if normal is not None:
+        # The spec's normal is tangent space in [-1, 1]³ (after the texture's scale and
+        # bias), +X along increasing s, +Y along increasing t, +Z the surface normal: the
+        # Normal Map node's tangent space (Cycles svm_node_normal_map), whose Color is
+        # in [0, 1] (n = 2·(c − ½)), so c = ½·n + ½. The tangents are those of the UV set
+        # the texture reads. The normal perturbs the coat too (one surface normal).
+        tangent_uv = g.uv_set_of(normal)
+        c = g.add(
+            "ShaderNodeVectorMath",
+            "normal to colour",
+            {"operation": "MULTIPLY_ADD"},
+            {"Vector": g.socket(normal, "vector"), "Vector_001": [0.5, 0.5, 0.5], "Vector_002": [0.5, 0.5, 0.5]},
+        )
+        nm = g.add(
+            "ShaderNodeNormalMap",
+            f"{shader.GetPath()} normal",
+            {"space": "TANGENT", "uv_map": tangent_uv},
+            {"Strength": 1.0, "Color": {"link": [c, "Vector"]}},
+        )
+        inputs["Normal"] = {"link": [nm, "Normal"]}
+        inputs["Coat Normal"] = {"link": [nm, "Normal"]}
     principled = g.add("ShaderNodeBsdfPrincipled", str(shader.GetPath()), {}, inputs)
     material = NodeMaterial(name, g.nodes, {"surface": [principled, "BSDF"]})
     material.usd_primvar_reads = frozenset(g.reads)  # checked against each bound mesh
+    material.usd_tangent_uv = tangent_uv  # None: no normal map; "": the mesh's default UV set
     return material, None

@@ -1066,6 +1066,14 @@ class _Reader:
                         f"noprimvar:{where}:{pv_name}",
                         f"prim {where}: primvar '{pv_name}' read by material '{self.materials[m].name}' is missing; it reads 0",
                     )
+            tangent_uv = getattr(self.materials[m], "usd_tangent_uv", None)
+            if tangent_uv not in (None, "", uv_name):
+                # The core derives tangents from the default UV set only.
+                self.warn(
+                    f"tangentuv:{where}:{tangent_uv}",
+                    f"prim {where}: the normal map of material '{self.materials[m].name}' reads UV set '{tangent_uv}'; "
+                    f"its tangents are those of the default UV set '{uv_name}'",
+                )
 
         return {
             "name": str(self.custom(prim, A.NAME, str(prim.GetPath()))),
