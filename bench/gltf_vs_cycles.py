@@ -8,7 +8,7 @@ grey floor; then rendered by Cycles CPU and by Polychrome through the add-on (sa
 the add-on's warnings, the two render times.
 
     python bench/gltf_vs_cycles.py [--models A,B] [--size 128] [--samples 64]
-        [--cache ~/.cache/polychrome/gltf] [--fetch [--source DIR]] [--out DIR]
+        [--cache ~/.cache/polychrome/gltf] [--fetch [--source DIR]] [--out DIR] [--images DIR]
 
 Models are looked up as tests/data/gltf/<Name>/ (only BoxTextured is vendored) or
 CACHE/<Name>/<Name>.gltf|.glb (CACHE: --cache, else $POLYCHROME_GLTF_CACHE, else
@@ -17,7 +17,8 @@ variant MODELS names for each model (Models/<Name>/<variant>/ of
 KhronosGroup/glTF-Sample-Assets): from GitHub (raw.githubusercontent.com, the .glb, or the
 .gltf and the buffers and images it names), or with `--source DIR` from a local clone of
 that repository (a work tree, or a bare git directory). A model still missing is listed as
-such. Needs `bpy` (numpy < 2) and OpenEXR in the venv.
+such. `--images DIR` writes DIR/<Name>.png: Cycles left, Polychrome right, sRGB-encoded
+(docs/images/gltf holds the table's). Needs `bpy` (numpy < 2), OpenEXR and Pillow in the venv.
 """
 
 from __future__ import annotations
@@ -207,6 +208,8 @@ def compare(path: Path, size: int = 128, samples: int = 64, tmp: Path | None = N
     poly, t_p = render(sc, "POLYCHROME", tmp / f"{path.stem}_poly.exr")
     de, p95 = delta_e(cyc, poly)
     return {
+        "cycles": cyc,
+        "polychrome": poly,
         "de": de,
         "p95": p95,
         "warnings": list(engine.last_warnings),
@@ -214,6 +217,21 @@ def compare(path: Path, size: int = 128, samples: int = 64, tmp: Path | None = N
         "t_cycles": t_c,
         "t_poly": t_p,
     }
+
+
+def side_by_side_png(left, right, path: Path) -> None:
+    """Two linear Rec.709 images side by side, sRGB-encoded 8-bit, a 2-pixel gap."""
+    import numpy as np
+    from PIL import Image
+
+    def srgb(x):
+        x = np.clip(x, 0.0, 1.0)
+        return np.where(x <= 0.0031308, 12.92 * x, 1.055 * x ** (1 / 2.4) - 0.055)
+
+    gap = np.ones((left.shape[0], 2, 3))
+    rgb = np.concatenate([srgb(left), gap, srgb(right)], 1)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    Image.fromarray((rgb * 255 + 0.5).astype(np.uint8)).save(path)
 
 
 def summarise(warnings: list[str]) -> str:
@@ -235,6 +253,7 @@ def main() -> int:
     ap.add_argument("--fetch", action="store_true", help="fetch models missing from the cache (see --source)")
     ap.add_argument("--source", default=None, help="a local glTF-Sample-Assets clone to fetch from (default: GitHub)")
     ap.add_argument("--out", type=Path, default=None, help="directory for the EXRs (default: a temp dir)")
+    ap.add_argument("--images", type=Path, default=None, help="directory for side-by-side PNGs (Cycles | Polychrome)")
     args = ap.parse_args()
     import atexit
 
@@ -259,6 +278,8 @@ def main() -> int:
         except Exception as e:  # noqa: BLE001 - one model failing must not stop the table
             rows.append(f"| {name} | – | – | failed: {e} | – | – |")
         else:
+            if args.images:
+                side_by_side_png(r["cycles"], r["polychrome"], args.images / f"{name}.png")
             for w in r["warnings"]:
                 print(f"{name}: warning: {w}", flush=True)
             warn = summarise(r["warnings"]) or ("error: " + r["error"] if r["error"] else "none")
