@@ -490,15 +490,62 @@ def test_network_in_a_node_graph_driven_by_material_interface_inputs(tmp_path):
     assert np.median(np.abs(got - want) / np.maximum(want, 0.05)) < 0.02
 
 
-def test_missing_uv_set_is_one_warning_naming_mesh_and_primvar(tmp_path):
+def test_missing_uv_set_reads_the_primvar_readers_fallback_with_one_warning(tmp_path):
+    """A mesh without the UV set a UsdPrimvarReader_float2 reads gets the reader's
+    `fallback` (here (0.6, 0.3): the whole plane shows the texture at
+    Transform2d(0.6, 0.3)); one warning naming the mesh, the primvar and the reader."""
     file = tmp_path / "tex.exr"
-    write_exr(file, np.ones((2, 2, 4), np.float32))
+    write_exr(file, np.concatenate([TEXELS, np.ones((3, 4, 1))], axis=2).astype(np.float32))
     path = emissive_stage(tmp_path, file, wrap_s="repeat", wrap_t="repeat")
     stage = pxr.Usd.Stage.Open(str(path))
     UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/plane")).RemovePrimvar("uvset")
+    reader = UsdShade.Shader(stage.GetPrimAtPath("/Looks/m/st"))
+    reader.CreateInput("fallback", Sdf.ValueTypeNames.Float2).Set(Gf.Vec2f(0.6, 0.3))
     stage.Save()
     scene, warns = read(path)
-    assert len(warns) == 1 and "/plane" in warns[0] and "'uvset'" in warns[0] and "/Looks/m" in warns[0], warns
+    assert len(warns) == 1 and "/plane" in warns[0] and "'uvset'" in warns[0] and "/Looks/m/st" in warns[0], warns
+    got = render_rgb(scene)
+    u, v = transform_st(np.array([0.6]), np.array([0.3]), 30.0, (1.5, 0.75), (0.25, -0.1))
+    want = bilinear(TEXELS, u, v, "repeat", "repeat")[0]
+    assert np.allclose(got, want, rtol=0.02, atol=0.005), (got.reshape(-1, 3).mean(axis=0), want)
+
+
+def test_transform2d_parameters_connected_to_interface_inputs_and_primvar_readers(tmp_path):
+    """UsdTransform2d's rotation through a material interface input (30°), its scale from
+    a UsdPrimvarReader_float2 of a constant primvar ((1.5, 0.75)) and its translation from
+    one of a per-vertex primvar varying over the plane ((0.25, −0.1) + (0.1 u, 0.05 v)):
+    the pixels are the spec's transform evaluated with those values at every point."""
+    file = tmp_path / "tex.exr"
+    write_exr(file, np.concatenate([TEXELS, np.ones((3, 4, 1))], axis=2).astype(np.float32))
+    path = emissive_stage(tmp_path, file, wrap_s="mirror", wrap_t="repeat")
+    stage = pxr.Usd.Stage.Open(str(path))
+    mat = UsdShade.Material(stage.GetPrimAtPath("/Looks/m"))
+    xf = UsdShade.Shader(stage.GetPrimAtPath("/Looks/m/xf"))
+    angle = mat.CreateInput("angle", Sdf.ValueTypeNames.Float)
+    angle.Set(30.0)
+    xf.GetInput("rotation").GetAttr().Clear()
+    xf.GetInput("rotation").ConnectToSource(angle)
+    for name, varname in (("scale", "xfscale"), ("translation", "xfshift")):
+        xf.GetInput(name).GetAttr().Clear()
+        xf.GetInput(name).ConnectToSource(primvar_reader(stage, f"/Looks/m/{varname}", varname))
+    api = UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/plane"))
+    api.CreatePrimvar("xfscale", Sdf.ValueTypeNames.Float2Array, UsdGeom.Tokens.constant).Set([Gf.Vec2f(1.5, 0.75)])
+    corners = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float32)
+    shift = np.array([0.25, -0.1], np.float32) + corners * np.array([0.1, 0.05], np.float32)
+    api.CreatePrimvar("xfshift", Sdf.ValueTypeNames.Float2Array, UsdGeom.Tokens.vertex).Set(Vt.Vec2fArray.FromNumpy(shift))
+    stage.Save()
+    scene, warns = read(path)
+    assert not warns, warns
+    got = render_rgb(scene)
+
+    def fn(x, y):
+        u, v = (x + 1) / 2, (y + 1) / 2
+        su, sv = transform_st(u, v, 30.0, (1.5, 0.75), (0.25 + 0.1 * u, -0.1 + 0.05 * v))
+        return bilinear(TEXELS, su, sv, "mirror", "repeat")
+
+    want = footprint_mean(fn, N)
+    err = np.abs(got - want)
+    assert np.median(err / np.maximum(want, 0.05)) < 0.02, np.median(err)
 
 
 def test_normal_map_becomes_a_tangent_normal_map_and_another_uv_set_warns(tmp_path):

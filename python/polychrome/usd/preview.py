@@ -175,6 +175,8 @@ class Graph:
         self.nodes: list[dict[str, Any]] = []
         self.memo: dict[tuple, Any] = {}
         self.reads: set[tuple[str, str]] = set()  # ("uv" | "attr", primvar name)
+        # What a mesh without the primvar reads: (kind, name) → (reader prim path, fallback).
+        self.fallbacks: dict[tuple[str, str], tuple[str, tuple[float, ...]]] = {}
 
     # -- plumbing ----------------------------------------------------------------------
     def add(self, kind: str, name: str, props=None, inputs=None) -> int:
@@ -294,6 +296,14 @@ class Graph:
             self.r.warn(f"varname:{shader.GetPath()}", f"prim {shader.GetPath()}: primvar reader without a varname; its fallback is used")
             fb = self.value(shader.GetInput("fallback"), kind)
             return fb if isinstance(fb, Const) else None
+        # The reader's fallback (spec: zeros of its type) for meshes without the primvar.
+        width = {"float2": 2, "float3": 3, "normal": 3, "point": 3, "vector": 3, "float4": 4}.get(ty, 1)
+        fb = self.value(shader.GetInput("fallback"), "vector" if width > 1 else "float")
+        fb_t = fb.value if isinstance(fb, Const) else 0.0
+        fb_t = tuple(float(c) for c in (fb_t if isinstance(fb_t, tuple) else (fb_t,)))
+        fb_t = (fb_t + (0.0,) * width)[:width]
+        tag = "uv" if ty == "float2" else "attr"
+        self.fallbacks.setdefault((tag, varname), (str(shader.GetPath()), fb_t))
         if ty == "float2":
             self.r.uv_names.add(varname)
             self.reads.add(("uv", varname))
@@ -307,14 +317,37 @@ class Graph:
 
     def transform2d(self, shader):
         vin = self.value(shader.GetInput("in"), "vector")
-        rotation = float(self.const(shader.GetInput("rotation"), 0.0))
-        scale = self.const(shader.GetInput("scale"), (1.0, 1.0))
-        translation = self.const(shader.GetInput("translation"), (0.0, 0.0))
-        inputs: dict[str, Any] = {
-            "Location": [float(translation[0]), float(translation[1]), 0.0],
-            "Rotation": [0.0, 0.0, math.radians(rotation)],
-            "Scale": [float(scale[0]), float(scale[1]), 1.0],
-        }
+        # rotation, scale, translation: constants (a connection to the material's
+        # interface inputs resolves to their value), or connected to a network (a
+        # primvar reader, a texture): then the Mapping's sockets are driven by it,
+        # evaluated at every hit like any input.
+        path = str(shader.GetPath())
+        inputs: dict[str, Any] = {}
+        rotation = self.value(shader.GetInput("rotation"), "float")
+        if isinstance(rotation, Link):
+            deg = self.add(
+                "ShaderNodeMath",
+                f"{path} rotation",
+                {"operation": "MULTIPLY"},
+                {"Value": self.socket(rotation, "float"), "Value_001": math.pi / 180.0},
+            )
+            comb = self.add("ShaderNodeCombineXYZ", f"{path} rotation", inputs={"X": 0.0, "Y": 0.0, "Z": {"link": [deg, "Value"]}})
+            inputs["Rotation"] = {"link": [comb, "Vector"]}
+        else:
+            r = 0.0 if rotation is None else rotation.value
+            inputs["Rotation"] = [0.0, 0.0, math.radians(float(r[0] if isinstance(r, tuple) else r))]
+        for socket, usd_name, default, z in (("Scale", "scale", (1.0, 1.0), 1.0), ("Location", "translation", (0.0, 0.0), 0.0)):
+            v = self.value(shader.GetInput(usd_name), "vector")
+            if isinstance(v, Link):
+                sep = self.add("ShaderNodeSeparateXYZ", f"{path} {usd_name}", inputs={"Vector": self.socket(v, "vector")})
+                comb = self.add(
+                    "ShaderNodeCombineXYZ", f"{path} {usd_name}", inputs={"X": {"link": [sep, "X"]}, "Y": {"link": [sep, "Y"]}, "Z": z}
+                )
+                inputs[socket] = {"link": [comb, "Vector"]}
+            else:
+                t = default if v is None else v.value
+                t = t if isinstance(t, tuple) else (float(t),) * 2
+                inputs[socket] = [float(t[0]), float(t[1]), z]
         if vin is None:  # UsdTransform2d's `in` fallback is (0, 0)
             vin = Const((0.0, 0.0, 0.0))
         inputs["Vector"] = self.socket(vin, "vector")
@@ -590,5 +623,6 @@ def build(reader, material_prim, shader, name: str):
     principled = g.add("ShaderNodeBsdfPrincipled", str(shader.GetPath()), {}, inputs)
     material = NodeMaterial(name, g.nodes, {"surface": [principled, "BSDF"]})
     material.usd_primvar_reads = frozenset(g.reads)  # checked against each bound mesh
+    material.usd_primvar_fallbacks = dict(g.fallbacks)  # what a mesh without one reads
     material.usd_tangent_uv = tangent_uv  # None: no normal map; "": the mesh's default UV set
     return material, None

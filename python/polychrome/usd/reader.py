@@ -1004,13 +1004,24 @@ class _Reader:
         face_of_corner = None
         extras: dict[tuple[str, str], tuple[np.ndarray, str]] = {}
         api = self.UsdGeom.PrimvarsAPI(prim)
+        used = [material] if material is not None else sorted({int(m) for m in np.unique(material_ids)})
         wanted = [("uv", n) for n in sorted(self.uv_names)] + [("attr", n) for n in sorted(self.attribute_names)]
         for kind, pv_name in wanted:
             pv = api.GetPrimvar(pv_name)
-            if not pv or not pv.HasValue():
-                continue
-            value = pv.ComputeFlattened(self.time)
+            value = pv.ComputeFlattened(self.time) if pv and pv.HasValue() else None
             if value is None or len(value) == 0:
+                # Read by this mesh's network but missing: the primvar reader's fallback.
+                for m in used:
+                    mat = self.materials[m]
+                    if (kind, pv_name) in getattr(mat, "usd_primvar_reads", ()):
+                        reader, fb = mat.usd_primvar_fallbacks[(kind, pv_name)]
+                        self.warn(
+                            f"noprimvar:{where}:{pv_name}",
+                            f"prim {where}: primvar '{pv_name}' read by {reader} (material '{mat.name}') is missing; "
+                            f"the reader's fallback {fb} is used",
+                        )
+                        extras[(kind, pv_name)] = (np.tile(np.asarray(fb, np.float32), (len(pts), 1)), "vertex")
+                        break
                 continue
             arr = np.asarray(value, dtype=np.float32)
             arr = arr.reshape(len(arr), -1)
@@ -1058,14 +1069,7 @@ class _Reader:
         out_n, out_uv = out.get("normals"), out.get("uvs")
         uv_maps = {k[1]: v for k, v in out.items() if isinstance(k, tuple) and k[0] == "uv"} or None
         attrs = {k[1]: v for k, v in out.items() if isinstance(k, tuple) and k[0] == "attr"} or None
-        used = [material] if material is not None else sorted({int(m) for m in np.unique(material_ids)})
         for m in used:
-            for kind, pv_name in sorted(getattr(self.materials[m], "usd_primvar_reads", ())):
-                if (kind, pv_name) not in extras:
-                    self.warn(
-                        f"noprimvar:{where}:{pv_name}",
-                        f"prim {where}: primvar '{pv_name}' read by material '{self.materials[m].name}' is missing; it reads 0",
-                    )
             tangent_uv = getattr(self.materials[m], "usd_tangent_uv", None)
             if tangent_uv not in (None, "", uv_name):
                 # The core derives tangents from the default UV set only.
