@@ -213,6 +213,9 @@ class _Reader:
             UsdRender,
             UsdShade,
         )
+        from pxr import Ar
+
+        self.Ar = Ar
         self.path = path
         self.stage = open_stage(path)
         # An animation's frame is a time code (Blender writes frame n at time code n).
@@ -246,6 +249,9 @@ class _Reader:
         self.world_texture: dict[str, Any] | None = None
         self.cameras: list[Any] = []
         self.textures: dict[str, Any] = {}
+        # Files read out of .usdz packages: resolved path → temporary copy (None: absent).
+        self.unpacked: dict[str, Path | None] = {}
+        self.unpack_dir = None
         # UV sets and primvars some material's network reads (meshes carry them).
         self.uv_names: set[str] = set()
         self.attribute_names: set[str] = set()
@@ -415,6 +421,8 @@ class _Reader:
         None, after one warning naming the prim and the file, when there is no such file."""
         resolved = getattr(attr_value, "resolvedPath", "") or ""
         raw = getattr(attr_value, "path", "") or str(attr_value or "")
+        if resolved and self.Ar.IsPackageRelativePath(resolved):
+            return self.packaged_file(resolved, prim, what, raw)
         if resolved:
             return Path(resolved)
         p = Path(raw)
@@ -424,6 +432,31 @@ class _Reader:
             self.warn(f"missing:{prim.GetPath()}:{raw}", f"prim {prim.GetPath()}: {what} {raw!r} does not exist; its fallback is used")
             return None
         return p
+
+    def packaged_file(self, resolved: str, prim, what: str, raw: str) -> Path | None:
+        """A file inside a package (``pkg.usdz[textures/x.png]``, nested packages too),
+        read through Ar and copied to a temporary directory the reader owns (the texture
+        loaders read paths and choose the format by suffix; textures are read eagerly)."""
+        if resolved in self.unpacked:
+            return self.unpacked[resolved]
+        asset = self.Ar.GetResolver().OpenAsset(self.Ar.ResolvedPath(resolved))
+        data = asset.GetBuffer() if asset is not None else None
+        if data is None:
+            self.warn(
+                f"missing:{prim.GetPath()}:{raw}", f"prim {prim.GetPath()}: {what} {resolved!r} is not in its package; its fallback is used"
+            )
+            self.unpacked[resolved] = None
+            return None
+        if self.unpack_dir is None:
+            import tempfile
+
+            self.unpack_dir = tempfile.TemporaryDirectory(prefix="polychrome-usdz-")  # removed with the reader
+        inner = self.Ar.SplitPackageRelativePathInner(resolved)[1]
+        out = Path(self.unpack_dir.name) / str(len(self.unpacked)) / Path(inner).name  # keeps the file's name
+        out.parent.mkdir()
+        out.write_bytes(bytes(data))
+        self.unpacked[resolved] = out
+        return out
 
     def texture_input(self, shader, name: str, material_prim):
         """A polychrome.Texture for an input driven by a UsdUVTexture, or None (no file,
@@ -1995,6 +2028,9 @@ def read_stage(path, *, resolution=None, time=None):
         detail = messages[0] if messages else (str(e).strip().splitlines() or ["USD error"])[0]
         where = getattr(reader, "current_prim", None)
         raise ValueError(f"{path}: " + (f"prim {where}: " if where else "") + detail) from None
+    finally:
+        if reader.unpack_dir is not None:  # files copied out of a .usdz (read by now)
+            reader.unpack_dir.cleanup()
 
 
 def read_settings(path) -> dict[str, Any]:
