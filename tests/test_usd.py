@@ -448,7 +448,7 @@ def test_unsupported_prim_warns_once_and_the_render_still_works(tmp_path):
     stage = Usd.Stage.Open(str(path))
     UsdGeom.NurbsPatch.Define(stage, "/World/ball")
     UsdGeom.NurbsCurves.Define(stage, "/World/hair")
-    UsdLux.CylinderLight.Define(stage, "/World/tube")
+    UsdLux.PortalLight.Define(stage, "/World/tube")
     stage.Save()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

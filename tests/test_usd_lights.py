@@ -368,3 +368,62 @@ def test_rect_light_in_front_of_the_camera_is_not_seen_but_lights_the_floor(tmp_
     want = rho / math.pi * radiance * 4 * corner(a, a)
     got = luminance(pc.render(scene, width=4, height=4, samples=64, max_bounces=1).rgba[..., :3]).mean()
     assert got == pytest.approx(want, rel=0.03)
+
+
+@pytest.mark.parametrize("normalize", [False, True])
+def test_cylinder_light_lights_the_floor_with_its_closed_form_irradiance(tmp_path, normalize):
+    """A CylinderLight (UsdLux: emits outward from the side of a cylinder of `radius`
+    and `length` along its local X, not from its caps) of radiance 5 at height 1 above a
+    white floor, seen by a camera above it (the light is invisible to the camera): the
+    floor under its axis has the irradiance of the cylinder's visible side, ∫ L cos θ_r
+    cos θ_e / s² dA integrated here numerically (≈ π L r / h for an infinite one).
+    Normalised, a cylinder scaled ×2 with intensity × 2^exposure = 5 × its world side
+    area 2π r L gives the same radiance."""
+    rho, h, r, length, radiance = 0.8, 1.0, 0.05, 6.0, 5.0
+    path = tmp_path / "tube.usda"
+    stage = new_stage(path)
+    mat = preview_material(stage, "/Looks/white", (rho, rho, rho))
+    floor_mesh(stage, "/floor", 5.0, mat)
+    light = UsdLux.CylinderLight.Define(stage, "/tube")
+    light.AddTranslateOp().Set(Gf.Vec3d(0, 0, h))
+    if normalize:
+        light.AddScaleOp().Set(Gf.Vec3f(2.0, 2.0, 2.0))
+        light.CreateRadiusAttr(r / 2)
+        light.CreateLengthAttr(length / 2)
+        light.CreateNormalizeAttr(True)
+        light.CreateExposureAttr(1.0)
+        light.CreateIntensityAttr(radiance * 2 * math.pi * r * length / 2.0)
+    else:
+        light.CreateRadiusAttr(r)
+        light.CreateLengthAttr(length)
+        light.CreateIntensityAttr(radiance)
+    top_camera(stage, "/cam", 3.0, 0.5)  # above the light, looking down at the floor
+    stage.Save()
+    scene, warns = read(path)
+    assert not warns, warns
+    n, width = 8, 0.5
+    result = pc.render(scene, width=n, height=n, samples=1024, max_bounces=1)
+
+    x = np.linspace(-length / 2, length / 2, 3001)
+    phi = np.linspace(0.0, 2 * np.pi, 361)
+    X, P = np.meshgrid(0.5 * (x[1:] + x[:-1]), 0.5 * (phi[1:] + phi[:-1]), indexing="ij")
+    dA = r * (x[1] - x[0]) * (phi[1] - phi[0])
+
+    def irradiance(px, py):  # at the floor point (px, py), normal +Z
+        v = np.stack([X - px, r * np.cos(P) - py, h + r * np.sin(P)], -1)  # to the surface
+        s = np.linalg.norm(v, axis=-1)
+        cos_e = -(v[..., 1] * np.cos(P) + v[..., 2] * np.sin(P)) / s
+        return radiance * np.sum(np.where(cos_e > 0, v[..., 2] / s * cos_e / s**2, 0.0)) * dA
+
+    # Thin-cylinder check: an infinite one's π L r / h times the finite length's share,
+    # (2/π)(t/(1 + t²) + atan t) with t = (length/2)/h.
+    t = length / 2 / h
+    thin = math.pi * radiance * r / h * (2 / math.pi) * (t / (1 + t * t) + math.atan(t))
+    assert irradiance(0.0, 0.0) == pytest.approx(thin, rel=0.005)
+    centres = ((np.arange(n) + 0.5) / n - 0.5) * width
+    # E is even in y and flat in x within 0.25 of the middle of a 6 m light (< 0.1 %).
+    rows = {abs(round(c, 9)): rho / math.pi * irradiance(0.0, c) for c in centres}
+    want = np.array([[rows[abs(round(cy, 9))]] * n for cy in centres])
+    got = luminance(result.rgba)
+    # Mean over the 64 pixels (a thin light is a noisy one per pixel).
+    assert np.mean(got / want) == pytest.approx(1.0, abs=0.02), np.mean(got / want)

@@ -31,6 +31,8 @@ from . import attributes as A
 GPRIM_RINGS, GPRIM_SEGMENTS = 24, 48
 #: Segments of the polygon standing in for a DiskLight.
 DISK_SEGMENTS = 32
+#: Sides of the prism standing in for a CylinderLight.
+CYLINDER_SEGMENTS = 32
 #: UsdPreviewSurface's fallback diffuseColor, used for unbound meshes without displayColor.
 FALLBACK_GREY = (0.18, 0.18, 0.18)
 
@@ -59,7 +61,7 @@ MAX_MOTION_KEYS = 33
 MAX_KEY_TURN = math.pi / 4
 #: Prims the reader turns into triangle meshes.
 GEOMETRY_TYPES = ("Mesh", "Sphere", "Cube", "Cylinder", "Cone", "Capsule", "Capsule_1", "Plane", "BasisCurves", "HermiteCurves", "Points")
-_LIGHTS_SKIPPED = {"CylinderLight", "GeometryLight", "PortalLight", "PluginLight", "MeshLight", "VolumeLight"}
+_LIGHTS_SKIPPED = {"GeometryLight", "PortalLight", "PluginLight", "MeshLight", "VolumeLight"}
 
 
 class DescribedLight:
@@ -1341,15 +1343,22 @@ class _Reader:
     def add_emitter_polygon(self, prim, pts2d: np.ndarray, size: float, normalize: bool, scalar, colour, blackbody) -> None:
         """An emissive polygon in the light's local XY plane emitting from its −Z face
         only (UsdLux: RectLight and DiskLight emit "from one side", "along the -Z
-        axis"), see-through and invisible to camera and shadow rays as Cycles' lights. Normalised, the
-        radiance is divided by the polygon's world-space area (UsdLux: "divide luminance
-        by the world-space surface area", so transform scale counts)."""
-        if prim.HasAPI(self.UsdLux.ShapingAPI):
-            self.warn(f"shaping:{prim.GetPath()}", f"prim {prim.GetPath()}: ShapingAPI on an area light is not supported and is ignored")
-        m = self.world_matrix(prim)
+        axis")."""
         n = len(pts2d)
         verts = np.concatenate([pts2d, np.zeros((n, 1))], axis=1).astype(np.float32)
         tris = np.stack([np.zeros(n - 2, np.int64), np.arange(1, n - 1), np.arange(2, n)], axis=1)
+        # counter-clockwise seen from −Z: the emitting front face looks along −Z
+        self.add_emitter_mesh(prim, verts, tris[:, ::-1].copy(), normalize, scalar, colour, blackbody)
+
+    def add_emitter_mesh(self, prim, verts: np.ndarray, tris: np.ndarray, normalize: bool, scalar, colour, blackbody) -> None:
+        """A one-sided emissive mesh in the light's local frame (``tris`` counter-clockwise
+        seen from the side that emits), see-through and invisible to camera and shadow
+        rays as Cycles' lights. Normalised, the radiance is divided by the mesh's
+        world-space area (UsdLux: "divide luminance by the world-space surface area", so
+        transform scale counts)."""
+        if prim.HasAPI(self.UsdLux.ShapingAPI):
+            self.warn(f"shaping:{prim.GetPath()}", f"prim {prim.GetPath()}: ShapingAPI on an area light is not supported and is ignored")
+        m = self.world_matrix(prim)
         world = (m[:3, :3] @ verts.T.astype(np.float64)).T
         area = 0.5 * float(
             np.linalg.norm(np.cross(world[tris[:, 1]] - world[tris[:, 0]], world[tris[:, 2]] - world[tris[:, 0]]), axis=1).sum()
@@ -1372,8 +1381,7 @@ class _Reader:
             "name": name,
             "order": None,
             "vertices": verts,
-            # counter-clockwise seen from −Z: the emitting front face looks along −Z
-            "triangles": tris if legacy else tris[:, ::-1].copy(),
+            "triangles": tris[:, ::-1].copy() if legacy else tris,
             "normals": None,
             "uvs": None,
             "material_ids": None,
@@ -1404,6 +1412,32 @@ class _Reader:
         k = math.sqrt(2.0 * math.pi / (DISK_SEGMENTS * math.sin(2.0 * math.pi / DISK_SEGMENTS)))
         pts = np.stack([np.cos(a), np.sin(a)], axis=1) * r * k
         self.add_emitter_polygon(prim, pts, 2 * r, bool(self.get(light.GetNormalizeAttr(), False)), scalar, colour, blackbody)
+
+    def read_cylinder_light(self, prim) -> None:
+        """UsdLux CylinderLight: emits outward from the side of a cylinder of ``radius``
+        and ``length`` along its local X axis (not from the end caps), radiance
+        intensity × 2^exposure × colour, ÷ the world-space side area when normalised.
+        A prism of CYLINDER_SEGMENTS sides whose perimeter, hence area, is the
+        cylinder's; ``treatAsLine`` is a hint that area-light renderers may ignore."""
+        light = self.UsdLux.CylinderLight(prim)
+        scalar, colour, blackbody = self.light_rgb(prim, light)
+        r = float(self.get(light.GetRadiusAttr(), 0.5))
+        length = float(self.get(light.GetLengthAttr(), 1.0))
+        if not (math.isfinite(r) and math.isfinite(length)):
+            raise self.error(prim, "its radius or length is not finite")
+        if r <= 0.0 or length <= 0.0:
+            return
+        n = CYLINDER_SEGMENTS
+        a = np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
+        rk = r * math.pi / (n * math.sin(math.pi / n))
+        ring = np.stack([np.cos(a), np.sin(a)], axis=1) * rk
+        verts = np.concatenate(
+            [np.concatenate([np.full((n, 1), -length / 2), ring], axis=1), np.concatenate([np.full((n, 1), length / 2), ring], axis=1)]
+        ).astype(np.float32)
+        i, j = np.arange(n), (np.arange(n) + 1) % n
+        # counter-clockwise seen from outside (angles grow from +Y towards +Z)
+        tris = np.concatenate([np.stack([i, j, n + j], axis=1), np.stack([i, n + j, n + i], axis=1)])
+        self.add_emitter_mesh(prim, verts, tris, bool(self.get(light.GetNormalizeAttr(), False)), scalar, colour, blackbody)
 
     def read_distant_light(self, prim) -> None:
 
@@ -1804,6 +1838,8 @@ class _Reader:
                 self.read_rect_light(prim)
             elif t == "DiskLight":
                 self.read_disk_light(prim)
+            elif t == "CylinderLight":
+                self.read_cylinder_light(prim)
             elif t == "DistantLight":
                 self.read_distant_light(prim)
             elif t in ("DomeLight", "DomeLight_1"):
