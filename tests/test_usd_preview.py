@@ -548,37 +548,52 @@ def test_transform2d_parameters_connected_to_interface_inputs_and_primvar_reader
     assert np.median(err / np.maximum(want, 0.05)) < 0.02, np.median(err)
 
 
-def test_normal_map_becomes_a_tangent_normal_map_and_another_uv_set_warns(tmp_path):
-    """A `normal` fed by a UsdUVTexture (scale 2, bias -1) becomes a tangent-space Normal
-    Map on the Principled Normal and Coat Normal, its colour ½·n + ½ (the renders are
-    compared with Cycles in tests/blender/test_usd_preview_cycles.py). The core derives
-    tangents from the mesh's default UV set: a map read through another UV set is one
-    warning naming the mesh and the set."""
-    file = tmp_path / "n.exr"
-    write_exr(file, np.tile(np.array([0.6, 0.5, 0.9, 1.0], np.float32), (2, 2, 1)))
+@pytest.mark.parametrize("uv_set", ["st", "second"])
+def test_normal_map_tilts_the_normal_in_the_tangent_frame_of_its_uv_set(tmp_path, uv_set):
+    """A `normal` fed by a UsdUVTexture (raw, scale 2, bias -1) is a tangent-space Normal
+    Map (Color ½·n + ½) on the Principled Normal and Coat Normal. A constant map
+    n = (0.6, 0, 0.8) on a plane whose `uv_set` has s growing along world +Y (t along
+    −X) tilts the normal to (0, 0.6, 0.8): a sun shining along −(0, 0.6, 0.8) onto this
+    pure diffuse (specular workflow, black specularColor) of albedo ρ gives ρ E / π,
+    and 0.64 of that if the tangent came from another UV set. Through "st" the core
+    derives the tangents; through "second" (with "st" a decoy along +X) the reader does."""
+    file = tmp_path / "n.png"
+    from PIL import Image
+
+    Image.fromarray(np.tile(np.array([204, 128, 230], np.uint8), (4, 4, 1))).save(file)  # (0.6, 0.004, 0.8)·½ + ½
     path = tmp_path / "nm.usda"
     stage = new_stage(path)
-    mat, sh = surface(stage, "/Looks/m", diffuseColor=(0.5, 0.5, 0.5))
-    st = primvar_reader(stage, "/Looks/m/uv", "second")
+    rho, irradiance = 0.5, 3.0
+    mat, sh = surface(stage, "/Looks/m", diffuseColor=(rho, rho, rho), specularColor=(0.0, 0.0, 0.0))
+    sh.CreateInput("useSpecularWorkflow", Sdf.ValueTypeNames.Int).Set(1)
+    st = primvar_reader(stage, "/Looks/m/uv", uv_set)
     tex = uv_texture(stage, "/Looks/m/tex", file, st=st, scale=(2, 2, 2, 1), bias=(-1, -1, -1, 0), sourceColorSpace="raw")
     connect(sh, "normal", tex, "rgb", Sdf.ValueTypeNames.Normal3f)
-    mesh = quad(stage, "/plane", material=mat)
-    pv = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar("second", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex)
-    pv.Set(Vt.Vec2fArray.FromNumpy(np.array([[0, 0], [0, 1], [1, 1], [1, 0]], np.float32)))
-    top_camera(stage)
+    rotated = np.array([[0, 1], [0, 0], [1, 0], [1, 1]], np.float32)  # s = (y+1)/2, t = (1-x)/2
+    mesh = quad(stage, "/plane", material=mat, st_name=uv_set, st=rotated)
+    if uv_set != "st":
+        pv = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex)
+        pv.Set(Vt.Vec2fArray.FromNumpy(np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float32)))
+    sun = UsdLux.DistantLight.Define(stage, "/sun")
+    sun.CreateIntensityAttr(irradiance)
+    sun.CreateNormalizeAttr(True)
+    sun.CreateAngleAttr(0.5)
+    sun.AddRotateXOp().Set(-math.degrees(math.atan2(0.6, 0.8)))  # its −Z onto −(0, 0.6, 0.8)
+    top_camera(stage, width=1.0)
     stage.Save()
     scene, warns = read(path)
-    assert len(warns) == 1 and "/plane" in warns[0] and "'second'" in warns[0] and "'st'" in warns[0], warns
+    assert not warns, warns
     (m,) = [m for m in scene.materials if isinstance(m, pc.NodeMaterial)]
     nodes = m.nodes
     (nm,) = [n for n in nodes if n["type"] == "ShaderNodeNormalMap"]
-    assert nm["props"] == {"space": "TANGENT", "uv_map": "second"}
-    colour = nodes[nm["inputs"]["Color"]["link"][0]]
-    assert colour["props"]["operation"] == "MULTIPLY_ADD" and colour["inputs"]["Vector_001"] == [0.5, 0.5, 0.5]
+    assert nm["props"] == {"space": "TANGENT", "uv_map": uv_set}
     (principled,) = [n for n in nodes if n["type"] == "ShaderNodeBsdfPrincipled"]
-    index = nodes.index(nm)
-    assert principled["inputs"]["Normal"] == {"link": [index, "Normal"]} == principled["inputs"]["Coat Normal"]
-    render_rgb(scene, samples=1)  # the core compiles it
+    assert principled["inputs"]["Normal"] == {"link": [nodes.index(nm), "Normal"]} == principled["inputs"]["Coat Normal"]
+    got = luminance(render_rgb(scene, samples=16)).mean()
+    n = np.array([204, 128, 230]) / 255 * 2 - 1
+    n_world = np.array([-n[1], n[0], n[2]]) / np.linalg.norm(n)  # T = +Y, B = −X (s, t above)
+    want = rho * irradiance / math.pi * float(n_world @ np.array([0.0, 0.6, 0.8]))
+    assert got == pytest.approx(want, rel=0.02), (got, want)
 
 
 def test_usdz_package_textures_are_read_from_inside_the_package(tmp_path):

@@ -513,6 +513,46 @@ class Graph:
         return Link(self.memo[key], {"r": "Red", "g": "Green", "b": "Blue"}[name])
 
 
+def smooth_tangents(vertices, triangles, uvs, normals=None) -> np.ndarray:
+    """(V, 4) tangents of the UV set ``uvs`` (tangent xyz, bitangent sign), as the core's
+    ``smooth_tangents`` derives them for the default set (rust/core/src/scene/hit.rs):
+    each triangle's ∂p/∂u and ∂p/∂v weighted by its angle at the vertex and summed,
+    the sum made orthogonal to the vertex normal, the sign that of (n × t) · Σ ∂p/∂v.
+    Vertices that get nothing have a zero tangent (the core then uses the triangle's
+    ∂p/∂u of the default UVs)."""
+    p = np.asarray(vertices, np.float64)
+    uv = np.asarray(uvs, np.float64)
+    tri = np.asarray(triangles, np.int64)
+    e1, e2 = p[tri[:, 1]] - p[tri[:, 0]], p[tri[:, 2]] - p[tri[:, 0]]
+    d1, d2 = uv[tri[:, 1]] - uv[tri[:, 0]], uv[tri[:, 2]] - uv[tri[:, 0]]
+    det = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
+    face = np.cross(e1, e2)
+    ok = (np.abs(det) >= 1e-12) & (np.einsum("ij,ij->i", face, face) > 0)
+    safe = np.where(ok, det, 1.0)[:, None]
+
+    def unit(v):
+        n = np.linalg.norm(v, axis=-1, keepdims=True)
+        return np.divide(v, n, out=np.zeros_like(v), where=n > 0)
+
+    t = unit((e1 * d2[:, 1:2] - e2 * d1[:, 1:2]) / safe)
+    b = unit((e2 * d1[:, 0:1] - e1 * d2[:, 0:1]) / safe)
+    f = unit(face)
+    ts, bs, ns = (np.zeros_like(p) for _ in range(3))
+    for k in range(3):
+        a, c = p[tri[:, (k + 1) % 3]] - p[tri[:, k]], p[tri[:, (k + 2) % 3]] - p[tri[:, k]]
+        la, lc = np.linalg.norm(a, axis=1), np.linalg.norm(c, axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            angle = np.arccos(np.clip(np.einsum("ij,ij->i", a, c) / (la * lc), -1.0, 1.0))
+        w = np.where(ok & np.isfinite(angle), angle, 0.0)[:, None]
+        np.add.at(ts, tri[:, k], t * w)
+        np.add.at(bs, tri[:, k], b * w)
+        np.add.at(ns, tri[:, k], f * w)
+    n = unit(np.asarray(normals, np.float64) if normals is not None else ns)
+    tt = unit(ts - n * np.einsum("ij,ij->i", n, ts)[:, None])
+    sign = np.where(np.einsum("ij,ij->i", np.cross(n, tt), bs) < 0, -1.0, 1.0)
+    return np.concatenate([tt, sign[:, None]], axis=1).astype(np.float32)
+
+
 def _triple(v) -> tuple[float, float, float]:
     t = tuple(float(x) for x in v) if isinstance(v, tuple) else (float(v),) * 3
     return (t + t[-1:] * 3)[:3]

@@ -1104,14 +1104,18 @@ class _Reader:
         out_n, out_uv = out.get("normals"), out.get("uvs")
         uv_maps = {k[1]: v for k, v in out.items() if isinstance(k, tuple) and k[0] == "uv"} or None
         attrs = {k[1]: v for k, v in out.items() if isinstance(k, tuple) and k[0] == "attr"} or None
-        for m in used:
-            tangent_uv = getattr(self.materials[m], "usd_tangent_uv", None)
-            if tangent_uv not in (None, "", uv_name):
-                # The core derives tangents from the default UV set only.
+        # The core derives tangents from the default UV set; a normal map read through
+        # another set gets that set's (one set per mesh, like Blender's MikkTSpace export).
+        tangents = None
+        tangent_sets = sorted({str(getattr(self.materials[m], "usd_tangent_uv", None) or "") for m in used} - {"", uv_name})
+        if tangent_sets and uv_maps and tangent_sets[0] in uv_maps:
+            from .preview import smooth_tangents
+
+            tangents = smooth_tangents(vertices, tris, uv_maps[tangent_sets[0]], out_n)
+            if len(tangent_sets) > 1 or any(getattr(self.materials[m], "usd_tangent_uv", None) in ("", uv_name) for m in used):
                 self.warn(
-                    f"tangentuv:{where}:{tangent_uv}",
-                    f"prim {where}: the normal map of material '{self.materials[m].name}' reads UV set '{tangent_uv}'; "
-                    f"its tangents are those of the default UV set '{uv_name}'",
+                    f"tangentuv:{where}",
+                    f"prim {where}: its normal maps read several UV sets; all use the tangents of '{tangent_sets[0]}'",
                 )
 
         return {
@@ -1123,6 +1127,7 @@ class _Reader:
             "uvs": out_uv,
             "uv_maps": uv_maps,
             "attributes": attrs,
+            "tangents": tangents,
             "material_ids": material_ids,
             "material": material,
         }
@@ -1905,6 +1910,7 @@ class _Reader:
                 place=False,
                 uv_maps=m.get("uv_maps"),
                 attributes=m.get("attributes"),
+                tangents=m.get("tangents"),
                 **((shutter and self.deformation(key, shutter)) or {}),
             )
         instanced = self.instancer_motion(shutter) if shutter is not None and self.instancer_runs else {}
