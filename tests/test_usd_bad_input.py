@@ -93,11 +93,18 @@ def test_unknown_shaders_payloads_and_materialx_warn_once_and_the_rest_renders(t
     odd.CreateSurfaceOutput().ConnectToSource(sh.ConnectableAPI(), "surface")
     mx = UsdShade.Material.Define(stage, "/Looks/mx")
     msh = UsdShade.Shader.Define(stage, "/Looks/mx/Surface")
-    msh.CreateIdAttr("ND_standard_surface_surfaceshader")
+    # A MaterialX surface the reader does not translate (materialx.py reads Standard
+    # Surface, OpenPBR and glTF PBR), bound for the "mtlx" context.
+    msh.CreateIdAttr("ND_disney_brdf_2012_surfaceshader")
     mx.CreateSurfaceOutput("mtlx").ConnectToSource(msh.ConnectableAPI(), "out")
+    ri = UsdShade.Material.Define(stage, "/Looks/ri")
+    rsh = UsdShade.Shader.Define(stage, "/Looks/ri/Surface")
+    rsh.CreateIdAttr("PxrSurface")
+    ri.CreateSurfaceOutput("ri").ConnectToSource(rsh.ConnectableAPI(), "out")
     floor_mesh(stage, "/odd", 1.0, odd)
     floor_mesh(stage, "/mx", 1.0, mx).AddTranslateOp().Set(Gf.Vec3d(3, 0, 0))
     floor_mesh(stage, "/mx2", 1.0, mx).AddTranslateOp().Set(Gf.Vec3d(6, 0, 0))
+    floor_mesh(stage, "/ri", 1.0, ri).AddTranslateOp().Set(Gf.Vec3d(9, 0, 0))
     stage.DefinePrim("/gone").GetPayloads().AddPayload("./no_such_payload.usda")
     top_camera(stage, "/cam", 2.0, 2.0)
     UsdLux.DistantLight.Define(stage, "/sun").CreateIntensityAttr(1.0)
@@ -107,8 +114,10 @@ def test_unknown_shaders_payloads_and_materialx_warn_once_and_the_rest_renders(t
     mx_w = [w for w in warns if "/Looks/mx" in w]
     payload_w = [w for w in warns if "no_such_payload" in w]
     assert len(odd_w) == 1 and "SomeStudioShader_v3" in odd_w[0], warns
-    assert len(mx_w) == 1 and "outputs:mtlx:surface" in mx_w[0], warns
+    ri_w = [w for w in warns if "/Looks/ri" in w]
+    assert len(mx_w) == 1 and "ND_disney_brdf_2012_surfaceshader" in mx_w[0], warns
+    assert len(ri_w) == 1 and "outputs:ri:surface" in ri_w[0], warns
     assert len(payload_w) == 1 and "/gone" in payload_w[0], warns
-    assert len(scene.description()[0]["meshes"]) == 3
+    assert len(scene.description()[0]["meshes"]) == 4
     result = pc.render(scene, width=4, height=4, samples=2, max_bounces=1)
     assert np.all(np.isfinite(result.rgba))

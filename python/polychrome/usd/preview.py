@@ -366,14 +366,7 @@ class Graph:
         path = self.r.asset_path(value, shader.GetPrim(), "texture file")
         if path is None:
             return None
-        cs = self.raw(shader.GetInput("sourceColorSpace"))
-        if cs is None:
-            cs = self.raw(shader.GetInput("isSRGB"))  # its name in stages written before the 2.3 spec
-        cs = "auto" if cs is None else str(cs)
-        cs = {"True": "sRGB", "False": "raw", "1": "sRGB", "0": "raw"}.get(cs, cs)
-        if cs not in ("raw", "sRGB", "auto"):
-            self.r.warn(f"colorspace:{key}", f"prim {key}: sourceColorSpace '{cs}' is not known; read as auto")
-            cs = "auto"
+        cs = self.colour_space(shader)
         from . import attributes as A
 
         name = str(self.r.custom(shader.GetPrim(), A.NAME, path.name))
@@ -384,6 +377,29 @@ class Graph:
             return None
         self.r.textures[key] = texture
         return texture
+
+    def colour_space(self, shader) -> str:
+        """ "raw", "sRGB" or "auto": how the texture's file is decoded."""
+        key = str(shader.GetPath())
+        cs = self.raw(shader.GetInput("sourceColorSpace"))
+        if cs is None:
+            cs = self.raw(shader.GetInput("isSRGB"))  # its name in stages written before the 2.3 spec
+        cs = "auto" if cs is None else str(cs)
+        cs = {"True": "sRGB", "False": "raw", "1": "sRGB", "0": "raw"}.get(cs, cs)
+        if cs not in ("raw", "sRGB", "auto"):
+            self.r.warn(f"colorspace:{key}", f"prim {key}: sourceColorSpace '{cs}' is not known; read as auto")
+            cs = "auto"
+        return cs
+
+    def texture_coordinates(self, shader):
+        """What drives the texture's coordinates (None: the default UV set)."""
+        return self.value(shader.GetInput("st"), "vector")
+
+    def interpolation(self, shader) -> str:
+        return "Linear"  # UsdUVTexture is bilinear
+
+    def wraps(self, shader) -> tuple[str, str]:
+        return self.wrap(shader, "wrapS"), self.wrap(shader, "wrapT")
 
     def wrap(self, shader, which: str) -> str:
         w = self.raw(shader.GetInput(which))
@@ -402,8 +418,8 @@ class Graph:
         texture = self.texture_file(shader)
         result = None
         if texture is not None:
-            st = self.value(shader.GetInput("st"), "vector")
-            ws, wt = self.wrap(shader, "wrapS"), self.wrap(shader, "wrapT")
+            st = self.texture_coordinates(shader)
+            ws, wt = self.wraps(shader)
             inputs: dict[str, Any] = {}
             if ws == wt:
                 extension = WRAPS[ws]
@@ -450,7 +466,7 @@ class Graph:
             img = self.add(
                 "ShaderNodeTexImage",
                 str(shader.GetPath()),
-                {"texture": texture, "interpolation": "Linear", "extension": extension},
+                {"texture": texture, "interpolation": self.interpolation(shader), "extension": extension},
                 inputs,
             )
             scale = self.const(shader.GetInput("scale"), (1.0, 1.0, 1.0, 1.0))

@@ -534,9 +534,22 @@ class _Reader:
         diffuse, emissive, opacity, ior_value, metallic, roughness = FALLBACK_GREY, (0.0, 0.0, 0.0), 1.0, 1.5, 0.0, 0.5
         shader = None
         surface = self.UsdShade.Material(prim).ComputeSurfaceSource()
+        if not (surface and surface[0]):
+            # MaterialX networks are usually bound for the "mtlx" render context only.
+            surface = self.UsdShade.Material(prim).ComputeSurfaceSource("mtlx")
         if surface and surface[0]:
             shader = surface[0]
             shader_id = shader.GetShaderId()
+            from . import materialx
+
+            if materialx.is_materialx(str(shader_id)):
+                material = materialx.build(self, prim, shader, name)
+                if reflectance is not None or emission is not None:
+                    self.warn(
+                        f"graphspec:{self.key_of(prim)}",
+                        f"prim {prim.GetPath()}: polychrome: spectra are not applied to a MaterialX surface",
+                    )
+                return material
             if shader_id != "UsdPreviewSurface":
                 self.warn(
                     f"shader:{self.key_of(prim)}",

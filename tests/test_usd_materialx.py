@@ -1,0 +1,345 @@
+"""MaterialX networks in USD (issue 15 item 12): Standard Surface, OpenPBR and glTF PBR
+surface shaders and MaterialX pattern nodes through the shading graph
+(python/polychrome/usd/materialx.py).
+
+Blender 4.5's USD importer does not read MaterialX shaders (a stage whose material is an
+ND_standard_surface_surfaceshader, bound for the universal or the "mtlx" render context,
+imports as a material without nodes; checked with bpy 4.5), so the references are closed
+forms: an unlit emissive plane whose pixels equal the texture sampled by a numpy bilinear
+filter written from MaterialX's node definitions (NG_tiledimage, mix, multiply, extract,
+combine3), a Lambertian plane under a sun (ρ E cos θ / π), Fresnel at normal incidence of
+smooth metals, coats and dielectrics under a white dome, and a tangent-space normal map
+tilting the normal towards a sun. Stages are built here with pxr.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+pxr = pytest.importorskip("pxr")
+from pxr import Gf, Sdf, UsdLux, UsdShade  # noqa: E402
+
+import polychrome as pc  # noqa: E402
+from polychrome.imageio import write_exr  # noqa: E402
+from conftest import luminance  # noqa: E402
+from test_usd_preview import TEXELS, bilinear, footprint_mean, new_stage, quad, read, top_camera  # noqa: E402
+
+T = Sdf.ValueTypeNames
+N = 12
+
+
+def mx_material(stage, path, surface_id, context="mtlx", **inputs):
+    """A Material whose surface (for `context`, "" = universal) is a MaterialX shader."""
+    mat = UsdShade.Material.Define(stage, path)
+    sh = UsdShade.Shader.Define(stage, path + "/surface")
+    sh.CreateIdAttr(surface_id)
+    for k, v in inputs.items():
+        set_input(sh, k, v)
+    out = sh.CreateOutput("out", T.Token)
+    mat.CreateSurfaceOutput(context).ConnectToSource(out)
+    return mat, sh
+
+
+def set_input(sh, name, v):
+    if isinstance(v, UsdShade.Output):
+        ty = {1: T.Float, 2: T.Float2}.get(getattr(v, "_width", 3), T.Color3f)
+        sh.CreateInput(name, ty).ConnectToSource(v)
+    elif isinstance(v, tuple):
+        ty = {2: T.Float2, 3: T.Color3f}[len(v)]
+        sh.CreateInput(name, ty).Set(Gf.Vec2f(*v) if len(v) == 2 else Gf.Vec3f(*v))
+    elif isinstance(v, str):
+        sh.CreateInput(name, T.String).Set(v)
+    elif isinstance(v, bool):
+        sh.CreateInput(name, T.Bool).Set(v)
+    elif isinstance(v, int):
+        sh.CreateInput(name, T.Int).Set(v)
+    else:
+        sh.CreateInput(name, T.Float).Set(float(v))
+
+
+def node(stage, path, sid, out_type=T.Color3f, **inputs):
+    """A MaterialX pattern node; returns its `out` output."""
+    sh = UsdShade.Shader.Define(stage, path)
+    sh.CreateIdAttr(sid)
+    for k, v in inputs.items():
+        set_input(sh, k, v)
+    return sh.CreateOutput("out", out_type)
+
+
+def image(stage, path, file, sid="ND_image_color3", colour_space="raw", texcoord=None, **inputs):
+    sh = UsdShade.Shader.Define(stage, path)
+    sh.CreateIdAttr(sid)
+    f = sh.CreateInput("file", T.Asset)
+    f.Set(Sdf.AssetPath(str(file)))
+    if colour_space is not None:
+        f.GetAttr().SetColorSpace(colour_space)
+    if texcoord is not None:
+        sh.CreateInput("texcoord", T.Float2).ConnectToSource(texcoord)
+    for k, v in inputs.items():
+        set_input(sh, k, v)
+    return sh.CreateOutput("out", T.Vector3f if "vector3" in sid else T.Color3f)
+
+
+def texcoord(stage, path):
+    return node(stage, path, "ND_texcoord_vector2", T.Float2)
+
+
+def render_rgb(scene, samples=16, n=N):
+    r = pc.render(scene, width=n, height=n, samples=samples, max_bounces=1, seed=2)
+    assert r.stats["nonfinite_samples"] == 0
+    return r.rgba[..., :3].astype(np.float64)
+
+
+def exr_texture(tmp_path):
+    file = tmp_path / "tex.exr"
+    write_exr(file, np.concatenate([TEXELS, np.ones((3, 4, 1))], axis=2).astype(np.float32))
+    return file
+
+
+def mirror_clamp(u, v, texels):
+    """NG_tiledimage with uaddressmode mirror, vaddressmode clamp: (st·tiling − offset)."""
+    return bilinear(texels, u, v, "mirror", "clamp")
+
+
+# ---------------------------------------------------------------------------------- emission
+
+
+TEXELS4 = np.array(
+    [
+        [[0.9, 0.2, 0.1], [0.2, 0.8, 0.3], [0.1, 0.3, 0.9], [0.7, 0.7, 0.2]],
+        [[0.3, 0.6, 0.6], [0.8, 0.4, 0.7], [0.5, 0.5, 0.5], [0.2, 0.1, 0.4]],
+        [[0.6, 0.9, 0.2], [0.1, 0.1, 0.1], [0.9, 0.6, 0.3], [0.4, 0.8, 0.9]],
+        [[0.05, 0.05, 0.6], [1.0, 1.0, 1.0], [0.3, 0.02, 0.02], [0.6, 0.3, 0.8]],
+    ],
+    np.float64,
+)
+
+
+@pytest.mark.parametrize("surface", ["ND_open_pbr_surface_surfaceshader", "ND_standard_surface_surfaceshader"])
+def test_emission_through_image_and_texcoord_equals_the_texels(tmp_path, surface):
+    """base weight 0, specular 0, emission 1 (OpenPBR: emission_luminance 1 nit = radiance 1)
+    × an ND_image_color3 (filtertype closest) read at ND_texcoord_vector2 on a plane whose
+    4 × 4 texels each cover 2 × 2 pixels of an orthographic view: every pixel of the unlit
+    plane is its texel."""
+    path = tmp_path / "emit.usda"
+    stage = new_stage(path)
+    o = "open_pbr" in surface
+    params = {
+        "base_weight" if o else "base": 0.0,
+        "specular_weight" if o else "specular": 0.0,
+        "emission_luminance" if o else "emission": 1.0,
+    }
+    mat, sh = mx_material(stage, "/Looks/m", surface, **params)
+    file = tmp_path / "tex4.exr"
+    write_exr(file, np.concatenate([TEXELS4, np.ones((4, 4, 1))], axis=2).astype(np.float32))
+    img = image(stage, "/Looks/m/img", file, texcoord=texcoord(stage, "/Looks/m/uv"), filtertype="closest")
+    set_input(sh, "emission_color", img)
+    quad(stage, "/plane", material=mat)
+    top_camera(stage)
+    stage.Save()
+    scene, warns = read(path)
+    assert not warns, warns
+    got = render_rgb(scene, samples=64, n=8)
+    want = np.repeat(np.repeat(TEXELS4, 2, axis=0), 2, axis=1)  # row 0 of the image is the top (t = 1)
+    err = np.abs(got - want)
+    assert err.max() < 4e-3, (err.max(), np.median(err))
+    assert np.median(err) < 1.5e-3, np.median(err)
+
+
+def test_pattern_nodes_tiledimage_multiply_mix_extract_combine_dot(tmp_path):
+    """Standard Surface emission_color = dot(mix(fg = combine3(b, g, r of a tiled image)·2,
+    bg = constant (0.1, 0.2, 0.3), mix 0.75)), the tiled image with uvtiling (1.5, 0.75),
+    uvoffset (0.25, −0.1), u mirrored and v clamped — against numpy from MaterialX's
+    node definitions."""
+    path = tmp_path / "nodes.usda"
+    stage = new_stage(path)
+    mat, sh = mx_material(stage, "/Looks/m", "ND_standard_surface_surfaceshader", context="", base=0.0, specular=0.0, emission=1.0)
+    img = image(
+        stage,
+        "/Looks/m/img",
+        exr_texture(tmp_path),
+        sid="ND_tiledimage_color3",
+        texcoord=texcoord(stage, "/Looks/m/uv"),
+        uvtiling=(1.5, 0.75),
+        uvoffset=(0.25, -0.1),
+        uaddressmode="mirror",
+        vaddressmode="clamp",
+    )
+    chans = []
+    for i in (2, 1, 0):
+        e = node(stage, f"/Looks/m/extract{i}", "ND_extract_color3", T.Float, index=i)
+        UsdShade.Shader(e.GetPrim()).CreateInput("in", T.Color3f).ConnectToSource(img)
+        chans.append(e)
+    comb = UsdShade.Shader.Define(stage, "/Looks/m/combine")
+    comb.CreateIdAttr("ND_combine3_color3")
+    for k, e in enumerate(chans):
+        comb.CreateInput(f"in{k + 1}", T.Float).ConnectToSource(e)
+    comb_out = comb.CreateOutput("out", T.Color3f)
+    mul = UsdShade.Shader.Define(stage, "/Looks/m/mul")
+    mul.CreateIdAttr("ND_multiply_color3FA")
+    mul.CreateInput("in1", T.Color3f).ConnectToSource(comb_out)
+    mul.CreateInput("in2", T.Float).Set(2.0)
+    mix = UsdShade.Shader.Define(stage, "/Looks/m/mix")
+    mix.CreateIdAttr("ND_mix_color3")
+    mix.CreateInput("fg", T.Color3f).ConnectToSource(mul.CreateOutput("out", T.Color3f))
+    const = node(stage, "/Looks/m/const", "ND_constant_color3", value=(0.1, 0.2, 0.3))
+    mix.CreateInput("bg", T.Color3f).ConnectToSource(const)
+    mix.CreateInput("mix", T.Float).Set(0.75)
+    dot = UsdShade.Shader.Define(stage, "/Looks/m/dot")
+    dot.CreateIdAttr("ND_dot_color3")
+    dot.CreateInput("in", T.Color3f).ConnectToSource(mix.CreateOutput("out", T.Color3f))
+    sh.CreateInput("emission_color", T.Color3f).ConnectToSource(dot.CreateOutput("out", T.Color3f))
+    quad(stage, "/plane", material=mat)
+    top_camera(stage)
+    stage.Save()
+    scene, warns = read(path)
+    assert not warns, warns
+    got = render_rgb(scene)
+
+    def fn(x, y):
+        u, v = (x + 1) / 2 * 1.5 - 0.25, (y + 1) / 2 * 0.75 + 0.1
+        t = mirror_clamp(u, v, TEXELS)[..., ::-1] * 2.0
+        return 0.75 * t + 0.25 * np.array([0.1, 0.2, 0.3])
+
+    want = footprint_mean(fn, N)
+    err = np.abs(got - want)
+    assert np.median(err / np.maximum(want, 0.05)) < 0.02, np.median(err)
+    assert err.max() < 0.08, err.max()
+
+
+# ---------------------------------------------------------------------------------- reflection
+
+
+def sun(stage, irradiance, tilt_deg):
+    light = UsdLux.DistantLight.Define(stage, "/sun")
+    light.CreateIntensityAttr(irradiance)
+    light.CreateNormalizeAttr(True)
+    light.CreateAngleAttr(0.5)
+    light.AddRotateXOp().Set(-tilt_deg)  # −Z tilted towards +Y
+    return light
+
+
+@pytest.mark.parametrize(
+    "surface, params",
+    [
+        ("ND_standard_surface_surfaceshader", {"base": 0.8, "base_color": (0.5, 0.2, 0.1), "specular": 0.0}),
+        ("ND_open_pbr_surface_surfaceshader", {"base_weight": 0.8, "base_color": (0.5, 0.2, 0.1), "specular_weight": 0.0}),
+    ],
+)
+def test_diffuse_plane_under_a_sun_is_rho_e_cos_over_pi(tmp_path, surface, params):
+    """base 0.8 × base_color (0.5, 0.2, 0.1), no specular: a Lambertian plane of albedo
+    ρ = (0.4, 0.16, 0.08) under a sun of irradiance E = 3 at 40° reflects ρ E cos 40° / π
+    per channel (through the RGB → spectrum uplift and back)."""
+    path = tmp_path / "sun.usda"
+    stage = new_stage(path)
+    mat, _ = mx_material(stage, "/Looks/m", surface, **params)
+    quad(stage, "/plane", material=mat)
+    sun(stage, 3.0, 40.0)
+    top_camera(stage, width=1.0)
+    stage.Save()
+    scene, warns = read(path)
+    assert not warns, warns
+    got = render_rgb(scene, samples=16).reshape(-1, 3).mean(axis=0)
+    want = np.array([0.4, 0.16, 0.08]) * 3.0 * math.cos(math.radians(40.0)) / math.pi
+    np.testing.assert_allclose(got, want, rtol=0.02)
+
+
+def schlick_f0(n):
+    return ((n - 1.0) / (n + 1.0)) ** 2
+
+
+@pytest.mark.parametrize(
+    "case, surface, params, want",
+    [
+        ("metal", "ND_standard_surface_surfaceshader", {"metalness": 1.0, "base_color": (0.9, 0.6, 0.3), "specular_roughness": 0.0}, (0.9, 0.6, 0.3)),
+        ("openpbr metal", "ND_open_pbr_surface_surfaceshader", {"base_metalness": 1.0, "base_color": (0.3, 0.6, 0.9), "specular_roughness": 0.0}, (0.3, 0.6, 0.9)),
+        ("gltf metal", "ND_gltf_pbr_surfaceshader", {"base_color": (0.7, 0.7, 0.2), "roughness": 0.0}, (0.7, 0.7, 0.2)),
+        ("coat", "ND_standard_surface_surfaceshader", {"base_color": (0.0, 0.0, 0.0), "specular": 0.0, "coat": 1.0, "coat_IOR": 2.0, "coat_roughness": 0.0}, (schlick_f0(2.0),) * 3),
+        ("dielectric", "ND_open_pbr_surface_surfaceshader", {"base_weight": 0.0, "specular_weight": 0.5, "specular_ior": 1.8, "specular_roughness": 0.0}, (0.5 * schlick_f0(1.8),) * 3),
+    ],
+)  # fmt: skip
+def test_fresnel_at_normal_incidence_under_a_white_dome(tmp_path, case, surface, params, want):
+    """A smooth plane seen straight down by an orthographic camera under a dome of radiance 1
+    shows F(0): a metal's base colour (Standard Surface, OpenPBR, glTF: Principled's F82
+    tint model, F0 = Base Color), a coat of index 2 over black ((n−1)²/(n+1)² = 1/9, the
+    base's specular off), OpenPBR specular_weight 0.5 of index 1.8 over black (0.5·F0)."""
+    path = tmp_path / "fresnel.usda"
+    stage = new_stage(path)
+    mat, _ = mx_material(stage, "/Looks/m", surface, **params)
+    quad(stage, "/plane", x0=-3, x1=3, y0=-3, y1=3, material=mat)
+    UsdLux.DomeLight.Define(stage, "/dome").CreateIntensityAttr(1.0)
+    top_camera(stage, width=1.0)
+    stage.Save()
+    scene, warns = read(path)
+    assert not warns, warns
+    got = render_rgb(scene, samples=16, n=6).reshape(-1, 3).mean(axis=0)
+    np.testing.assert_allclose(got, want, rtol=0.02, atol=2e-3)
+
+
+def test_normalmap_tilts_the_normal_in_the_tangent_frame(tmp_path):
+    """ND_image_vector3 (raw) → ND_normalmap (scale 1) on Standard Surface `normal`: a
+    constant map (0.6, 0, 0.8) on a plane whose st has s along world +Y tilts the normal to
+    (0, 0.6, 0.8); a sun along −(0, 0.6, 0.8) on the pure diffuse gives ρ E / π. With
+    scale 0.5 the tangent part is halved (mx_normalmap): ρ E cos / π with
+    n ∝ (0, 0.3, 0.8)."""
+    from PIL import Image
+
+    file = tmp_path / "n.png"
+    Image.fromarray(np.tile(np.array([204, 128, 230], np.uint8), (4, 4, 1))).save(file)
+    c = np.array([204, 128, 230]) / 255 * 2 - 1
+    rho, irradiance = 0.5, 3.0
+    for scale in (1.0, 0.5):
+        path = tmp_path / f"nm{scale}.usda"
+        stage = new_stage(path)
+        mat, sh = mx_material(stage, "/Looks/m", "ND_standard_surface_surfaceshader", base=1.0, base_color=(rho,) * 3, specular=0.0)
+        img = image(stage, "/Looks/m/img", file, sid="ND_image_vector3", texcoord=texcoord(stage, "/Looks/m/uv"))
+        nm = UsdShade.Shader.Define(stage, "/Looks/m/nm")
+        nm.CreateIdAttr("ND_normalmap")
+        nm.CreateInput("in", T.Vector3f).ConnectToSource(img)
+        nm.CreateInput("scale", T.Float).Set(scale)
+        sh.CreateInput("normal", T.Vector3f).ConnectToSource(nm.CreateOutput("out", T.Vector3f))
+        quad(stage, "/plane", material=mat, st=np.array([[0, 1], [0, 0], [1, 0], [1, 1]], np.float32))
+        sun(stage, irradiance, math.degrees(math.atan2(0.6, 0.8)))
+        top_camera(stage, width=1.0)
+        stage.Save()
+        scene, warns = read(path)
+        assert not warns, warns
+        got = luminance(render_rgb(scene)).mean()
+        n_world = np.array([-c[1] * scale, c[0] * scale, c[2]])
+        n_world /= np.linalg.norm(n_world)
+        want = rho * irradiance / math.pi * float(n_world @ np.array([0.0, 0.6, 0.8]))
+        assert got == pytest.approx(want, rel=0.02), (scale, got, want)
+
+
+# ---------------------------------------------------------------------------------- bad input
+
+
+def test_unsupported_parameters_and_unknown_nodes_warn_once_each(tmp_path):
+    """specular_anisotropy and subsurface: one warning each naming the prim and the
+    parameter; an unknown node (ND_noise2d_color3) on base_color: one warning naming the
+    node and the prim, base_color's default (0.8) is used (checked in the graph); a stage
+    referencing a .mtlx document (usd-core ships no usdMtlx file format): USD's warning,
+    the rest renders."""
+    path = tmp_path / "bad.usda"
+    stage = new_stage(path)
+    mat, sh = mx_material(stage, "/Looks/m", "ND_standard_surface_surfaceshader", specular_anisotropy=0.5, subsurface=0.3)
+    noise = node(stage, "/Looks/m/noise", "ND_noise2d_color3", amplitude=(1.0, 1.0, 1.0))
+    set_input(sh, "base_color", noise)
+    quad(stage, "/plane", material=mat)
+    other = UsdShade.Material.Define(stage, "/Looks/fromfile")
+    other.GetPrim().GetReferences().AddReference(str(tmp_path / "looks.mtlx"), "/MaterialX/Materials/m")
+    quad(stage, "/plane2", z=-1, material=other)
+    top_camera(stage)
+    stage.Save()
+    (tmp_path / "looks.mtlx").write_text('<?xml version="1.0"?>\n<materialx version="1.38"/>\n')
+    scene, warns = read(path)
+    mine = [w for w in warns if "/Looks/m" in w]
+    assert len([w for w in mine if "specular_anisotropy" in w]) == 1, warns
+    assert len([w for w in mine if "'subsurface'" in w]) == 1, warns
+    assert len([w for w in mine if "ND_noise2d_color3" in w and "/Looks/m/noise" in w]) == 1, warns
+    assert any("looks.mtlx" in w for w in warns), warns
+    (m,) = [m for m in scene.materials if isinstance(m, pc.NodeMaterial)]
+    (p,) = [n for n in m.nodes if n["type"] == "ShaderNodeBsdfPrincipled"]
+    assert p["inputs"]["Base Color"] == pytest.approx([0.8, 0.8, 0.8])
+    assert render_rgb(scene, samples=1).shape == (N, N, 3)
