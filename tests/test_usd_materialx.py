@@ -116,10 +116,12 @@ TEXELS4 = np.array(
 )
 
 
-@pytest.mark.parametrize("surface", ["ND_open_pbr_surface_surfaceshader", "ND_standard_surface_surfaceshader"])
+@pytest.mark.parametrize(
+    "surface", ["ND_open_pbr_surface_surfaceshader", "ND_standard_surface_surfaceshader", "ND_UsdPreviewSurface_surfaceshader"]
+)
 def test_emission_through_image_and_texcoord_equals_the_texels(tmp_path, surface):
-    """base weight 0, specular 0, emission 1 (OpenPBR: emission_luminance 1 nit = radiance 1)
-    × an ND_image_color3 (filtertype closest) read at ND_texcoord_vector2 on a plane whose
+    """base weight 0, specular 0, emission 1 (OpenPBR: emission_luminance 1 nit = radiance 1;
+    MaterialX's UsdPreviewSurface: black diffuseColor, emissiveColor) × an ND_image_color3 (filtertype closest) read at ND_texcoord_vector2 on a plane whose
     4 × 4 texels each cover 2 × 2 pixels of an orthographic view: every pixel of the unlit
     plane is its texel."""
     path = tmp_path / "emit.usda"
@@ -130,11 +132,13 @@ def test_emission_through_image_and_texcoord_equals_the_texels(tmp_path, surface
         "specular_weight" if o else "specular": 0.0,
         "emission_luminance" if o else "emission": 1.0,
     }
+    if "Preview" in surface:  # MaterialX's UsdPreviewSurface: emissiveColor, black diffuse
+        params = {"diffuseColor": (0.0, 0.0, 0.0)}
     mat, sh = mx_material(stage, "/Looks/m", surface, **params)
     file = tmp_path / "tex4.exr"
     write_exr(file, np.concatenate([TEXELS4, np.ones((4, 4, 1))], axis=2).astype(np.float32))
     img = image(stage, "/Looks/m/img", file, texcoord=texcoord(stage, "/Looks/m/uv"), filtertype="closest")
-    set_input(sh, "emission_color", img)
+    set_input(sh, "emissiveColor" if "Preview" in surface else "emission_color", img)
     quad(stage, "/plane", material=mat)
     top_camera(stage)
     stage.Save()
@@ -343,3 +347,156 @@ def test_unsupported_parameters_and_unknown_nodes_warn_once_each(tmp_path):
     (p,) = [n for n in m.nodes if n["type"] == "ShaderNodeBsdfPrincipled"]
     assert p["inputs"]["Base Color"] == pytest.approx([0.8, 0.8, 0.8])
     assert render_rgb(scene, samples=1).shape == (N, N, 3)
+
+
+def cauchy_from_abbe(nd, vd, lam_nm):
+    """n(λ) = A + B/λ²: n(d) = nd and n(F) − n(C) = (nd − 1)/Vd with SCHOTT's d, F, C lines."""
+    d, f, c = 0.5875618, 0.4861327, 0.6562725
+    b = (nd - 1.0) / vd / (1.0 / f**2 - 1.0 / c**2)
+    return nd - b / d**2 + b / (np.asarray(lam_nm) / 1000.0) ** 2
+
+
+@pytest.mark.parametrize(
+    "surface, params, vd",
+    [
+        ("ND_open_pbr_surface_surfaceshader", {"transmission_dispersion_scale": 1.0}, 20.0),
+        ("ND_open_pbr_surface_surfaceshader", {"transmission_dispersion_scale": 0.5, "transmission_dispersion_abbe_number": 15.0}, 30.0),
+        ("ND_standard_surface_surfaceshader", {"transmission_dispersion": 12.0}, 12.0),
+    ],
+)
+def test_dispersion_is_the_abbe_model_seen_in_the_spectral_fresnel(tmp_path, surface, params, vd):
+    """OpenPBR Vd = abbe_number / dispersion_scale, Standard Surface Vd = transmission_dispersion,
+    with the specular IOR 1.6 as nd: a smooth dielectric over black seen at normal incidence
+    under a white dome, rendered spectrally, reflects F0(n(λ)) = ((n − 1)/(n + 1))² with n the
+    two-term Cauchy through nd and nF − nC = (nd − 1)/Vd: its ratio to the same material
+    without dispersion is F0(n(λ)) / F0(nd) at every wavelength."""
+    o = "open_pbr" in surface
+    base = {"base_weight" if o else "base": 0.0, "specular_roughness": 0.0, "specular_ior" if o else "specular_IOR": 1.6}
+    grid = [420.0, 480.0, 540.0, 600.0, 660.0]
+    images = []
+    for extra in (params, {}):
+        path = tmp_path / f"disp{len(extra)}.usda"
+        stage = new_stage(path)
+        mat, _ = mx_material(stage, "/Looks/m", surface, **base, **extra)
+        quad(stage, "/plane", x0=-3, x1=3, y0=-3, y1=3, material=mat)
+        UsdLux.DomeLight.Define(stage, "/dome").CreateIntensityAttr(1.0)
+        top_camera(stage, width=1.0)
+        stage.Save()
+        scene, warns = read(path)
+        assert not warns, warns
+        r = pc.render(scene, width=4, height=4, samples=4, max_bounces=1, seed=1, wavelengths=grid, spectral_output=True)
+        images.append(r.spectral.reshape(-1, len(grid)).mean(axis=0))
+    n = cauchy_from_abbe(1.6, vd, grid)
+    want = ((n - 1) / (n + 1)) ** 2 / ((0.6 / 2.6) ** 2)
+    np.testing.assert_allclose(images[0] / images[1], want, rtol=1e-5)
+    assert want[0] / want[-1] > 1.05  # the effect is well above the tolerance
+
+
+def place2d_reference(s, t, pivot, scale, rotate, offset, order):
+    """NG_place2d_vector2 with mx_rotate_vector2 (ca·x + sa·y, −sa·x + ca·y)."""
+    a = math.radians(rotate)
+
+    def rot(x, y):
+        return math.cos(a) * x + math.sin(a) * y, -math.sin(a) * x + math.cos(a) * y
+
+    x, y = s - pivot[0], t - pivot[1]
+    if order == 0:
+        x, y = rot(x / scale[0], y / scale[1])
+        x, y = x - offset[0], y - offset[1]
+    else:
+        x, y = rot(x - offset[0], y - offset[1])
+        x, y = x / scale[0], y / scale[1]
+    return x + pivot[0], y + pivot[1]
+
+
+@pytest.mark.parametrize("order", [0, 1])
+def test_place2d_geompropvalue_and_clamp(tmp_path, order):
+    """emission_color = clamp(image(place2d(geompropvalue "uvset")), 0.2, 0.7) with pivot
+    (0.5, 0.5), scale (0.8, 1.25), rotate 30°, offset (0.1, −0.2), SRT and TRS; "st" is a
+    decoy. Against numpy from NG_place2d and mx_rotate_vector2."""
+    path = tmp_path / "place.usda"
+    stage = new_stage(path)
+    mat, sh = mx_material(
+        stage, "/Looks/m", "ND_open_pbr_surface_surfaceshader", base_weight=0.0, specular_weight=0.0, emission_luminance=1.0
+    )
+    uv = node(stage, "/Looks/m/uv", "ND_geompropvalue_vector2", T.Float2, geomprop="uvset")
+    pl = UsdShade.Shader.Define(stage, "/Looks/m/place")
+    pl.CreateIdAttr("ND_place2d_vector2")
+    pl.CreateInput("texcoord", T.Float2).ConnectToSource(uv)
+    for k, v in {"pivot": (0.5, 0.5), "scale": (0.8, 1.25), "rotate": 30.0, "offset": (0.1, -0.2), "operationorder": order}.items():
+        set_input(pl, k, v)
+    img = image(stage, "/Looks/m/img", exr_texture(tmp_path), texcoord=pl.CreateOutput("out", T.Float2))
+    cl = UsdShade.Shader.Define(stage, "/Looks/m/clamp")
+    cl.CreateIdAttr("ND_clamp_color3FA")
+    cl.CreateInput("in", T.Color3f).ConnectToSource(img)
+    set_input(cl, "low", 0.2)
+    set_input(cl, "high", 0.7)
+    sh.CreateInput("emission_color", T.Color3f).ConnectToSource(cl.CreateOutput("out", T.Color3f))
+    m = quad(stage, "/plane", material=mat, st_name="uvset")
+    from pxr import UsdGeom, Vt
+
+    UsdGeom.PrimvarsAPI(m).CreatePrimvar("st", T.TexCoord2fArray, UsdGeom.Tokens.vertex).Set(
+        Vt.Vec2fArray.FromNumpy(np.zeros((4, 2), np.float32))
+    )
+    top_camera(stage)
+    stage.Save()
+    scene, warns = read(path)
+    assert not warns, warns
+    got = render_rgb(scene)
+
+    def fn(x, y):
+        u, v = place2d_reference((x + 1) / 2, (y + 1) / 2, (0.5, 0.5), (0.8, 1.25), 30.0, (0.1, -0.2), order)
+        return np.clip(bilinear(TEXELS, u, v, "repeat", "repeat"), 0.2, 0.7)
+
+    want = footprint_mean(fn, N)
+    err = np.abs(got - want)
+    assert np.median(err / want) < 0.02, np.median(err / want)
+    assert err.max() < 0.08, err.max()
+
+
+@pytest.mark.parametrize("mode", ["openpbr", "gltf mask", "gltf blend"])
+def test_color4_alpha_drives_coverage(tmp_path, mode):
+    """An unlit white emitter over a black world whose coverage is a 2 × 1 color4 image's
+    alpha (0.3 | 0.8, closest filter): OpenPBR geometry_opacity ← separate4 outa, and glTF
+    PBR alpha ← extract index 3 with alpha_mode 1 (mask, cutoff 0.5: 0 | 1) and 2 (blend:
+    0.3 | 0.8). The left half of the view shows the left texel."""
+    from PIL import Image
+
+    file = tmp_path / "a.png"
+    Image.fromarray(np.array([[[255, 255, 255, 77], [255, 255, 255, 204]]], np.uint8), "RGBA").save(file)
+    path = tmp_path / "alpha.usda"
+    stage = new_stage(path)
+    if mode == "openpbr":
+        mat, sh = mx_material(
+            stage, "/Looks/m", "ND_open_pbr_surface_surfaceshader", base_weight=0.0, specular_weight=0.0, emission_luminance=1.0
+        )
+    else:
+        mat, sh = mx_material(
+            stage, "/Looks/m", "ND_gltf_pbr_surfaceshader", base_color=(0.0, 0.0, 0.0), metallic=0.0, specular=0.0, emissive=(1.0, 1.0, 1.0)
+        )
+        set_input(sh, "alpha_mode", 1 if mode == "gltf mask" else 2)
+    img = UsdShade.Shader.Define(stage, "/Looks/m/img")
+    img.CreateIdAttr("ND_image_color4")
+    img.CreateInput("file", T.Asset).Set(Sdf.AssetPath(str(file)))
+    set_input(img, "filtertype", "closest")
+    out = img.CreateOutput("out", T.Color4f)
+    if mode == "openpbr":
+        sep = UsdShade.Shader.Define(stage, "/Looks/m/sep")
+        sep.CreateIdAttr("ND_separate4_color4")
+        sep.CreateInput("in", T.Color4f).ConnectToSource(out)
+        sh.CreateInput("geometry_opacity", T.Float).ConnectToSource(sep.CreateOutput("outa", T.Float))
+    else:
+        ex = UsdShade.Shader.Define(stage, "/Looks/m/extract")
+        ex.CreateIdAttr("ND_extract_color4")
+        ex.CreateInput("in", T.Color4f).ConnectToSource(out)
+        set_input(ex, "index", 3)
+        sh.CreateInput("alpha", T.Float).ConnectToSource(ex.CreateOutput("out", T.Float))
+    quad(stage, "/plane", material=mat)
+    top_camera(stage)
+    stage.Save()
+    scene, warns = read(path)
+    assert not warns, warns
+    got = luminance(render_rgb(scene, samples=256, n=4))
+    left, right = (0.0, 1.0) if mode == "gltf mask" else (77 / 255, 204 / 255)
+    np.testing.assert_allclose(got[:, :2].mean(), left, atol=0.03)
+    np.testing.assert_allclose(got[:, 2:].mean(), right, atol=0.03)

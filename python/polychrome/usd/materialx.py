@@ -463,7 +463,7 @@ _DEFAULTS = {
         "specular_color": (1.0, 1.0, 1.0), "specular_roughness": 0.2, "specular_IOR": 1.5, "transmission": 0.0,
         "coat": 0.0, "coat_color": (1.0, 1.0, 1.0), "coat_roughness": 0.1, "coat_IOR": 1.5, "sheen": 0.0,
         "sheen_color": (1.0, 1.0, 1.0), "sheen_roughness": 0.3, "thin_film_thickness": 0.0, "thin_film_IOR": 1.5,
-        "emission": 0.0, "emission_color": (1.0, 1.0, 1.0), "opacity": (1.0, 1.0, 1.0),
+        "emission": 0.0, "emission_color": (1.0, 1.0, 1.0), "opacity": (1.0, 1.0, 1.0), "transmission_dispersion": 0.0,
     },
     "openpbr": {
         "base_weight": 1.0, "base_color": (0.8, 0.8, 0.8), "base_diffuse_roughness": 0.0, "base_metalness": 0.0,
@@ -471,7 +471,8 @@ _DEFAULTS = {
         "transmission_weight": 0.0, "coat_weight": 0.0, "coat_color": (1.0, 1.0, 1.0), "coat_roughness": 0.0,
         "coat_ior": 1.6, "fuzz_weight": 0.0, "fuzz_color": (1.0, 1.0, 1.0), "fuzz_roughness": 0.5,
         "thin_film_weight": 0.0, "thin_film_thickness": 0.5, "thin_film_ior": 1.4, "emission_luminance": 0.0,
-        "emission_color": (1.0, 1.0, 1.0), "geometry_opacity": 1.0,
+        "emission_color": (1.0, 1.0, 1.0), "geometry_opacity": 1.0, "transmission_dispersion_scale": 0.0,
+        "transmission_dispersion_abbe_number": 20.0,
     },
     "gltf": {
         "base_color": (1.0, 1.0, 1.0), "metallic": 1.0, "roughness": 1.0, "specular": 1.0, "specular_color": (1.0, 1.0, 1.0),
@@ -486,14 +487,14 @@ _DEFAULTS = {
 _UNSUPPORTED = {
     "standard": {
         "specular_anisotropy": 0.0, "transmission_depth": 0.0, "transmission_scatter": (0.0, 0.0, 0.0),
-        "transmission_scatter_anisotropy": 0.0, "transmission_dispersion": 0.0, "transmission_extra_roughness": 0.0,
+        "transmission_scatter_anisotropy": 0.0, "transmission_extra_roughness": 0.0,
         "transmission_color": (1.0, 1.0, 1.0), "subsurface": 0.0, "coat_anisotropy": 0.0, "coat_affect_color": 0.0,
         "coat_affect_roughness": 0.0, "thin_walled": 0, "tangent": None,
     },
     "openpbr": {
         "specular_roughness_anisotropy": 0.0, "transmission_color": (1.0, 1.0, 1.0), "transmission_depth": 0.0,
         "transmission_scatter": (0.0, 0.0, 0.0), "transmission_scatter_anisotropy": 0.0,
-        "transmission_dispersion_scale": 0.0, "subsurface_weight": 0.0, "coat_roughness_anisotropy": 0.0,
+        "subsurface_weight": 0.0, "coat_roughness_anisotropy": 0.0,
         "coat_darkening": 1.0, "geometry_thin_walled": 0, "geometry_tangent": None, "geometry_coat_tangent": None,
     },
     "gltf": {
@@ -561,7 +562,30 @@ def build(reader, material_prim, shader, name: str):
         put("Specular IOR Level", g.math("MULTIPLY", get("specular_weight" if o else "specular"), Const(0.5)), "float")
         put("Specular Tint", get("specular_color"), "color")
         put("Roughness", get("specular_roughness"), "float")
-        put("IOR", get("specular_ior" if o else "specular_IOR"), "float")
+        ior = get("specular_ior" if o else "specular_IOR")
+        put("IOR", ior, "float")
+        # Dispersion: OpenPBR's Abbe number Vd = transmission_dispersion_abbe_number /
+        # transmission_dispersion_scale, specular_ior being n at the d line; Standard
+        # Surface's transmission_dispersion is Vd itself (Arnold's "Dispersion Abbe", 0 = off).
+        # The core's Abbe model (two-term Cauchy through nd with nF − nC = (nd − 1)/Vd) on
+        # the Principled IOR: reflection and refraction of one dispersive dielectric.
+        if o:
+            ds, dv = get("transmission_dispersion_scale"), get("transmission_dispersion_abbe_number")
+            params = (ds, dv, ior)
+        else:
+            ds = dv = get("transmission_dispersion")
+            params = (ds, ior)
+        if not (isinstance(ds, Const) and _tuple(ds.value)[0] <= 0.0):
+            name_d = "transmission_dispersion_scale" if o else "transmission_dispersion"
+            if not all(isinstance(p, Const) for p in params):
+                warn(name_d, "is connected, or with a connected IOR; dispersion needs constants and is ignored")
+            else:
+                vd = _tuple(dv.value)[0] / _tuple(ds.value)[0] if o else _tuple(ds.value)[0]
+                nd = _tuple(ior.value)[0]
+                if vd > 0.0 and math.isfinite(vd) and nd > 1.0:
+                    inputs["IOR"] = {"ior": {"type": "abbe", "nd": nd, "vd": vd}}
+                else:
+                    warn(name_d, f"gives the Abbe number {vd:g} with IOR {nd:g}; dispersion is ignored")
         put("Transmission Weight", get("transmission_weight" if o else "transmission"), "float")
         put("Coat Weight", get("coat_weight" if o else "coat"), "float")
         put("Coat Tint", get("coat_color"), "color")

@@ -574,13 +574,13 @@ def _triple(v) -> tuple[float, float, float]:
     return (t + t[-1:] * 3)[:3]
 
 
-def build(reader, material_prim, shader, name: str):
+def build(reader, material_prim, shader, name: str, graph_class=None):
     """(NodeMaterial, None) when some input of ``shader`` varies over the surface, else
     (None, {input: constant}) with every input of :data:`INPUTS` resolved (missing
     textures replaced by their fallbacks)."""
     from ..scene import NodeMaterial
 
-    g = Graph(reader, material_prim, shader)
+    g = (graph_class or Graph)(reader, material_prim, shader)  # materialx.MxGraph: MaterialX pattern nodes too
     values = {}
     for usd_name, (kind, fallback) in INPUTS.items():
         v = g.value(shader.GetInput(usd_name), kind)

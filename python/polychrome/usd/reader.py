@@ -550,7 +550,7 @@ class _Reader:
                         f"prim {prim.GetPath()}: polychrome: spectra are not applied to a MaterialX surface",
                     )
                 return material
-            if shader_id != "UsdPreviewSurface":
+            if shader_id not in ("UsdPreviewSurface", "ND_UsdPreviewSurface_surfaceshader"):
                 self.warn(
                     f"shader:{self.key_of(prim)}",
                     f"prim {prim.GetPath()}: surface shader '{shader_id}' is not supported; rendered as grey diffuse",
@@ -567,7 +567,9 @@ class _Reader:
         if shader is not None:
             from . import preview
 
-            graph, consts = preview.build(self, prim, shader, name)
+            # MaterialX's definition of UsdPreviewSurface reads MaterialX pattern nodes too.
+            mx_graph = materialx.MxGraph if str(shader.GetShaderId()).startswith("ND_") else None
+            graph, consts = preview.build(self, prim, shader, name, graph_class=mx_graph)
             if graph is not None:
                 if reflectance is not None or emission is not None:
                     self.warn(
