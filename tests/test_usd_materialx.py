@@ -117,7 +117,8 @@ TEXELS4 = np.array(
 
 
 @pytest.mark.parametrize(
-    "surface", ["ND_open_pbr_surface_surfaceshader", "ND_standard_surface_surfaceshader", "ND_UsdPreviewSurface_surfaceshader"]
+    "surface",
+    ["ND_open_pbr_surface_surfaceshader", "ND_standard_surface_surfaceshader", "ND_UsdPreviewSurface_surfaceshader", "houdini"],
 )
 def test_emission_through_image_and_texcoord_equals_the_texels(tmp_path, surface):
     """base weight 0, specular 0, emission 1 (OpenPBR: emission_luminance 1 nit = radiance 1;
@@ -126,6 +127,14 @@ def test_emission_through_image_and_texcoord_equals_the_texels(tmp_path, surface
     plane is its texel."""
     path = tmp_path / "emit.usda"
     stage = new_stage(path)
+    if surface == "houdini":
+        # Houdini's layout: a UsdPreviewSurface approximation on the universal surface
+        # (here a green emitter) beside the MaterialX network on the mtlx one, which wins.
+        surface = "ND_standard_surface_surfaceshader"
+        preview = UsdShade.Shader.Define(stage, "/Looks/m/preview")
+        preview.CreateIdAttr("UsdPreviewSurface")
+        preview.CreateInput("emissiveColor", T.Color3f).Set(Gf.Vec3f(0.0, 1.0, 0.0))
+        UsdShade.Material.Define(stage, "/Looks/m").CreateSurfaceOutput().ConnectToSource(preview.CreateOutput("surface", T.Token))
     o = "open_pbr" in surface
     params = {
         "base_weight" if o else "base": 0.0,
@@ -321,13 +330,17 @@ def test_normalmap_tilts_the_normal_in_the_tangent_frame(tmp_path):
 
 def test_unsupported_parameters_and_unknown_nodes_warn_once_each(tmp_path):
     """specular_anisotropy and subsurface: one warning each naming the prim and the
-    parameter; an unknown node (ND_noise2d_color3) on base_color: one warning naming the
+    parameter (subsurface_color, which acts only through subsurface, none); an input that
+    is no parameter of the shader: one warning; an unknown node (ND_noise2d_color3) on base_color: one warning naming the
     node and the prim, base_color's default (0.8) is used (checked in the graph); a stage
     referencing a .mtlx document (usd-core ships no usdMtlx file format): USD's warning,
     the rest renders."""
     path = tmp_path / "bad.usda"
     stage = new_stage(path)
-    mat, sh = mx_material(stage, "/Looks/m", "ND_standard_surface_surfaceshader", specular_anisotropy=0.5, subsurface=0.3)
+    mat, sh = mx_material(
+        stage, "/Looks/m", "ND_standard_surface_surfaceshader", specular_anisotropy=0.5, subsurface=0.3, subsurface_color=(1.0, 0.5, 0.5)
+    )
+    set_input(sh, "displacement", 0.1)  # not a standard_surface parameter
     noise = node(stage, "/Looks/m/noise", "ND_noise2d_color3", amplitude=(1.0, 1.0, 1.0))
     set_input(sh, "base_color", noise)
     quad(stage, "/plane", material=mat)
@@ -341,6 +354,8 @@ def test_unsupported_parameters_and_unknown_nodes_warn_once_each(tmp_path):
     mine = [w for w in warns if "/Looks/m" in w]
     assert len([w for w in mine if "specular_anisotropy" in w]) == 1, warns
     assert len([w for w in mine if "'subsurface'" in w]) == 1, warns
+    assert len([w for w in mine if "'displacement' is not a parameter" in w]) == 1, warns
+    assert not [w for w in mine if "subsurface_color" in w], warns  # acts through subsurface, warned once
     assert len([w for w in mine if "ND_noise2d_color3" in w and "/Looks/m/noise" in w]) == 1, warns
     assert any("looks.mtlx" in w for w in warns), warns
     (m,) = [m for m in scene.materials if isinstance(m, pc.NodeMaterial)]

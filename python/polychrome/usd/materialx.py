@@ -54,6 +54,11 @@ def is_materialx(shader_id: str) -> bool:
     return shader_id in SURFACES
 
 
+def translates(shader_id: str) -> bool:
+    """A surface the reader translates: these, or MaterialX's UsdPreviewSurface."""
+    return shader_id in SURFACES or shader_id == "ND_UsdPreviewSurface_surfaceshader"
+
+
 def parse_id(sid: str) -> tuple[str, list[str]]:
     """("multiply", ["color3FA"]) from "ND_multiply_color3FA"; ("convert", ["float", "color3"]) ..."""
     parts = sid[3:].split("_")
@@ -504,6 +509,21 @@ _UNSUPPORTED = {
 }  # fmt: skip
 
 
+# Parameters read above, or that act only through one warned about (subsurface colour with
+# subsurface weight 0, ...), or that name the geometry's own normal.
+_IMPLIED = {
+    "standard": {
+        "normal", "coat_normal", "specular_rotation", "coat_rotation", "subsurface_color", "subsurface_radius",
+        "subsurface_scale", "subsurface_anisotropy", "subsurface_type",
+    },
+    "openpbr": {
+        "geometry_normal", "geometry_coat_normal", "specular_roughness_anisotropy", "subsurface_color",
+        "subsurface_radius", "subsurface_radius_scale", "subsurface_scatter_anisotropy",
+    },
+    "gltf": {"normal", "clearcoat_normal", "anisotropy_rotation", "attenuation_distance"},
+}  # fmt: skip
+
+
 def _family(sid: str) -> str:
     return "openpbr" if "open_pbr" in sid else "gltf" if "gltf" in sid else "standard"
 
@@ -544,6 +564,11 @@ def build(reader, material_prim, shader, name: str):
 
     for n, neutral in _UNSUPPORTED[fam].items():
         unsupported(n, neutral)
+    known = set(defaults) | set(_UNSUPPORTED[fam]) | _IMPLIED[fam]
+    for i in shader.GetInputs():
+        n = str(i.GetBaseName())
+        if n not in known and (i.HasConnectedSource() or i.GetAttr().HasAuthoredValue()):
+            warn(n, "is not a parameter of this shader; ignored")
 
     inputs: dict[str, Any] = {}
 

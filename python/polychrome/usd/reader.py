@@ -533,14 +533,19 @@ class _Reader:
         # Plain UsdPreviewSurface, with polychrome spectra where given.
         diffuse, emissive, opacity, ior_value, metallic, roughness = FALLBACK_GREY, (0.0, 0.0, 0.0), 1.0, 1.5, 0.0, 0.5
         shader = None
-        surface = self.UsdShade.Material(prim).ComputeSurfaceSource()
-        if not (surface and surface[0]):
-            # MaterialX networks are usually bound for the "mtlx" render context only.
-            surface = self.UsdShade.Material(prim).ComputeSurfaceSource("mtlx")
+        from . import materialx
+
+        # The "mtlx" surface when it is one materialx.py translates (Houdini writes a
+        # UsdPreviewSurface approximation on the universal surface beside the MaterialX
+        # network: the network is the material), else the universal one.
+        surface = self.UsdShade.Material(prim).ComputeSurfaceSource("mtlx")  # falls back to universal
+        if not (surface and surface[0] and materialx.translates(str(surface[0].GetShaderId()))):
+            universal = self.UsdShade.Material(prim).ComputeSurfaceSource()
+            if universal and universal[0]:
+                surface = universal
         if surface and surface[0]:
             shader = surface[0]
             shader_id = shader.GetShaderId()
-            from . import materialx
 
             if materialx.is_materialx(str(shader_id)):
                 material = materialx.build(self, prim, shader, name)
