@@ -515,3 +515,56 @@ def test_color4_alpha_drives_coverage(tmp_path, mode):
     left, right = (0.0, 1.0) if mode == "gltf mask" else (77 / 255, 204 / 255)
     np.testing.assert_allclose(got[:, :2].mean(), left, atol=0.03)
     np.testing.assert_allclose(got[:, 2:].mean(), right, atol=0.03)
+
+
+def test_node_graph_with_interface_inputs_swizzle_power_invert_luminance(tmp_path):
+    """A NodeGraph (as usdMtlx writes them) whose image reads the file given by the
+    Material's interface input, the surface's `emission` driven by another (1.5):
+    emission_color = invert(power(swizzle(image, "bgr"), 2)) × luminance(image) (Rec.709
+    luma, the working space's) — per texel with the closest filter, exact."""
+    path = tmp_path / "ng.usda"
+    stage = new_stage(path)
+    mat, sh = mx_material(stage, "/Looks/m", "ND_standard_surface_surfaceshader", base=0.0, specular=0.0)
+    file = tmp_path / "tex4.exr"
+    write_exr(file, np.concatenate([TEXELS4, np.ones((4, 4, 1))], axis=2).astype(np.float32))
+    tex_file = mat.CreateInput("tex_file", T.Asset)
+    tex_file.Set(Sdf.AssetPath(str(file)))
+    glow = mat.CreateInput("glow", T.Float)
+    glow.Set(1.5)
+    sh.CreateInput("emission", T.Float).ConnectToSource(glow)
+    ng = UsdShade.NodeGraph.Define(stage, "/Looks/m/NG")
+    img = UsdShade.Shader.Define(stage, "/Looks/m/NG/img")
+    img.CreateIdAttr("ND_image_color3")
+    img.CreateInput("file", T.Asset).ConnectToSource(tex_file)
+    set_input(img, "filtertype", "closest")
+    img.CreateInput("texcoord", T.Float2).ConnectToSource(texcoord(stage, "/Looks/m/NG/uv"))
+    img_out = img.CreateOutput("out", T.Color3f)
+
+    def shader(name, sid, **inputs):
+        s = UsdShade.Shader.Define(stage, f"/Looks/m/NG/{name}")
+        s.CreateIdAttr(sid)
+        for k, v in inputs.items():
+            if isinstance(v, UsdShade.Output):
+                s.CreateInput(k, T.Color3f).ConnectToSource(v)
+            else:
+                set_input(s, k, v)
+        return s.CreateOutput("out", T.Color3f)
+
+    sw = shader("swizzle", "ND_swizzle_color3_color3", channels="bgr")
+    UsdShade.Shader(sw.GetPrim()).CreateInput("in", T.Color3f).ConnectToSource(img_out)
+    pw = shader("power", "ND_power_color3FA", in1=sw, in2=2.0)
+    inv = shader("invert", "ND_invert_color3", **{"in": pw})
+    lum = shader("luminance", "ND_luminance_color3", **{"in": img_out})
+    out = shader("product", "ND_multiply_color3", in1=inv, in2=lum)
+    ng_out = ng.CreateOutput("out", T.Color3f)
+    ng_out.ConnectToSource(out)
+    sh.CreateInput("emission_color", T.Color3f).ConnectToSource(ng_out)
+    quad(stage, "/plane", material=mat)
+    top_camera(stage)
+    stage.Save()
+    scene, warns = read(path)
+    assert not warns, warns
+    got = render_rgb(scene, samples=64, n=8)
+    t = np.repeat(np.repeat(TEXELS4, 2, axis=0), 2, axis=1)
+    want = 1.5 * (1.0 - t[..., ::-1] ** 2) * (t @ np.array([0.2126, 0.7152, 0.0722]))[..., None]
+    np.testing.assert_allclose(got, want, atol=1e-4)

@@ -39,7 +39,15 @@ SURFACES = (
 
 _WIDTH = {"float": 1, "integer": 1, "boolean": 1, "vector2": 2, "vector3": 3, "color3": 3, "vector4": 4, "color4": 4}
 _MX_WRAP = {"periodic": "repeat", "mirror": "mirror", "clamp": "clamp", "constant": "black"}
-_BINARY = {"add": "ADD", "subtract": "SUBTRACT", "multiply": "MULTIPLY", "divide": "DIVIDE", "min": "MINIMUM", "max": "MAXIMUM"}
+_BINARY = {
+    "add": "ADD",
+    "subtract": "SUBTRACT",
+    "multiply": "MULTIPLY",
+    "divide": "DIVIDE",
+    "min": "MINIMUM",
+    "max": "MAXIMUM",
+    "power": "POWER",
+}
 _PY = {
     "ADD": lambda a, b: a + b,
     "SUBTRACT": lambda a, b: a - b,
@@ -47,7 +55,11 @@ _PY = {
     "DIVIDE": lambda a, b: a / b if b != 0 else 0.0,  # Cycles' safe division
     "MINIMUM": min,
     "MAXIMUM": max,
+    "POWER": lambda a, b: a**b if a > 0 or float(b).is_integer() else 0.0,  # Cycles' safe power
 }
+#: MaterialX's luminance uses the working space's luma coefficients (the spec lets
+#: applications take them from it): Polychrome's is linear Rec.709.
+REC709_LUMA = (0.2126, 0.7152, 0.0722)
 
 
 def is_materialx(shader_id: str) -> bool:
@@ -176,7 +188,7 @@ class MxGraph(preview.Graph):
     def _binary(self, shader, node, types):
         w = self.width(types)
         fa = bool(types) and types[0].endswith("FA")
-        d2 = 1.0 if node in ("multiply", "divide") else 0.0
+        d2 = 1.0 if node in ("multiply", "divide", "power") else 0.0
         a = self.inp(shader, "in1", self.zero(w).value)
         b = self.inp(shader, "in2", d2 if fa else self.zero(w, d2).value)
         return self.op(_BINARY[node], a, b, w)
@@ -198,6 +210,86 @@ class MxGraph(preview.Graph):
 
     def mx_max(self, shader, name, types, kind):
         return self._binary(shader, "max", types)
+
+    def mx_power(self, shader, name, types, kind):
+        return self._binary(shader, "power", types)
+
+    def mx_invert(self, shader, name, types, kind):
+        """amount − in (amount 1)."""
+        w = self.width(types)
+        fa = types[0].endswith("FA")
+        x = self.inp(shader, "in", self.zero(w).value)
+        amount = self.inp(shader, "amount", 1.0 if fa else self.zero(w, 1.0).value)
+        return self.op("SUBTRACT", amount, x, w)
+
+    def mx_luminance(self, shader, name, types, kind):
+        """dot(in, lumacoeffs) in every channel (alpha kept)."""
+        w = self.width(types)
+        x = self.inp(shader, "in", self.zero(w).value)
+        coeffs = self.inp(shader, "lumacoeffs", REC709_LUMA)
+        if isinstance(x, Const) and isinstance(coeffs, Const):
+            y = sum(a * b for a, b in zip(_tuple(x.value), _tuple(coeffs.value)))
+            out: Any = Const((y, y, y))
+        else:
+            n = self.add(
+                "ShaderNodeVectorMath",
+                "luminance",
+                {"operation": "DOT_PRODUCT"},
+                {"Vector": self.socket(x, "vector"), "Vector_001": self.socket(coeffs, "vector")},
+            )
+            out = Link(self.add("ShaderNodeCombineXYZ", "luminance", inputs={k: {"link": [n, "Value"]} for k in "XYZ"}), "Vector")
+        return self.with_alpha(out, self.alpha_of(x)) if w == 4 else out
+
+    def mx_swizzle(self, shader, name, types, kind):
+        """MaterialX 1.38's swizzle: `channels` picks components (r/x, g/y, b/z, a/w, 0, 1)."""
+        w_in = _WIDTH.get(types[0], 3) if types else 3
+        x = self.inp(shader, "in", self.zero(w_in).value)
+        channels = str(self.raw(shader.GetInput("channels")) or "")
+        pick = {"r": 0, "x": 0, "g": 1, "y": 1, "b": 2, "z": 2, "a": 3, "w": 3}
+        parts = []
+        for ch in channels:
+            if ch in "01":
+                parts.append(Const(float(ch)))
+            elif ch in pick:
+                parts.append(self.component(x, min(pick[ch], w_in - 1) if pick[ch] < 3 else 3))
+            else:
+                self.warn(f"swizzle:{shader.GetPath()}", f"{shader.GetPath()}: swizzle channel '{ch}' is not known; 0 is used")
+                parts.append(Const(0.0))
+        if len(parts) <= 1:
+            return parts[0] if parts else Const(0.0)
+        rgb = (parts + [Const(0.0)] * 3)[:3]
+        if all(isinstance(p, Const) for p in rgb):
+            out: Any = Const(tuple(float(_tuple(p.value)[0]) for p in rgb))
+        else:
+            out = Link(
+                self.add("ShaderNodeCombineXYZ", "swizzle", inputs={k: self.socket(p, "float") for k, p in zip("XYZ", rgb)}), "Vector"
+            )
+        return self.with_alpha(out, parts[3]) if len(parts) == 4 else out
+
+    def mx_colorcorrect(self, shader, name, types, kind):
+        """Passed through when its parameters are MaterialX's defaults (the identity); else
+        one warning, and `in` passes through uncorrected."""
+        neutral = {
+            "hue": 0.0,
+            "saturation": 1.0,
+            "gamma": 1.0,
+            "lift": 0.0,
+            "gain": 1.0,
+            "contrast": 1.0,
+            "contrastpivot": 0.5,
+            "exposure": 0.0,
+        }
+        changed = []
+        for n, d in neutral.items():
+            v = self.value(shader.GetInput(n), "float")
+            if v is not None and not (isinstance(v, Const) and _tuple(v.value)[0] == d):
+                changed.append(n)
+        if changed:
+            self.warn(
+                f"colorcorrect:{shader.GetPath()}",
+                f"{shader.GetPath()}: colorcorrect {', '.join(changed)} are not supported; its input passes through uncorrected",
+            )
+        return self.inp(shader, "in", self.zero(self.width(types)).value)
 
     def mx_clamp(self, shader, name, types, kind):
         w = self.width(types)
