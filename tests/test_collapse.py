@@ -117,3 +117,15 @@ def test_dispersion_splitting_with_another_collapse_is_an_error_naming_it():
         pc.render(glass_box(), width=4, height=4, samples=1, dispersion_splitting=True, collapse="STRATIFIED")
     with pytest.raises(ValueError, match="setting 'collapse_k': 1 is below the minimum 2"):
         pc.RenderSettings(collapse_k=1)
+
+
+@pytest.mark.parametrize("method", ["HERO", "RGB", "MONOCHROMATIC_RAYS"])
+def test_split_with_another_method_is_an_error_not_ignored(method):
+    """SPLIT divides a polychromatic ray among k wavelengths; HERO ends its secondary
+    wavelengths at a dispersive surface and RGB collapses to a channel, so SPLIT there
+    would silently do nothing."""
+    with pytest.raises(ValueError, match="setting 'collapse'.*POLYCHROMATIC"):
+        pc.render(glass_box(), width=4, height=4, samples=1, method=method, collapse="SPLIT")
+    # AUTO and ENERGY stay valid with every method.
+    r = pc.render(glass_box(), width=4, height=4, samples=1, method=method, collapse="ENERGY")
+    assert np.all(np.isfinite(r.rgba))

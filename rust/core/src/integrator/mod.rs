@@ -234,6 +234,12 @@ pub fn from_settings(scene: &Scene, settings: &ResolvedSettings) -> crate::Resul
             ),
         ));
     }
+    // SPLIT divides a polychromatic ray's energy among k wavelengths; HERO ends its
+    // secondary wavelengths at a dispersive surface instead and RGB collapses to one
+    // channel, so an explicit SPLIT there would be silently ignored.
+    if settings.collapse == Collapse::Split && settings.method != Method::Polychromatic {
+        return Err(Error::setting("collapse", "SPLIT applies to the POLYCHROMATIC method only"));
+    }
     if settings.method == Method::Rgb && scene.grid.len() != 3 {
         return Err(Error::setting("method", "RGB needs the three-channel grid"));
     }
