@@ -94,6 +94,7 @@ fn every_method_and_direction_drops_non_finite_samples() {
             let mut scene = Scene::build(&desc, &buffers, &opts).unwrap();
             scene.lights = vec![Box::new(PoisonLight { n: g.len() })];
             scene.light_distribution = Distribution1D::new(&[1.0]);
+            scene.nee_distribution = Distribution1D::new(&[1.0]);
             let settings = ResolvedSettings {
                 width: w,
                 height: h,

@@ -9,7 +9,7 @@ mod common;
 use common::*;
 use polychrome_core::material::IorDesc;
 use polychrome_core::render::{render, Direction, MediumSampling, Method, RenderControl, ResolvedSettings};
-use polychrome_core::scene::{BsdfDesc, Buffer, MaterialDesc, SceneDesc, VolumeDesc, WorldDesc};
+use polychrome_core::scene::{BsdfDesc, Buffer, MaterialDesc, SceneDesc, VolumeDesc};
 use polychrome_core::spectrum::named::{NoRgb, SpectrumKind, SpectrumRole};
 use polychrome_core::spectrum::{SpectrumDesc, WavelengthGrid};
 
@@ -59,10 +59,6 @@ fn camera_along_y(desc: &mut SceneDesc, distance: f32, focal_length: f32) {
     desc.camera.to_world =
         [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, -1.0, -distance], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
     desc.camera.focal_length = focal_length;
-}
-
-fn world(radiance: SpectrumDesc) -> WorldDesc {
-    serde_json::from_value(serde_json::json!({ "radiance": radiance })).expect("world description")
 }
 
 const SIGMA_A: [(f32, f32); 4] = [(380.0, 2.0), (500.0, 0.1), (600.0, 0.8), (780.0, 1.5)];
@@ -205,7 +201,7 @@ fn white_furnace_with_albedo_one() {
     desc.materials.push(material("fog", BsdfDesc::Null, Some(volume)));
     let (v, t) = uv_sphere([0.0; 3], 1.0, 24, 48);
     add_mesh(&mut desc, &mut buffers, "sphere", v, t, 0);
-    desc.world = Some(world(tabulated(&[(380.0, 0.7), (780.0, 1.3)], 1.0)));
+    desc.world = Some(uniform_world(&tabulated(&[(380.0, 0.7), (780.0, 1.3)], 1.0)));
     camera_along_y(&mut desc, 4.0, 50.0);
     let base = ResolvedSettings { max_bounces: 256, spectral_output: false, ..settings(n, 16) };
     let base = ResolvedSettings { width: 12, height: 12, ..base };
@@ -400,7 +396,7 @@ fn camera_inside_media_beer_lambert() {
             add_mesh(&mut desc, &mut buffers, "box", v, t, m);
         }
         if in_world {
-            let mut w = world(SpectrumDesc::constant(0.0));
+            let mut w = uniform_world(&SpectrumDesc::constant(0.0));
             w.volume = Some(absorbing(tabulated(&SIGMA_B, 0.1)));
             desc.world = Some(w);
         }
@@ -436,7 +432,7 @@ fn volume_emission_closed_form() {
     for in_world in [false, true] {
         let (mut desc, buffers) = if in_world {
             let (mut desc, buffers) = slab_scene(material("air", BsdfDesc::Null, None), None);
-            let mut w = world(SpectrumDesc::constant(0.0));
+            let mut w = uniform_world(&SpectrumDesc::constant(0.0));
             w.volume = Some(VolumeDesc { absorption: Some(tabulated(&SIGMA_A, 0.2)), ..glowing.clone() });
             desc.world = Some(w);
             (desc, buffers)
@@ -467,7 +463,7 @@ fn volume_emission_closed_form() {
 fn invalid_world_volume_is_an_error() {
     for scale in [f32::NAN, -1.0, f32::INFINITY] {
         let (mut desc, buffers) = slab_scene(material("air", BsdfDesc::Null, None), None);
-        let mut w = world(SpectrumDesc::constant(0.0));
+        let mut w = uniform_world(&SpectrumDesc::constant(0.0));
         w.volume = Some(absorbing(SpectrumDesc { kind: SpectrumKind::Constant { value: 1.0 }, scale }));
         desc.world = Some(w);
         let err = render(&desc, &buffers, &settings(5, 1), &RenderControl::new()).err().expect("an error").to_string();

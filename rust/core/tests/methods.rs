@@ -12,7 +12,7 @@ use polychrome_core::render::{
     render, render_scene, Collapse, Direction, Method, RenderControl, RenderSettings, ResolvedSettings,
 };
 use polychrome_core::sampling::cosine_hemisphere;
-use polychrome_core::scene::{BsdfDesc, Buffer, BuildOptions, MaterialDesc, Scene, SceneDesc, WorldDesc};
+use polychrome_core::scene::{BsdfDesc, Buffer, BuildOptions, MaterialDesc, Scene, SceneDesc};
 use polychrome_core::spectrum::named::{NoRgb, SpectrumKind, SpectrumRole};
 use polychrome_core::spectrum::{SampledSpectrum, SpectrumDesc, WavelengthGrid};
 
@@ -28,10 +28,6 @@ fn diffuse(name: &str, reflectance: SpectrumDesc, emission: Option<SpectrumDesc>
 }
 
 /// A uniform world of `radiance` (through JSON, as every front end builds it).
-fn world(radiance: &SpectrumDesc) -> WorldDesc {
-    serde_json::from_value(serde_json::json!({ "radiance": radiance })).expect("world description")
-}
-
 fn furnace_scene(l: f32, a: f32) -> (SceneDesc, Vec<Buffer>) {
     let mut desc = SceneDesc::default();
     let mut buffers = Vec::new();
@@ -427,7 +423,7 @@ fn dispersive_white_sphere_vanishes_in_a_uniform_environment_in_every_method() {
     let (v, t) = uv_sphere([0.0, 0.0, -4.0], 1.5, 16, 32);
     add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
     let env = SpectrumDesc { kind: SpectrumKind::Blackbody { temperature: 2500.0 }, scale: 1.0 };
-    desc.world = Some(world(&env));
+    desc.world = Some(uniform_world(&env));
     let (w, h) = (12u32, 12u32);
     let grid = WavelengthGrid::uniform(21, 380.0, 780.0).unwrap();
     for (method, splitting) in [
@@ -477,8 +473,10 @@ fn rgb_mode_differs_from_spectral_under_narrow_band_light() {
     let mut buffers = Vec::new();
     let green = SpectrumDesc { kind: SpectrumKind::NarrowBand { center: 540.0, width: 60.0 }, scale: 0.9 };
     desc.materials.push(diffuse("green", green, None));
-    desc.world =
-        Some(world(&SpectrumDesc { kind: SpectrumKind::NarrowBand { center: 610.0, width: 20.0 }, scale: 1.0 }));
+    desc.world = Some(uniform_world(&SpectrumDesc {
+        kind: SpectrumKind::NarrowBand { center: 610.0, width: 20.0 },
+        scale: 1.0,
+    }));
     let (v, t) = uv_sphere([0.0, 0.0, -4.0], 3.0, 16, 32);
     add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
     let base = ResolvedSettings { width: 8, height: 8, samples: 16, max_bounces: 1, ..Default::default() };
@@ -533,7 +531,7 @@ fn dispersive_glass_sphere_vanishes_in_a_uniform_environment() {
     let (v, t) = uv_sphere([0.0, 0.0, -4.0], 1.5, 24, 48);
     add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
     let env = SpectrumDesc { kind: SpectrumKind::Blackbody { temperature: 2500.0 }, scale: 1.0 };
-    desc.world = Some(world(&env));
+    desc.world = Some(uniform_world(&env));
     for (method, splitting, samples) in [
         (Method::Polychromatic, false, 64),
         (Method::Polychromatic, true, 16),
@@ -572,7 +570,7 @@ fn every_collapse_strategy_keeps_the_glass_furnace_at_the_closed_form() {
     let (v, t) = uv_sphere([0.0, 0.0, -4.0], 1.5, 24, 48);
     add_mesh(&mut desc, &mut buffers, "ball", v, t, 0);
     let env = SpectrumDesc { kind: SpectrumKind::Blackbody { temperature: 2500.0 }, scale: 1.0 };
-    desc.world = Some(world(&env));
+    desc.world = Some(uniform_world(&env));
     for (collapse, k, direction, samples) in [
         (Collapse::Stratified, 4, Direction::Backward, 64),
         (Collapse::Split, 3, Direction::Backward, 32),

@@ -14,7 +14,7 @@ use crate::film::PixelSample;
 use crate::geometry::{offset_ray_origin, shadow_ray};
 use crate::light::LightSample;
 use crate::material::ShadingContext;
-use crate::sampling::{power_heuristic, Rng};
+use crate::sampling::{power_heuristic, Distribution1D, Rng};
 use crate::scene::Scene;
 use crate::spectrum::SampledSpectrum;
 use glam::{Vec2, Vec3A};
@@ -41,6 +41,10 @@ pub trait CameraMis {
     fn escape(&mut self, scene: &Scene, st: &PathState, env: usize) -> f32;
     /// At `v`, before it connects and scatters.
     fn vertex(&mut self, _v: &Vertex) {}
+    /// Where light samples come from (eq. 7's choice ∝ power), as the weights count them.
+    fn nee_lights<'s>(&self, scene: &'s Scene) -> &'s Distribution1D {
+        &scene.light_distribution
+    }
     /// Weight of light sample `d` taken at `v`.
     fn direct(&mut self, scene: &Scene, ctx: &mut ShadingContext, v: &Vertex, d: &DirectSample) -> f32;
     /// The BSDF at `v` was sampled.
@@ -58,7 +62,7 @@ impl CameraMis for PowerHeuristic {
         }
         match scene.triangle_light(v.si.instance, v.si.triangle) {
             Some(l) => {
-                let pl = scene.light_distribution.pmf(l)
+                let pl = scene.nee_distribution.pmf(l)
                     * scene.lights[l].pdf_li_part(v.si.triangle, st.prev_p, st.ray.direction, st.traveled + v.si.t);
                 power_heuristic(st.prev_pdf, pl)
             }
@@ -69,9 +73,11 @@ impl CameraMis for PowerHeuristic {
         if st.specular {
             return 1.0;
         }
-        let pl =
-            scene.light_distribution.pmf(env) * scene.lights[env].pdf_li(st.prev_p, st.ray.direction, f32::INFINITY);
+        let pl = scene.nee_distribution.pmf(env) * scene.lights[env].pdf_li(st.prev_p, st.ray.direction, f32::INFINITY);
         power_heuristic(st.prev_pdf, pl)
+    }
+    fn nee_lights<'s>(&self, scene: &'s Scene) -> &'s Distribution1D {
+        &scene.nee_distribution
     }
     fn direct(&mut self, _scene: &Scene, _ctx: &mut ShadingContext, _v: &Vertex, d: &DirectSample) -> f32 {
         if d.ls.delta {
@@ -265,10 +271,11 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
             return;
         }
         // Next-event estimation: one light chosen ∝ its spectral power (eq. 7).
-        let Some(l) = scene.light_distribution.sample(rng.uniform()) else {
+        let lights = self.mis.nee_lights(scene);
+        let Some(l) = lights.sample(rng.uniform()) else {
             return;
         };
-        let pmf = scene.light_distribution.pmf(l);
+        let pmf = lights.pmf(l);
         let u = rng.uniform2();
         let Some(ls) = scene.lights[l].sample_li(v.si.p, u, &mut scratch.le) else {
             return;
@@ -364,10 +371,11 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
         rng: &mut Rng,
         scratch: &mut Scratch,
     ) {
-        let Some(l) = scene.light_distribution.sample(rng.uniform()) else {
+        let lights = self.mis.nee_lights(scene);
+        let Some(l) = lights.sample(rng.uniform()) else {
             return;
         };
-        let pmf = scene.light_distribution.pmf(l);
+        let pmf = lights.pmf(l);
         let u = rng.uniform2();
         let Some(ls) = scene.lights[l].sample_li(mv.p, u, &mut scratch.le) else {
             return;

@@ -160,7 +160,16 @@ pub struct Scene {
     pub accel: Accel,
     pub materials: Vec<Material>,
     pub lights: Vec<Box<dyn Light>>,
+    /// Lights ∝ spectral power (eq. 7): where light paths start, and the light sample
+    /// of BIDIRECTIONAL's camera paths (its MIS weights count both with one pmf).
     pub light_distribution: Distribution1D,
+    /// The light sample of BACKWARD camera paths: the same, without a uniform world,
+    /// which BSDF sampling finds as well as light sampling could (cosine or lobe-shaped
+    /// directions against uniform ones) — so the other lights get all the samples and
+    /// a uniform world under a sun is not noise. Cycles' world sampling on Auto does
+    /// not sample a solid-colour world as a light either (a diffuse plane under one
+    /// renders without noise there).
+    pub nee_distribution: Distribution1D,
     /// For instances with emissive triangles: the light index of each triangle
     /// (u32::MAX where the triangle does not emit), for MIS on BSDF-sampled hits.
     pub triangle_lights: Vec<Option<Vec<u32>>>,
@@ -852,6 +861,11 @@ impl Scene {
             + environment.as_ref().and_then(|e| e.image.as_ref()).map_or(0, |i| i.bytes() - i.texture.bytes());
         let powers: Vec<f64> = lights.iter().map(|l| l.power(grid.weights())).collect();
         let light_distribution = Distribution1D::new(&powers);
+        let mut nee_powers = powers.clone();
+        if let Some(env) = environment.as_ref().filter(|e| e.image.is_none()) {
+            nee_powers[env.light] = 0.0;
+        }
+        let nee_distribution = Distribution1D::new(&nee_powers);
 
         let mut scene = Self {
             observer: Observer::new(&grid),
@@ -865,6 +879,7 @@ impl Scene {
             materials,
             lights,
             light_distribution,
+            nee_distribution,
             triangle_lights,
             environment,
             texture_bytes,

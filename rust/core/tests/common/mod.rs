@@ -1,7 +1,8 @@
 //! Scene-building helpers shared by the core's integration tests.
 #![allow(dead_code)]
 
-use polychrome_core::scene::{Buffer, MeshDesc, SceneDesc};
+use polychrome_core::scene::{Buffer, MeshDesc, SceneDesc, WorldDesc};
+use polychrome_core::spectrum::SpectrumDesc;
 
 /// A UV sphere of `radius` around `center` (outward winding), as vertices and triangles.
 pub fn uv_sphere(center: [f32; 3], radius: f32, rings: u32, segments: u32) -> (Vec<f32>, Vec<u32>) {
@@ -78,4 +79,10 @@ pub fn mean_and_standard_error(rgba: &[f32]) -> (f64, f64) {
     let mean = ys.iter().sum::<f64>() / n;
     let var = ys.iter().map(|y| (y - mean).powi(2)).sum::<f64>() / (n - 1.0);
     (mean, (var / n).sqrt())
+}
+
+/// A world of uniform `radiance` from every direction (the description's other fields
+/// at their defaults).
+pub fn uniform_world(radiance: &SpectrumDesc) -> WorldDesc {
+    serde_json::from_value(serde_json::json!({ "radiance": radiance })).expect("world description")
 }
