@@ -240,7 +240,8 @@ def summarise(warnings: list[str]) -> str:
     import re
     from collections import Counter
 
-    c = Counter(re.sub(r"^material '[^']*': (node '[^']*' \([^)]*\): )?", "", w) for w in warnings)
+    # Numbers too (one "Anisotropic … is not supported" for a sweep of values).
+    c = Counter(re.sub(r"-?\d+(\.\d+)?", "…", re.sub(r"^material '[^']*': (node '[^']*' \([^)]*\): )?", "", w)) for w in warnings)
     return "; ".join(f"{w} (×{n})" if n > 1 else w for w, n in c.items())
 
 
