@@ -329,12 +329,13 @@ def test_normalmap_tilts_the_normal_in_the_tangent_frame(tmp_path):
 
 
 def test_unsupported_parameters_and_unknown_nodes_warn_once_each(tmp_path):
-    """specular_anisotropy and subsurface: one warning each naming the prim and the
-    parameter (subsurface_color, which acts only through subsurface, none); an input that
+    """specular_anisotropy and subsurface (rendered as a diffuse of subsurface_color): one
+    warning each naming the prim and the parameter (subsurface_color, which acts only
+    through subsurface, none); an input that
     is no parameter of the shader: one warning; an unknown node (ND_noise2d_color3) on base_color: one warning naming the
     node and the prim, base_color's default (0.8) is used (checked in the graph); a stage
-    referencing a .mtlx document (usd-core ships no usdMtlx file format): USD's warning,
-    the rest renders."""
+    referencing a truncated .mtlx document: one warning naming the prim and the file, the
+    rest renders."""
     path = tmp_path / "bad.usda"
     stage = new_stage(path)
     mat, sh = mx_material(
@@ -349,18 +350,20 @@ def test_unsupported_parameters_and_unknown_nodes_warn_once_each(tmp_path):
     quad(stage, "/plane2", z=-1, material=other)
     top_camera(stage)
     stage.Save()
-    (tmp_path / "looks.mtlx").write_text('<?xml version="1.0"?>\n<materialx version="1.38"/>\n')
+    (tmp_path / "looks.mtlx").write_text('<?xml version="1.0"?>\n<materialx version="1.38">\n')  # truncated
     scene, warns = read(path)
     mine = [w for w in warns if "/Looks/m" in w]
     assert len([w for w in mine if "specular_anisotropy" in w]) == 1, warns
     assert len([w for w in mine if "'subsurface'" in w]) == 1, warns
     assert len([w for w in mine if "'displacement' is not a parameter" in w]) == 1, warns
-    assert not [w for w in mine if "subsurface_color" in w], warns  # acts through subsurface, warned once
+    assert not [w for w in mine if "'subsurface_color'" in w], warns  # acts through subsurface, warned once
     assert len([w for w in mine if "ND_noise2d_color3" in w and "/Looks/m/noise" in w]) == 1, warns
-    assert any("looks.mtlx" in w for w in warns), warns
+    assert len([w for w in warns if "looks.mtlx" in w and "/Looks/fromfile" in w and "cannot read MaterialX document" in w]) == 1, warns
     (m,) = [m for m in scene.materials if isinstance(m, pc.NodeMaterial)]
     (p,) = [n for n in m.nodes if n["type"] == "ShaderNodeBsdfPrincipled"]
-    assert p["inputs"]["Base Color"] == pytest.approx([0.8, 0.8, 0.8])
+    # base_color's default 0.8 (the noise is dropped), blended with subsurface_color by the
+    # subsurface weight 0.3 (subsurface rendered as a diffuse of its colour).
+    assert p["inputs"]["Base Color"] == pytest.approx([0.7 * 0.8 + 0.3 * c for c in (1.0, 0.5, 0.5)])
     assert render_rgb(scene, samples=1).shape == (N, N, 3)
 
 
@@ -567,4 +570,69 @@ def test_node_graph_with_interface_inputs_swizzle_power_invert_luminance(tmp_pat
     got = render_rgb(scene, samples=64, n=8)
     t = np.repeat(np.repeat(TEXELS4, 2, axis=0), 2, axis=1)
     want = 1.5 * (1.0 - t[..., ::-1] ** 2) * (t @ np.array([0.2126, 0.7152, 0.0722]))[..., None]
+    np.testing.assert_allclose(got, want, atol=1e-4)
+
+
+MTLX_DOC = """<?xml version="1.0"?>
+<materialx version="1.38" colorspace="lin_rec709" fileprefix="tex/">
+  <nodegraph name="NG_glow">
+    <input name="file" type="filename" value="glow.png" colorspace="srgb_texture" />
+    <texcoord name="uv" type="vector2" />
+    <image name="img" type="color3">
+      <input name="file" type="filename" interfacename="file" />
+      <input name="texcoord" type="vector2" nodename="uv" />
+      <input name="filtertype" type="string" value="closest" />
+    </image>
+    <multiply name="twice" type="color3">
+      <input name="in1" type="color3" nodename="img" />
+      <input name="in2" type="float" value="2" />
+    </multiply>
+    <output name="out" type="color3" nodename="twice" />
+  </nodegraph>
+  <standard_surface name="glow_surface" type="surfaceshader">
+    <input name="base" type="float" value="0" />
+    <input name="specular" type="float" value="0" />
+    <input name="emission" type="float" value="1" />
+    <input name="emission_color" type="color3" nodegraph="NG_glow" output="out" />
+  </standard_surface>
+  <surfacematerial name="glow" type="material">
+    <input name="surfaceshader" type="surfaceshader" nodename="glow_surface" />
+  </surfacematerial>
+</materialx>
+"""
+
+
+def test_referenced_mtlx_document_inside_a_variant(tmp_path):
+    """A .mtlx document (nodegraph with an interface filename, fileprefix, colorspace
+    srgb_texture, image → multiply_color3FA, a standard_surface and its surfacematerial)
+    referenced as usdMtlx lays it out (`doc.mtlx</MaterialX/Materials>`) from the selected
+    variant of a variant set — the other variant references a missing document — is read by
+    mtlxdoc.py without usdMtlx: the plane bound to its material shows 2 × the sRGB-decoded
+    texels, no warning."""
+    from PIL import Image
+
+    from test_usd_preview import srgb_decode
+
+    (tmp_path / "tex").mkdir()
+    q = np.round(TEXELS4 * 255).astype(np.uint8)
+    Image.fromarray(q, "RGB").save(tmp_path / "tex" / "glow.png")
+    (tmp_path / "looks.mtlx").write_text(MTLX_DOC)
+    path = tmp_path / "doc.usda"
+    stage = new_stage(path)
+    looks = stage.DefinePrim("/Looks")
+    vset = looks.GetVariantSets().AddVariantSet("model")
+    for name, doc in (("other", "missing.mtlx"), ("mtlx", "looks.mtlx")):
+        vset.AddVariant(name)
+        vset.SetVariantSelection(name)
+        with vset.GetVariantEditContext():
+            stage.OverridePrim("/Looks/mx").GetReferences().AddReference(f"./{doc}", "/MaterialX/Materials")
+    vset.SetVariantSelection("mtlx")
+    mesh = quad(stage, "/plane")
+    UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).GetDirectBindingRel().SetTargets([Sdf.Path("/Looks/mx/glow")])
+    top_camera(stage)
+    stage.Save()
+    scene, warns = read(path)
+    assert not warns, warns
+    got = render_rgb(scene, samples=64, n=8)
+    want = 2.0 * np.repeat(np.repeat(srgb_decode(q / 255.0), 2, axis=0), 2, axis=1)
     np.testing.assert_allclose(got, want, atol=1e-4)

@@ -162,6 +162,15 @@ class MxGraph(preview.Graph):
         )
         return Link(n, "Vector")
 
+    def lerp(self, a, b, t):
+        """(1 − t)·a + t·b of colours (t a float)."""
+        if all(isinstance(v, Const) for v in (a, b, t)):
+            x, y, f = _tuple(a.value), _tuple(b.value), _tuple(t.value)[0]
+            x, y = (x * 3)[:3] if len(x) == 1 else x, (y * 3)[:3] if len(y) == 1 else y
+            return Const(tuple((1 - f) * p + f * q for p, q in zip(x, y)))
+        inputs = {"Factor_Float": self.socket(t, "float"), "A_Vector": self.socket(a, "vector"), "B_Vector": self.socket(b, "vector")}
+        return Link(self.add("ShaderNodeMix", "lerp", {"data_type": "VECTOR", "clamp_factor": True}, inputs), "Result_Vector")
+
     def op(self, op: str, a, b, width: int):
         if width == 1:
             return self.math(op, a, b)
@@ -484,8 +493,9 @@ class MxGraph(preview.Graph):
         → sRGB; linear spaces and none → raw (the document's working space, lin_rec709, is
         MaterialX's default); "auto" as UsdUVTexture's."""
         inp = shader.GetInput("file")
-        attr = inp.GetAttr() if inp else None
-        cs = str(attr.GetColorSpace()) if attr and attr.HasColorSpace() else ""
+        # On the input, else on the interface input it is connected to (which holds the file).
+        attrs = ([inp.GetAttr()] + list(inp.GetValueProducingAttributes())) if inp else []
+        cs = next((str(a.GetColorSpace()) for a in attrs if a.HasColorSpace()), "")
         low = cs.lower()
         if low in ("srgb_texture", "srgb", "srgb_rec709", "g22_rec709"):
             return "sRGB"
@@ -561,6 +571,7 @@ _DEFAULTS = {
         "coat": 0.0, "coat_color": (1.0, 1.0, 1.0), "coat_roughness": 0.1, "coat_IOR": 1.5, "sheen": 0.0,
         "sheen_color": (1.0, 1.0, 1.0), "sheen_roughness": 0.3, "thin_film_thickness": 0.0, "thin_film_IOR": 1.5,
         "emission": 0.0, "emission_color": (1.0, 1.0, 1.0), "opacity": (1.0, 1.0, 1.0), "transmission_dispersion": 0.0,
+        "subsurface": 0.0, "subsurface_color": (1.0, 1.0, 1.0), "transmission_color": (1.0, 1.0, 1.0),
     },
     "openpbr": {
         "base_weight": 1.0, "base_color": (0.8, 0.8, 0.8), "base_diffuse_roughness": 0.0, "base_metalness": 0.0,
@@ -569,7 +580,8 @@ _DEFAULTS = {
         "coat_ior": 1.6, "fuzz_weight": 0.0, "fuzz_color": (1.0, 1.0, 1.0), "fuzz_roughness": 0.5,
         "thin_film_weight": 0.0, "thin_film_thickness": 0.5, "thin_film_ior": 1.4, "emission_luminance": 0.0,
         "emission_color": (1.0, 1.0, 1.0), "geometry_opacity": 1.0, "transmission_dispersion_scale": 0.0,
-        "transmission_dispersion_abbe_number": 20.0,
+        "transmission_dispersion_abbe_number": 20.0, "subsurface_weight": 0.0, "subsurface_color": (0.8, 0.8, 0.8),
+        "transmission_color": (1.0, 1.0, 1.0),
     },
     "gltf": {
         "base_color": (1.0, 1.0, 1.0), "metallic": 1.0, "roughness": 1.0, "specular": 1.0, "specular_color": (1.0, 1.0, 1.0),
@@ -585,13 +597,13 @@ _UNSUPPORTED = {
     "standard": {
         "specular_anisotropy": 0.0, "transmission_depth": 0.0, "transmission_scatter": (0.0, 0.0, 0.0),
         "transmission_scatter_anisotropy": 0.0, "transmission_extra_roughness": 0.0,
-        "transmission_color": (1.0, 1.0, 1.0), "subsurface": 0.0, "coat_anisotropy": 0.0, "coat_affect_color": 0.0,
+        "coat_anisotropy": 0.0, "coat_affect_color": 0.0,
         "coat_affect_roughness": 0.0, "thin_walled": 0, "tangent": None,
     },
     "openpbr": {
-        "specular_roughness_anisotropy": 0.0, "transmission_color": (1.0, 1.0, 1.0), "transmission_depth": 0.0,
+        "specular_roughness_anisotropy": 0.0, "transmission_depth": 0.0,
         "transmission_scatter": (0.0, 0.0, 0.0), "transmission_scatter_anisotropy": 0.0,
-        "subsurface_weight": 0.0, "coat_roughness_anisotropy": 0.0,
+        "coat_roughness_anisotropy": 0.0,
         "coat_darkening": 1.0, "geometry_thin_walled": 0, "geometry_tangent": None, "geometry_coat_tangent": None,
     },
     "gltf": {
@@ -670,7 +682,23 @@ def build(reader, material_prim, shader, name: str):
     if fam in ("standard", "openpbr"):
         o = fam == "openpbr"
         weight = get("base_weight" if o else "base")
-        put("Base Color", g.vmath("MULTIPLY", get("base_color"), weight), "color")
+        base = g.vmath("MULTIPLY", get("base_color"), weight)
+        # No subsurface scattering yet: the subsurface lobe, which replaces the diffuse by
+        # its weight, is rendered as a diffuse of subsurface_color (warned).
+        sss = get("subsurface_weight" if o else "subsurface")
+        if not (isinstance(sss, Const) and _tuple(sss.value)[0] == 0.0):
+            base = g.lerp(base, get("subsurface_color"), sss)
+            warn("subsurface_weight" if o else "subsurface", "is rendered as a diffuse of subsurface_color (no subsurface scattering yet)")
+        # Principled tints transmission by Base Color (Blender's export writes
+        # transmission_color = Base Color): a transmission of weight w blends it in.
+        tw, tc = get("transmission_weight" if o else "transmission"), get("transmission_color")
+        if not (isinstance(tw, Const) and _tuple(tw.value)[0] == 0.0) and not (
+            isinstance(tc, Const) and _tuple(tc.value) == (1.0, 1.0, 1.0)
+        ):
+            base = g.lerp(base, tc, tw)
+            if not (isinstance(tw, Const) and _tuple(tw.value)[0] == 1.0):
+                warn("transmission_color", "with a partial transmission also tints the reflection (Principled has one colour)")
+        put("Base Color", base, "color")
         put("Metallic", get("base_metalness" if o else "metalness"), "float")
         put("Diffuse Roughness", get("base_diffuse_roughness" if o else "diffuse_roughness"), "float")
         # standard_surface / OpenPBR scale the dielectric's Fresnel by the specular weight;

@@ -361,7 +361,7 @@ class Graph:
         self.r.textures[key] = None  # warn once, whatever happens below
         value = self.raw(shader.GetInput("file"))
         if value is None or not (getattr(value, "path", "") or ""):
-            self.r.warn(f"texfile:{key}", f"prim {key}: UsdUVTexture without a file; its fallback is used")
+            self.r.warn(f"texfile:{key}", f"prim {key}: {shader.GetShaderId() or 'UsdUVTexture'} without a file; its fallback is used")
             return None
         path = self.r.asset_path(value, shader.GetPrim(), "texture file")
         if path is None:

@@ -6,7 +6,9 @@ and Points (tubes and spheres, ``basis.py``), transforms
 (``ComputeLocalToWorldTransform`` through an XformCache), instanceable prims and
 PointInstancers, one UsdGeom.Camera, UsdLux sphere / rect / disk / distant / dome lights,
 UsdPreviewSurface materials (networks of UsdUVTexture, UsdTransform2d and UsdPrimvarReader
-become shading graphs, ``preview.py``) and the ``polychrome:`` attributes (which win). Units are
+become shading graphs, ``preview.py``), MaterialX Standard Surface / OpenPBR / glTF PBR
+networks (``materialx.py``; referenced ``.mtlx`` documents through ``mtlxdoc.py``) and the
+``polychrome:`` attributes (which win). Units are
 converted to metres (``metersPerUnit``) and Y-up stages rotated to Z-up.
 
 Unsupported prims are skipped with one ``warnings.warn`` each naming the prim; malformed
@@ -1983,25 +1985,36 @@ def open_stage(path, *, report: bool = True):
         raise ValueError(f"{p}: no such file")
     delegate = UsdUtils.CoalescingDiagnosticDelegate()
     try:
-        stage = Usd.Stage.Open(str(p))
+        try:
+            stage = Usd.Stage.Open(str(p))
+        except Exception as e:  # noqa: BLE001 - pxr raises Tf.ErrorException
+            import re
+
+            messages = [" ".join(m.split()) for m in re.findall(r" : '(.*?)'\s*(?=\n\s*Error in|$)", str(e), re.S)]
+            detail = messages[0] if messages else (str(e).strip().splitlines() or ["unreadable"])[0]
+            detail = re.sub(r"pxrInternal_\w+?__pxrReserved__::", "", detail).replace(str(p) + ":", "line ")
+            raise ValueError(f"{p}: not a readable USD stage ({detail[:200]})") from None
+        if stage is None:
+            raise ValueError(f"{p}: not a readable USD stage")
+        # .mtlx documents it references, read by mtlxdoc.py (usd-core has no usdMtlx): USD's
+        # "cannot determine file format" for them is then not a problem.
+        from . import mtlxdoc
+
+        notes: list[str] = []
+        handled = mtlxdoc.attach(stage, notes.append)
         if report:
             seen = set()
             for diagnostic in delegate.TakeUncoalescedDiagnostics():
                 text = " ".join(str(diagnostic.commentary).split())
+                if "Cannot determine file format" in text and any(h in text for h in handled):
+                    continue
                 if text and text not in seen:
                     seen.add(text)
                     warnings.warn(f"{p}: {text}", stacklevel=3)
-    except Exception as e:  # noqa: BLE001 - pxr raises Tf.ErrorException
-        import re
-
-        messages = [" ".join(m.split()) for m in re.findall(r" : '(.*?)'\s*(?=\n\s*Error in|$)", str(e), re.S)]
-        detail = messages[0] if messages else (str(e).strip().splitlines() or ["unreadable"])[0]
-        detail = re.sub(r"pxrInternal_\w+?__pxrReserved__::", "", detail).replace(str(p) + ":", "line ")
-        raise ValueError(f"{p}: not a readable USD stage ({detail[:200]})") from None
+            for text in dict.fromkeys(notes):
+                warnings.warn(f"{p}: {text}", stacklevel=3)
     finally:
         del delegate
-    if stage is None:
-        raise ValueError(f"{p}: not a readable USD stage")
     return stage
 
 
