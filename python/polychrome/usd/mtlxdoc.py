@@ -231,7 +231,8 @@ def attach(stage, warn) -> set[str]:
 
     found = []  # (namespace path, absolute document path, reference)
     for layer in stage.GetUsedLayers():
-        if layer.anonymous:
+        # Cheap first: only layers that name a .mtlx asset are traversed (spec by spec).
+        if layer.anonymous or not any(str(d).lower().endswith(".mtlx") for d in layer.GetCompositionAssetDependencies()):
             continue
 
         def visit(path, layer=layer):
