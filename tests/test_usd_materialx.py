@@ -636,3 +636,47 @@ def test_referenced_mtlx_document_inside_a_variant(tmp_path):
     got = render_rgb(scene, samples=64, n=8)
     want = 2.0 * np.repeat(np.repeat(srgb_decode(q / 255.0), 2, axis=0), 2, axis=1)
     np.testing.assert_allclose(got, want, atol=1e-4)
+
+
+def test_unary_modulo_and_ifgreater_nodes(tmp_path):
+    """emission_color = ifgreater(extract(T, 0), 0.5, absval(T − 0.5), modulo(3T, 1))
+    + sin(T)·0.1 + sqrt(T)·0.05 per texel T (closest filter): numpy from the node
+    definitions (mx_mod floored), within 1e-4."""
+    path = tmp_path / "unary.usda"
+    stage = new_stage(path)
+    mat, sh = mx_material(stage, "/Looks/m", "ND_standard_surface_surfaceshader", base=0.0, specular=0.0, emission=1.0)
+    file = tmp_path / "tex4.exr"
+    write_exr(file, np.concatenate([TEXELS4, np.ones((4, 4, 1))], axis=2).astype(np.float32))
+    img = image(stage, "/Looks/m/img", file, texcoord=texcoord(stage, "/Looks/m/uv"), filtertype="closest")
+
+    def n(name, sid, out_type=T.Color3f, **inputs):
+        s = UsdShade.Shader.Define(stage, f"/Looks/m/{name}")
+        s.CreateIdAttr(sid)
+        for k, v in inputs.items():
+            if isinstance(v, UsdShade.Output):
+                ty = T.Float if k in ("value1", "value2") else T.Color3f
+                s.CreateInput(k, ty).ConnectToSource(v)
+            else:
+                set_input(s, k, v)
+        return s.CreateOutput("out", out_type)
+
+    half = n("half", "ND_subtract_color3FA", in1=img, in2=0.5)
+    a = n("abs", "ND_absval_color3", **{"in": half})
+    b = n("mod", "ND_modulo_color3FA", in1=n("x3", "ND_multiply_color3FA", in1=img, in2=3.0), in2=1.0)
+    r = n("r", "ND_extract_color3", T.Float, **{"in": img})
+    c = n("if", "ND_ifgreater_color3", value1=r, value2=0.5, in1=a, in2=b)
+    sin = n("sin01", "ND_multiply_color3FA", in1=n("sin", "ND_sin_color3", **{"in": img}), in2=0.1)
+    sq = n("sqrt05", "ND_multiply_color3FA", in1=n("sqrt", "ND_sqrt_color3", **{"in": img}), in2=0.05)
+    total = n("total", "ND_add_color3", in1=n("sum", "ND_add_color3", in1=c, in2=sin), in2=sq)
+    sh.CreateInput("emission_color", T.Color3f).ConnectToSource(total)
+    quad(stage, "/plane", material=mat)
+    top_camera(stage)
+    stage.Save()
+    scene, warns = read(path)
+    assert not warns, warns
+    got = render_rgb(scene, samples=64, n=8)
+    t = np.repeat(np.repeat(TEXELS4.astype(np.float32).astype(np.float64), 2, axis=0), 2, axis=1)
+    x3 = 3.0 * t
+    pick = np.where(t[..., :1] > 0.5, np.abs(t - 0.5), x3 - np.floor(x3))
+    want = pick + 0.1 * np.sin(t) + 0.05 * np.sqrt(t)
+    np.testing.assert_allclose(got, want, atol=1e-4)

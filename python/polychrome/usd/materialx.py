@@ -220,6 +220,119 @@ class MxGraph(preview.Graph):
     def mx_max(self, shader, name, types, kind):
         return self._binary(shader, "max", types)
 
+    def unary(self, math_op: str, vector_op: str | None, x, w: int, py):
+        if isinstance(x, Const):
+            t = tuple(py(c) for c in _tuple(x.value))
+            return Const(t[0] if w == 1 else t)
+        if w == 1:
+            return Link(self.add("ShaderNodeMath", math_op.lower(), {"operation": math_op}, {"Value": self.socket(x, "float")}), "Value")
+        if vector_op:
+            out = Link(
+                self.add("ShaderNodeVectorMath", vector_op.lower(), {"operation": vector_op}, {"Vector": self.socket(x, "vector")}),
+                "Vector",
+            )
+        else:  # per component
+            parts = [self.unary(math_op, None, self.component(x, i), 1, py) for i in range(min(w, 3))]
+            parts += [Const(0.0)] * (3 - len(parts))
+            out = Link(
+                self.add("ShaderNodeCombineXYZ", math_op.lower(), inputs={k: self.socket(p, "float") for k, p in zip("XYZ", parts)}),
+                "Vector",
+            )
+        if w == 4:
+            out = self.with_alpha(out, self.unary(math_op, None, self.alpha_of(x), 1, py))
+        return out
+
+    def _unary(self, shader, types, math_op, vector_op, py):
+        w = self.width(types)
+        return self.unary(math_op, vector_op, self.inp(shader, "in", self.zero(w).value), w, py)
+
+    def mx_absval(self, shader, name, types, kind):
+        return self._unary(shader, types, "ABSOLUTE", "ABSOLUTE", abs)
+
+    def mx_floor(self, shader, name, types, kind):
+        return self._unary(shader, types, "FLOOR", "FLOOR", math.floor)
+
+    def mx_ceil(self, shader, name, types, kind):
+        return self._unary(shader, types, "CEIL", "CEIL", math.ceil)
+
+    def mx_sign(self, shader, name, types, kind):
+        return self._unary(shader, types, "SIGN", "SIGN", lambda c: float((c > 0) - (c < 0)))
+
+    def mx_sin(self, shader, name, types, kind):
+        return self._unary(shader, types, "SINE", "SINE", math.sin)
+
+    def mx_cos(self, shader, name, types, kind):
+        return self._unary(shader, types, "COSINE", "COSINE", math.cos)
+
+    def mx_sqrt(self, shader, name, types, kind):
+        return self._unary(shader, types, "SQRT", None, lambda c: math.sqrt(c) if c > 0 else 0.0)
+
+    def mx_exp(self, shader, name, types, kind):
+        return self._unary(shader, types, "EXPONENT", None, math.exp)
+
+    def mx_modulo(self, shader, name, types, kind):
+        """in1 − in2·floor(in1 / in2) (mx_mod: floored), per component (in2 default 1)."""
+        w = self.width(types)
+        fa = types[0].endswith("FA")
+        a = self.inp(shader, "in1", self.zero(w).value)
+        b = self.inp(shader, "in2", 1.0 if fa else self.zero(w, 1.0).value)
+
+        def one(x, y):
+            if isinstance(x, Const) and isinstance(y, Const):
+                p, q = _tuple(x.value)[0], _tuple(y.value)[0]
+                return Const(p - q * math.floor(p / q) if q != 0 else 0.0)
+            inputs = {"Value": self.socket(x, "float"), "Value_001": self.socket(y, "float")}
+            return Link(self.add("ShaderNodeMath", "modulo", {"operation": "FLOORED_MODULO"}, inputs), "Value")
+
+        if w == 1:
+            return one(a, b)
+        parts = [one(self.component(a, i), self.component(b, i) if not fa else b) for i in range(min(w, 3))]
+        parts += [Const(0.0)] * (3 - len(parts))
+        if all(isinstance(p, Const) for p in parts):
+            return Const(tuple(float(_tuple(p.value)[0]) for p in parts)[:w])
+        return Link(self.add("ShaderNodeCombineXYZ", "modulo", inputs={k: self.socket(p, "float") for k, p in zip("XYZ", parts)}), "Vector")
+
+    def mx_normalize(self, shader, name, types, kind):
+        x = self.inp(shader, "in", (0.0, 0.0, 0.0))
+        return Link(
+            self.add("ShaderNodeVectorMath", "normalize", {"operation": "NORMALIZE"}, {"Vector": self.socket(x, "vector")}), "Vector"
+        )
+
+    def mx_magnitude(self, shader, name, types, kind):
+        x = self.inp(shader, "in", (0.0, 0.0, 0.0))
+        return Link(self.add("ShaderNodeVectorMath", "length", {"operation": "LENGTH"}, {"Vector": self.socket(x, "vector")}), "Value")
+
+    def mx_dotproduct(self, shader, name, types, kind):
+        a, b = self.inp(shader, "in1", (0.0, 0.0, 0.0)), self.inp(shader, "in2", (0.0, 0.0, 0.0))
+        inputs = {"Vector": self.socket(a, "vector"), "Vector_001": self.socket(b, "vector")}
+        return Link(self.add("ShaderNodeVectorMath", "dot", {"operation": "DOT_PRODUCT"}, inputs), "Value")
+
+    def mx_crossproduct(self, shader, name, types, kind):
+        a, b = self.inp(shader, "in1", (0.0, 0.0, 0.0)), self.inp(shader, "in2", (0.0, 0.0, 0.0))
+        inputs = {"Vector": self.socket(a, "vector"), "Vector_001": self.socket(b, "vector")}
+        return Link(self.add("ShaderNodeVectorMath", "cross", {"operation": "CROSS_PRODUCT"}, inputs), "Vector")
+
+    def _if(self, shader, types, op: str):
+        """value1 > value2 (GREATER_THAN) or ≥ (1 − LESS_THAN) ? in1 : in2."""
+        w = self.width(types)
+        v1, v2 = self.inp(shader, "value1", 1.0), self.inp(shader, "value2", 0.0)
+        in1, in2 = self.inp(shader, "in1", self.zero(w).value), self.inp(shader, "in2", self.zero(w).value)
+        t = self.math("GREATER_THAN" if op == ">" else "LESS_THAN", v1, v2) if not all(isinstance(v, Const) for v in (v1, v2)) else None
+        if t is None:
+            p, q = _tuple(v1.value)[0], _tuple(v2.value)[0]
+            return in1 if (p > q if op == ">" else p >= q) else in2
+        if op == ">=":
+            t = self.math("SUBTRACT", Const(1.0), t)
+        if w == 1:
+            return self.math("ADD", self.math("MULTIPLY", in1, t), self.math("MULTIPLY", in2, self.math("SUBTRACT", Const(1.0), t)))
+        return self.lerp(in2, in1, t)
+
+    def mx_ifgreater(self, shader, name, types, kind):
+        return self._if(shader, types, ">")
+
+    def mx_ifgreatereq(self, shader, name, types, kind):
+        return self._if(shader, types, ">=")
+
     def mx_power(self, shader, name, types, kind):
         return self._binary(shader, "power", types)
 
