@@ -286,7 +286,7 @@ def test_fresnel_at_normal_incidence_under_a_white_dome(tmp_path, case, surface,
     stage.Save()
     scene, warns = read(path)
     assert not warns, warns
-    got = render_rgb(scene, samples=16, n=6).reshape(-1, 3).mean(axis=0)
+    got = render_rgb(scene, samples=64, n=8).reshape(-1, 3).mean(axis=0)  # the coat picks a lobe per sample: noisy
     np.testing.assert_allclose(got, want, rtol=0.02, atol=2e-3)
 
 
