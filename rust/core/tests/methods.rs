@@ -237,6 +237,64 @@ fn every_method_and_direction_agrees_with_polychromatic_backward_on_a_lit_box() 
     }
 }
 
+/// The lit box with its lamp replaced by a sphere light (reached by BSDF rays and MIS-
+/// weighted against its cone samples) beside a smooth glass ball; light paths start on
+/// the sphere. Every direction and method agrees with polychromatic BACKWARD (the
+/// caustic's closed form: hit_lights.rs).
+#[test]
+fn every_method_and_direction_agrees_under_a_sphere_light_over_glass() {
+    let (mut desc, mut buffers) = box_scene();
+    desc.meshes.retain(|m| m.name != "lamp");
+    desc.lights.push(polychrome_core::scene::LightDesc::Point {
+        name: "sphere".into(),
+        position: [0.2, 0.4, 0.5],
+        intensity: SpectrumDesc { kind: SpectrumKind::Blackbody { temperature: 4000.0 }, scale: 1.5 },
+        radius: 0.2,
+        visibility: Default::default(),
+    });
+    desc.materials.push(MaterialDesc {
+        name: "glass".into(),
+        bsdf: BsdfDesc::Dielectric { ior: polychrome_core::material::IorDesc::Constant { ior: 1.5 }, roughness: 0.0 },
+        emission: None,
+        volume: None,
+        one_sided: false,
+        see_through: false,
+    });
+    let (v, t) = uv_sphere([0.1, 0.4, -0.7], 0.3, 16, 32);
+    let glass = desc.materials.len() as u32 - 1;
+    add_mesh(&mut desc, &mut buffers, "ball", v, t, glass);
+    let (w, h) = (16usize, 16usize);
+    let base = ResolvedSettings {
+        width: w as u32,
+        height: h as u32,
+        max_bounces: 6,
+        grid: WavelengthGrid::uniform(21, 380.0, 780.0).unwrap(),
+        ..Default::default()
+    };
+    let reference =
+        render(&desc, &buffers, &ResolvedSettings { samples: 256, ..base.clone() }, &RenderControl::new()).unwrap();
+    let reference = quadrant_means(&reference.images.rgba, w, h);
+    assert!(reference.iter().all(|&(m, _)| m > 0.0));
+    let cases = [
+        (Method::MonochromaticRays, Direction::Backward, 128),
+        (Method::Polychromatic, Direction::Forward, 128),
+        (Method::Polychromatic, Direction::Bidirectional, 64),
+        (Method::Hero, Direction::Backward, 128),
+        (Method::Hero, Direction::Bidirectional, 128),
+    ];
+    for (method, direction, samples) in cases {
+        let out = render(
+            &desc,
+            &buffers,
+            &ResolvedSettings { method, direction, samples, ..base.clone() },
+            &RenderControl::new(),
+        )
+        .unwrap();
+        assert_eq!(out.stats.nonfinite_samples, 0);
+        assert_close(&quadrant_means(&out.images.rgba, w, h), &reference, &format!("{method:?} {direction:?}"));
+    }
+}
+
 #[test]
 fn bidirectional_with_a_panorama_uses_the_camera_strategies_alone() {
     // Light paths cannot reach a panoramic camera: BIDIRECTIONAL must still converge to

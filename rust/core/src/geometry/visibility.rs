@@ -55,6 +55,35 @@ impl VisibilityDesc {
     }
 }
 
+/// The kinds of rays that see a light that is no geometry (point, spot and sun lights):
+/// as [`VisibilityDesc`], except that the camera sees a sun's disk or a sphere light
+/// only when asked, as Cycles' lights are invisible to camera rays by default
+/// (`visible_camera`). Diffuse, glossy and transmission rays see it (and next-event
+/// estimation from lobes of those kinds lights with it) unless turned off; `shadow` has
+/// no effect (such lights block nothing).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LightVisibilityDesc {
+    pub camera: bool,
+    pub shadow: bool,
+    pub diffuse: bool,
+    pub glossy: bool,
+    pub transmission: bool,
+}
+
+impl Default for LightVisibilityDesc {
+    fn default() -> Self {
+        Self { camera: false, shadow: true, diffuse: true, glossy: true, transmission: true }
+    }
+}
+
+impl LightVisibilityDesc {
+    pub fn mask(&self) -> u8 {
+        let Self { camera, shadow, diffuse, glossy, transmission } = *self;
+        VisibilityDesc { camera, shadow, diffuse, glossy, transmission }.mask()
+    }
+}
+
 /// The kind of a ray a BSDF with lobes `lobe_kinds` ([`crate::material::Bsdf::lobe_kinds`])
 /// sampled (see the module docs): transmission when it left through the surface, glossy
 /// for a specular reflection, else the BSDF's reflection kind — diffuse or glossy when
@@ -112,6 +141,9 @@ mod tests {
         ));
         assert_eq!(of_connection(false, DIFFUSE | TRANSMISSION), DIFFUSE);
         assert_eq!(of_connection(true, GLOSSY), 0);
+        let lamp: LightVisibilityDesc = serde_json::from_str(r#"{"diffuse": false}"#).unwrap();
+        assert_eq!(lamp.mask(), ALL & !CAMERA & !DIFFUSE, "lights: camera off unless asked");
+        assert_eq!(LightVisibilityDesc::default().mask(), ALL & !CAMERA);
         let parsed: VisibilityDesc = serde_json::from_str(r#"{"camera": false}"#).unwrap();
         assert_eq!(parsed, light);
         assert!(serde_json::from_str::<VisibilityDesc>(r#"{"camra": false}"#).is_err());

@@ -2,8 +2,8 @@
 //! tracing combined with the power heuristic over three strategies for every path
 //! length. A path x0 (camera) … xk (light) is produced by
 //!
-//! - A: a camera path whose BSDF-sampled ray hits the emitter (impossible for delta
-//!   lights);
+//! - A: a camera path whose BSDF-sampled ray hits the emitter (an emissive surface, the
+//!   environment, a sun's disk or a sphere light; impossible for delta lights);
 //! - B: a camera path with next-event estimation at x(k−1) (impossible when x(k−1)
 //!   scattered specularly);
 //! - C: a light path connected to the pinhole at x1 (impossible when x1 scattered
@@ -238,6 +238,25 @@ impl CameraMis for BidirectionalMis {
             cos: 1.0,
         };
         weights(&self.cam, &self.verts, &light, self.legacy)[0] as f32
+    }
+    /// A sun's disk (at infinity, as the environment) or a sphere light: strategy A
+    /// against B (their light paths are no strategy C: no `pdf_le`). |cos| at the light
+    /// is 1 on both sides (`direct` uses the same), so it cancels.
+    fn reached_light(&mut self, scene: &Scene, st: &PathState, light: usize, distance: f32) -> f32 {
+        if st.depth == 0 {
+            return 1.0;
+        }
+        let infinite = distance.is_infinite();
+        let end = LightEnd {
+            p: st.prev_p + st.ray.direction * if infinite { 1.0 } else { distance },
+            pmf: scene.light_distribution.pmf(light),
+            le: None,
+            delta: false,
+            infinite,
+            pdf_li: scene.lights[light].pdf_li(st.prev_p, st.ray.direction, distance),
+            cos: 1.0,
+        };
+        weights(&self.cam, &self.verts, &end, self.legacy)[0] as f32
     }
     fn vertex(&mut self, v: &Vertex) {
         self.legacy |= v.flags.dispersive;

@@ -33,7 +33,9 @@ pub enum ForwardPart {
     /// Everything (FORWARD direction).
     All,
     /// Only what backward path tracing cannot sample: paths from a delta-position light
-    /// whose first scattering vertex is specular (caustics of point lights). Used by the
+    /// (point, spot and parallel sun; not a sphere light or a sun with an angle, which
+    /// camera paths reach) whose first scattering vertex is specular (caustics of point
+    /// lights). Used by the
     /// BIDIRECTIONAL partition, whose other paths come from backward tracing.
     BackwardUnreachable,
 }
@@ -204,7 +206,7 @@ pub fn walk_light<T: Throughput, H: PathHooks<T> + PathHooks<super::throughput::
 /// The hooks of a light-tracing path: connect smooth vertices to the camera.
 struct LightPath<'a> {
     part: ForwardPart,
-    /// The path started at a point or spot light.
+    /// The path started at a delta-position light (point, spot, parallel sun).
     delta_light: bool,
     splats: &'a mut Vec<Splat>,
 }

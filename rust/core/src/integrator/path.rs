@@ -3,7 +3,9 @@
 //! power, eq. 7); the two are combined with multiple importance sampling. How they are
 //! weighted is a [`CameraMis`]: the power heuristic of the two strategies
 //! ([`PowerHeuristic`], BACKWARD) or the three-strategy weights of BIDIRECTIONAL
-//! (`bidir.rs`). Whole-spectrum paths that collapse at a dispersive surface (eq. 9) or
+//! (`bidir.rs`). Lights that are no geometry but have an extent (a sun's disk, a sphere
+//! light) are reached by every segment of the path ([`PathHooks::segment_lights`]) and
+//! weighted as emitters are. Whole-spectrum paths that collapse at a dispersive surface (eq. 9) or
 //! split there continue as single-wavelength paths with the power heuristic.
 
 use super::throughput::{SingleWavelength, Throughput};
@@ -11,7 +13,7 @@ use super::walk::{russian_roulette, End, MediumVertex, PathHooks, PathState, Ver
 use super::wavelengths::{WavelengthPolicy, Wavelengths};
 use super::{CameraSample, Scatter, Scratch, Technique};
 use crate::film::PixelSample;
-use crate::geometry::{offset_ray_origin, shadow_ray};
+use crate::geometry::{offset_ray_origin, shadow_ray, visibility};
 use crate::light::LightSample;
 use crate::material::ShadingContext;
 use crate::sampling::{power_heuristic, Distribution1D, Rng};
@@ -39,6 +41,10 @@ pub trait CameraMis {
     fn emission(&mut self, scene: &Scene, v: &Vertex, st: &PathState) -> f32;
     /// Weight of the environment (light `env`) reached by the path escaping along `st.ray`.
     fn escape(&mut self, scene: &Scene, st: &PathState, env: usize) -> f32;
+    /// Weight of light `light` that is no geometry (a sun's disk, a sphere light:
+    /// [`Scene::hit_lights`]) reached along `st.ray` at `distance` from `st.prev_p`
+    /// (infinite for a sun).
+    fn reached_light(&mut self, scene: &Scene, st: &PathState, light: usize, distance: f32) -> f32;
     /// At `v`, before it connects and scatters.
     fn vertex(&mut self, _v: &Vertex) {}
     /// Where light samples come from (eq. 7's choice ∝ power), as the weights count them.
@@ -70,10 +76,17 @@ impl CameraMis for PowerHeuristic {
         }
     }
     fn escape(&mut self, scene: &Scene, st: &PathState, env: usize) -> f32 {
+        self.reached_light(scene, st, env, f32::INFINITY)
+    }
+    /// The power heuristic with the light-sampling pdf of the point reached, as Cycles
+    /// weighs lights a BSDF ray hits (kernel/integrator/shade_light.h,
+    /// shade_background.h: `light_sample_mis_weight_forward`). The pdfs are those of
+    /// directions, the same for every wavelength: one weight per path.
+    fn reached_light(&mut self, scene: &Scene, st: &PathState, light: usize, distance: f32) -> f32 {
         if st.specular {
             return 1.0;
         }
-        let pl = scene.nee_distribution.pmf(env) * scene.lights[env].pdf_li(st.prev_p, st.ray.direction, f32::INFINITY);
+        let pl = scene.nee_distribution.pmf(light) * scene.lights[light].pdf_li(st.prev_p, st.ray.direction, distance);
         power_heuristic(st.prev_pdf, pl)
     }
     fn nee_lights<'s>(&self, scene: &'s Scene) -> &'s Distribution1D {
@@ -174,6 +187,33 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
             let w = self.mis.escape(scene, st, env.light);
             let l = env.radiance_along(st.ray.direction, &mut scratch.le);
             self.gathered.add_emitted(beta, l, w);
+        }
+    }
+
+    /// A sun's disk or a sphere light on the segment, when the ray's kind sees it
+    /// (camera rays only with the light's camera visibility), attenuated by the media
+    /// the segment crosses up to it.
+    fn segment_lights(&mut self, scene: &Scene, st: &PathState, end: f32, beta: &T, scratch: &mut Scratch) {
+        for &l in &scene.hit_lights {
+            if !visibility::sees(scene.light_visibility[l], st.ray.kind) {
+                continue;
+            }
+            let Some(t) = scene.lights[l].hit(st.ray.origin, st.ray.direction, &mut scratch.le) else {
+                continue;
+            };
+            // A sphere before the next surface; a sun only when the path leaves the scene.
+            let reached = if t.is_finite() { t < end } else { end.is_infinite() };
+            if !reached || !beta.carries(&scratch.le) {
+                continue;
+            }
+            if !st.media.is_empty() && scene.coefficients(&st.media, &mut scratch.shadow) {
+                for i in 0..scratch.le.len() {
+                    let tr = crate::medium::homogeneous::transmittance(scratch.shadow.sigma_t.get(i), t);
+                    scratch.le.set(i, scratch.le.get(i) * tr);
+                }
+            }
+            let w = self.mis.reached_light(scene, st, l, st.traveled + t);
+            self.gathered.add_emitted(beta, &scratch.le, w);
         }
     }
 

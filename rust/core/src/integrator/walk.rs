@@ -174,6 +174,11 @@ pub trait PathHooks<T: Throughput> {
     ) -> bool {
         true
     }
+    /// The segment `st.ray` travels, up to distance `end` (the next surface; infinite
+    /// when it leaves the scene), may reach lights that are no geometry
+    /// ([`Scene::hit_lights`]: sphere lights on the way, a sun's disk when it escapes).
+    /// Called once per segment, before its free flight in media. Draws no random numbers.
+    fn segment_lights(&mut self, _scene: &Scene, _st: &PathState, _end: f32, _beta: &T, _scratch: &mut Scratch) {}
     /// The segment `st.ray` travels emits `e` (per grid lane, already integrated over
     /// the segment's transmittance) towards its start.
     fn medium_emission(&mut self, _scene: &Scene, _st: &PathState, _beta: &T, _e: &SampledSpectrum) {}
@@ -263,15 +268,21 @@ impl Walk {
         let mut crossings = 0;
         loop {
             let hit = scene.intersect(&st.ray);
-            if media && !st.media.is_empty() && scene.coefficients(&st.media, &mut scratch.medium) {
-                let d = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-                if ctx.single_wavelength.is_none() {
-                    let c = &scratch.medium;
-                    if let Some(index) = volume::collapse(c, beta, self.medium_sampling, scene.grid.weights(), rng) {
-                        ctx.single_wavelength = Some(index);
-                        return End::Collapsed { index, state: st };
-                    }
+            let d = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+            let in_medium = media && !st.media.is_empty() && scene.coefficients(&st.media, &mut scratch.medium);
+            if in_medium && ctx.single_wavelength.is_none() {
+                let c = &scratch.medium;
+                if let Some(index) = volume::collapse(c, beta, self.medium_sampling, scene.grid.weights(), rng) {
+                    ctx.single_wavelength = Some(index);
+                    return End::Collapsed { index, state: st };
                 }
+            }
+            if !scene.hit_lights.is_empty() {
+                // Before the flight changes beta: what the segment reaches of them is
+                // weighted by the media's transmittance up to them.
+                hooks.segment_lights(scene, &st, d, beta, scratch);
+            }
+            if in_medium {
                 if scratch.medium.emits {
                     volume::segment_emission(&scratch.medium, d, &mut scratch.em);
                     hooks.medium_emission(scene, &st, beta, &scratch.em);

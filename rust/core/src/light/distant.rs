@@ -5,8 +5,11 @@
 //! sun is a disk of directions of half-angle h about `−direction` with the uniform
 //! radiance L = E / (π sin² h), so that a surface facing it still receives E (Cycles:
 //! scene/light.cpp, the distant light's area π sin² h; kernel/light/distant.h samples
-//! the cone). Next-event estimation samples the cone uniformly: soft shadows. As for a
-//! sphere light, camera and BSDF rays do not reach the disk (no sun in a mirror).
+//! the cone). Next-event estimation samples the cone uniformly: soft shadows. A ray
+//! that leaves the scene inside the cone sees the disk ([`Light::hit`], Cycles'
+//! `distant_light_intersect`): the sun shows in mirrors, its caustics through glass,
+//! and light samples are MIS-weighted against BSDF sampling. Parallel rays (angle 0)
+//! stay a delta light, reached by light sampling only.
 
 use super::{EmissionSample, Light, LightSample};
 use crate::geometry::Frame;
@@ -40,6 +43,13 @@ impl DistantLight {
         let s = self.half_angle.min(std::f32::consts::FRAC_PI_2).sin();
         1.0 / (PI * s * s)
     }
+    /// Unit `wi` lies in the disk of directions (θ ≤ h from −direction; compared by
+    /// sin² θ = |wi × axis|², exact for the small angles of real suns).
+    fn in_cone(&self, wi: Vec3A) -> bool {
+        let axis = -self.direction;
+        let s = self.half_angle.min(std::f32::consts::FRAC_PI_2).sin();
+        wi.dot(axis) > 0.0 && wi.cross(axis).length_squared() <= s * s
+    }
 }
 
 impl Light for DistantLight {
@@ -54,24 +64,44 @@ impl Light for DistantLight {
             le.copy_from(&self.irradiance);
             le.scale(self.radiance_scale());
             let wi = Frame::from_normal(-self.direction).to_world(local);
-            // Not hittable by BSDF rays: weight 1 (delta), the pdf still divides.
-            return Some(LightSample { wi, distance: f32::INFINITY, pdf, delta: true, part: 0 });
+            // BSDF rays that escape in the cone see the disk too (`hit`): MIS.
+            return Some(LightSample { wi, distance: f32::INFINITY, pdf, delta: false, part: 0 });
         }
         le.copy_from(&self.irradiance);
         Some(LightSample { wi: -self.direction, distance: f32::INFINITY, pdf: 1.0, delta: true, part: 0 })
     }
+    /// Uniform over the disk of directions (Cycles' `distant_light_pdf`: 1/(2π(1−cos h))).
+    fn pdf_li(&self, _p: Vec3A, wi: Vec3A, _distance: f32) -> f32 {
+        match self.cone() {
+            Some(omc) if self.in_cone(wi) => 1.0 / (2.0 * PI * omc),
+            _ => 0.0,
+        }
+    }
+    fn hittable(&self) -> bool {
+        self.cone().is_some()
+    }
+    fn hit(&self, _p: Vec3A, wi: Vec3A, le: &mut SampledSpectrum) -> Option<f32> {
+        if self.cone().is_none() || !self.in_cone(wi) {
+            return None;
+        }
+        le.copy_from(&self.irradiance);
+        le.scale(self.radiance_scale());
+        Some(f32::INFINITY)
+    }
     /// Light paths start on the disk of the bounding sphere facing the light; the
     /// direction is a delta (pdf_dir = 1), `le` is the irradiance, so `le/pdf_pos` is
     /// the flux through the disk. No normal (the start disk is not a surface a camera
-    /// could see) and `delta_position: true`: like a point light, no camera or BSDF ray
-    /// can ever reach a distant light, so caustics from it belong to forward tracing.
+    /// could see). `delta_position` for parallel rays: like a point light, no camera or
+    /// BSDF ray can reach them, so their caustics belong to forward tracing; a sun with
+    /// an angle is reached by rays that escape in its cone ([`Light::hit`]).
     fn sample_le(&self, u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
         let r = self.scene_radius.max(1e-3);
         let d = concentric_disk(u_pos) * r;
         let f = Frame::from_normal(self.direction);
         let origin = self.scene_center - self.direction * r + f.s * d.x + f.t * d.y;
         le.copy_from(&self.irradiance);
-        let (direction, pdf_dir) = match self.cone() {
+        let cone = self.cone();
+        let (direction, pdf_dir) = match cone {
             // A direction in the cone through the disk: the flux per area and solid
             // angle crossing it is L·cos θ (θ from the axis).
             Some(omc) => {
@@ -87,13 +117,13 @@ impl Light for DistantLight {
             normal: None,
             pdf_pos: 1.0 / (PI * r * r),
             pdf_dir,
-            delta_position: true,
+            delta_position: cone.is_none(),
             part: 0,
         })
     }
     fn pdf_le(&self, _origin: Vec3A, _dir: Vec3A) -> Option<super::LeDensity> {
         // With an angle its light paths are no strategy of the bidirectional MIS: it
-        // reaches camera paths only through light sampling, weighted 1.
+        // reaches camera paths through light sampling and rays escaping in its cone.
         if self.cone().is_some() {
             return None;
         }
@@ -136,5 +166,45 @@ mod tests {
                 assert!((e / closed - 1.0).abs() < 2e-3, "h {h} alpha {alpha}: {e} vs {closed}");
             }
         }
+    }
+
+    /// What light sampling returns, a ray reaches ([`Light::hit`]) with the same
+    /// radiance and `pdf_li`; directions outside the disk reach nothing. The pdf is
+    /// normalised: the disk's solid angle 2π(1 − cos h) times it is 1.
+    #[test]
+    fn sampled_directions_hit_the_disk_with_their_pdf() {
+        for &h in &[0.004_6f32, 0.2, 1.2] {
+            let sun = DistantLight {
+                direction: Vec3A::new(0.3, -0.2, -0.9).normalize(),
+                irradiance: SampledSpectrum::splat(1, 2.0),
+                scene_center: Vec3A::ZERO,
+                scene_radius: 1.0,
+                half_angle: h,
+            };
+            assert!(sun.hittable());
+            let mut rng = Rng::new(9, 4);
+            let (mut le, mut hit) = (SampledSpectrum::zeros(1), SampledSpectrum::zeros(1));
+            for _ in 0..2000 {
+                let ls = sun.sample_li(Vec3A::ZERO, rng.uniform2(), &mut le).unwrap();
+                assert!(!ls.delta);
+                let t = sun.hit(Vec3A::ZERO, ls.wi, &mut hit).expect("a sampled direction reaches the disk");
+                assert!(t.is_infinite() && hit.get(0) == le.get(0));
+                let pdf = sun.pdf_li(Vec3A::ZERO, ls.wi, t);
+                assert!((pdf - ls.pdf).abs() <= 1e-4 * ls.pdf, "h {h}: {pdf} vs {}", ls.pdf);
+                assert!((pdf as f64 * 2.0 * std::f64::consts::PI * (1.0 - (h as f64).cos()) - 1.0).abs() < 1e-3);
+            }
+            let away = Frame::from_normal(-sun.direction).to_world(Vec3A::new((1.02 * h).sin(), 0.0, (1.02 * h).cos()));
+            assert!(sun.hit(Vec3A::ZERO, away, &mut hit).is_none() && sun.pdf_li(Vec3A::ZERO, away, 1.0) == 0.0);
+        }
+        let parallel = DistantLight {
+            direction: -Vec3A::Z,
+            irradiance: SampledSpectrum::splat(1, 2.0),
+            scene_center: Vec3A::ZERO,
+            scene_radius: 1.0,
+            half_angle: 0.0,
+        };
+        let mut le = SampledSpectrum::zeros(1);
+        assert!(!parallel.hittable() && parallel.hit(Vec3A::ZERO, Vec3A::Z, &mut le).is_none());
+        assert!(parallel.sample_li(Vec3A::ZERO, Vec2::splat(0.5), &mut le).unwrap().delta);
     }
 }

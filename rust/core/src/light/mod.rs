@@ -27,7 +27,8 @@ pub struct LightSample {
     pub distance: f32,
     /// Solid-angle pdf at the shading point (1 for delta lights).
     pub pdf: f32,
-    /// A point or directional light that BSDF sampling can never hit.
+    /// A point or parallel light that BSDF sampling can never hit: weight 1, no MIS. A
+    /// sun's disk or a sphere light is no delta: BSDF rays reach it ([`Light::hit`]).
     pub delta: bool,
     /// Which part of the light the point lies on (a [`MeshLight`]'s mesh triangle; 0
     /// for lights of one part), for [`Light::pdf_li_part`] / [`Light::pdf_le_part`].
@@ -45,7 +46,8 @@ pub struct EmissionSample {
     pub pdf_pos: f32,
     /// Solid-angle pdf of the direction.
     pub pdf_dir: f32,
-    /// The position is a delta (point, spot): no camera or BSDF ray can hit it.
+    /// The position is a delta (point, spot, parallel sun): no camera or BSDF ray can
+    /// hit it. False for lights rays do reach, a sphere or a sun's disk ([`Light::hit`]).
     pub delta_position: bool,
     /// Which part of the light the origin lies on (see [`LightSample::part`]).
     pub part: u32,
@@ -99,6 +101,20 @@ pub trait Light: Send + Sync {
     fn pdf_le_part(&self, _part: u32, origin: Vec3A, dir: Vec3A) -> Option<LeDensity> {
         self.pdf_le(origin, dir)
     }
+    /// A light with an extent that is no scene geometry (a sun's disk of directions, a
+    /// sphere light): camera and BSDF rays reach it through [`Light::hit`], as Cycles'
+    /// `distant_light_intersect` / `point_light_intersect` (kernel/light/distant.h,
+    /// point.h), and its light samples are MIS-weighted against BSDF sampling.
+    fn hittable(&self) -> bool {
+        false
+    }
+    /// Where the ray from `p` along unit `wi` meets the light's emitting shape: the
+    /// distance (infinite for a sun) and, in `le`, the radiance arriving along the ray.
+    /// None when it misses (and for lights that are not [`Light::hittable`]). The
+    /// shape blocks nothing: the ray goes on to the surface behind it.
+    fn hit(&self, _p: Vec3A, _wi: Vec3A, _le: &mut SampledSpectrum) -> Option<f32> {
+        None
+    }
 }
 
 /// 1 − cos θ from sin²θ (θ ≤ π/2) without cancellation: s² / (1 + √(1 − s²)).
@@ -118,6 +134,39 @@ pub fn sample_uniform_cone(u: Vec2, one_minus_cos_max: f32) -> (Vec3A, f32) {
     let sin = (omc * (2.0 - omc)).max(0.0).sqrt();
     let phi = 2.0 * std::f32::consts::PI * u.y;
     (Vec3A::new(sin * phi.cos(), sin * phi.sin(), cos), 1.0 / (2.0 * std::f32::consts::PI * one_minus_cos_max))
+}
+
+/// The distance along unit `wi` from `p` to the near surface of the sphere (`center`,
+/// `radius` > 0); None when the ray misses it or `p` is inside (where
+/// [`sample_sphere_cone`] samples nothing either).
+pub fn hit_sphere(center: Vec3A, radius: f32, p: Vec3A, wi: Vec3A) -> Option<f32> {
+    let d = center - p;
+    let d2 = d.length_squared();
+    let r2 = radius * radius;
+    if !(d2 > r2 && d2.is_finite()) {
+        return None;
+    }
+    let b = d.dot(wi);
+    // Squared distance of the centre from the ray's line, without cancellation.
+    let h2 = (d - wi * b).length_squared();
+    if b <= 0.0 || h2 > r2 {
+        return None;
+    }
+    Some((b - (r2 - h2).sqrt()).max(0.0))
+}
+
+/// The solid-angle pdf with which [`sample_sphere_cone`] from `p` returns `wi`: uniform
+/// over the cone the sphere subtends, 0 outside it.
+pub fn sphere_cone_pdf(center: Vec3A, radius: f32, p: Vec3A, wi: Vec3A) -> f32 {
+    if hit_sphere(center, radius, p, wi).is_none() {
+        return 0.0;
+    }
+    let omc_max = one_minus_cos_from_sin2(radius * radius / (center - p).length_squared());
+    if omc_max > 0.0 {
+        1.0 / (2.0 * std::f32::consts::PI * omc_max)
+    } else {
+        0.0
+    }
 }
 
 /// The unit direction from `p` to `q`, the distance and its square; None when the

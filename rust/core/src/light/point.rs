@@ -6,8 +6,11 @@
 //! point lights): far away it is the point light of intensity I, and a point facing it
 //! at distance d receives E = π L (r/d)² = I/d². Next-event estimation samples the
 //! cone the sphere subtends uniformly ([`super::sample_sphere_cone`]). The sphere is
-//! not geometry: camera and BSDF rays do not hit it (no highlight of its disk in a
-//! mirror; a light ray reaches it only through light sampling, with MIS weight 1).
+//! not scene geometry, but camera and BSDF rays reach it ([`Light::hit`], as Cycles'
+//! `point_light_intersect`, kernel/light/point.h): its highlight shows in a mirror, its
+//! caustic through glass, and light sampling is MIS-weighted against BSDF sampling. It
+//! blocks nothing (a ray goes on behind it, as Cycles' lights are transparent bounces).
+//! Radius 0 stays a delta light, reached by light sampling only.
 
 use super::{EmissionSample, Light, LightSample};
 use crate::geometry::Frame;
@@ -43,13 +46,33 @@ pub(crate) fn sample_point_or_sphere(
         }
         le.copy_from(intensity);
         le.scale(scale / (PI * radius * radius));
-        // Not hittable by BSDF rays: weight 1 (delta), the pdf still divides.
-        return Some(LightSample { wi, distance, pdf, delta: true, part: 0 });
+        // BSDF rays hit the sphere too (`sphere_hit`): MIS.
+        return Some(LightSample { wi, distance, pdf, delta: false, part: 0 });
     }
     let (wi, distance, d2) = super::direction_to(p, center)?;
     le.copy_from(intensity);
     le.scale(scale / d2);
     Some(LightSample { wi, distance, pdf: 1.0, delta: true, part: 0 })
+}
+
+/// A ray from `p` along `wi` reaching the sphere light at `center` whose radiant
+/// intensity towards `p` is `intensity × scale`: the distance, `le` its radiance.
+pub(crate) fn sphere_hit(
+    center: Vec3A,
+    radius: f32,
+    intensity: &SampledSpectrum,
+    scale: f32,
+    p: Vec3A,
+    wi: Vec3A,
+    le: &mut SampledSpectrum,
+) -> Option<f32> {
+    if !(radius > 0.0 && scale > 0.0) {
+        return None;
+    }
+    let t = super::hit_sphere(center, radius, p, wi)?;
+    le.copy_from(intensity);
+    le.scale(scale / (PI * radius * radius));
+    Some(t)
 }
 
 /// A ray leaving a sphere light: a uniform point of the sphere and a cosine-weighted
@@ -76,9 +99,8 @@ pub(crate) fn sphere_le(
         normal: Some(n),
         pdf_pos: 1.0 / (4.0 * PI * radius * radius),
         pdf_dir,
-        // No camera or BSDF ray can reach the sphere (it is not geometry): for the
-        // integrators' partitions it is as unreachable as a point.
-        delta_position: true,
+        // Camera and BSDF rays reach the sphere (`Light::hit`): no delta.
+        delta_position: false,
         part: 0,
     })
 }
@@ -89,6 +111,19 @@ impl Light for PointLight {
     }
     fn sample_li(&self, p: Vec3A, u: Vec2, le: &mut SampledSpectrum) -> Option<LightSample> {
         sample_point_or_sphere(self.position, self.radius, &self.intensity, 1.0, p, u, le)
+    }
+    fn pdf_li(&self, p: Vec3A, wi: Vec3A, _distance: f32) -> f32 {
+        if self.radius > 0.0 {
+            super::sphere_cone_pdf(self.position, self.radius, p, wi)
+        } else {
+            0.0
+        }
+    }
+    fn hittable(&self) -> bool {
+        self.radius > 0.0
+    }
+    fn hit(&self, p: Vec3A, wi: Vec3A, le: &mut SampledSpectrum) -> Option<f32> {
+        sphere_hit(self.position, self.radius, &self.intensity, 1.0, p, wi, le)
     }
     fn sample_le(&self, u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
         if self.radius > 0.0 {
@@ -107,7 +142,7 @@ impl Light for PointLight {
     }
     fn pdf_le(&self, _origin: Vec3A, _dir: Vec3A) -> Option<super::LeDensity> {
         // A sphere's light paths are no strategy of the bidirectional MIS (None): its
-        // light reaches camera paths only through light sampling, weighted 1.
+        // light reaches camera paths through light sampling and BSDF rays that hit it.
         (self.radius <= 0.0).then_some(super::LeDensity {
             pos: 1.0,
             dir: 1.0 / (4.0 * PI),
@@ -161,5 +196,34 @@ mod tests {
         let flux = le.get(0) * cos / (es.pdf_pos * es.pdf_dir);
         assert!((flux - 4.0 * PI).abs() < 1e-3, "{flux}");
         assert!(light.pdf_le(es.origin, es.direction).is_none());
+    }
+
+    /// A sphere light's cone samples are the directions a ray from the point reaches
+    /// the sphere along ([`Light::hit`]: the same near-surface distance and radiance,
+    /// `pdf_li` = the sample's pdf); rays past it reach nothing; radius 0 stays a delta.
+    #[test]
+    fn sampled_directions_hit_the_sphere_with_their_pdf() {
+        let light =
+            PointLight { position: Vec3A::new(0.5, 1.0, 2.0), intensity: SampledSpectrum::splat(1, 3.0), radius: 0.7 };
+        assert!(light.hittable());
+        let p = Vec3A::new(0.1, -0.3, 0.0);
+        let mut rng = Rng::new(11, 2);
+        let (mut le, mut hit) = (SampledSpectrum::zeros(1), SampledSpectrum::zeros(1));
+        for _ in 0..2000 {
+            let ls = light.sample_li(p, rng.uniform2(), &mut le).unwrap();
+            assert!(!ls.delta);
+            let t = light.hit(p, ls.wi, &mut hit).expect("a sampled direction reaches the sphere");
+            assert!((t - ls.distance).abs() < 1e-3, "{t} vs {}", ls.distance);
+            assert!((hit.get(0) - le.get(0)).abs() <= 1e-6 * le.get(0));
+            let pdf = light.pdf_li(p, ls.wi, t);
+            assert!((pdf - ls.pdf).abs() <= 1e-4 * ls.pdf, "{pdf} vs {}", ls.pdf);
+        }
+        let axis = (light.position - p).normalize();
+        let past = Frame::from_normal(axis).to_world(Vec3A::new(0.5, 0.0, 0.75f32.sqrt()));
+        assert!(light.hit(p, past, &mut hit).is_none() && light.pdf_li(p, past, 1.0) == 0.0);
+        assert!(light.hit(p, -axis, &mut hit).is_none());
+        let point = PointLight { radius: 0.0, ..light };
+        assert!(!point.hittable() && point.hit(p, axis, &mut hit).is_none());
+        assert!(point.sample_li(p, Vec2::splat(0.5), &mut le).unwrap().delta);
     }
 }

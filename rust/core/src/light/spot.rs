@@ -4,7 +4,8 @@
 //! core the radiant intensity is the full spectral intensity I(λ); no cosine falloff.
 //! With a radius (Blender's `shadow_soft_size`) it is a sphere light as
 //! [`super::point`] describes, its radiance scaled by the falloff towards the shading
-//! point seen from the centre (Cycles' spot lights are spheres too, Blender 4.x).
+//! point seen from the centre (Cycles' spot lights are spheres too, Blender 4.x),
+//! reached by camera and BSDF rays as a sphere light is.
 
 use super::{EmissionSample, Light, LightSample};
 use crate::geometry::Frame;
@@ -69,12 +70,28 @@ impl Light for SpotLight {
         }
         super::point::sample_point_or_sphere(self.position, self.radius, &self.intensity, fall, p, u, le)
     }
+    fn pdf_li(&self, p: Vec3A, wi: Vec3A, _distance: f32) -> f32 {
+        // sample_li samples nothing where the falloff towards p is 0.
+        match super::direction_to(self.position, p) {
+            Some((w, _, _)) if self.radius > 0.0 && self.falloff(w) > 0.0 => {
+                super::sphere_cone_pdf(self.position, self.radius, p, wi)
+            }
+            _ => 0.0,
+        }
+    }
+    fn hittable(&self) -> bool {
+        self.radius > 0.0
+    }
+    fn hit(&self, p: Vec3A, wi: Vec3A, le: &mut SampledSpectrum) -> Option<f32> {
+        // The falloff towards p seen from the centre, as `sample_li`.
+        let (w, _, _) = super::direction_to(self.position, p)?;
+        super::point::sphere_hit(self.position, self.radius, &self.intensity, self.falloff(w), p, wi, le)
+    }
     fn sample_le(&self, u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
         if self.radius > 0.0 {
             // From the sphere, the falloff of the emitted direction.
-            let mut es = super::point::sphere_le(self.position, self.radius, &self.intensity, u_pos, u_dir, le)?;
+            let es = super::point::sphere_le(self.position, self.radius, &self.intensity, u_pos, u_dir, le)?;
             le.scale(self.falloff(es.direction));
-            es.delta_position = true;
             return Some(es);
         }
         // Uniform in the cone.

@@ -456,10 +456,12 @@ pub enum LightDesc {
         intensity: SpectrumDesc,
         #[serde(default)]
         radius: f32,
-        /// The kinds of rays whose bounces it lights (Cycles' light ray visibility:
-        /// diffuse, glossy, transmission; camera and shadow do not apply). All by default.
+        /// The kinds of rays that see it and whose bounces it lights (Cycles' light ray
+        /// visibility): diffuse, glossy, transmission (on by default); camera (off by
+        /// default: rays from the camera see a sun's disk or a sphere light only with
+        /// it); shadow does not apply.
         #[serde(default)]
-        visibility: crate::geometry::visibility::VisibilityDesc,
+        visibility: crate::geometry::visibility::LightVisibilityDesc,
     },
     /// Blender's spot light: radiant intensity on the axis, cone of full angle
     /// `spot_size` (radians, default 45°), edge softened over `spot_blend` (default 0.15).
@@ -476,10 +478,12 @@ pub enum LightDesc {
         /// Radius of the emitting sphere (0: a point), as for `Point`.
         #[serde(default)]
         radius: f32,
-        /// The kinds of rays whose bounces it lights (Cycles' light ray visibility:
-        /// diffuse, glossy, transmission; camera and shadow do not apply). All by default.
+        /// The kinds of rays that see it and whose bounces it lights (Cycles' light ray
+        /// visibility): diffuse, glossy, transmission (on by default); camera (off by
+        /// default: rays from the camera see a sun's disk or a sphere light only with
+        /// it); shadow does not apply.
         #[serde(default)]
-        visibility: crate::geometry::visibility::VisibilityDesc,
+        visibility: crate::geometry::visibility::LightVisibilityDesc,
     },
     /// A sun: light travelling along `direction` with spectral irradiance on a surface
     /// facing it, from a disk of directions of angular diameter `angle` (radians, 0:
@@ -490,10 +494,12 @@ pub enum LightDesc {
         irradiance: SpectrumDesc,
         #[serde(default)]
         angle: f32,
-        /// The kinds of rays whose bounces it lights (Cycles' light ray visibility:
-        /// diffuse, glossy, transmission; camera and shadow do not apply). All by default.
+        /// The kinds of rays that see it and whose bounces it lights (Cycles' light ray
+        /// visibility): diffuse, glossy, transmission (on by default); camera (off by
+        /// default: rays from the camera see a sun's disk or a sphere light only with
+        /// it); shadow does not apply.
         #[serde(default)]
-        visibility: crate::geometry::visibility::VisibilityDesc,
+        visibility: crate::geometry::visibility::LightVisibilityDesc,
     },
 }
 

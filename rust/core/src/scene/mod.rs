@@ -204,6 +204,9 @@ pub struct Scene {
     /// lights that are no geometry), so light paths do not show the camera an emitter
     /// camera rays pass through.
     pub light_visibility: Vec<u8>,
+    /// The lights that are no geometry but that rays reach ([`Light::hittable`]: suns
+    /// with an angle, sphere lights), which camera paths look for along every segment.
+    pub hit_lights: Vec<usize>,
 }
 
 /// The RGB → spectrum map while building: where the grid has none, the first RGB
@@ -866,6 +869,7 @@ impl Scene {
             nee_powers[env.light] = 0.0;
         }
         let nee_distribution = Distribution1D::new(&nee_powers);
+        let hit_lights = (0..lights.len()).filter(|&l| lights[l].hittable()).collect();
 
         let mut scene = Self {
             observer: Observer::new(&grid),
@@ -893,6 +897,7 @@ impl Scene {
             pass_through,
             mesh_data,
             light_visibility,
+            hit_lights,
             world_medium,
             camera_media: crate::medium::MediumStack::default(),
         };
