@@ -72,3 +72,30 @@ def test_a_ball_casts_a_penumbra():
     soft_edge, lit_soft = ring(0.8)
     assert sharp_edge < 0.02 * lit
     assert 0.15 * lit_soft < soft_edge < 0.85 * lit_soft
+
+
+@pytest.mark.parametrize("camera", [False, True])
+def test_a_mirror_shows_the_sphere_and_the_camera_only_when_visible(camera):
+    """A sphere light of intensity I and radius r has radiance I/(πr²): seen straight on,
+    the pixels inside its disk read it only with ``visibility={"camera": True}`` (off by
+    default, as Cycles' ``visible_camera``); in a white mirror (Glossy, roughness 0) below
+    the camera, its reflection reads it whatever the camera visibility (BSDF rays hit
+    the sphere)."""
+    intensity, r = 5.0, 0.3
+    scene = pc.Scene()
+    mirror = scene.add_material(pc.Glossy(1.0, roughness=0.0, name="mirror"))
+    v = np.array([[-9, -9, 0], [9, -9, 0], [9, 9, 0], [-9, 9, 0]], np.float32)
+    scene.add_mesh("mirror", v, np.array([[0, 1, 2], [0, 2, 3]], np.uint32), material=mirror)
+    vis = {"camera": True} if camera else None
+    scene.add_light(pc.PointLight((0, 0, 2.0), power=4 * math.pi * intensity, radius=r, name="sphere", visibility=vis))
+    radiance = intensity / (math.pi * r * r)
+    # Looking up at the sphere from below its centre (the mirror is behind the camera) ...
+    scene.camera = pc.Camera.looking_at((0, 0, 1.0), (0, 0, 2.0), up=(0, 1, 0), focal_length=50.0, name="up")
+    up = luminance(pc.render(scene, width=16, height=16, samples=4, max_bounces=2, seed=1).rgba[..., :3])
+    assert up[6:10, 6:10].mean() == pytest.approx(radiance if camera else 0.0, rel=0.01, abs=1e-6)
+    assert up[0, 0] == 0.0
+    # ... and down at its reflection (the sphere is behind the camera: at 2 above, seen at 1 + 2 = 3 away).
+    scene.camera = pc.Camera.looking_at((0, 0, 1.0), (0, 0, 0.0), up=(0, 1, 0), focal_length=50.0, name="down")
+    down = luminance(pc.render(scene, width=16, height=16, samples=4, max_bounces=2, seed=1).rgba[..., :3])
+    assert down[7:9, 7:9].mean() == pytest.approx(radiance, rel=0.01)
+    assert down[0, 0] == 0.0

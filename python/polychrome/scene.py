@@ -353,8 +353,9 @@ class PointLight:
     The radiant intensity is ``color × power / 4π`` per wavelength; ``color`` may be
     any spectrum (RGB white gives a D65-shaped spectrum of luminance 1). With
     ``radius`` > 0 it is a sphere light (soft shadows) of uniform radiance
-    intensity / (π r²), as Cycles' point light of that radius: camera and BSDF rays do
-    not hit the sphere itself.
+    intensity / (π r²), as Cycles' point light of that radius: BSDF rays hit the sphere
+    (its highlight in a mirror, its caustic through glass), camera rays only with
+    ``visibility={"camera": True}``; it blocks nothing.
     """
 
     position: Sequence[float]
@@ -362,7 +363,7 @@ class PointLight:
     color: Any = (1.0, 1.0, 1.0)
     name: str = "PointLight"
     radius: float = 0.0
-    #: the kinds of bounces it lights, e.g. ``{"diffuse": False}`` (``LIGHT_RAY_KINDS``)
+    #: the kinds of rays that see it, e.g. ``{"diffuse": False}``, ``{"camera": True}`` (``LIGHT_RAY_KINDS``)
     visibility: Any = None
 
     def to_dict(self) -> dict[str, Any]:
@@ -375,14 +376,16 @@ class PointLight:
         return _with_light_visibility(_with_radius(d, self.radius, self.name), self.visibility, self.name)
 
 
-#: The kinds of rays a light's ``visibility`` names: the bounces it lights (Cycles' light
-#: ray visibility; a light that is no geometry has no camera or shadow visibility).
-LIGHT_RAY_KINDS = ("diffuse", "glossy", "transmission")
+#: The kinds of rays a light's ``visibility`` names (Cycles' light ray visibility): the
+#: bounces it lights and whose rays see a sphere light or a sun's disk (diffuse, glossy,
+#: transmission; on by default), and whether camera rays see them (off by default, as
+#: Cycles' ``visible_camera``). A light that is no geometry has no shadow visibility.
+LIGHT_RAY_KINDS = ("camera", "diffuse", "glossy", "transmission")
 
 
 def _with_light_visibility(d: dict[str, Any], visibility: Any, name: str) -> dict[str, Any]:
     """``d`` with the light's ray visibility (a dict of LIGHT_RAY_KINDS booleans, missing
-    ones True), left out when every kind sees it."""
+    ones at their defaults: camera False, the others True), left out when it is the default."""
     if visibility is None:
         return d
     vis = dict(visibility)
@@ -391,7 +394,7 @@ def _with_light_visibility(d: dict[str, Any], visibility: Any, name: str) -> dic
         raise ValueError(f"light '{name}': unknown ray visibility {unknown} (known: {', '.join(LIGHT_RAY_KINDS)})")
     if not all(isinstance(v, (bool, np.bool_)) for v in vis.values()):
         raise ValueError(f"light '{name}': ray visibility values must be True or False")
-    if not all(vis.values()):
+    if any(bool(v) != (k != "camera") for k, v in vis.items()):
         d["visibility"] = {k: bool(v) for k, v in vis.items()}
     return d
 
@@ -485,7 +488,7 @@ class SpotLight:
     spot_blend: float = 0.15
     name: str = "SpotLight"
     radius: float = 0.0
-    #: the kinds of bounces it lights, e.g. ``{"diffuse": False}`` (``LIGHT_RAY_KINDS``)
+    #: the kinds of rays that see it, e.g. ``{"diffuse": False}``, ``{"camera": True}`` (``LIGHT_RAY_KINDS``)
     visibility: Any = None
 
     def to_dict(self) -> dict[str, Any]:
@@ -513,14 +516,15 @@ class SunLight:
     irradiance ``strength`` W/m² times ``color`` on a surface facing it. ``angle``:
     the sun's angular diameter in radians (Blender's sun angle; 0..π): a disk of
     directions of uniform radiance, soft shadows, the same irradiance on a surface
-    facing it (camera and BSDF rays do not see the disk)."""
+    facing it; BSDF rays that leave the scene inside the disk see it (the sun in a mirror,
+    its caustic through glass), camera rays only with ``visibility={"camera": True}``."""
 
     direction: Sequence[float] = (0.0, 0.0, -1.0)
     strength: float = 1.0
     color: Any = (1.0, 1.0, 1.0)
     name: str = "Sun"
     angle: float = 0.0
-    #: the kinds of bounces it lights, e.g. ``{"diffuse": False}`` (``LIGHT_RAY_KINDS``)
+    #: the kinds of rays that see it, e.g. ``{"diffuse": False}``, ``{"camera": True}`` (``LIGHT_RAY_KINDS``)
     visibility: Any = None
 
     def to_dict(self) -> dict[str, Any]:

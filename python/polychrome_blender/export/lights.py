@@ -8,7 +8,7 @@ colour × energy × 2^exposure; ``normalize`` from ``LA_UNNORMALIZED``) and
 * Point / spot: ``energy`` P watts → radiant intensity ``colour × P / 4π``. Cycles' area of
   a point or spot light is 4πr² (r = ``shadow_soft_size``), or 4 when r = 0; with
   Normalize off the power is therefore multiplied by 4πr² (4 when r = 0). The radius
-  (soft shadows) is otherwise ignored: a true point.
+  makes it a sphere light (soft shadows).
 * Area: a one-sided Lambertian emitter of radiance ``colour × P / (π A)``, A its
   world-space area (Cycles: |X axis|·size_x × |Y axis|·size_y, × π/4 for disks and
   ellipses, so object scale counts); with Normalize off ``colour × P / π``. Exported as an
@@ -22,7 +22,11 @@ colour × energy × 2^exposure; ``normalize`` from ``LA_UNNORMALIZED``) and
 * Sun: ``polychrome.SunLight`` of irradiance ``colour × strength`` W/m² (Normalize on);
   with Normalize off Cycles' sun disk has radiance = strength, so the irradiance is
   ``strength × π sin²(angle/2)`` (angle 0: strength). The angle is the sun disk's
-  angular diameter (soft shadows, as Cycles'; the disk itself is not seen in mirrors).
+  angular diameter (soft shadows, as Cycles'; the disk shows in mirrors and its caustics
+  through glass, MIS-weighted as Cycles' ``distant_light_intersect``).
+* Point and spot lights with a radius are spheres that BSDF rays hit too (Cycles'
+  ``point_light_intersect``). Sphere lights and sun disks are seen by the camera only
+  with the object's ``visible_camera`` (off by default).
 * Temperature (``use_temperature``): a blackbody spectrum normalised to the luminance of
   white, filtered by the colour tint (``polychrome.spectra.tinted``), as Cycles multiplies
   the colour by the temperature colour.

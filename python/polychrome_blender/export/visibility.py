@@ -4,7 +4,7 @@ polychrome instances.
 Cycles (intern/cycles/blender/object.cpp ``object_ray_visibility``, light.cpp): an object
 is seen by camera, shadow, diffuse, glossy and transmission rays as its ``visible_*``
 flags say. For lights, ``visible_camera`` (off by default) decides whether the camera sees
-them. Cycles' lights never block shadow rays (measured with Cycles 4.5: an area light
+them (an area light's polygon, a sphere light, a sun's disk). Cycles' lights never block shadow rays (measured with Cycles 4.5: an area light
 between a sun and a floor casts no shadow, whatever ``visible_shadow`` says), and neither
 does Polychrome's area light: it is a one-sided emitter (``pc.Emitter(one_sided=True)``)
 that shadow rays do not see. A light's ``visible_diffuse``/``glossy``/``transmission`` drop it from that kind of
@@ -53,7 +53,9 @@ def light_visibility(ob, name, warnings):
 
 
 def point_light_visibility(ob, name, warnings):
-    """The bounces a point, spot or sun light lights (``visible_diffuse``/``glossy``/
-    ``transmission``); None when all."""
-    vis = _light_bounce_visibility(ob, name, warnings)
-    return None if all(vis.values()) else vis
+    """The rays that see a point, spot or sun light and the bounces it lights: the camera
+    (a sphere light or a sun's disk) as ``visible_camera`` says (off by default), diffuse,
+    glossy and transmission as ``visible_*`` say; None when that is the default (camera
+    off, the rest on)."""
+    vis = {"camera": bool(getattr(ob, "visible_camera", False)), **_light_bounce_visibility(ob, name, warnings)}
+    return None if not vis["camera"] and all(vis[k] for k in ("diffuse", "glossy", "transmission")) else vis
