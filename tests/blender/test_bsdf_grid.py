@@ -70,18 +70,16 @@ FEATURES = {
 # layers: coat 19.1, sheen 7.5; before the Specular Tint on the dielectric layer: 10.0;
 # before the Principled's Oren–Nayar base: diffuse_roughness 1.2 (warned); before rough glass's
 # multiple scattering and the Principled's √(base colour) transmission tint: rough_glass 7.9
-# (0.69 after, 128 spp); before suns were hittable by BSDF rays (MIS with light sampling): coat 1.55.
+# (0.69 after, 128 spp); before suns were hittable by BSDF rays (MIS with light sampling): coat 1.55
+# (the sun's reflection in the near-smooth coat one noisy block), 1.12 after (with the light sample
+# leaving out the uniform world; 1.95 without that, from one pixel of BSDF-sampled hits of the sun's
+# disk; 0.70 at 512 spp).
 XFAIL = {
-    "coat": "the sun's reflection in the near-smooth coat (roughness 0.05) is one pixel of high variance at 128 spp: "
-    "the sun's disk (radiance 2090) is now hit by BSDF rays and MIS-weighted against light sampling, but the coat "
-    "lobe is chosen with probability ~0.17, so a few hits make or miss that pixel: dE00 1.95 here (1.55 before "
-    "the sun was hittable); 0.70 with the same grid at 512 spp; 1.23 and 1.04 in a coat-only grid at 128 "
-    "and 1024 spp (Cycles' own highlight pixel: 3.5 here, 2.5 and 1.4 in the coat-only grid)",
     "anisotropic_metal": "Principled Anisotropic not supported yet (warned): dE00 2.8",
     "subsurface": "no subsurface scattering yet (warned): dE00 2.7",
     "translucent_bsdf": "Translucent BSDF borderline: dE00 1.26-1.52 between runs",
     "transparent_bsdf": "tint passed twice: Cycles squares the RGB, Polychrome the uplifted spectrum: dE00 1.61",
-    "tinted_glass": "the tint squared spectrally (as transparent_bsdf): dE00 3.23 at 128 spp, where Cycles' own mean "
+    "tinted_glass": "the tint squared spectrally (as transparent_bsdf): dE00 3.22 at 128 spp, where Cycles' own mean "
     "is high by fireflies (R 0.884 at 128 spp, 0.808 at 512); 1.52 at 512 spp, as without the sun (1.52). The sun "
     "reached through the glass by BSDF rays changed nothing measurable here (no floor for a caustic)",
     "refraction_bsdf": "Refraction BSDF rendered as Glass (warned), dE00 0.43",
