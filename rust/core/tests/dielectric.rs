@@ -176,7 +176,7 @@ fn glass_ball_in_a_white_furnace_is_invisible() {
             d.meshes.clear();
             let o = render(
                 &d,
-                &[],
+                &[] as &[Buffer],
                 &ResolvedSettings { width: 2, height: 2, samples: 1, ..Default::default() },
                 &RenderControl::new(),
             )
@@ -260,7 +260,7 @@ fn bad_glass_and_metals_are_reported_by_name() {
             width: 8,
             height: 8,
         };
-        let e = Scene::build(&desc, &[], &opts).err().expect("must fail").to_string();
+        let e = Scene::build(&desc, &[] as &[Buffer], &opts).err().expect("must fail").to_string();
         assert!(e.contains("material 'Odd One'") && e.contains(needle), "{e}");
     }
 }

@@ -114,7 +114,7 @@ fn cancel_before_start_returns_no_samples() {
     let desc = SceneDesc::default();
     let control = RenderControl::new();
     control.cancel();
-    let out = render(&desc, &[], &ResolvedSettings::default(), &control).unwrap();
+    let out = render(&desc, &[] as &[Buffer], &ResolvedSettings::default(), &control).unwrap();
     assert_eq!(out.stats.samples_per_pixel, 0);
     assert!(out.stats.cancelled);
 }

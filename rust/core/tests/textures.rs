@@ -366,7 +366,8 @@ fn texture_errors_name_the_texture_or_material() {
         radius: 0.0,
         visibility: Default::default(),
     });
-    let err = render(&desc, &[], &ResolvedSettings::default(), &RenderControl::new()).err().unwrap().to_string();
+    let err =
+        render(&desc, &[] as &[Buffer], &ResolvedSettings::default(), &RenderControl::new()).err().unwrap().to_string();
     assert!(err.contains("light 'Lamp'") && err.contains("texture"), "{err}");
 }
 

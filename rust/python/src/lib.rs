@@ -17,7 +17,7 @@ use polychrome_core::render::{
     compile, render as core_render, Driver, Merge, RenderControl, RenderOutput, RenderSettings, ResolvedSettings,
     Timing,
 };
-use polychrome_core::scene::{Buffer, Scene, SceneDesc};
+use polychrome_core::scene::{AsBufferView, Buffer, BufferView, Scene, SceneDesc};
 use polychrome_core::spectrum::named::{RgbToSpectrum, SpectrumRole};
 use polychrome_core::spectrum::SpectrumDesc;
 use polychrome_core::Error;
@@ -57,20 +57,71 @@ fn parse<T: serde::de::DeserializeOwned>(json: &str, what: &str) -> PyResult<T> 
     serde_json::from_str(json).map_err(|e| PyValueError::new_err(format!("{what}: {e}")))
 }
 
-fn convert_buffers(buffers: Vec<Bound<'_, PyAny>>) -> PyResult<Vec<Buffer>> {
+/// One numpy buffer of a call, borrowed read-only (numpy's borrow flag: no Rust code
+/// writes it meanwhile).
+enum Lent<'py> {
+    F32(PyReadonlyArrayDyn<'py, f32>),
+    U32(PyReadonlyArrayDyn<'py, u32>),
+    U8(PyReadonlyArrayDyn<'py, u8>),
+}
+
+impl Lent<'_> {
+    /// The array in place when it is contiguous (the scene's buffers always are).
+    fn view(&self) -> Option<BufferView<'_>> {
+        match self {
+            Lent::F32(a) => a.as_slice().ok().map(BufferView::F32),
+            Lent::U32(a) => a.as_slice().ok().map(BufferView::U32),
+            Lent::U8(a) => a.as_slice().ok().map(BufferView::U8),
+        }
+    }
+
+    fn to_owned_buffer(&self) -> Buffer {
+        match self {
+            Lent::F32(a) => Buffer::F32(a.as_array().iter().copied().collect()),
+            Lent::U32(a) => Buffer::U32(a.as_array().iter().copied().collect()),
+            Lent::U8(a) => Buffer::U8(a.as_array().iter().copied().collect()),
+        }
+    }
+}
+
+fn lend_buffers<'py>(buffers: &[Bound<'py, PyAny>]) -> PyResult<Vec<Lent<'py>>> {
     buffers
-        .into_iter()
+        .iter()
         .enumerate()
         .map(|(i, b)| {
             if let Ok(a) = b.extract::<PyReadonlyArrayDyn<f32>>() {
-                Ok(Buffer::F32(a.as_array().iter().copied().collect()))
+                Ok(Lent::F32(a))
             } else if let Ok(a) = b.extract::<PyReadonlyArrayDyn<u32>>() {
-                Ok(Buffer::U32(a.as_array().iter().copied().collect()))
+                Ok(Lent::U32(a))
             } else if let Ok(a) = b.extract::<PyReadonlyArrayDyn<u8>>() {
-                Ok(Buffer::U8(a.as_array().iter().copied().collect()))
+                Ok(Lent::U8(a))
             } else {
                 Err(PyTypeError::new_err(format!("buffer {i}: expected a float32, uint32 or uint8 numpy array")))
             }
+        })
+        .collect()
+}
+
+/// Copies of the buffers, for a render that outlives the call (`RenderJob`).
+fn convert_buffers(buffers: Vec<Bound<'_, PyAny>>) -> PyResult<Vec<Buffer>> {
+    Ok(lend_buffers(&buffers)?.iter().map(Lent::to_owned_buffer).collect())
+}
+
+/// Copies of the strided buffers among `lent` (None where one is read in place); with
+/// [`views`] the buffers of a call that reads them before it returns, so a large mesh's
+/// arrays are not copied (they are 28 bytes per triangle on a grid with normals and uvs).
+/// The caller's Python code could still write an array while the GIL is released; the
+/// build then reads some old and some new values, as numpy's own threads would.
+fn strided_copies(lent: &[Lent<'_>]) -> Vec<Option<Buffer>> {
+    lent.iter().map(|a| if a.view().is_some() { None } else { Some(a.to_owned_buffer()) }).collect()
+}
+
+fn views<'a>(lent: &'a [Lent<'_>], copies: &'a [Option<Buffer>]) -> Vec<BufferView<'a>> {
+    lent.iter()
+        .zip(copies)
+        .map(|(a, c)| match c {
+            Some(b) => b.view(),
+            None => a.view().expect("contiguous: no copy was made"),
         })
         .collect()
 }
@@ -93,7 +144,9 @@ fn render<'py>(
     let desc: SceneDesc = parse(scene_json, "scene description")?;
     // Null or absent settings are left to `quality`; they are resolved on the worker.
     let settings = RenderSettings::from_json(settings_json).map_err(to_py_err)?;
-    let buffers = convert_buffers(buffers)?;
+    let lent = lend_buffers(&buffers)?;
+    let copies = strided_copies(&lent);
+    let buffers = views(&lent, &copies);
     let control = RenderControl::new();
     let mut callback_error: Option<PyErr> = None;
     let result = py.allow_threads(|| {
@@ -134,9 +187,9 @@ fn render<'py>(
 type JobOutcome = PyResult<RenderOutput>;
 
 /// The settings resolved for the scene (quality preset, AUTO's grid), then the render.
-fn resolve_and_render(
+fn resolve_and_render<B: AsBufferView + Sync>(
     desc: &SceneDesc,
-    buffers: &[Buffer],
+    buffers: &[B],
     settings: &RenderSettings,
     control: &RenderControl,
 ) -> Result<RenderOutput, Error> {
@@ -409,7 +462,9 @@ impl PassRenderer {
     fn new(py: Python<'_>, scene_json: &str, buffers: Vec<Bound<'_, PyAny>>, settings_json: &str) -> PyResult<Self> {
         let desc: SceneDesc = parse(scene_json, "scene description")?;
         let given = RenderSettings::from_json(settings_json).map_err(to_py_err)?;
-        let buffers = convert_buffers(buffers)?;
+        let lent = lend_buffers(&buffers)?;
+        let copies = strided_copies(&lent);
+        let buffers = views(&lent, &copies);
         py.allow_threads(|| {
             guarded("scene build", || {
                 let settings = given.resolve(Some(&desc))?;

@@ -7,7 +7,6 @@
 //! deforming mesh's boxes bound each triangle over all its motion keys (linear
 //! interpolation stays inside them) and the triangle is interpolated at the ray's time.
 
-use crate::geometry::motion::key_span;
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::visibility;
 use crate::geometry::{Instance, Mesh, Ray};
@@ -32,30 +31,15 @@ pub struct Hit {
     pub b2: f32,
 }
 
-/// One BVH over (a chunk of) a mesh's triangles.
+/// One BVH over (a chunk of) a mesh's triangles. Traversal reads the triangles from
+/// the mesh itself (its index and position arrays), so the structure keeps no copy of
+/// them: 12 bytes per triangle (wide nodes and leaf order) instead of 60.
 struct MeshBvh {
     /// `bvh.primitive_indices` holds the mesh's triangle index of each leaf slot.
     bvh: CwBvh,
-    /// Triangles in BVH leaf order, so traversal reads them without indirection.
-    triangles: Vec<[Vec3A; 3]>,
-    /// A deforming mesh: the triangles at each motion key, in leaf order.
-    motion: Option<Vec<Vec<[Vec3A; 3]>>>,
 }
 
 impl MeshBvh {
-    /// Leaf triangle `i` at shutter time `time`.
-    #[inline]
-    fn triangle(&self, i: usize, time: f32) -> [Vec3A; 3] {
-        match &self.motion {
-            None => self.triangles[i],
-            Some(keys) => {
-                let (a, b, w) = key_span(keys.len(), time);
-                let (ta, tb) = (keys[a][i], keys[b][i]);
-                [ta[0].lerp(tb[0], w), ta[1].lerp(tb[1], w), ta[2].lerp(tb[2], w)]
-            }
-        }
-    }
-
     /// The BVH over the mesh's triangles `ids` (all of them when None), built with
     /// `params`.
     fn build(m: &Mesh, ids: Option<&[u32]>, params: BvhBuildParams) -> Self {
@@ -77,21 +61,15 @@ impl MeshBvh {
             .collect();
         let mut bvh = build_cwbvh(&aabbs, params, &mut Duration::default());
         drop(aabbs);
+        // obvhs reserves one 80-byte node per primitive and fills about a quarter of
+        // them: without this a chunked mesh kept the rest, in pages the allocator had
+        // already touched for earlier chunks' transients (heaptrack: 80 B/tri).
+        bvh.nodes.shrink_to_fit();
+        bvh.primitive_indices.shrink_to_fit();
         for p in &mut bvh.primitive_indices {
             *p = mesh_index(*p as usize) as u32;
         }
-        let triangles = bvh.primitive_indices.iter().map(|&i| m.triangle(i as usize)).collect();
-        let motion = m.motion.as_ref().map(|v| {
-            (0..v.key_count())
-                .map(|k| {
-                    bvh.primitive_indices
-                        .iter()
-                        .map(|&i| m.indices[i as usize].map(|j| v.positions[k][j as usize]))
-                        .collect()
-                })
-                .collect()
-        });
-        MeshBvh { bvh, triangles, motion }
+        MeshBvh { bvh }
     }
 }
 
@@ -114,17 +92,22 @@ fn build_params_for(primitives: usize) -> BvhBuildParams {
     }
 }
 
-/// Triangles per BVH of a large mesh. obvhs's build holds about 250 bytes per
-/// triangle while it runs (boxes, the binary BVH, the wide-BVH conversion's 7 cost
-/// decisions per binary node) on top of the 60 it keeps, so a mesh with more triangles
-/// is cut into chunks of consecutive centroid Morton order and each chunk gets its own
-/// BVH, a few at a time: the transient memory stays bounded by the chunk size, and
-/// the top-level BVH sees each chunk as an instance. Meshes up to this size build as
-/// one BVH, exactly as before chunking.
-pub const CHUNK: usize = 1 << 19;
+/// Meshes of more than this many triangles get one BVH per chunk of [`CHUNK`]
+/// triangles. obvhs's build holds about 250 bytes per triangle while it runs (boxes,
+/// the binary BVH, the wide-BVH conversion's 7 cost decisions per binary node) on top
+/// of the 12 it keeps, so a large mesh is cut into chunks of consecutive centroid
+/// Morton order and each chunk gets its own BVH, a few at a time: the transient memory
+/// stays bounded by the chunk size, and the top-level BVH sees each chunk as an
+/// instance. Meshes up to this size build as one BVH, exactly as before chunking.
+pub const CHUNK_ABOVE: usize = 1 << 19;
+
+/// Triangles per chunk of a mesh of more than [`CHUNK_ABOVE`]: two builds of 2^16 at
+/// once hold about 33 MB of transient memory (2^19, the size before, held 260 MB, more
+/// than one BVH over a whole 1M-triangle mesh, and made 1M cost more, not less).
+pub const CHUNK: usize = 1 << 17;
 
 /// The mesh's triangles in runs of at most `chunk`, in the Morton order of their
-/// centroids (10 bits per axis over the mesh's bounds), so each run is spatially compact.
+/// centroids (10 bits per axis over the mesh's bounding cube), so each run is spatially compact.
 fn chunks(m: &Mesh, chunk: usize) -> Vec<Vec<u32>> {
     let n = m.indices.len();
     let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
@@ -132,7 +115,11 @@ fn chunks(m: &Mesh, chunk: usize) -> Vec<Vec<u32>> {
         lo = lo.min(*p);
         hi = hi.max(*p);
     }
-    let scale = Vec3A::splat(1023.0) / (hi - lo).max(Vec3A::splat(f32::MIN_POSITIVE));
+    // One scale for all axes, so the Morton cells are cubes: scaled per axis, a thin
+    // mesh's (a displaced grid's) height got as many bits as its width, and runs cut
+    // along it were spread over the whole grid, their boxes overlapping (closest-hit
+    // rays 30 % slower than one BVH over a 1M-triangle grid in chunks of 2^16).
+    let scale = Vec3A::splat(1023.0 / (hi - lo).max_element().max(f32::MIN_POSITIVE));
     let spread = |v: u32| {
         // Bits of a 10-bit integer spread to every third bit.
         let mut x = v & 0x3ff;
@@ -156,11 +143,12 @@ fn chunks(m: &Mesh, chunk: usize) -> Vec<Vec<u32>> {
 
 impl Accel {
     pub fn build(meshes: &[Mesh], instances: &[Instance]) -> Self {
-        Self::build_chunked(meshes, instances, CHUNK)
+        Self::build_chunked(meshes, instances, CHUNK_ABOVE, CHUNK)
     }
 
-    /// [`Accel::build`] with meshes of more than `chunk` triangles cut into chunks.
-    fn build_chunked(meshes: &[Mesh], instances: &[Instance], chunk: usize) -> Self {
+    /// [`Accel::build`] with meshes of more than `above` triangles cut into chunks of
+    /// `chunk`: for tests (chunks of small meshes) and benchmarks (other sizes).
+    pub fn build_chunked(meshes: &[Mesh], instances: &[Instance], above: usize, chunk: usize) -> Self {
         let threads = rayon::current_num_threads().max(1);
         let mesh_bvhs: Vec<Vec<MeshBvh>> = meshes
             .par_iter()
@@ -170,14 +158,18 @@ impl Accel {
                 if n == 0 {
                     return Vec::new();
                 }
-                if n <= chunk {
+                if n <= above {
                     return vec![MeshBvh::build(m, None, params)];
                 }
-                let parts = chunks(m, chunk);
+                let mut parts = chunks(m, chunk);
                 let mut out = Vec::with_capacity(parts.len());
-                // A few chunks at a time, so at most `threads` builds hold their transient memory.
-                for batch in parts.chunks(threads) {
-                    out.extend(batch.par_iter().map(|ids| MeshBvh::build(m, Some(ids), params)).collect::<Vec<_>>());
+                // A few chunks at a time, so at most `threads` builds hold their transient
+                // memory; each chunk's id list is freed once its BVH holds the ids.
+                while !parts.is_empty() {
+                    let batch: Vec<Vec<u32>> = parts.drain(..threads.min(parts.len())).collect();
+                    out.extend(
+                        batch.into_par_iter().map(|ids| MeshBvh::build(m, Some(&ids), params)).collect::<Vec<_>>(),
+                    );
                 }
                 out
             })
@@ -202,26 +194,18 @@ impl Accel {
         Self { meshes: mesh_bvhs, tlas, tlas_instances }
     }
 
-    /// Bytes the structure holds (nodes, leaf order, triangle copies), for benchmarks.
+    /// Bytes the structure holds (nodes and leaf order), for benchmarks.
     pub fn bytes(&self) -> usize {
         let bvh = |b: &CwBvh| {
             b.nodes.len() * std::mem::size_of::<obvhs::cwbvh::node::CwBvhNode>() + b.primitive_indices.len() * 4
         };
-        let meshes: usize = self
-            .meshes
-            .iter()
-            .flatten()
-            .map(|m: &MeshBvh| {
-                bvh(&m.bvh)
-                    + std::mem::size_of_val(m.triangles.as_slice())
-                    + m.motion.as_ref().map_or(0, |k| k.iter().map(|v| std::mem::size_of_val(v.as_slice())).sum())
-            })
-            .sum();
+        let meshes: usize = self.meshes.iter().flatten().map(|m| bvh(&m.bvh)).sum();
         meshes + self.tlas.as_ref().map_or(0, bvh) + self.tlas_instances.len() * 8
     }
 
-    /// Closest hit along `ray` within (tmin, tmax).
-    pub fn intersect(&self, instances: &[Instance], ray: &Ray) -> Option<Hit> {
+    /// Closest hit along `ray` within (tmin, tmax), among `instances` of `meshes` (those
+    /// the structure was built over).
+    pub fn intersect(&self, meshes: &[Mesh], instances: &[Instance], ray: &Ray) -> Option<Hit> {
         let tlas = self.tlas.as_ref()?;
         let mut best: Option<Hit> = None;
         let mut hit = RayHit::none();
@@ -232,7 +216,7 @@ impl Accel {
             if !visibility::sees(inst.visibility, ray.kind) {
                 return f32::INFINITY; // the ray goes on through instances its kind does not see
             }
-            let mb = &self.meshes[inst.mesh as usize][chunk as usize];
+            let (mesh, mb) = (&meshes[inst.mesh as usize], &self.meshes[inst.mesh as usize][chunk as usize]);
             // Object space: the direction is not renormalised, so t is the same in both spaces.
             let to_object = inst.to_object_at(ray.time);
             let o = to_object.transform_point3a(r.origin);
@@ -242,7 +226,7 @@ impl Accel {
             let mut local_hit = RayHit::none();
             let mut bary = (0.0, 0.0);
             mb.bvh.ray_traverse(local, &mut local_hit, |lr, tri| {
-                let [a, b, c] = mb.triangle(tri, ray.time);
+                let [a, b, c] = mesh.triangle_at(mb.bvh.primitive_indices[tri] as usize, ray.time);
                 match wt.intersect(a, b, c, lr.tmin, lr.tmax) {
                     Some((t, b1, b2)) => {
                         bary = (b1, b2);
@@ -269,7 +253,7 @@ impl Accel {
     }
 
     /// Whether anything blocks `ray` within (tmin, tmax): for shadow rays.
-    pub fn occluded(&self, instances: &[Instance], ray: &Ray) -> bool {
+    pub fn occluded(&self, meshes: &[Mesh], instances: &[Instance], ray: &Ray) -> bool {
         let Some(tlas) = self.tlas.as_ref() else { return false };
         let world_ray = bvh_ray(ray.origin, ray.direction, ray.tmin, ray.tmax);
         !tlas.ray_traverse_miss(world_ray, |r, slot| {
@@ -278,14 +262,14 @@ impl Accel {
             if !visibility::sees(inst.visibility, ray.kind) {
                 return f32::INFINITY;
             }
-            let mb = &self.meshes[inst.mesh as usize][chunk as usize];
+            let (mesh, mb) = (&meshes[inst.mesh as usize], &self.meshes[inst.mesh as usize][chunk as usize]);
             let to_object = inst.to_object_at(ray.time);
             let o = to_object.transform_point3a(r.origin);
             let d = to_object.transform_vector3a(r.direction);
             let wt = WatertightRay::new(o, d);
             let local = bvh_ray(o, d, r.tmin, r.tmax);
             let miss = mb.bvh.ray_traverse_miss(local, |lr, tri| {
-                let [a, b, c] = mb.triangle(tri, ray.time);
+                let [a, b, c] = mesh.triangle_at(mb.bvh.primitive_indices[tri] as usize, ray.time);
                 wt.intersect(a, b, c, lr.tmin, lr.tmax).map_or(f32::INFINITY, |h| h.0)
             });
             if miss {
@@ -357,18 +341,26 @@ mod tests {
         ];
         let accel = Accel::build(&meshes, &instances);
         let ray = Ray::new(Vec3A::new(0.2, 0.3, 5.0), Vec3A::new(0.0, 0.0, -1.0));
-        let h = accel.intersect(&instances, &ray).unwrap();
+        let h = accel.intersect(&meshes, &instances, &ray).unwrap();
         assert_eq!(h.instance, 0);
         assert!((h.t - 4.0).abs() < 1e-5);
         // Outside the near quad but inside the scaled far one.
         let ray = Ray::new(Vec3A::new(2.0, 0.0, 5.0), Vec3A::new(0.0, 0.0, -1.0));
-        let h = accel.intersect(&instances, &ray).unwrap();
+        let h = accel.intersect(&meshes, &instances, &ray).unwrap();
         assert_eq!(h.instance, 1);
         assert!((h.t - 7.0).abs() < 1e-5);
-        assert!(accel.occluded(&instances, &Ray::segment(Vec3A::new(2.0, 0.0, 5.0), Vec3A::new(0.0, 0.0, -1.0), 8.0)));
-        assert!(!accel.occluded(&instances, &Ray::segment(Vec3A::new(2.0, 0.0, 5.0), Vec3A::new(0.0, 0.0, -1.0), 6.0)));
+        assert!(accel.occluded(
+            &meshes,
+            &instances,
+            &Ray::segment(Vec3A::new(2.0, 0.0, 5.0), Vec3A::new(0.0, 0.0, -1.0), 8.0)
+        ));
+        assert!(!accel.occluded(
+            &meshes,
+            &instances,
+            &Ray::segment(Vec3A::new(2.0, 0.0, 5.0), Vec3A::new(0.0, 0.0, -1.0), 6.0)
+        ));
         assert!(accel
-            .intersect(&instances, &Ray::new(Vec3A::new(9.0, 0.0, 5.0), Vec3A::new(0.0, 0.0, -1.0)))
+            .intersect(&meshes, &instances, &Ray::new(Vec3A::new(9.0, 0.0, 5.0), Vec3A::new(0.0, 0.0, -1.0)))
             .is_none());
     }
 
@@ -378,8 +370,8 @@ mod tests {
         let instances = vec![Instance::new("q", 0, Affine3A::IDENTITY).unwrap()];
         let accel = Accel::build(&meshes, &instances);
         let ray = Ray::new(Vec3A::new(0.1, 0.2, 5.0), Vec3A::new(-0.0, -0.0, -1.0));
-        assert!(accel.intersect(&instances, &ray).is_some());
-        assert!(accel.occluded(&instances, &ray));
+        assert!(accel.intersect(&meshes, &instances, &ray).is_some());
+        assert!(accel.occluded(&meshes, &instances, &ray));
     }
 
     #[test]
@@ -407,8 +399,8 @@ mod tests {
             Instance::new("a", 0, Affine3A::IDENTITY).unwrap(),
             Instance::new("b", 0, Affine3A::from_translation(glam::Vec3::new(0.5, 0.0, -0.5))).unwrap(),
         ];
-        let whole = Accel::build_chunked(&meshes, &instances, usize::MAX);
-        let cut = Accel::build_chunked(&meshes, &instances, 500);
+        let whole = Accel::build_chunked(&meshes, &instances, usize::MAX, usize::MAX);
+        let cut = Accel::build_chunked(&meshes, &instances, 500, 500);
         assert_eq!(whole.tlas_instances.len(), 2);
         assert_eq!(cut.tlas_instances.len(), 2 * 7);
         let mut state = 12345u32;
@@ -423,7 +415,7 @@ mod tests {
             let o = Vec3A::new(rnd() * 3.0 - 1.5, rnd() * 3.0 - 1.5, 2.0);
             let d = (Vec3A::new(rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, -0.5) - o).normalize();
             let ray = Ray::new(o, d);
-            let (a, b) = (whole.intersect(&instances, &ray), cut.intersect(&instances, &ray));
+            let (a, b) = (whole.intersect(&meshes, &instances, &ray), cut.intersect(&meshes, &instances, &ray));
             assert_eq!(a.is_some(), b.is_some());
             if let (Some(a), Some(b)) = (a, b) {
                 hits += 1;
@@ -431,15 +423,113 @@ mod tests {
                 assert_eq!((a.b1, a.b2), (b.b1, b.b2));
             }
             let seg = Ray::segment(o, d, 1.5);
-            assert_eq!(whole.occluded(&instances, &seg), cut.occluded(&instances, &seg));
+            assert_eq!(whole.occluded(&meshes, &instances, &seg), cut.occluded(&meshes, &instances, &seg));
         }
         assert!(hits > 500, "{hits}");
+    }
+
+    /// A displaced n × n vertex grid, 2 (n − 1)² triangles.
+    fn grid(name: &str, n: usize, phase: f32) -> Mesh {
+        let mut pos = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let (x, y) = (i as f32 / (n - 1) as f32, j as f32 / (n - 1) as f32);
+                pos.extend_from_slice(&[x * 2.0 - 1.0, y * 2.0 - 1.0, 0.1 * (7.0 * x + phase).sin() * (5.0 * y).cos()]);
+            }
+        }
+        let mut idx = Vec::new();
+        for j in 0..n - 1 {
+            for i in 0..n - 1 {
+                let a = (i + n * j) as u32;
+                let n = n as u32;
+                idx.extend_from_slice(&[a, a + 1, a + n + 1, a, a + n + 1, a + n]);
+            }
+        }
+        Mesh::from_buffers(name, &pos, &idx, None, None, &vec![0; idx.len() / 3]).unwrap()
+    }
+
+    /// The closest hit over every triangle of every instance, without a BVH: t, and the
+    /// (instance, triangle, b1, b2) of each triangle hit at that t (several on a shared
+    /// edge, where either is right).
+    fn brute_force(meshes: &[Mesh], instances: &[Instance], ray: &Ray) -> Option<(f32, Vec<(u32, u32, f32, f32)>)> {
+        let mut best: Option<(f32, Vec<(u32, u32, f32, f32)>)> = None;
+        for (k, inst) in instances.iter().enumerate() {
+            let m = &meshes[inst.mesh as usize];
+            let to_object = inst.to_object_at(ray.time);
+            let o = to_object.transform_point3a(ray.origin);
+            let d = to_object.transform_vector3a(ray.direction + Vec3A::ZERO);
+            let wt = WatertightRay::new(o, d);
+            for i in 0..m.indices.len() {
+                let [a, b, c] = m.triangle_at(i, ray.time);
+                let Some((t, b1, b2)) = wt.intersect(a, b, c, ray.tmin, ray.tmax) else { continue };
+                let hit = (k as u32, i as u32, b1, b2);
+                match &mut best {
+                    Some((bt, hits)) if t == *bt => hits.push(hit),
+                    Some((bt, _)) if t > *bt => {}
+                    _ => best = Some((t, vec![hit])),
+                }
+            }
+        }
+        best
+    }
+
+    #[test]
+    fn chunked_meshes_hit_what_brute_force_hits() {
+        // A grid (3042 triangles) placed twice, once rotated and scaled, and a deforming
+        // grid (1250 triangles, two motion keys) on a moving instance; chunks of 200
+        // triangles for meshes of more than 100, so every mesh is cut.
+        let mut moving = grid("moving", 26, 1.0);
+        let keys: Vec<Vec<f32>> = (0..2)
+            .map(|k| {
+                moving.positions.iter().flat_map(|p| [p.x, p.y, p.z + 0.3 * k as f32 + 0.2 * p.x * k as f32]).collect()
+            })
+            .collect();
+        moving.set_motion(&[&keys[0], &keys[1]], None).unwrap();
+        let meshes = vec![grid("still", 40, 0.0), moving];
+        let turn = Affine3A::from_scale_rotation_translation(
+            glam::Vec3::splat(0.7),
+            glam::Quat::from_rotation_x(0.4) * glam::Quat::from_rotation_z(0.3),
+            glam::Vec3::new(0.4, -0.2, -0.6),
+        );
+        let (from, to) = (glam::Vec3::new(-0.3, 0.5, 0.2), glam::Vec3::new(0.1, 0.4, 0.3));
+        let keys = [Affine3A::from_translation(from), Affine3A::from_translation(to)];
+        let shifted = Instance::with_motion("moving", 1, keys[0], &keys).unwrap();
+        let instances =
+            vec![Instance::new("a", 0, Affine3A::IDENTITY).unwrap(), Instance::new("b", 0, turn).unwrap(), shifted];
+        let accel = Accel::build_chunked(&meshes, &instances, 100, 200);
+        assert_eq!(accel.tlas_instances.len(), 2 * 3042_usize.div_ceil(200) + 1250_usize.div_ceil(200));
+        let mut state = 987654321u32;
+        let mut rnd = || {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            state as f32 / u32::MAX as f32
+        };
+        let (mut hits, mut shadowed) = (0, 0);
+        for _ in 0..3000 {
+            let o = Vec3A::new(rnd() * 3.0 - 1.5, rnd() * 3.0 - 1.5, 1.5 + rnd());
+            let d = (Vec3A::new(rnd() * 2.4 - 1.2, rnd() * 2.4 - 1.2, rnd() - 1.0) - o).normalize();
+            let ray = Ray::new(o, d).with_time(rnd());
+            let reference = brute_force(&meshes, &instances, &ray);
+            let got = accel.intersect(&meshes, &instances, &ray);
+            assert_eq!(got.is_some(), reference.is_some(), "{ray:?}");
+            if let (Some(h), Some((t, candidates))) = (got, &reference) {
+                hits += 1;
+                assert_eq!(h.t, *t, "{ray:?}");
+                assert!(candidates.contains(&(h.instance, h.triangle, h.b1, h.b2)), "{h:?} not in {candidates:?}");
+            }
+            let seg = Ray { tmax: 2.0, ..ray };
+            let blocked = reference.is_some_and(|(t, _)| t < seg.tmax);
+            shadowed += blocked as u32;
+            assert_eq!(accel.occluded(&meshes, &instances, &seg), blocked, "{seg:?}");
+        }
+        assert!(hits > 1000 && shadowed > 300, "{hits} hits, {shadowed} shadowed");
     }
 
     #[test]
     fn empty_scene_has_no_hits() {
         let accel = Accel::build(&[], &[]);
-        assert!(accel.intersect(&[], &Ray::new(Vec3A::ZERO, Vec3A::Z)).is_none());
-        assert!(!accel.occluded(&[], &Ray::new(Vec3A::ZERO, Vec3A::Z)));
+        assert!(accel.intersect(&[], &[], &Ray::new(Vec3A::ZERO, Vec3A::Z)).is_none());
+        assert!(!accel.occluded(&[], &[], &Ray::new(Vec3A::ZERO, Vec3A::Z)));
     }
 }

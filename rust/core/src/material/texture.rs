@@ -12,7 +12,7 @@
 //! numpy, Pillow and OpenEXR give images), texture coordinate `v = 0` is the bottom edge,
 //! texel centres sit at `((i + ½)/w, (j + ½)/h)`, and lookups are bilinear.
 
-use crate::scene::{Buffer, TextureDesc, TextureEncoding};
+use crate::scene::{BufferView, TextureDesc, TextureEncoding};
 use crate::{Error, Result};
 use glam::Vec2;
 use serde::{Deserialize, Serialize};
@@ -103,13 +103,13 @@ fn lerp(a: f32, b: f32, t: f32) -> f32 {
 
 impl Texture {
     /// Builds texture `index` of a scene description from its numbered buffer.
-    pub fn from_desc(d: &TextureDesc, buffers: &[Buffer]) -> Result<Self> {
+    pub fn from_desc(d: &TextureDesc, buffers: &[BufferView]) -> Result<Self> {
         let name = d.name.as_str();
         match (d.encoding, buffers.get(d.buffer)) {
-            (TextureEncoding::Linear, Some(Buffer::F32(v))) => {
+            (TextureEncoding::Linear, Some(BufferView::F32(v))) => {
                 Self::from_linear(name, d.width, d.height, d.channels, v, d.wrap)
             }
-            (TextureEncoding::Srgb, Some(Buffer::U8(v))) => {
+            (TextureEncoding::Srgb, Some(BufferView::U8(v))) => {
                 Self::from_srgb8(name, d.width, d.height, d.channels, v, d.wrap)
             }
             (TextureEncoding::Linear, Some(_)) => Err(Error::object(

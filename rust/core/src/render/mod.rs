@@ -6,7 +6,7 @@
 
 use crate::color::RgbSpace;
 use crate::film::FilmImages;
-use crate::scene::{Buffer, BuildOptions, Scene, SceneDesc};
+use crate::scene::{AsBufferView, BuildOptions, Scene, SceneDesc};
 use crate::spectrum::WavelengthGrid;
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -236,9 +236,9 @@ pub struct RenderOutput {
 /// Renders a scene description with settings resolved for it
 /// ([`RenderSettings::resolve`] with the same `desc`). Cancelling returns the samples
 /// finished so far.
-pub fn render(
+pub fn render<B: AsBufferView + Sync>(
     desc: &SceneDesc,
-    buffers: &[Buffer],
+    buffers: &[B],
     settings: &ResolvedSettings,
     control: &RenderControl,
 ) -> Result<RenderOutput> {
@@ -254,9 +254,9 @@ pub fn render(
     Ok(out)
 }
 
-fn render_in_pool(
+fn render_in_pool<B: AsBufferView>(
     desc: &SceneDesc,
-    buffers: &[Buffer],
+    buffers: &[B],
     settings: &ResolvedSettings,
     control: &RenderControl,
     threads: usize,
@@ -269,7 +269,7 @@ fn render_in_pool(
 
 /// Compiles a scene description for resolved `settings`: their image size and grid
 /// (for the RGB method, the three-channel grid of [`WavelengthGrid::rgb_channels`]).
-pub fn compile(desc: &SceneDesc, buffers: &[Buffer], settings: &ResolvedSettings) -> Result<Scene> {
+pub fn compile<B: AsBufferView>(desc: &SceneDesc, buffers: &[B], settings: &ResolvedSettings) -> Result<Scene> {
     let grid = match settings.method {
         Method::Rgb => WavelengthGrid::rgb_channels(&settings.grid, &RgbSpace::rec709())?,
         _ => settings.grid.clone(),

@@ -15,6 +15,37 @@ pub enum Buffer {
     U8(Vec<u8>),
 }
 
+/// A buffer the build reads in place: a [`Buffer`]'s data, or a caller's memory (the
+/// Python bindings lend numpy arrays for the length of a render instead of copying them).
+#[derive(Clone, Copy, Debug)]
+pub enum BufferView<'a> {
+    F32(&'a [f32]),
+    U32(&'a [u32]),
+    U8(&'a [u8]),
+}
+
+/// What [`super::Scene::build`] and the render entry points accept as buffers: owned
+/// [`Buffer`]s or borrowed [`BufferView`]s.
+pub trait AsBufferView {
+    fn view(&self) -> BufferView<'_>;
+}
+
+impl AsBufferView for Buffer {
+    fn view(&self) -> BufferView<'_> {
+        match self {
+            Buffer::F32(v) => BufferView::F32(v),
+            Buffer::U32(v) => BufferView::U32(v),
+            Buffer::U8(v) => BufferView::U8(v),
+        }
+    }
+}
+
+impl AsBufferView for BufferView<'_> {
+    fn view(&self) -> BufferView<'_> {
+        *self
+    }
+}
+
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SceneDesc {

@@ -25,7 +25,7 @@ pub struct MeshShadingData {
 }
 
 fn per_vertex(
-    buffers: &[super::Buffer],
+    buffers: &[super::BufferView],
     i: usize,
     mesh: &str,
     what: &str,
@@ -59,7 +59,7 @@ fn per_vertex(
 }
 
 impl MeshShadingData {
-    pub fn new(md: &MeshDesc, mesh: &Mesh, buffers: &[super::Buffer]) -> Result<Self> {
+    pub fn new(md: &MeshDesc, mesh: &Mesh, buffers: &[super::BufferView]) -> Result<Self> {
         let v = mesh.positions.len();
         let name = md.name.as_str();
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));

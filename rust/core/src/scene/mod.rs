@@ -280,26 +280,26 @@ fn graph_bsdf(
     crate::shading::bsdf::GraphBsdf::new(compiled.program.clone(), compiled.template.clone(), Box::new(build))
 }
 
-fn buffer_f32<'a>(buffers: &'a [Buffer], i: usize, mesh: &str, what: &str) -> Result<&'a [f32]> {
+fn buffer_f32<'a>(buffers: &[BufferView<'a>], i: usize, mesh: &str, what: &str) -> Result<&'a [f32]> {
     match buffers.get(i) {
-        Some(Buffer::F32(v)) => Ok(v),
-        Some(Buffer::U32(_)) => {
+        Some(BufferView::F32(v)) => Ok(v),
+        Some(BufferView::U32(_)) => {
             Err(Error::object("mesh", mesh, format!("{what} buffer {i} holds integers, expected floats")))
         }
-        Some(Buffer::U8(_)) => {
+        Some(BufferView::U8(_)) => {
             Err(Error::object("mesh", mesh, format!("{what} buffer {i} holds bytes, expected floats")))
         }
         None => Err(Error::object("mesh", mesh, format!("{what} buffer {i} does not exist"))),
     }
 }
 
-fn buffer_u32<'a>(buffers: &'a [Buffer], i: usize, mesh: &str, what: &str) -> Result<&'a [u32]> {
+fn buffer_u32<'a>(buffers: &[BufferView<'a>], i: usize, mesh: &str, what: &str) -> Result<&'a [u32]> {
     match buffers.get(i) {
-        Some(Buffer::U32(v)) => Ok(v),
-        Some(Buffer::F32(_)) => {
+        Some(BufferView::U32(v)) => Ok(v),
+        Some(BufferView::F32(_)) => {
             Err(Error::object("mesh", mesh, format!("{what} buffer {i} holds floats, expected integers")))
         }
-        Some(Buffer::U8(_)) => {
+        Some(BufferView::U8(_)) => {
             Err(Error::object("mesh", mesh, format!("{what} buffer {i} holds bytes, expected 32-bit integers")))
         }
         None => Err(Error::object("mesh", mesh, format!("{what} buffer {i} does not exist"))),
@@ -307,7 +307,12 @@ fn buffer_u32<'a>(buffers: &'a [Buffer], i: usize, mesh: &str, what: &str) -> Re
 }
 
 impl Scene {
-    pub fn build(desc: &SceneDesc, buffers: &[Buffer], opts: &BuildOptions) -> Result<Self> {
+    pub fn build<B: AsBufferView>(desc: &SceneDesc, buffers: &[B], opts: &BuildOptions) -> Result<Self> {
+        let views: Vec<BufferView> = buffers.iter().map(|b| b.view()).collect();
+        Self::build_from(desc, &views, opts)
+    }
+
+    fn build_from(desc: &SceneDesc, buffers: &[BufferView], opts: &BuildOptions) -> Result<Self> {
         let grid = opts.grid.clone();
         let n = grid.len();
         let uplift_result = Uplift::new(&grid, &opts.space, opts.uplift).map(Arc::new);
@@ -913,10 +918,10 @@ impl Scene {
     }
 
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        self.accel.intersect(&self.instances, ray)
+        self.accel.intersect(&self.meshes, &self.instances, ray)
     }
     pub fn occluded(&self, ray: &Ray) -> bool {
-        self.accel.occluded(&self.instances, ray)
+        self.accel.occluded(&self.meshes, &self.instances, ray)
     }
 
     /// World-space geometry at a hit.
