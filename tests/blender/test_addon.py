@@ -1,5 +1,6 @@
 """The Blender add-on, driven through bpy in subprocesses (see bhelper.py)."""
 
+import numpy as np
 import pytest
 
 from .bhelper import check, run_bpy
@@ -512,3 +513,59 @@ def test_material_slots_loose_vertices_and_empty_meshes(tmp_path):
     assert r["nverts"] == 6 and [9.0, 9.0, 9.0] not in r["verts"]  # the loose vertex is dropped
     assert r["names"] == ["NoMat", "Two"]  # the empty mesh is skipped
     assert r["nomat"] == "default" and r["warns"] == []
+
+
+def test_mesh_export_matches_blender_corners_on_awkward_faces(tmp_path):
+    """Against a plain-Python walk over Blender's loop triangles: concave, degenerate and
+    non-planar quads, an n-gon, flat and smooth faces, custom normals, the render UV map
+    (not the active one) and per-face material slots; loose vertices are dropped."""
+    proc, res = run_bpy(
+        tmp_path,
+        """
+    from polychrome_blender.export.meshes import mesh_arrays
+    sc = empty_scene(8, 8)
+    me = bpy.data.meshes.new('Awkward')
+    verts = [(0, 0, 0), (2, 0, 0), (0.5, 0.5, 0), (0, 2, 0),            # concave quad (dart)
+             (3, 0, 0), (4, 0, 0), (4, 0, 0), (3, 1, 0),                # degenerate quad (two equal corners)
+             (5, 0, 0), (6, 0, 1), (6, 1, 0), (5, 1, 1),                # non-planar quad
+             (7, 0, 0), (8, 0, 0), (8.5, 1, 0), (7.5, 1.8, 0.2), (6.8, 1, 0),  # pentagon
+             (0, 0, 3), (1, 0, 3), (0, 1, 3),                          # triangle
+             (9, 9, 9), (9, 9, 8)]                                      # loose
+    me.from_pydata(verts, [], [(0, 1, 2, 3), (4, 5, 6, 7), (8, 9, 10, 11), (12, 13, 14, 15, 16), (17, 18, 19),
+                               (1, 4, 7, 2)])
+    for i, p in enumerate(me.polygons):
+        p.material_index = i % 3
+        p.use_smooth = i % 2 == 0
+    for n in ('A', 'B', 'C'):
+        me.materials.append(bpy.data.materials.new(n))
+    rng = np.random.default_rng(7)
+    a = me.uv_layers.new(name='Active'); r = me.uv_layers.new(name='Render')
+    for layer in (a, r):
+        for d in layer.uv: d.vector = tuple(rng.random(2))
+    me.uv_layers.active = a; r.active_render = True
+    custom = rng.normal(size=(len(me.loops), 3))
+    custom[:4] = (0, 0, 1)   # shared by the concave quad's corners
+    me.normals_split_custom_set([tuple(v / np.linalg.norm(v)) for v in custom])
+    ob = bpy.data.objects.new('Awkward', me); sc.collection.objects.link(ob)
+    dg = bpy.context.evaluated_depsgraph_get(); ev = ob.evaluated_get(dg)
+    out = mesh_arrays(ev, ob.name)
+    em = ev.to_mesh(); em.calc_loop_triangles()
+    uvl = em.uv_layers['Render'].uv
+    ref = dict(
+        p=[[list(em.vertices[i].co) for i in lt.vertices] for lt in em.loop_triangles],
+        n=[[list(em.corner_normals[l].vector) for l in lt.loops] for lt in em.loop_triangles],
+        uv=[[list(uvl[l].vector) for l in lt.loops] for lt in em.loop_triangles],
+        slot=[lt.material_index for lt in em.loop_triangles],
+    )
+    ev.to_mesh_clear()
+    t = out.triangles.astype(int)
+    emit(p=out.vertices[t].tolist(), n=out.normals[t].tolist(), uv=out.uvs[t].tolist(), slot=out.tri_slot.tolist(),
+         dtype=str(out.triangles.dtype), nv=len(out.vertices), used=len(set(t.ravel().tolist())), ref=ref)
+    """,
+    )
+    r = check(proc, res)[0]
+    ref = r["ref"]
+    for k in ("p", "n", "uv"):
+        assert np.abs(np.array(r[k]) - np.array(ref[k])).max() < 1e-6, k
+    assert r["slot"] == ref["slot"] == [i % 3 for i, k in enumerate((4, 4, 4, 5, 3, 4)) for _ in range(k - 2)]
+    assert r["dtype"] == "uint32" and r["used"] == r["nv"]  # every exported vertex is used: loose ones dropped
