@@ -296,6 +296,7 @@ impl Walk {
                         if st.depth >= self.max_bounces {
                             return End::Done;
                         }
+                        rng.start_vertex();
                         hooks.connect_medium(scene, ctx, &mv, &st, beta, rng, scratch);
                         if st.depth >= self.scatter_below {
                             return End::Done;
@@ -407,6 +408,8 @@ impl Walk {
             if st.depth >= self.max_bounces || v.wo_local.z == 0.0 {
                 return End::Done;
             }
+            // Stratified draws line up vertex by vertex across a pixel's samples.
+            rng.start_vertex();
             hooks.connect(scene, ctx, &v, &st, beta, rng, scratch);
             if st.depth >= self.scatter_below {
                 return End::Done;

@@ -3,8 +3,9 @@
 //!
 //! Sample passes are numbered `0 .. rounds × samples` ([`Integrator::rounds`]): pass `g`
 //! is the g-th sample of every pixel, and its light paths are numbered
-//! `g·pixels .. (g+1)·pixels`. Every pixel sample draws from its own random stream
-//! seeded by (seed, pixel, g), every light path from one seeded by (seed, its number),
+//! `g·pixels .. (g+1)·pixels`. Every pixel sample draws the numbers of (seed, pixel, g)
+//! (SOBOL: point g of the pixel's scrambled sequence, `sampling::Sobol`), every light
+//! path from a PCG stream seeded by (seed, its number),
 //! so an image depends neither on the thread count nor on how the passes are grouped:
 //! [`Driver::render_passes`] renders any range of passes into sums that add up
 //! exactly to the sums of the whole render (up to float rounding of the additions).
@@ -14,7 +15,7 @@ use super::{RenderControl, RenderOutput, RenderStats, ResolvedSettings, PREVIEW_
 use crate::film::{Film, FilmBuffer, PixelSample, PixelSums};
 use crate::integrator::forward::Splat;
 use crate::integrator::{self, CameraSample, Integrator, Scratch};
-use crate::sampling::{mix64, Rng, Strata};
+use crate::sampling::{mix64, Rng, Sampler, Strata};
 use crate::scene::Scene;
 use crate::spectrum::named;
 use crate::spectrum::SampledSpectrum;
@@ -423,7 +424,7 @@ impl<'a> Driver<'a> {
                 }
                 for g in passes.clone() {
                     ps.reset();
-                    let mut rng = Rng::for_sample(self.settings.seed, pixel, g as u64);
+                    let mut rng = Rng::for_sampler(self.settings.sampler, self.settings.seed, pixel, g as u64);
                     scratch.strata = Some(Strata::new(mix64(self.settings.seed ^ mix64(pixel ^ PIXEL_STRATA)), g));
                     let jitter = rng.uniform2();
                     let film = glam::Vec2::new(x as f32 + jitter.x, y as f32 + jitter.y);
@@ -457,7 +458,7 @@ impl<'a> Driver<'a> {
                 let end = ((c + 1) * LIGHT_CHUNK).min(count);
                 for k in c * LIGHT_CHUNK..end {
                     let path = first + k;
-                    let mut rng = Rng::for_sample(self.settings.seed ^ LIGHT_STREAM, path, 0);
+                    let mut rng = Rng::for_sampler(Sampler::Independent, self.settings.seed ^ LIGHT_STREAM, path, 0);
                     // A pass's light paths are one stratified set (COLLAPSE STRATIFIED).
                     let key = mix64(self.settings.seed ^ LIGHT_STREAM ^ mix64(path / pixels));
                     scratch.strata = Some(Strata::new(key, (path % pixels) as u32));

@@ -16,6 +16,7 @@
 use super::quality::{self, Quality};
 use super::{Collapse, Direction, MediumSampling, Method};
 use crate::color::uplift::UpliftMethod;
+use crate::sampling::Sampler;
 use crate::scene::SceneDesc;
 use crate::spectrum::grid::{LAMBDA_MAX, LAMBDA_MIN, MAX_SAMPLES, MIN_SAMPLES};
 use crate::spectrum::WavelengthGrid;
@@ -284,6 +285,16 @@ settings! {
         "Random seed: the same settings and seed give the same pixels on any thread count",
         int(0, INT32_MAX),
     );
+    /// Which random numbers pixel samples draw.
+    sampler: copy Sampler = Sampler::Sobol => Spec::new(
+        "Sampling",
+        "Sampler",
+        "Which random numbers a pixel's samples draw",
+        Kind::Enum { items: vec![
+            item(Sampler::Sobol, "Sobol", "Owen-scrambled Sobol points stratified across a pixel's samples, a fresh set of dimensions per bounce (as Cycles)"),
+            item(Sampler::Independent, "Independent", "Independent random numbers for every draw, for comparison"),
+        ]},
+    ).see("methods.md");
     /// How spectra are traced.
     method: copy Method = Method::Polychromatic => Spec::new(
         "Spectrum",

@@ -1,14 +1,29 @@
 //! Random numbers and the sampling routines shared by integrators, materials and lights.
 
 use glam::{Vec2, Vec3A};
+use serde::{Deserialize, Serialize};
 use std::f32::consts::PI;
 
-/// PCG32 (O'Neill 2014): small, fast, and seekable by stream, so every pixel sample
-/// gets its own deterministic sequence whatever thread renders it.
+/// Which numbers a pixel sample's [`Rng`] hands out (the `sampler` setting).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "SCREAMING_SNAKE_CASE")]
+pub enum Sampler {
+    /// Owen-scrambled Sobol points stratified across a pixel's samples ([`Sobol`]).
+    #[default]
+    Sobol,
+    /// Independent PCG32 numbers for every draw.
+    Independent,
+}
+
+/// The random numbers of one path: PCG32 (O'Neill 2014) — small, fast, and seekable by
+/// stream, so every pixel sample gets its own deterministic sequence whatever thread
+/// renders it — or, for a pixel sample of the SOBOL sampler, stratified points
+/// ([`Sobol`]) with the same calls, so integrators do not know which they draw from.
 #[derive(Clone, Debug)]
 pub struct Rng {
     state: u64,
     inc: u64,
+    sobol: Option<Sobol>,
 }
 
 const PCG_MULT: u64 = 6364136223846793005;
@@ -20,32 +35,164 @@ pub fn mix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// Salt of a pixel's Sobol scrambling key, apart from the PCG streams of the same seed.
+const SOBOL_SALT: u64 = 0x736f_626f_6c5f_6275;
+
 impl Rng {
     pub fn new(seed: u64, stream: u64) -> Self {
-        let mut r = Self { state: 0, inc: (stream << 1) | 1 };
-        r.next_u32();
+        let mut r = Self { state: 0, inc: (stream << 1) | 1, sobol: None };
+        r.next_pcg();
         r.state = r.state.wrapping_add(mix64(seed));
-        r.next_u32();
+        r.next_pcg();
         r
     }
-    /// The stream of pixel (x, y), sample `s` of a render with `seed`.
+    /// The numbers of pixel (x, y), sample `s` of a render with `seed`: stratified
+    /// across the pixel's samples (the SOBOL sampler).
     pub fn for_sample(seed: u64, pixel: u64, sample: u64) -> Self {
-        Self::new(mix64(seed ^ mix64(sample.wrapping_add(0x9e3779b97f4a7c15))), pixel)
+        Self::for_sampler(Sampler::Sobol, seed, pixel, sample)
     }
-    pub fn next_u32(&mut self) -> u32 {
+    /// As [`Rng::for_sample`] with the given sampler; INDEPENDENT: a PCG stream per
+    /// pixel sample.
+    pub fn for_sampler(sampler: Sampler, seed: u64, pixel: u64, sample: u64) -> Self {
+        let mut r = Self::new(mix64(seed ^ mix64(sample.wrapping_add(0x9e3779b97f4a7c15))), pixel);
+        if sampler == Sampler::Sobol {
+            // The key has no sample in it: a pixel's samples are points of one sequence.
+            let key = mix64(seed ^ mix64(pixel ^ SOBOL_SALT));
+            r.sobol = Some(Sobol { key, index: sample as u32, block: 0, call: 0 });
+        }
+        r
+    }
+    /// A path reached a new vertex: its draws start a fresh block of dimensions, so
+    /// the draws of vertex k line up across a pixel's samples however many numbers
+    /// earlier vertices took (as Cycles' per-bounce dimensions). No-op for PCG.
+    pub fn start_vertex(&mut self) {
+        if let Some(s) = &mut self.sobol {
+            s.block += 1;
+            s.call = 0;
+        }
+    }
+    fn next_pcg(&mut self) -> u32 {
         let old = self.state;
         self.state = old.wrapping_mul(PCG_MULT).wrapping_add(self.inc);
         let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
         let rot = (old >> 59) as u32;
         xorshifted.rotate_right(rot)
     }
+    pub fn next_u32(&mut self) -> u32 {
+        match &mut self.sobol {
+            Some(s) => s.next_1d(),
+            None => self.next_pcg(),
+        }
+    }
     /// Uniform in [0, 1).
     pub fn uniform(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+        to_unit(self.next_u32())
     }
     pub fn uniform2(&mut self) -> Vec2 {
-        Vec2::new(self.uniform(), self.uniform())
+        match &mut self.sobol {
+            Some(s) => {
+                let [x, y] = s.next_2d();
+                Vec2::new(to_unit(x), to_unit(y))
+            }
+            None => Vec2::new(self.uniform(), self.uniform()),
+        }
     }
+}
+
+/// 32 random bits to [0, 1) (24 bits: every value exactly representable, never 1).
+#[inline]
+fn to_unit(x: u32) -> f32 {
+    (x >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+}
+
+/// Stratified numbers of one pixel sample: sample `index` of a pixel draws, at the
+/// `call`-th draw of its vertex `block`, the `index`-th point of the first one or two
+/// dimensions of the Sobol sequence (Sobol 1967; dimension 0 is van der Corput, 1 is
+/// the Pascal matrix), index-shuffled and Owen-scrambled with seeds hashed from the
+/// pixel, block and call — Burley 2020, "Practical Hash-based Owen Scrambling", JCGT
+/// 9(4), sec. 3–4 ("padding" by shuffling), as Cycles' kernel/sample/sobol_burley.h.
+/// Every 2^m samples of a pixel put one point of each draw in each interval of width
+/// 2^-m, and each 2D draw is a (0,m,2)-net; draws of different calls are decorrelated
+/// by their seeds. Each point of a nested uniform scramble is uniform on [0,1)^d on
+/// its own, and different seeds are independent, so every estimator stays unbiased
+/// whichever draw a call lands on. The hash seeds have no dimension limit and the
+/// 32-bit matrices cover 2^32 samples (the sample index is a u32), so nothing falls
+/// back to independent numbers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Sobol {
+    pub key: u64,
+    pub index: u32,
+    /// The path's vertex (0: the camera's draws: pixel jitter, lens, time).
+    pub block: u32,
+    /// Draws so far at this vertex.
+    pub call: u32,
+}
+
+impl Sobol {
+    fn seeds(&mut self) -> u64 {
+        let h = mix64(self.key ^ mix64(((self.block as u64) << 32) | self.call as u64));
+        self.call += 1;
+        h
+    }
+    /// One stratified draw (32 bits of a uniform in [0, 1)).
+    pub fn next_1d(&mut self) -> u32 {
+        let h = self.seeds();
+        let i = owen(self.index, h as u32);
+        owen(i.reverse_bits(), (h >> 32) as u32)
+    }
+    /// One stratified 2D draw: Sobol dimensions 0 and 1 of the shuffled index.
+    pub fn next_2d(&mut self) -> [u32; 2] {
+        let h = self.seeds();
+        let i = owen(self.index, h as u32);
+        let h2 = mix64(h);
+        [owen(i.reverse_bits(), (h >> 32) as u32), owen(sobol_dim1(i), h2 as u32)]
+    }
+}
+
+/// Dimension 1 of Sobol's sequence: the XOR of the direction numbers of `i`'s set bits,
+/// from primitive polynomial x + 1 (m_1 = 1, m_k = 2m_{k-1} ⊕ m_{k-1}; Joe & Kuo 2008's
+/// first entry), as 32-bit binary fractions.
+#[inline]
+pub fn sobol_dim1(mut i: u32) -> u32 {
+    let mut x = 0;
+    let mut k = 0;
+    while i != 0 {
+        if i & 1 != 0 {
+            x ^= SOBOL_DIM1[k];
+        }
+        i >>= 1;
+        k += 1;
+    }
+    x
+}
+
+const SOBOL_DIM1: [u32; 32] = {
+    let mut v = [0u32; 32];
+    let mut m: u64 = 1;
+    let mut k = 0;
+    while k < 32 {
+        // v_k = m_k / 2^(k+1); m_k < 2^(k+1).
+        v[k] = (m << (31 - k)) as u32;
+        m ^= m << 1;
+        k += 1;
+    }
+    v
+};
+
+/// Burley's nested uniform (Owen) scramble of a 32-bit binary fraction, with the
+/// improved Laine–Karras hash (Burley 2020 sec. 4, as Cycles' `reversed_bit_owen`):
+/// each output bit depends on that bit and the more significant ones, so aligned
+/// power-of-two blocks of fractions (or of indices, when applied to an index) map to
+/// blocks — stratification survives, and each point is uniform.
+#[inline]
+fn owen(x: u32, seed: u32) -> u32 {
+    let mut n = x.reverse_bits();
+    n ^= n.wrapping_mul(0x3d20_adea);
+    n = n.wrapping_add(seed);
+    n = n.wrapping_mul((seed >> 16) | 1);
+    n ^= n.wrapping_mul(0x0552_6c56);
+    n ^= n.wrapping_mul(0x53a2_2864);
+    n.reverse_bits()
 }
 
 /// Laine–Karras style hash permutation (Burley 2020, "Practical Hash-based Owen
@@ -270,6 +417,77 @@ mod tests {
         let n = 4096;
         let mean: f64 = (0..n).map(|k| Strata::new(k as u64, 3).uniform(2) as f64).sum::<f64>() / n as f64;
         assert!((mean - 0.5).abs() < 0.02, "{mean}");
+    }
+
+    /// The 2^m samples of a pixel, for the draws of a few blocks and calls: in [0, 1),
+    /// one point per interval of width 2^-m in each dimension, and 2D draws a
+    /// (0,m,2)-net (one point in each of the 2^m elementary boxes of every shape
+    /// 2^-a × 2^-(m-a)).
+    #[test]
+    fn sobol_draws_are_stratified_and_2d_draws_are_nets() {
+        fn strata(xs: &[f64]) -> bool {
+            let n = xs.len();
+            let mut seen = vec![false; n];
+            xs.iter().all(|&x| (0.0..1.0).contains(&x) && !std::mem::replace(&mut seen[(x * n as f64) as usize], true))
+        }
+        for (seed, pixel) in [(0u64, 0u64), (7, 1234), (99, 5)] {
+            for m in 0..=10u32 {
+                let n = 1u32 << m;
+                let draws: Vec<Vec<(f32, f32, f32)>> = (0..n)
+                    .map(|i| {
+                        let mut r = Rng::for_sample(seed, pixel, i as u64);
+                        let mut out = Vec::new();
+                        for _ in 0..3 {
+                            let a = r.uniform();
+                            let b = r.uniform2();
+                            out.push((a, b.x, b.y));
+                            r.start_vertex();
+                        }
+                        out
+                    })
+                    .collect();
+                for d in 0..3 {
+                    let col =
+                        |f: fn(&(f32, f32, f32)) -> f32| draws.iter().map(|v| f(&v[d]) as f64).collect::<Vec<_>>();
+                    let (a, x, y) = (col(|t| t.0), col(|t| t.1), col(|t| t.2));
+                    assert!(strata(&a) && strata(&x) && strata(&y), "seed {seed} m {m} block {d}");
+                    for ax in 0..=m {
+                        let (nx, ny) = (1u64 << ax, 1u64 << (m - ax));
+                        let mut seen = vec![false; n as usize];
+                        for (&px, &py) in x.iter().zip(&y) {
+                            let b = ((px * nx as f64) as u64 * ny + (py * ny as f64) as u64) as usize;
+                            assert!(!seen[b], "seed {seed} m {m} block {d}: box {nx}x{ny} twice");
+                            seen[b] = true;
+                        }
+                    }
+                }
+            }
+        }
+        // Draws differ between calls, blocks and pixels; INDEPENDENT is the old PCG stream.
+        let first = |seed, pixel| {
+            let mut r = Rng::for_sample(seed, pixel, 3);
+            let a = [r.uniform(), r.uniform()];
+            r.start_vertex();
+            [a[0], a[1], r.uniform()]
+        };
+        let a = first(1, 2);
+        assert!(a[0] != a[1] && a[1] != a[2] && a != first(1, 3) && a != first(2, 2));
+        let mut p = Rng::for_sampler(Sampler::Independent, 1, 2, 3);
+        let mut q = Rng::new(mix64(1 ^ mix64(3u64.wrapping_add(0x9e3779b97f4a7c15))), 2);
+        assert_eq!(p.uniform2(), q.uniform2());
+        // Over many pixels a draw is uniform: mean 1/2, variance 1/12.
+        let n = 20_000;
+        let v: Vec<f64> = (0..n).map(|k| Rng::for_sample(5, k, 6).uniform2().y as f64).collect();
+        let mean = v.iter().sum::<f64>() / n as f64;
+        let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64;
+        assert!((mean - 0.5).abs() < 0.01 && (var - 1.0 / 12.0).abs() < 0.003, "{mean} {var}");
+    }
+
+    /// Dimension 1's first points are those of Sobol's second dimension (Joe & Kuo).
+    #[test]
+    fn sobol_dimension_one_matches_the_sequence() {
+        let x: Vec<f64> = (0..8).map(|i| sobol_dim1(i) as f64 / 4_294_967_296.0).collect();
+        assert_eq!(x, [0.0, 0.5, 0.75, 0.25, 0.625, 0.125, 0.375, 0.875]);
     }
 
     #[test]
