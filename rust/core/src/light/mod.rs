@@ -125,15 +125,19 @@ pub fn one_minus_cos_from_sin2(sin2: f32) -> f32 {
 }
 
 /// A direction uniform in the cone of half-angle θmax about +z, given 1 − cos θmax,
-/// and its solid-angle pdf 1 / (2π (1 − cos θmax)) (pbrt-v4 `SampleUniformCone`;
-/// Cycles `sample_uniform_cone`).
+/// and its solid-angle pdf 1 / (2π (1 − cos θmax)) (pbrt-v4 `SampleUniformCone`).
+/// Through the concentric disk, as Cycles' `sample_uniform_cone_concentric`: the
+/// area-preserving map keeps stratified `u` stratified over the cone (the polar map's
+/// √ edge left a 10° sun's 16-spp pixel spread at 0.28 % with Sobol points).
 #[inline]
 pub fn sample_uniform_cone(u: Vec2, one_minus_cos_max: f32) -> (Vec3A, f32) {
-    let omc = u.x * one_minus_cos_max;
+    let d = crate::sampling::concentric_disk(u);
+    // |d|² is uniform on [0, 1) and its angle uniform: 1 − cos θ = |d|² (1 − cos θmax).
+    let r2 = d.length_squared();
+    let omc = r2 * one_minus_cos_max;
     let cos = 1.0 - omc;
-    let sin = (omc * (2.0 - omc)).max(0.0).sqrt();
-    let phi = 2.0 * std::f32::consts::PI * u.y;
-    (Vec3A::new(sin * phi.cos(), sin * phi.sin(), cos), 1.0 / (2.0 * std::f32::consts::PI * one_minus_cos_max))
+    let sin_over_r = if r2 > 0.0 { (omc * (2.0 - omc) / r2).max(0.0).sqrt() } else { 0.0 };
+    (Vec3A::new(d.x * sin_over_r, d.y * sin_over_r, cos), 1.0 / (2.0 * std::f32::consts::PI * one_minus_cos_max))
 }
 
 /// The distance along unit `wi` from `p` to the near surface of the sphere (`center`,
