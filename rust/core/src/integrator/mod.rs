@@ -86,10 +86,13 @@ pub fn connection_side(
 pub struct Facing<'s> {
     /// Unit direction back along the ray.
     pub wo: glam::Vec3A,
-    /// Geometric and shading normals, facing `wo`.
+    /// Geometric and shading normals, facing `wo` (`ns`: the Normal pass's).
     pub ng: glam::Vec3A,
     pub ns: glam::Vec3A,
     pub material: &'s crate::material::Material,
+    /// The shading frame the BSDF sees directions in: about `ns`, or about `ng` when
+    /// the material's closures carry their own normals.
+    pub frame: crate::geometry::Frame,
 }
 
 /// Orients a hit towards the incoming ray and points `ctx` at it (uv, face).
@@ -109,17 +112,22 @@ pub fn facing<'s>(
     }
     let ng = if front { si.ng } else { -si.ng };
     let mut ns = if front { si.ns } else { -si.ns };
+    let mut frame_normal = ns;
     if let Some(n) = &material.normal {
-        // The graph's normal (Normal Map, Bump) becomes the shading normal, bent towards
-        // ng until the mirror direction of wo is above the surface, as Cycles does to
-        // every closure's normal (ensure_valid_specular_reflection, bsdf_util.h). Light
-        // still cannot leak: `scatter` and `connection_side` keep requiring directions
-        // on the same side of ng and of this normal.
+        // A graph with linked normals: each closure is shaded about its own normal
+        // (material::Oriented, placed by closure::Orient when the hit's BSDF is built),
+        // in a frame about ng, so which side a direction is on is decided by ng as in
+        // Cycles' bsdf_eval/bsdf_sample. The Normal pass reads the first linked normal,
+        // made valid as Cycles makes the specular closures' (ensure_valid_specular_reflection,
+        // bsdf_util.h).
         let n = glam::Vec3A::from(n.at(&ctx.hit));
         ns =
             glam::Vec3A::from(crate::shading::vector::ensure_valid_specular_reflection(ng.into(), wo.into(), n.into()));
+        frame_normal = ng;
     }
-    Facing { wo, ng, ns, material }
+    let frame = crate::geometry::Frame::from_normal(frame_normal);
+    ctx.frame = frame;
+    Facing { wo, ng, ns, material, frame }
 }
 
 /// How pixel samples and light paths are estimated: the direction's technique on the

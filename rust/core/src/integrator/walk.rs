@@ -340,8 +340,7 @@ impl Walk {
                 if crossings > VOLUME_BOUNDS_MAX {
                     return End::Done;
                 }
-                let Facing { wo, ng, ns, material } = facing(scene, &st.ray, &si, ctx);
-                let frame = Frame::from_normal(ns);
+                let Facing { wo, ng, ns, material, frame } = facing(scene, &st.ray, &si, ctx);
                 let v = Vertex {
                     si,
                     wo,
@@ -400,8 +399,7 @@ impl Walk {
                 }
             }
             // Surfaces are two-sided: shade on the side the ray arrived from.
-            let Facing { wo, ng, ns, material } = facing(scene, &st.ray, &si, ctx);
-            let frame = Frame::from_normal(ns);
+            let Facing { wo, ng, ns, material, frame } = facing(scene, &st.ray, &si, ctx);
             let v =
                 Vertex { si, wo, ng, ns, material, frame, wo_local: frame.to_local(wo), flags: material.bsdf.flags() };
             hooks.reached(scene, ctx, &v, &st, beta, scratch);

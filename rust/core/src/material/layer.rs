@@ -31,6 +31,7 @@
 use super::conductor::{MetalFresnel, MicrofacetReflection};
 use super::energy::{dielectric_e, fresnel_avg, reflection_compensation};
 use super::fresnel::fresnel_dielectric;
+use super::oriented::{same_event, LobeFrame};
 use super::sheen::{Sheen, SheenLtc};
 use super::{Bsdf, BsdfFlags, BsdfSample, ShadingContext, SpectralParam, TransportMode};
 use crate::spectrum::SampledSpectrum;
@@ -148,11 +149,48 @@ fn weight_of(w: f32) -> f32 {
 pub struct Layered {
     pub top: TopLobe,
     pub bottom: Box<dyn Bsdf>,
+    /// The top lobe's own normal (Principled Coat Normal; the sheen's mix of it and the
+    /// Normal, Cycles' svm_node_closure_bsdf), in this BSDF's frame: the top lobe, its
+    /// albedo and its tint's path length are all taken about it (None: about +z).
+    pub frame: Option<LobeFrame>,
 }
 
 impl Layered {
     pub fn new(top: TopLobe, bottom: Box<dyn Bsdf>) -> Self {
-        Self { top, bottom }
+        Self { top, bottom, frame: None }
+    }
+
+    /// The top lobe oriented about `n` (this BSDF's frame).
+    pub fn with_top_normal(mut self, n: Option<Vec3A>) -> Self {
+        self.frame = n.map(LobeFrame::new);
+        self
+    }
+
+    #[inline]
+    fn top_view(&self, wo: Vec3A) -> Vec3A {
+        self.frame.map_or(wo, |f| f.view_to_lobe(wo))
+    }
+
+    #[inline]
+    fn top_dir(&self, wi: Vec3A) -> Vec3A {
+        self.frame.map_or(wi, |f| f.to_lobe(wi))
+    }
+
+    /// The top lobe's pair in its frame, None when its frame and this one disagree
+    /// about reflection and transmission (`oriented::same_event`).
+    #[inline]
+    fn top_pair(&self, wo: Vec3A, wi: Vec3A) -> Option<(Vec3A, Vec3A)> {
+        let (a, b) = (self.top_view(wo), self.top_dir(wi));
+        (self.frame.is_none() || same_event(wo, wi, a, b)).then_some((a, b))
+    }
+
+    /// The camera side's cosine about the top lobe's normal.
+    #[inline]
+    fn top_view_cos(&self, ctx: &ShadingContext, wo: Vec3A, wi: Vec3A) -> f32 {
+        match ctx.mode {
+            TransportMode::Radiance => self.top_view(wo).z,
+            TransportMode::Importance => self.top_dir(wi).z,
+        }
     }
 
     /// Probability of sampling the top lobe from `wo`.
@@ -163,9 +201,10 @@ impl Layered {
         }
         let n = ctx.grid.len();
         let mut a = SampledSpectrum::zeros(n);
-        self.top.albedo_at(ctx, wo.z.abs(), &mut a);
+        let mu = self.top_view(wo).z.abs();
+        self.top.albedo_at(ctx, mu, &mut a);
         let top = (w * mean(ctx, &a)).min(1.0);
-        self.top.transmittance(ctx, wo.z.abs(), &mut a);
+        self.top.transmittance(ctx, mu, &mut a);
         let t = mean(ctx, &a);
         self.bottom.albedo(ctx, &mut a);
         let bottom = t * mean(ctx, &a);
@@ -176,24 +215,17 @@ impl Layered {
         (top / total).clamp(0.05, 0.95)
     }
 
-    /// The view direction's cosine (camera side) of a pair.
-    #[inline]
-    fn view_cos(ctx: &ShadingContext, wo: Vec3A, wi: Vec3A) -> f32 {
-        match ctx.mode {
-            TransportMode::Radiance => wo.z,
-            TransportMode::Importance => wi.z,
-        }
-    }
-
     /// f·|cos θi| into `out` and the mixture pdf, with the top chosen with `p_top`.
     fn eval_with(&self, ctx: &ShadingContext, p_top: f32, wo: Vec3A, wi: Vec3A, out: &mut SampledSpectrum) -> f32 {
         let n = out.len();
         let mut f = SampledSpectrum::zeros(n);
         let pdf_b = self.bottom.eval(ctx, wo, wi, out);
-        self.top.transmittance(ctx, Self::view_cos(ctx, wo, wi), &mut f);
+        let mu = self.top_view_cos(ctx, wo, wi);
+        self.top.transmittance(ctx, mu, &mut f);
         out.mul_assign(&f);
-        let pdf_t = self.top.bsdf().eval(ctx, wo, wi, &mut f);
-        out.add_scaled(&f, self.top.weight() * self.top.lobe_scale(Self::view_cos(ctx, wo, wi)));
+        let Some((a, b)) = self.top_pair(wo, wi) else { return (1.0 - p_top) * pdf_b };
+        let pdf_t = self.top.bsdf().eval(ctx, a, b, &mut f);
+        out.add_scaled(&f, self.top.weight() * self.top.lobe_scale(mu));
         p_top * pdf_t + (1.0 - p_top) * pdf_b
     }
 }
@@ -220,7 +252,10 @@ impl Bsdf for Layered {
     }
     fn pdf(&self, ctx: &ShadingContext, wo: Vec3A, wi: Vec3A) -> f32 {
         let p = self.top_probability(ctx, wo);
-        let pdf_t = if p > 0.0 { self.top.bsdf().pdf(ctx, wo, wi) } else { 0.0 };
+        let pdf_t = match self.top_pair(wo, wi) {
+            Some((a, b)) if p > 0.0 => self.top.bsdf().pdf(ctx, a, b),
+            _ => 0.0,
+        };
         p * pdf_t + (1.0 - p) * self.bottom.pdf(ctx, wo, wi)
     }
     fn sample(
@@ -237,14 +272,25 @@ impl Bsdf for Layered {
         let (lobe, prob, uc) =
             if choose_top { (self.top.bsdf(), p, uc / p) } else { (&*self.bottom, 1.0 - p, (uc - p) / (1.0 - p)) };
         let mut tp = throughput.clone();
-        let s = lobe.sample(ctx, wo, u, uc.clamp(0.0, 0.999_999), &mut tp)?;
+        let s = if choose_top && self.frame.is_some() {
+            let a = self.top_view(wo);
+            let s = lobe.sample(ctx, a, u, uc.clamp(0.0, 0.999_999), &mut tp)?;
+            let wi = self.frame.map_or(s.wi, |f| f.to_vertex(s.wi));
+            if !same_event(wo, wi, a, s.wi) {
+                return None;
+            }
+            BsdfSample { wi, ..s }
+        } else {
+            lobe.sample(ctx, wo, u, uc.clamp(0.0, 0.999_999), &mut tp)?
+        };
         if s.specular || s.collapsed_to.is_some() {
             // The lobe's own weight over its selection probability.
             let mut k = SampledSpectrum::zeros(n);
+            let mu = self.top_view_cos(ctx, wo, s.wi);
             if choose_top {
-                k.fill(self.top.weight() * self.top.lobe_scale(Self::view_cos(ctx, wo, s.wi)));
+                k.fill(self.top.weight() * self.top.lobe_scale(mu));
             } else {
-                self.top.transmittance(ctx, Self::view_cos(ctx, wo, s.wi), &mut k);
+                self.top.transmittance(ctx, mu, &mut k);
             }
             tp.mul_assign(&k);
             tp.scale(1.0 / prob);

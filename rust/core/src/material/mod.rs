@@ -17,6 +17,7 @@ pub mod layer;
 pub mod microfacet;
 pub mod mix;
 pub mod oren_nayar;
+pub mod oriented;
 pub mod param;
 pub mod principled;
 pub mod sheen;
@@ -38,6 +39,7 @@ pub use dispersion::{IndexOfRefraction, IorDesc};
 pub use layer::{Layered, TopLobe};
 pub use mix::MixBsdf;
 pub use oren_nayar::OrenNayar;
+pub use oriented::Oriented;
 pub use param::SpectralParam;
 pub use principled::{Principled, PrincipledParams};
 pub use sheen::Sheen;
@@ -78,6 +80,9 @@ pub struct ShadingContext<'a> {
     /// (eq. 9: the reflection/refraction choice, then the wavelength) uses instead of the
     /// `uc` it is given, stratified across the pixel's samples (COLLAPSE STRATIFIED).
     pub collapse_u: Option<f32>,
+    /// The vertex's shading frame (world ↔ the local directions BSDFs see): lobes with
+    /// their own normal ([`Oriented`]) are placed in it when the hit's BSDF is built.
+    pub frame: crate::geometry::Frame,
 }
 
 /// Which quantity a path transports, for the non-symmetric scattering of refraction.
@@ -101,6 +106,7 @@ impl<'a> ShadingContext<'a> {
             mode: TransportMode::Radiance,
             hit: Default::default(),
             collapse_u: None,
+            frame: crate::geometry::Frame::from_normal(Vec3A::Z),
         }
     }
 }

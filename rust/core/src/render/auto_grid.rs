@@ -427,6 +427,7 @@ mod tests {
             diffuse_roughness: 0.0,
             coat: None,
             sheen: None,
+            normals: None,
         };
         assert!(grid_of(&scene(vec![material(principled(1.0))], vec![f11()])).len() >= 41);
         assert_eq!(

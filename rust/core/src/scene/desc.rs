@@ -267,6 +267,9 @@ pub enum BsdfDesc {
         /// Blender's Sheen: the microfibre sheen on top of the coat (absent: none).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         sheen: Option<SheenLayerDesc>,
+        /// Its lobes' own normals at a hit of a graph (not part of the scene format).
+        #[serde(skip)]
+        normals: Option<Box<PrincipledNormals>>,
     },
     /// Blender's Mix Shader: (1 − factor)·a + factor·b; `factor_from` (a Fresnel or
     /// Layer Weight node on Fac) replaces the constant by a function of the view angle.
@@ -314,6 +317,15 @@ pub enum BsdfDesc {
     },
     /// A node graph (docs/shading.md); written as the material's `nodes` and `output`.
     Graph(Box<crate::shading::GraphDesc>),
+    /// `bsdf` about its own unit `normal`, given in the vertex's shading frame (a
+    /// graph's per-lobe Normal at a hit, `material::Oriented`; not part of the scene format).
+    #[serde(skip)]
+    Oriented {
+        normal: [f32; 3],
+        bsdf: Box<BsdfDesc>,
+        /// A diffuse lobe's smooth normal (Cycles' bump shadowing term).
+        smooth: Option<[f32; 3]>,
+    },
 }
 
 impl BsdfDesc {
@@ -337,7 +349,7 @@ impl BsdfDesc {
         match self {
             BsdfDesc::Transparent { .. } => true,
             BsdfDesc::Mix { a, b, .. } | BsdfDesc::Add { a, b } => a.has_transparent() || b.has_transparent(),
-            BsdfDesc::Tint { bsdf, .. } => bsdf.has_transparent(),
+            BsdfDesc::Tint { bsdf, .. } | BsdfDesc::Oriented { bsdf, .. } => bsdf.has_transparent(),
             _ => false,
         }
     }
@@ -359,6 +371,16 @@ pub struct CoatDesc {
     /// White when absent.
     #[serde(default)]
     pub tint: Option<SpectrumDesc>,
+}
+
+/// The Principled BSDF's lobes' own normals in the vertex's shading frame (a graph's
+/// Normal and Coat Normal at a hit; None: the frame's own normal): specular, metal,
+/// glass and diffuse are oriented about `base`, the coat and the sheen about theirs.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PrincipledNormals {
+    pub base: Option<[f32; 3]>,
+    pub coat: Option<[f32; 3]>,
+    pub sheen: Option<[f32; 3]>,
 }
 
 /// The Principled BSDF's Sheen (Cycles' first layer): the microfibre sheen of
@@ -665,6 +687,7 @@ impl BsdfDesc {
             BsdfDesc::Translucent { color }
             | BsdfDesc::Transparent { color }
             | BsdfDesc::Sheen { color, roughness: _ } => f(Spectrum(Surface, color)),
+            BsdfDesc::Oriented { bsdf, .. } => bsdf.for_each_spectrum(f),
             BsdfDesc::Tint { color, bsdf } => {
                 f(Spectrum(Surface, color));
                 bsdf.for_each_spectrum(f);

@@ -7,12 +7,13 @@ use crate::color::uplift::Uplift;
 use crate::material::mix::MixFactor;
 use crate::material::principled::{Principled, PrincipledParams};
 use crate::material::{
-    Black, Bsdf, Diffuse, IndexOfRefraction, Layered, MixBsdf, OrenNayar, Sheen, SpectralParam, Texture, ThinFilm,
-    Tinted, TopLobe, Translucent,
+    Black, Bsdf, Diffuse, IndexOfRefraction, Layered, MixBsdf, OrenNayar, Oriented, Sheen, SpectralParam, Texture,
+    ThinFilm, Tinted, TopLobe, Translucent,
 };
 use crate::spectrum::named::{SpectrumKind, SpectrumRole};
 use crate::spectrum::{SampledSpectrum, SpectrumDesc, WavelengthGrid};
 use crate::{Error, Result};
+use glam::Vec3A;
 use std::sync::Arc;
 
 /// Deepest nesting of Mix/Add accepted (guards against runaway descriptions).
@@ -135,6 +136,7 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
             diffuse_roughness,
             coat,
             sheen,
+            normals,
         } => {
             let base_color = b.reflectance(base_color, material, "base_color")?;
             let metallic = unit_weight(material, "metallic", *metallic)?;
@@ -185,6 +187,10 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
                 },
                 b.grid,
             ));
+            let n = normals.as_deref().cloned().unwrap_or_default();
+            if let Some(b) = n.base {
+                out = Box::new(Oriented::new(Vec3A::from(b), out));
+            }
             // Cycles' svm_node_closure_bsdf (CLOSURE_BSDF_PRINCIPLED_ID) stacks the coat over
             // everything else, then the sheen over the coat.
             if let Some(c) = coat {
@@ -195,7 +201,8 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
                 }
                 if weight > 0.0 {
                     let tint = b.optional_reflectance(c.tint.as_ref(), material, "coat tint")?;
-                    out = Box::new(Layered::new(TopLobe::coat(weight, roughness, c.ior, tint), out));
+                    let top = TopLobe::coat(weight, roughness, c.ior, tint);
+                    out = Box::new(Layered::new(top, out).with_top_normal(n.coat.map(Vec3A::from)));
                 }
             }
             if let Some(sh) = sheen {
@@ -203,7 +210,8 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
                 let roughness = unit_weight(material, "sheen roughness", sh.roughness)?;
                 if weight > 0.0 {
                     let tint = b.optional_reflectance(sh.tint.as_ref(), material, "sheen tint")?;
-                    out = Box::new(Layered::new(TopLobe::sheen(weight, tint, roughness), out));
+                    let top = TopLobe::sheen(weight, tint, roughness);
+                    out = Box::new(Layered::new(top, out).with_top_normal(n.sheen.map(Vec3A::from)));
                 }
             }
             out
@@ -251,6 +259,11 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
             color: b.reflectance(color, material, "color")?,
             roughness: unit_weight(material, "roughness", *roughness)?,
         }),
+        BsdfDesc::Oriented { normal, bsdf, smooth } => Box::new(Oriented::diffuse(
+            Vec3A::from(*normal),
+            smooth.map(Vec3A::from),
+            build_at(b, material, bsdf, depth + 1)?,
+        )),
         BsdfDesc::Graph(_) => {
             return Err(Error::object("material", material, "a node graph cannot be nested inside a mix or add shader"))
         }

@@ -111,8 +111,9 @@ pub struct VaryingPass {
     pub probability: crate::shading::closure::PassProbability,
 }
 
-/// A shading normal read from a program register at each hit (a linked Normal input:
-/// Normal Map, Bump), the program reduced to the ops it depends on.
+/// A material's normal read from a program register at each hit (its first linked
+/// Normal input: Normal Map, Bump), the program reduced to the ops it depends on: the
+/// Normal pass. Its closures are each shaded about their own normals.
 #[derive(Clone, Debug)]
 pub struct VaryingNormal {
     pub program: crate::shading::Program,
@@ -277,7 +278,12 @@ fn graph_bsdf(
         let b = layered::BsdfBuild { grid: &grid, rgb: &rgb, textures: &textures, uplift: Some(&up) };
         layered::build_bsdf(&b, &name, d)
     };
-    crate::shading::bsdf::GraphBsdf::new(compiled.program.clone(), compiled.template.clone(), Box::new(build))
+    crate::shading::bsdf::GraphBsdf::new(
+        compiled.program.clone(),
+        compiled.template.clone(),
+        Box::new(build),
+        compiled.normal.is_some(),
+    )
 }
 
 fn buffer_f32<'a>(buffers: &[BufferView<'a>], i: usize, mesh: &str, what: &str) -> Result<&'a [f32]> {
@@ -480,6 +486,7 @@ impl Scene {
                 | BsdfDesc::Translucent { .. }
                 | BsdfDesc::Tint { .. }
                 | BsdfDesc::Sheen { .. }
+                | BsdfDesc::Oriented { .. }
                 | BsdfDesc::Graph(_) => {
                     let b = layered::BsdfBuild { grid: &grid, rgb: &rgb, textures: &textures, uplift: uplift.as_ref() };
                     layered::build_bsdf(&b, &m.name, bsdf_desc)?

@@ -4,7 +4,7 @@
 //! would be (pbrt-v4's material → BSDF at the hit). The BSDF is kept per thread for the
 //! hit, so next-event estimation, sampling and MIS at one vertex build it once.
 
-use super::closure::Template;
+use super::closure::{Orient, Template};
 use super::program::{Program, ShadingPoint};
 use crate::material::{Black, Bsdf, BsdfFlags, BsdfSample, ShadingContext};
 use crate::spectrum::SampledSpectrum;
@@ -20,6 +20,9 @@ pub struct GraphBsdf {
     pub template: Template,
     build: Box<BuildFn>,
     flags: BsdfFlags,
+    /// Its closures carry their own normals (a linked Normal somewhere): each lobe is
+    /// oriented at the hit in the vertex's frame (`closure::Orient`).
+    orient: bool,
     /// Distinguishes materials in the per-thread cache.
     id: u64,
 }
@@ -55,13 +58,13 @@ fn hit_key(sp: &ShadingPoint) -> [u32; 7] {
 impl GraphBsdf {
     /// `build` turns an instantiated description into a BSDF; the flags are those of
     /// the material at a default hit, plus a delta lobe where a roughness may reach 0.
-    pub fn new(program: Program, template: Template, build: Box<BuildFn>) -> crate::Result<Self> {
+    pub fn new(program: Program, template: Template, build: Box<BuildFn>, orient: bool) -> crate::Result<Self> {
         let mut regs = Vec::new();
         program.run(&ShadingPoint::default(), &mut regs);
-        let mut flags = build(&template.instantiate(&|r| regs[r as usize]))?.flags();
+        let mut flags = build(&template.instantiate(&|r| regs[r as usize], None))?.flags();
         flags.smooth = true;
         flags.specular |= template.may_be_specular();
-        Ok(Self { program, template, build, flags, id: NEXT_ID.fetch_add(1, Ordering::Relaxed) })
+        Ok(Self { program, template, build, flags, orient, id: NEXT_ID.fetch_add(1, Ordering::Relaxed) })
     }
 
     /// The BSDF at the context's hit.
@@ -72,7 +75,8 @@ impl GraphBsdf {
             if c.material != self.id || c.key != key || c.bsdf.is_none() {
                 let Cached { regs, .. } = &mut *c;
                 self.program.run(&ctx.hit, regs);
-                let desc = self.template.instantiate(&|r| regs[r as usize]);
+                let orient = self.orient.then(|| Orient::at(&ctx.hit, ctx.frame));
+                let desc = self.template.instantiate(&|r| regs[r as usize], orient.as_ref());
                 let bsdf = (self.build)(&desc).unwrap_or_else(|_| Box::new(Black));
                 c.bsdf = Some(bsdf);
                 c.material = self.id;

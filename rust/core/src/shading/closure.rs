@@ -103,6 +103,70 @@ pub struct CoatT {
     pub roughness: F,
     pub ior: F,
     pub tint: Col,
+    /// A linked Coat Normal (None: the smooth normal, as Cycles' `sd->N`).
+    pub normal: Option<Reg>,
+}
+
+/// Where a closure's own normal comes from (Cycles' svm_node_closure_bsdf,
+/// intern/cycles/kernel/svm/closure.h): its Normal input's register (None: the smooth
+/// normal `sd->N`), and whether it is made valid for specular reflection
+/// (`maybe_ensure_valid_specular_reflection`: the Glossy, Glass, Refraction and
+/// Translucent closures and the Principled's specular, metal, glass and coat lobes; not
+/// Diffuse or Sheen, nor the Principled's diffuse and sheen).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LobeNormal {
+    pub reg: Option<Reg>,
+    pub valid_reflection: bool,
+}
+
+/// What instantiating a template at a hit needs to orient its lobes: the vertex's
+/// shading frame (about the geometric normal for materials with lobe normals), the
+/// geometric and smooth normals and the incoming direction, all facing the ray as
+/// [`super::ShadingPoint`]'s.
+#[derive(Clone, Copy, Debug)]
+pub struct Orient {
+    pub frame: crate::geometry::Frame,
+    pub ng: Vec3,
+    pub incoming: Vec3,
+    pub smooth: Vec3,
+}
+
+impl Orient {
+    pub fn at(sp: &super::ShadingPoint, frame: crate::geometry::Frame) -> Self {
+        Self { frame, ng: sp.true_normal, incoming: sp.incoming, smooth: sp.normal }
+    }
+
+    /// A closure's normal before any correction: its register's value normalised, the
+    /// smooth normal when unlinked or zero (Cycles' `safe_normalize_fallback(N, sd->N)`).
+    fn raw(&self, v: &dyn Fn(Reg) -> Vec3, reg: Option<Reg>) -> Vec3 {
+        reg.and_then(|r| v(r).try_normalize()).unwrap_or(self.smooth)
+    }
+
+    /// Cycles' `maybe_ensure_valid_specular_reflection` (kernel/closure/bsdf_util.h):
+    /// unchanged when equal to the geometric normal, else bent just enough that the
+    /// mirror direction of the incoming ray stays above the surface.
+    pub fn valid(&self, n: Vec3) -> Vec3 {
+        if n == self.ng {
+            n
+        } else {
+            super::vector::ensure_valid_specular_reflection(self.ng, self.incoming, n)
+        }
+    }
+
+    fn normal(&self, v: &dyn Fn(Reg) -> Vec3, n: LobeNormal) -> Vec3 {
+        let raw = self.raw(v, n.reg);
+        if n.valid_reflection {
+            self.valid(raw)
+        } else {
+            raw
+        }
+    }
+
+    /// `n` in the vertex's frame; None when it is the frame's own normal (nothing to orient).
+    fn local(&self, n: Vec3) -> Option<[f32; 3]> {
+        let l = self.frame.to_local(n.into());
+        ((l - glam::Vec3A::Z).length_squared() > 1e-12).then(|| l.to_array())
+    }
 }
 
 /// The Principled BSDF's Sheen parameters (see [`SheenLayerDesc`]).
@@ -192,6 +256,14 @@ pub enum Template {
         diffuse_roughness: F,
         coat: Option<CoatT>,
         sheen: Option<SheenT>,
+        /// A linked Normal (None: the smooth normal).
+        normal: Option<Reg>,
+    },
+    /// A closure about its own normal (every BSDF node but the Principled, which
+    /// orients its layers itself).
+    Oriented {
+        normal: LobeNormal,
+        t: Box<Template>,
     },
     Diffuse {
         color: Col,
@@ -294,6 +366,7 @@ impl Template {
         match self {
             Template::Fixed(d) => d.has_transparent(),
             Template::Mix { a, b, .. } | Template::Add { a, b } => a.has_transparent() || b.has_transparent(),
+            Template::Oriented { t, .. } => t.has_transparent(),
             _ => false,
         }
     }
@@ -315,8 +388,10 @@ impl Template {
                 diffuse_roughness,
                 coat,
                 sheen,
+                normal,
             } => {
-                coat.as_ref().is_none_or(CoatT::is_const)
+                normal.is_none()
+                    && coat.as_ref().is_none_or(|c| c.is_const() && c.normal.is_none())
                     && sheen.as_ref().is_none_or(SheenT::is_const)
                     && base_color.is_const()
                     && specular_tint.is_const()
@@ -341,6 +416,7 @@ impl Template {
                 color.is_const() && roughness.is_const() && matches!(ior, Ior::C(_))
             }
             Template::Translucent { color } => color.is_const(),
+            Template::Oriented { normal, t } => normal.reg.is_none() && t.is_constant(),
             Template::Mix { factor, a, b, .. } => factor.is_const() && a.is_constant() && b.is_constant(),
             Template::Add { a, b } => a.is_constant() && b.is_constant(),
         }
@@ -357,12 +433,14 @@ impl Template {
             }
             Template::Glossy { roughness, .. } | Template::Glass { roughness, .. } => !roughness.is_const(),
             Template::Mix { a, b, .. } | Template::Add { a, b } => a.may_be_specular() || b.may_be_specular(),
+            Template::Oriented { t, .. } => t.may_be_specular(),
             _ => false,
         }
     }
 
-    /// The fixed description at register values `v`.
-    pub fn instantiate(&self, v: &dyn Fn(Reg) -> Vec3) -> BsdfDesc {
+    /// The fixed description at register values `v`, its lobes oriented about their own
+    /// normals at a hit `o` (None: every lobe about the vertex's normal).
+    pub fn instantiate(&self, v: &dyn Fn(Reg) -> Vec3, o: Option<&Orient>) -> BsdfDesc {
         match self {
             Template::Fixed(d) => d.clone(),
             Template::Principled {
@@ -378,8 +456,27 @@ impl Template {
                 diffuse_roughness,
                 coat,
                 sheen,
+                normal,
             } => {
                 let tint = specular_tint.at(v);
+                let coat_desc = coat.as_ref().and_then(|c| c.at(v));
+                let sheen_desc = sheen.as_ref().and_then(|c| c.at(v));
+                let normals = o.map(|o| {
+                    // Cycles: the specular, metal and glass lobes about the valid Normal,
+                    // the coat about its valid Coat Normal (sd->N when unlinked), the sheen
+                    // about normalize(mix(N, Coat Normal, Coat Weight)) as given. The
+                    // diffuse shares the base's normal here (Cycles: N as given).
+                    let n = o.raw(v, *normal);
+                    let c = o.raw(v, coat.as_ref().and_then(|c| c.normal));
+                    let w = coat_desc.as_ref().map_or(0.0, |c| c.weight.clamp(0.0, 1.0));
+                    Box::new(crate::scene::PrincipledNormals {
+                        base: o.local(o.valid(n)),
+                        coat: coat_desc.as_ref().and_then(|_| o.local(o.valid(c))),
+                        sheen: sheen_desc
+                            .as_ref()
+                            .and_then(|_| o.local((n + (c - n) * w).try_normalize().unwrap_or(n))),
+                    })
+                });
                 BsdfDesc::Principled {
                     base_color: base_color.at(v),
                     metallic: metallic.at(v),
@@ -391,8 +488,22 @@ impl Template {
                     thin_film_ior: thin_film_ior.at(v),
                     specular_ior_level: specular_ior_level.at(v),
                     diffuse_roughness: diffuse_roughness.at(v),
-                    coat: coat.as_ref().and_then(|c| c.at(v)),
-                    sheen: sheen.as_ref().and_then(|c| c.at(v)),
+                    coat: coat_desc,
+                    sheen: sheen_desc,
+                    normals,
+                }
+            }
+            Template::Oriented { normal, t } => {
+                let inner = t.instantiate(v, o);
+                let Some(o) = o else { return inner };
+                let n = o.normal(v, *normal);
+                // Cycles dims a diffuse closure bent off the smooth normal towards the
+                // smooth surface's horizon (bump_shadowing_term, kernel/closure/bsdf.h).
+                let smooth =
+                    (!normal.valid_reflection && n != o.smooth).then(|| o.frame.to_local(o.smooth.into()).to_array());
+                match o.local(n) {
+                    Some(normal) => BsdfDesc::Oriented { normal, bsdf: Box::new(inner), smooth },
+                    None => inner,
                 }
             }
             Template::Diffuse { color, roughness } => {
@@ -420,12 +531,14 @@ impl Template {
             Template::Translucent { color } => BsdfDesc::Translucent { color: color.at(v) },
             Template::Sheen { color, roughness } => BsdfDesc::Sheen { color: color.at(v), roughness: roughness.at(v) },
             Template::Mix { factor, factor_from, a, b } => BsdfDesc::Mix {
-                a: Box::new(a.instantiate(v)),
-                b: Box::new(b.instantiate(v)),
+                a: Box::new(a.instantiate(v, o)),
+                b: Box::new(b.instantiate(v, o)),
                 factor: factor.at(v),
                 factor_from: factor_from.clone(),
             },
-            Template::Add { a, b } => BsdfDesc::Add { a: Box::new(a.instantiate(v)), b: Box::new(b.instantiate(v)) },
+            Template::Add { a, b } => {
+                BsdfDesc::Add { a: Box::new(a.instantiate(v, o)), b: Box::new(b.instantiate(v, o)) }
+            }
         }
     }
 }
@@ -434,9 +547,13 @@ pub struct Lowering<'c, 'a> {
     pub c: &'c mut Compiler<'a>,
     /// Closure nodes on the current path, for cycles through shader links.
     path: Vec<usize>,
-    /// Each BSDF node's Normal: its register when linked, None when it keeps the
-    /// shading normal.
-    normals: Vec<(usize, Option<Reg>)>,
+    /// The linked Normal (and Coat Normal) inputs' registers, in lowering order.
+    normals: Vec<Reg>,
+}
+
+/// `t` about its own normal `reg` (see [`LobeNormal`]).
+fn oriented(t: Template, reg: Option<Reg>, valid_reflection: bool) -> Template {
+    Template::Oriented { normal: LobeNormal { reg, valid_reflection }, t: Box::new(t) }
 }
 
 fn add_emission(material: &str, a: Option<Emission>, b: Option<Emission>) -> Result<Option<Emission>> {
@@ -522,29 +639,21 @@ impl<'c, 'a> Lowering<'c, 'a> {
         }
     }
 
-    /// A BSDF's Normal input: a linked one becomes the shading normal at the hit
-    /// (`CompiledMaterial::normal`).
-    fn normal(&mut self, node: usize, id: &str) -> Result<()> {
+    /// A BSDF's Normal input (`id`): its register when linked, None when the closure
+    /// keeps the smooth normal. Each closure is shaded about its own (`Orient`).
+    fn normal(&mut self, node: usize, id: &str) -> Result<Option<Reg>> {
         let r = match self.c.linked(node, id) {
             Some(_) => Some(self.c.input_reg(node, id)?),
             None => None,
         };
-        self.normals.push((node, r));
-        Ok(())
+        self.normals.extend(r);
+        Ok(r)
     }
 
-    /// The one shading normal of the material: the material's BSDFs share one frame,
-    /// so when they read different normals the first linked one is used for all (warned).
+    /// The material's normal for the Normal pass: the first linked one (made valid at
+    /// the hit), None when no closure links a normal, and then nothing is oriented.
     fn shading_normal(&mut self) -> Option<Reg> {
-        let first = self.normals.iter().find_map(|&(_, r)| r)?;
-        if let Some(&(node, _)) = self.normals.iter().find(|&&(_, r)| r != Some(first)) {
-            self.c.warn(
-                node,
-                "its Normal differs from another BSDF's in this material; one shading normal per material is \
-                 supported, so every BSDF here uses the first linked Normal",
-            );
-        }
-        Some(first)
+        self.normals.first().copied()
     }
 
     /// Warns when an input this build ignores differs from Blender's default.
@@ -614,7 +723,7 @@ impl<'c, 'a> Lowering<'c, 'a> {
         let material = self.c.material;
         Ok(match kind {
             "ShaderNodeBsdfPrincipled" => {
-                self.normal(node, "Normal")?;
+                let normal = self.normal(node, "Normal")?;
                 let alpha = self.float(node, "Alpha", 0.0, 1.0)?;
                 for (id, default, what) in [
                     ("Subsurface Weight", 0.0, "no subsurface scattering yet"),
@@ -641,6 +750,7 @@ impl<'c, 'a> Lowering<'c, 'a> {
                     diffuse_roughness: self.float(node, "Diffuse Roughness", 0.0, 1.0)?,
                     coat: self.coat(node)?,
                     sheen: self.sheen(node)?,
+                    normal,
                 };
                 // Alpha: a transparent closure of weight 1 − alpha mixed in (Cycles'
                 // svm_node_closure_bsdf, CLOSURE_BSDF_PRINCIPLED_ID: bsdf_transparent_setup
@@ -660,33 +770,36 @@ impl<'c, 'a> Lowering<'c, 'a> {
                 (t, emission)
             }
             "ShaderNodeBsdfDiffuse" => {
-                self.normal(node, "Normal")?;
+                let n = self.normal(node, "Normal")?;
                 let color = self.color(node, "Color")?;
-                (Template::Diffuse { color, roughness: self.float(node, "Roughness", 0.0, 1.0)? }, None)
+                let t = Template::Diffuse { color, roughness: self.float(node, "Roughness", 0.0, 1.0)? };
+                (oriented(t, n, false), None)
             }
             "ShaderNodeBsdfAnisotropic" | "ShaderNodeBsdfGlossy" => {
-                self.normal(node, "Normal")?;
+                let n = self.normal(node, "Normal")?;
                 self.ignored(node, "Anisotropy", 0.0, "no anisotropy yet")?;
                 let color = self.color(node, "Color")?;
-                (Template::Glossy { color, roughness: self.float(node, "Roughness", 0.0, 1.0)? }, None)
+                let t = Template::Glossy { color, roughness: self.float(node, "Roughness", 0.0, 1.0)? };
+                (oriented(t, n, true), None)
             }
             "ShaderNodeBsdfGlass" | "ShaderNodeBsdfRefraction" => {
-                self.normal(node, "Normal")?;
+                let n = self.normal(node, "Normal")?;
                 if kind == "ShaderNodeBsdfRefraction" {
                     self.c.warn(node, "Refraction BSDF is rendered as Glass (its reflection is kept)");
                 }
                 let color = self.color(node, "Color")?;
                 let roughness = self.float(node, "Roughness", 0.0, 1.0)?;
-                (Template::Glass { color, roughness, ior: self.ior(node, "IOR")? }, None)
+                (oriented(Template::Glass { color, roughness, ior: self.ior(node, "IOR")? }, n, true), None)
             }
             "ShaderNodeBsdfTranslucent" => {
-                self.normal(node, "Normal")?;
-                (Template::Translucent { color: self.color(node, "Color")? }, None)
+                let n = self.normal(node, "Normal")?;
+                (oriented(Template::Translucent { color: self.color(node, "Color")? }, n, true), None)
             }
             "ShaderNodeBsdfSheen" => {
-                self.normal(node, "Normal")?;
+                let n = self.normal(node, "Normal")?;
                 let color = self.color(node, "Color")?;
-                (Template::Sheen { color, roughness: self.float(node, "Roughness", 0.0, 1.0)? }, None)
+                let t = Template::Sheen { color, roughness: self.float(node, "Roughness", 0.0, 1.0)? };
+                (oriented(t, n, false), None)
             }
             "ShaderNodeEmission" => (Template::Fixed(BsdfDesc::None), self.emission(node, "Color", "Strength")?),
             "ShaderNodeBsdfTransparent" => {
@@ -742,14 +855,9 @@ impl<'c, 'a> Lowering<'c, 'a> {
         if matches!(weight, F::C(w) if w <= 0.0) {
             return Ok(None);
         }
-        if self.c.linked(node, "Coat Normal").is_some() {
-            let coat = self.c.input_reg(node, "Coat Normal")?;
-            let base = self.c.linked(node, "Normal").map(|_| self.c.input_reg(node, "Normal")).transpose()?;
-            if base != Some(coat) {
-                self.c.warn(node, "a linked Coat Normal is not supported yet (the coat uses the surface's Normal)");
-            }
-        }
+        let normal = self.normal(node, "Coat Normal")?;
         Ok(Some(CoatT {
+            normal,
             weight,
             roughness: self.float(node, "Coat Roughness", 0.0, 1.0)?,
             ior: self.float(node, "Coat IOR", 1.0, 10.0)?,

@@ -35,8 +35,9 @@ pub struct CompiledMaterial {
     /// An emission that varies over the surface: RGB terms over the program's
     /// registers, evaluated per hit (`emission::GraphEmission`).
     pub varying_emission: Option<Vec<closure::EmissionTerm>>,
-    /// The register of a linked Normal input (Normal Map, Bump, any vector): the
-    /// shading normal at each hit, in world space facing the ray's side.
+    /// The register of the first linked Normal input (Normal Map, Bump, any vector):
+    /// the Normal pass at each hit, in world space facing the ray's side. When set,
+    /// every closure is shaded about its own normal (`closure::Orient`).
     pub normal: Option<program::Reg>,
     pub program: Program,
     pub warnings: Vec<String>,
@@ -46,7 +47,7 @@ impl CompiledMaterial {
     /// The fixed description the graph equals, when every closure input is constant.
     pub fn constant_surface(&self) -> Option<crate::scene::BsdfDesc> {
         let init = &self.program.init;
-        self.template.is_constant().then(|| self.template.instantiate(&|r| init[r as usize]))
+        self.template.is_constant().then(|| self.template.instantiate(&|r| init[r as usize], None))
     }
 }
 

@@ -172,7 +172,7 @@ fn a_varying_graph_keeps_its_program_and_builds_each_hit_from_it() {
             reflectance: SpectralParam::Constant(crate::spectrum::SampledSpectrum::splat(4, rgb[0])),
         }))
     });
-    let g = bsdf::GraphBsdf::new(c.program, c.template, build).unwrap();
+    let g = bsdf::GraphBsdf::new(c.program, c.template, build, false).unwrap();
     let grid = crate::spectrum::WavelengthGrid::uniform(4, 400.0, 700.0).unwrap();
     let mut ctx = crate::material::ShadingContext::new(&grid);
     let mut out = crate::spectrum::SampledSpectrum::zeros(4);
@@ -382,4 +382,88 @@ fn a_varying_emission_is_evaluated_per_hit() {
     let at = |u: f32| emitted_rgb(&c, &ShadingPoint { uv: Vec2::new(u, 0.0), ..Default::default() });
     assert!((at(1.0) - 0.5 * Vec3::new(0.2, 0.4, 0.8)).abs().max_element() < 1e-6);
     assert_eq!(at(0.0), Vec3::ZERO);
+}
+
+/// A world-space Normal Map of a constant colour: the unit normal `n` (node `name`).
+fn world_normal(name: &str, n: Vec3) -> serde_json::Value {
+    let c = 0.5 * n + Vec3::splat(0.5);
+    json!({"type": "ShaderNodeNormalMap", "name": name, "props": {"space": "WORLD"}, "inputs": {"Color": [c.x, c.y, c.z, 1.0]}})
+}
+
+/// Each closure keeps its own normal (no warning): a Principled's Coat Normal differs
+/// from its Normal, the two Glossy BSDFs of a Mix read different Normals, a Diffuse
+/// keeps the smooth one; instantiated at a hit seen straight on (where no normal needs
+/// bending), each lobe carries its normal in the vertex's frame.
+#[test]
+fn every_closure_keeps_its_own_normal() {
+    let (na, nb) = (Vec3::new(0.3f32.sin(), 0.0, 0.3f32.cos()), Vec3::new(0.0, 0.4f32.sin(), 0.4f32.cos()));
+    let c = compile(json!({
+        "nodes": [
+            world_normal("A", na), world_normal("B", nb),
+            {"type": "ShaderNodeBsdfPrincipled", "name": "P", "inputs": {"Coat Weight": 1.0,
+                "Normal": {"link": [0, "Normal"]}, "Coat Normal": {"link": [1, "Normal"]}}},
+            {"type": "ShaderNodeBsdfAnisotropic", "name": "G1", "inputs": {"Normal": {"link": [0, "Normal"]}}},
+            {"type": "ShaderNodeBsdfAnisotropic", "name": "G2", "inputs": {"Normal": {"link": [1, "Normal"]}}},
+            {"type": "ShaderNodeMixShader", "name": "M1", "inputs": {"Shader": {"link": [3, "BSDF"]}, "Shader_001": {"link": [4, "BSDF"]}}},
+            {"type": "ShaderNodeBsdfDiffuse", "name": "D"},
+            {"type": "ShaderNodeAddShader", "name": "A1", "inputs": {"Shader": {"link": [5, "Shader"]}, "Shader_001": {"link": [6, "BSDF"]}}},
+            {"type": "ShaderNodeAddShader", "name": "A2", "inputs": {"Shader": {"link": [2, "BSDF"]}, "Shader_001": {"link": [7, "Shader"]}}}
+        ],
+        "output": {"surface": [8, "Shader"]}
+    }))
+    .unwrap();
+    assert!(c.warnings.is_empty(), "{:?}", c.warnings);
+    assert!(c.normal.is_some() && !c.template.is_constant());
+    let sp = ShadingPoint::default();
+    let mut regs = Vec::new();
+    c.program.run(&sp, &mut regs);
+    let o = closure::Orient::at(&sp, crate::geometry::Frame::from_normal(glam::Vec3A::Z));
+    let d = c.template.instantiate(&|r| regs[r as usize], Some(&o));
+    let near = |n: &Option<[f32; 3]>, e: Vec3| n.is_some_and(|n| (Vec3::from(n) - e).length() < 1e-5);
+    let BsdfDesc::Add { a: p, b: rest } = &d else { panic!("{d:?}") };
+    let BsdfDesc::Principled { normals: Some(n), coat: Some(_), .. } = &**p else { panic!("{p:?}") };
+    assert!(near(&n.base, na) && near(&n.coat, nb) && n.sheen.is_none(), "{n:?}");
+    let BsdfDesc::Add { a: mix, b: diffuse } = &**rest else { panic!() };
+    let BsdfDesc::Mix { a: g1, b: g2, .. } = &**mix else { panic!("{mix:?}") };
+    for (g, e) in [(g1, na), (g2, nb)] {
+        let BsdfDesc::Oriented { normal, bsdf, .. } = &**g else { panic!("{g:?}") };
+        assert!(near(&Some(*normal), e) && matches!(**bsdf, BsdfDesc::Glossy { .. }), "{normal:?} vs {e}");
+    }
+    // The smooth normal is the vertex frame's own here: nothing to orient.
+    assert!(matches!(**diffuse, BsdfDesc::Diffuse { .. }), "{diffuse:?}");
+    // Without a hit to orient at (a default build), no lobe is oriented.
+    let plain = c.template.instantiate(&|r| regs[r as usize], None);
+    assert!(!format!("{plain:?}").contains("Oriented"));
+}
+
+/// Cycles bends the specular closures' normals (maybe_ensure_valid_specular_reflection)
+/// and leaves the diffuse's: a Normal tilted 60° seen straight on would mirror the view
+/// below the surface, so the Glossy's normal is lifted until the mirror leaves 0.01
+/// above it, while the Diffuse keeps the 60° tilt.
+#[test]
+fn only_specular_closures_bend_their_normal() {
+    let n = Vec3::new(60f32.to_radians().sin(), 0.0, 60f32.to_radians().cos());
+    let c = compile(json!({
+        "nodes": [
+            world_normal("N", n),
+            {"type": "ShaderNodeBsdfAnisotropic", "name": "G", "inputs": {"Normal": {"link": [0, "Normal"]}}},
+            {"type": "ShaderNodeBsdfDiffuse", "name": "D", "inputs": {"Normal": {"link": [0, "Normal"]}}},
+            {"type": "ShaderNodeAddShader", "name": "A", "inputs": {"Shader": {"link": [1, "BSDF"]}, "Shader_001": {"link": [2, "BSDF"]}}}
+        ],
+        "output": {"surface": [3, "Shader"]}
+    }))
+    .unwrap();
+    let sp = ShadingPoint::default();
+    let mut regs = Vec::new();
+    c.program.run(&sp, &mut regs);
+    let o = closure::Orient::at(&sp, crate::geometry::Frame::from_normal(glam::Vec3A::Z));
+    let BsdfDesc::Add { a, b } = c.template.instantiate(&|r| regs[r as usize], Some(&o)) else { panic!() };
+    let normal = |d: &BsdfDesc| match d {
+        BsdfDesc::Oriented { normal, .. } => Vec3::from(*normal),
+        _ => panic!("{d:?}"),
+    };
+    let (g, d) = (normal(&a), normal(&b));
+    assert!((d - n).length() < 1e-5, "diffuse {d}");
+    let mirror = 2.0 * g.dot(Vec3::Z) * g - Vec3::Z;
+    assert!((mirror.z - 0.01).abs() < 1e-3 && g.y.abs() < 1e-6 && g.x > 0.0, "glossy {g}: mirror {mirror}");
 }

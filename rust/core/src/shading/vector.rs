@@ -260,6 +260,47 @@ mod tests {
         }
     }
 
+    /// Against its definition, over random geometry: the corrected mirror direction is at
+    /// least min(0.9·i·ng, 0.01) above the surface (Cycles' threshold), the normal is
+    /// unchanged when its mirror already was, and a bent normal stays unit, in the plane
+    /// of n and ng, and lifts the mirror exactly to the threshold.
+    #[test]
+    fn valid_specular_reflection_against_its_closed_form() {
+        let mut rng = crate::sampling::Rng::new(3, 5);
+        let unit = |rng: &mut crate::sampling::Rng| loop {
+            let v = Vec3::new(rng.uniform() * 2.0 - 1.0, rng.uniform() * 2.0 - 1.0, rng.uniform() * 2.0 - 1.0);
+            if (0.01..1.0).contains(&v.length_squared()) {
+                return v.normalize();
+            }
+        };
+        let (mut kept, mut bent) = (0, 0);
+        for _ in 0..20_000 {
+            let ng = unit(&mut rng);
+            let mut i = unit(&mut rng);
+            if i.dot(ng) < 0.0 {
+                i = -i;
+            }
+            let n = unit(&mut rng);
+            if n.dot(ng) < 0.05 {
+                continue;
+            }
+            let t = (0.9 * i.dot(ng)).min(0.01);
+            let m = ensure_valid_specular_reflection(ng, i, n);
+            let r = 2.0 * m.dot(i) * m - i;
+            if (2.0 * n.dot(i) * n - i).dot(ng) >= t {
+                assert_eq!(m, n);
+                kept += 1;
+                continue;
+            }
+            bent += 1;
+            assert!((m.length() - 1.0).abs() < 1e-4, "{m}");
+            assert!(r.dot(ng) >= t - 2e-3, "ng {ng} i {i} n {n}: mirror {r} at {} < {t}", r.dot(ng));
+            assert!((r.dot(ng) - t).abs() < 2e-3, "lifted to {} not {t}", r.dot(ng));
+            assert!(m.dot(n.cross(ng)).abs() < 1e-3, "{m} leaves the plane of {n} and {ng}");
+        }
+        assert!(kept > 1000 && bent > 1000, "{kept} {bent}");
+    }
+
     #[test]
     fn normal_map_strength_and_backfacing_follow_cycles_4_5() {
         // Cycles 4.5 CPU, a plane seen from above, Color (0.7, 0.4, 0.9), Strength 0.5:
