@@ -62,6 +62,22 @@ def block_means(a, block=2):
     h, w = a.shape[0] // block, a.shape[1] // block
     return a[:block * h, :block * w].reshape(h, block, w, block, 3).mean(axis=(1, 3))
 
+# The normal tests' stage: a W x W image, a dim grey world, a sun of 3 W/m² (`angle`
+# radians wide) from (40°, 0, 30°), an orthographic camera 5 above the origin framing a
+# smooth unit UV sphere (64 x 32), which it returns.
+def ortho_sphere_under_sun(W, angle=0.0):
+    sc = empty_scene(W, W)
+    sc.world = bpy.data.worlds.new('W'); sc.world.use_nodes = True
+    bg = sc.world.node_tree.nodes['Background']; bg.inputs['Color'].default_value = (0.05, 0.05, 0.05, 1.0)
+    ld = bpy.data.lights.new('Sun', 'SUN'); ld.energy = 3.0; ld.angle = angle
+    sun = bpy.data.objects.new('Sun', ld); sc.collection.objects.link(sun)
+    sun.rotation_euler = (math.radians(40), 0.0, math.radians(30))
+    cd = bpy.data.cameras.new('C'); cd.type = 'ORTHO'; cd.ortho_scale = 2.3
+    cam = bpy.data.objects.new('C', cd); sc.collection.objects.link(cam); sc.camera = cam; cam.location = (0, 0, 5)
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=1.0, segments=64, ring_count=32)
+    bpy.ops.object.shade_smooth()
+    return sc, bpy.context.object
+
 # Cycles CPU as the reference: no denoising, adaptivity, clamping or glossy blur (none of
 # which Polychrome has), a near-box pixel filter, `bounces` for every ray type.
 def cycles_cpu(sc, samples, bounces=8):

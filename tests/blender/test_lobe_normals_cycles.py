@@ -25,17 +25,7 @@ def test_per_closure_normals_match_cycles(tmp_path):
         tmp_path,
         """
     W = 48
-    sc = empty_scene(W, W)
-    sc.world = bpy.data.worlds.new('W'); sc.world.use_nodes = True
-    bg = sc.world.node_tree.nodes['Background']; bg.inputs['Color'].default_value = (0.05, 0.05, 0.05, 1.0)
-    ld = bpy.data.lights.new('Sun', 'SUN'); ld.energy = 3.0; ld.angle = math.radians(5.0)
-    sun = bpy.data.objects.new('Sun', ld); sc.collection.objects.link(sun)
-    sun.rotation_euler = (math.radians(40), 0.0, math.radians(30))
-    cd = bpy.data.cameras.new('C'); cd.type = 'ORTHO'; cd.ortho_scale = 2.3
-    cam = bpy.data.objects.new('C', cd); sc.collection.objects.link(cam); sc.camera = cam; cam.location = (0, 0, 5)
-    bpy.ops.mesh.primitive_uv_sphere_add(radius=1.0, segments=64, ring_count=32)
-    bpy.ops.object.shade_smooth()
-    ob = bpy.context.object
+    sc, ob = ortho_sphere_under_sun(W, math.radians(5.0))
     m = bpy.data.materials.new('Lobes'); m.use_nodes = True; nt = m.node_tree
     out = nt.nodes['Material Output']
     for n in list(nt.nodes):

@@ -17,17 +17,7 @@ def test_normal_mapped_and_bumped_spheres_match_cycles(tmp_path):
     proc, res = run_bpy(
         tmp_path,
         """
-    sc = empty_scene(48, 48)
-    sc.world = bpy.data.worlds.new('W'); sc.world.use_nodes = True
-    bg = sc.world.node_tree.nodes['Background']; bg.inputs['Color'].default_value = (0.05, 0.05, 0.05, 1.0)
-    ld = bpy.data.lights.new('Sun', 'SUN'); ld.energy = 3.0; ld.angle = 0.0
-    sun = bpy.data.objects.new('Sun', ld); sc.collection.objects.link(sun)
-    sun.rotation_euler = (math.radians(40), 0.0, math.radians(30))
-    cd = bpy.data.cameras.new('C'); cd.type = 'ORTHO'; cd.ortho_scale = 2.3
-    cam = bpy.data.objects.new('C', cd); sc.collection.objects.link(cam); sc.camera = cam; cam.location = (0, 0, 5)
-    bpy.ops.mesh.primitive_uv_sphere_add(radius=1.0, segments=64, ring_count=32)
-    bpy.ops.object.shade_smooth()
-    ob = bpy.context.object
+    sc, ob = ortho_sphere_under_sun(48)
     m = bpy.data.materials.new('Bumpy'); m.use_nodes = True; nt = m.node_tree
     p = nt.nodes['Principled BSDF']
     p.inputs['Base Color'].default_value = (0.7, 0.45, 0.25, 1.0)
