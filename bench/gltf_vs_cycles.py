@@ -198,7 +198,8 @@ def delta_e(ref, img):
 
 
 def compare(path: Path, size: int = 128, samples: int = 64, tmp: Path | None = None) -> dict:
-    """One model: {'de', 'p95', 'warnings', 'error', 't_cycles', 't_poly'}."""
+    """One model: {'de', 'p95', 'warnings', 'error', 't_cycles', 't_poly'} and the two linear
+    images {'cycles', 'polychrome'} (numpy arrays)."""
     import polychrome_blender
 
     engine = polychrome_blender.engine.PolychromeRenderEngine
