@@ -680,3 +680,41 @@ def test_unary_modulo_and_ifgreater_nodes(tmp_path):
     pick = np.where(t[..., :1] > 0.5, np.abs(t - 0.5), x3 - np.floor(x3))
     want = pick + 0.1 * np.sin(t) + 0.05 * np.sqrt(t)
     np.testing.assert_allclose(got, want, atol=1e-4)
+
+
+def test_mtlx_document_referenced_from_a_referenced_layer_lands_where_it_composes(tmp_path):
+    """usd-wg/assets' OpenChessSet layout: an asset layer whose /Asset/Looks references a
+    .mtlx document, referenced (twice, under other prim paths) by the shot stage. The
+    document's materials compose at /Shot/A/Looks and /Shot/B/Looks, not at the asset
+    layer's /Asset/Looks; both planes show 2 × the sRGB-decoded texels (as
+    test_referenced_mtlx_document_inside_a_variant), no warning."""
+    from PIL import Image
+
+    from test_usd_preview import srgb_decode
+
+    (tmp_path / "tex").mkdir()
+    q = np.round(TEXELS4 * 255).astype(np.uint8)
+    Image.fromarray(q, "RGB").save(tmp_path / "tex" / "glow.png")
+    (tmp_path / "looks.mtlx").write_text(MTLX_DOC)
+    asset = new_stage(tmp_path / "asset.usda")
+    root = asset.DefinePrim("/Asset", "Xform")
+    asset.SetDefaultPrim(root)
+    asset.DefinePrim("/Asset/Looks").GetReferences().AddReference("./looks.mtlx", "/MaterialX/Materials")
+    mesh = quad(asset, "/Asset/plane", x0=-0.5, x1=0.5, y0=-0.5, y1=0.5)
+    UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).GetDirectBindingRel().SetTargets([Sdf.Path("/Asset/Looks/glow")])
+    asset.Save()
+    path = tmp_path / "shot.usda"
+    stage = new_stage(path)
+    for name, x in (("A", -0.5), ("B", 0.5)):
+        prim = stage.DefinePrim(f"/Shot/{name}", "Xform")
+        prim.GetReferences().AddReference("./asset.usda")
+        pxr.UsdGeom.Xformable(prim).AddTranslateOp().Set(Gf.Vec3d(x, 0, 0))
+    top_camera(stage, width=2.0)
+    stage.Save()
+    scene, warns = read(path)
+    assert not warns, warns
+    got = render_rgb(scene, samples=64, n=8)
+    texel = 2.0 * srgb_decode(q / 255.0)  # each plane: 1 × 1 of the 2 × 2 view, 4 × 4 pixels
+    want = np.zeros((8, 8, 3))
+    want[2:6, 0:4] = want[2:6, 4:8] = texel
+    np.testing.assert_allclose(got, want, atol=1e-4)

@@ -226,10 +226,11 @@ def translate(path: Path, warn):
 
 def attach(stage, warn) -> set[str]:
     """Adds the translated .mtlx documents that `stage`'s active references name, in its
-    session layer; returns the documents handled (absolute paths)."""
+    session layer, on the stage prims those references compose into; returns the documents
+    handled (absolute paths)."""
     from pxr import Sdf, Usd
 
-    found = []  # (namespace path, absolute document path, reference)
+    found = []  # (layer, spec path in that layer, absolute document path, reference)
     for layer in stage.GetUsedLayers():
         # Cheap first: only layers that name a .mtlx asset are traversed (spec by spec).
         if layer.anonymous or not any(str(d).lower().endswith(".mtlx") for d in layer.GetCompositionAssetDependencies()):
@@ -247,34 +248,43 @@ def attach(stage, warn) -> set[str]:
                 + list(spec.referenceList.appendedItems)
             ):
                 if ref.assetPath.lower().endswith(".mtlx"):
-                    found.append((path, layer.ComputeAbsolutePath(ref.assetPath), ref))
+                    found.append((layer, path, layer.ComputeAbsolutePath(ref.assetPath), ref))
 
         layer.Traverse(Sdf.Path.absoluteRootPath, visit)
+    if not found:
+        return set()
+    # Where each spec composes: the stage prims whose prim stack holds it. A spec of a
+    # referenced or payloaded layer sits under another path on the stage than in its layer
+    # (usd-wg's OpenChessSet: Pawn_look.usd's /Pawn/Materials is /ChessSet/Black/Pawns/Pawn/
+    # Materials); a spec inside a variant the stage has not selected is in no prim stack.
+    wanted = {(layer.identifier, path) for layer, path, _, _ in found}
+    targets: dict = {}
+    for prim in Usd.PrimRange.Stage(stage, Usd.TraverseInstanceProxies(Usd.PrimAllPrimsPredicate)):
+        for spec in prim.GetPrimStack():
+            key = (spec.layer.identifier, spec.path)
+            if key in wanted:
+                targets.setdefault(key, []).append(prim)
     handled: set[str] = set()
     session = stage.GetSessionLayer()
     seen = set()
-    for spec_path, doc, ref in found:
-        # Only references inside the variants the stage has selected compose.
-        active = True
-        for prefix in spec_path.GetPrefixes():
-            if prefix.IsPrimVariantSelectionPath():
-                vset, sel = prefix.GetVariantSelection()
-                owner = stage.GetPrimAtPath(prefix.StripAllVariantSelections())
-                if not owner or owner.GetVariantSets().GetVariantSelection(vset) != sel:
-                    active = False
-        ns = spec_path.StripAllVariantSelections()
-        if not active or (str(ns), doc, str(ref.primPath)) in seen:
-            continue
-        seen.add((str(ns), doc, str(ref.primPath)))
-        p = Path(doc)
-        if not p.is_file():
-            continue  # USD's own warning names the file
-        try:
-            layer = translate(p, warn)
-        except (ET.ParseError, OSError, ValueError) as e:
-            warn(f"prim {ns}: cannot read MaterialX document {p} ({e}); its materials are missing")
-            continue
-        with Usd.EditContext(stage, session):
-            stage.OverridePrim(ns).GetReferences().AddReference(Sdf.Reference(layer.identifier, ref.primPath))
-        handled.add(str(p))
+    for layer, spec_path, doc, ref in found:
+        for prim in targets.get((layer.identifier, spec_path), []):
+            ns = prim.GetPath()
+            if (str(ns), doc, str(ref.primPath)) in seen:
+                continue
+            seen.add((str(ns), doc, str(ref.primPath)))
+            p = Path(doc)
+            if not p.is_file():
+                continue  # USD's own warning names the file
+            if prim.IsInstanceProxy():
+                warn(f"prim {ns}: MaterialX document {p} is referenced inside an instance; its materials are missing")
+                continue
+            try:
+                translated = translate(p, warn)
+            except (ET.ParseError, OSError, ValueError) as e:
+                warn(f"prim {ns}: cannot read MaterialX document {p} ({e}); its materials are missing")
+                continue
+            with Usd.EditContext(stage, session):
+                stage.OverridePrim(ns).GetReferences().AddReference(Sdf.Reference(translated.identifier, ref.primPath))
+            handled.add(str(p))
     return handled
