@@ -158,13 +158,24 @@ def setup_scene(path: Path, size: int, samples: int):
     cam.rotation_euler = (centre - cam.location).to_track_quat("-Z", "Y").to_euler()
     cd.clip_start, cd.clip_end = dist * 1e-3, dist * 100
     sc.camera = cam
+    engine_settings(sc, samples)
+    return sc
+
+
+def engine_settings(sc, samples: int, bounces: int | None = None) -> None:
+    """Cycles CPU as the reference (no denoising, adaptivity, clamping, a near-box pixel
+    filter) and Polychrome at `samples`; with `bounces`, that for every Cycles ray type and
+    Polychrome's max_bounces (else each engine's default)."""
     c = sc.cycles
     c.device, c.samples = "CPU", samples
     c.use_denoising = c.use_adaptive_sampling = False
     c.filter_width = 0.01
     c.sample_clamp_direct = c.sample_clamp_indirect = 0.0
     sc.polychrome.samples = samples
-    return sc
+    if bounces is not None:
+        c.max_bounces = c.diffuse_bounces = c.glossy_bounces = c.transmission_bounces = bounces
+        c.blur_glossy = 0.0
+        sc.polychrome.max_bounces = bounces
 
 
 def render(sc, engine: str, out: Path):
@@ -220,8 +231,8 @@ def compare(path: Path, size: int = 128, samples: int = 64, tmp: Path | None = N
     }
 
 
-def side_by_side_png(left, right, path: Path) -> None:
-    """Two linear Rec.709 images side by side, sRGB-encoded 8-bit, a 2-pixel gap."""
+def side_by_side_png(path: Path, *images) -> None:
+    """Linear Rec.709 images side by side, left to right, sRGB-encoded 8-bit, 2-pixel gaps."""
     import numpy as np
     from PIL import Image
 
@@ -229,8 +240,11 @@ def side_by_side_png(left, right, path: Path) -> None:
         x = np.clip(x, 0.0, 1.0)
         return np.where(x <= 0.0031308, 12.92 * x, 1.055 * x ** (1 / 2.4) - 0.055)
 
-    gap = np.ones((left.shape[0], 2, 3))
-    rgb = np.concatenate([srgb(left), gap, srgb(right)], 1)
+    gap = np.ones((images[0].shape[0], 2, 3))
+    parts = [srgb(images[0])]
+    for img in images[1:]:
+        parts += [gap, srgb(img)]
+    rgb = np.concatenate(parts, 1)
     path.parent.mkdir(parents=True, exist_ok=True)
     Image.fromarray((rgb * 255 + 0.5).astype(np.uint8)).save(path)
 
@@ -281,7 +295,7 @@ def main() -> int:
             rows.append(f"| {name} | – | – | failed: {e} | – | – |")
         else:
             if args.images:
-                side_by_side_png(r["cycles"], r["polychrome"], args.images / f"{name}.png")
+                side_by_side_png(args.images / f"{name}.png", r["cycles"], r["polychrome"])
             for w in r["warnings"]:
                 print(f"{name}: warning: {w}", flush=True)
             warn = summarise(r["warnings"]) or ("error: " + r["error"] if r["error"] else "none")
