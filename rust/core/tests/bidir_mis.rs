@@ -7,7 +7,6 @@
 mod common;
 
 use common::*;
-use glam::Vec3A;
 use polychrome_core::render::{render, Direction, RenderControl, ResolvedSettings};
 use polychrome_core::scene::{BsdfDesc, Buffer, MaterialDesc, SceneDesc};
 use polychrome_core::spectrum::named::SpectrumKind;
@@ -31,15 +30,6 @@ fn diffuse(name: &str, reflectance: SpectrumDesc, emission: Option<SpectrumDesc>
 
 fn quad(desc: &mut SceneDesc, buffers: &mut Vec<Buffer>, name: &str, p: [[f32; 3]; 4], material: u32) {
     add_mesh(desc, buffers, name, p.iter().flatten().copied().collect(), vec![0, 1, 2, 0, 2, 3], material);
-}
-
-fn look_at(eye: [f32; 3], target: [f32; 3]) -> [[f32; 4]; 4] {
-    let eye = Vec3A::from(eye);
-    let f = (Vec3A::from(target) - eye).normalize();
-    let r = f.cross(Vec3A::Z).normalize();
-    let u = r.cross(f);
-    let z = -f;
-    [[r.x, u.x, z.x, eye.x], [r.y, u.y, z.y, eye.y], [r.z, u.z, z.z, eye.z], [0.0, 0.0, 0.0, 1.0]]
 }
 
 fn lamp(strength: f32) -> MaterialDesc {

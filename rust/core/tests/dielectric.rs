@@ -6,7 +6,7 @@ mod common;
 
 use common::*;
 use glam::{Vec2, Vec3A};
-use polychrome_core::camera::{CameraDesc, Projection};
+use polychrome_core::camera::CameraDesc;
 use polychrome_core::color::uplift::UpliftMethod;
 use polychrome_core::color::RgbSpace;
 use polychrome_core::geometry::{offset_ray_origin, Frame, Ray};
@@ -14,10 +14,6 @@ use polychrome_core::material::{IorDesc, ShadingContext};
 use polychrome_core::render::{render, RenderControl, ResolvedSettings};
 use polychrome_core::scene::{BsdfDesc, Buffer, BuildOptions, LightDesc, MaterialDesc, Scene, SceneDesc, WorldDesc};
 use polychrome_core::spectrum::{SpectrumDesc, WavelengthGrid};
-
-fn material(name: &str, bsdf: BsdfDesc) -> MaterialDesc {
-    MaterialDesc { name: name.into(), bsdf, emission: None, volume: None, one_sided: false, see_through: false }
-}
 
 fn glass(name: &str, ior: IorDesc) -> MaterialDesc {
     material(name, BsdfDesc::Dielectric { ior, roughness: 0.0 })
@@ -134,12 +130,7 @@ fn furnace_scene(ior: IorDesc, roughness: f32) -> (SceneDesc, Vec<Buffer>) {
     let world: WorldDesc =
         serde_json::from_value(serde_json::json!({"radiance": {"type": "constant", "value": 1.0}})).unwrap();
     desc.world = Some(world);
-    desc.camera = CameraDesc {
-        projection: Projection::Orthographic,
-        ortho_scale: 1.6,
-        to_world: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 5.0], [0.0, 0.0, 0.0, 1.0]],
-        ..Default::default()
-    };
+    desc.camera = ortho_down(1.6);
     (desc, buffers)
 }
 
@@ -285,12 +276,7 @@ fn spot_light_on_a_plane_is_inverse_square_inside_and_black_outside() {
         radius: 0.0,
         visibility: Default::default(),
     });
-    desc.camera = CameraDesc {
-        projection: Projection::Orthographic,
-        ortho_scale: 4.0,
-        to_world: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 5.0], [0.0, 0.0, 0.0, 1.0]],
-        ..Default::default()
-    };
+    desc.camera = ortho_down(4.0);
     let (w, hh) = (41u32, 41u32);
     let settings = ResolvedSettings { width: w, height: hh, samples: 16, max_bounces: 1, ..Default::default() };
     let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
@@ -329,19 +315,8 @@ fn sun_on_a_plane_gives_irradiance_times_cosine() {
     desc.materials.push(material("plane", BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(rho) }));
     add_square(&mut desc, &mut buffers, "plane", 4.0, 0);
     let theta = 0.6f32;
-    desc.lights.push(LightDesc::Distant {
-        name: "sun".into(),
-        direction: [theta.sin(), 0.0, -theta.cos()],
-        irradiance: SpectrumDesc::constant(e),
-        angle: 0.0,
-        visibility: Default::default(),
-    });
-    desc.camera = CameraDesc {
-        projection: Projection::Orthographic,
-        ortho_scale: 2.0,
-        to_world: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 5.0], [0.0, 0.0, 0.0, 1.0]],
-        ..Default::default()
-    };
+    desc.lights.push(sun([theta.sin(), 0.0, -theta.cos()], e, 0.0));
+    desc.camera = ortho_down(2.0);
     let settings = ResolvedSettings { width: 8, height: 8, samples: 4, max_bounces: 1, ..Default::default() };
     let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
     let expected = (rho / std::f32::consts::PI * e * theta.cos()) as f64;
@@ -389,42 +364,12 @@ fn sun_through_a_glass_slab_is_found_by_forward_tracing() {
     desc.materials.push(material("floor", BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(rho) }));
     desc.materials.push(glass("slab", IorDesc::Constant { ior: n as f64 }));
     add_square(&mut desc, &mut buffers, "floor", 2.0, 0);
-    // Slab x ∈ [−1.5, 1.5], y ∈ [−2, 2], z ∈ [1, 1.3], wound outwards.
-    let (x0, x1, y0, y1, z0, z1) = (-1.5f32, 1.5f32, -2.0f32, 2.0f32, 1.0f32, 1.3f32);
-    let mut v = Vec::new();
-    for &z in &[z0, z1] {
-        for &y in &[y0, y1] {
-            for &x in &[x0, x1] {
-                v.extend_from_slice(&[x, y, z]);
-            }
-        }
-    }
-    let faces = [[0u32, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
-    let t: Vec<u32> = faces.iter().flat_map(|f| [f[0], f[1], f[2], f[0], f[2], f[3]]).collect();
-    add_mesh(&mut desc, &mut buffers, "slab", v, t, 1);
-    desc.lights.push(LightDesc::Distant {
-        name: "sun".into(),
-        direction: [0.0, 0.0, -1.0],
-        irradiance: SpectrumDesc::constant(e),
-        angle: 0.0,
-        visibility: Default::default(),
-    });
+    add_box(&mut desc, &mut buffers, "slab", [-1.5, -2.0, 1.0], [1.5, 2.0, 1.3], 1);
+    desc.lights.push(sun([0.0, 0.0, -1.0], e, 0.0));
     // Perspective camera at (4, 0, 2) looking at the origin, +z up: its line of sight to
     // the floor near the origin passes beside the slab.
-    let eye = Vec3A::new(4.0, 0.0, 2.0);
-    let fwd = (-eye).normalize();
-    let right = fwd.cross(Vec3A::Z).normalize();
-    let up = right.cross(fwd);
-    desc.camera = CameraDesc {
-        focal_length: 120.0,
-        to_world: [
-            [right.x, up.x, -fwd.x, eye.x],
-            [right.y, up.y, -fwd.y, eye.y],
-            [right.z, up.z, -fwd.z, eye.z],
-            [0.0, 0.0, 0.0, 1.0],
-        ],
-        ..Default::default()
-    };
+    desc.camera =
+        CameraDesc { focal_length: 120.0, to_world: look_at([4.0, 0.0, 2.0], [0.0; 3]), ..Default::default() };
     let r = ((n - 1.0) / (n + 1.0)).powi(2);
     let expected = (rho / std::f32::consts::PI * e * (1.0 - r) / (1.0 + r)) as f64;
     for direction in [Direction::Backward, Direction::Forward, Direction::Bidirectional] {

@@ -8,7 +8,7 @@ mod common;
 
 use common::*;
 use glam::Vec3A;
-use polychrome_core::camera::{CameraDesc, Projection};
+use polychrome_core::camera::CameraDesc;
 use polychrome_core::color::uplift::UpliftMethod;
 use polychrome_core::color::RgbSpace;
 use polychrome_core::geometry::visibility::LightVisibilityDesc;
@@ -16,22 +16,17 @@ use polychrome_core::geometry::Frame;
 use polychrome_core::material::ShadingContext;
 use polychrome_core::render::{render, Direction, Method, RenderControl, ResolvedSettings};
 use polychrome_core::sampling::Rng;
-use polychrome_core::scene::{BsdfDesc, Buffer, BuildOptions, LightDesc, MaterialDesc, Scene, SceneDesc};
+use polychrome_core::scene::{BsdfDesc, Buffer, BuildOptions, LightDesc, Scene, SceneDesc};
 use polychrome_core::spectrum::{SampledSpectrum, SpectrumDesc, WavelengthGrid};
 use std::f32::consts::PI;
 
-fn material(name: &str, bsdf: BsdfDesc) -> MaterialDesc {
-    MaterialDesc { name: name.into(), bsdf, emission: None, volume: None, one_sided: false, see_through: false }
-}
-
+/// [`common::sun`] of half-angle `half_angle`, with `visibility`.
 fn sun(direction: [f32; 3], e: f32, half_angle: f32, visibility: LightVisibilityDesc) -> LightDesc {
-    LightDesc::Distant {
-        name: "sun".into(),
-        direction,
-        irradiance: SpectrumDesc::constant(e),
-        angle: 2.0 * half_angle,
-        visibility,
+    let mut light = common::sun(direction, e, 2.0 * half_angle);
+    if let LightDesc::Distant { visibility: v, .. } = &mut light {
+        *v = visibility;
     }
+    light
 }
 
 /// A pinhole at height `z` looking down −z (`up`: looking up +z instead), focal length
@@ -41,15 +36,6 @@ fn pinhole(z: f32, f: f32, up: bool) -> CameraDesc {
     CameraDesc {
         focal_length: f,
         to_world: [[1.0, 0.0, 0.0, 0.0], [0.0, s, 0.0, 0.0], [0.0, 0.0, s, z], [0.0, 0.0, 0.0, 1.0]],
-        ..Default::default()
-    }
-}
-
-fn ortho_down(scale: f32) -> CameraDesc {
-    CameraDesc {
-        projection: Projection::Orthographic,
-        ortho_scale: scale,
-        to_world: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 5.0], [0.0, 0.0, 0.0, 1.0]],
         ..Default::default()
     }
 }
@@ -284,34 +270,10 @@ fn a_suns_caustic_through_a_glass_slab_is_found_by_every_direction() {
     desc.materials.push(material("floor", BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(rho) }));
     desc.materials.push(material("slab", BsdfDesc::Dielectric { ior: IorDesc::Constant { ior: n }, roughness: 0.0 }));
     add_square(&mut desc, &mut buffers, "floor", 3.0, 0);
-    // Slab x ∈ [−1.5, 1.5], y ∈ [−2, 2], z ∈ [1, 1.3], wound outwards.
-    let (x0, x1, y0, y1, z0, z1) = (-1.5f32, 1.5f32, -2.0f32, 2.0f32, 1.0f32, 1.3f32);
-    let mut v = Vec::new();
-    for &z in &[z0, z1] {
-        for &y in &[y0, y1] {
-            for &x in &[x0, x1] {
-                v.extend_from_slice(&[x, y, z]);
-            }
-        }
-    }
-    let faces = [[0u32, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
-    let t: Vec<u32> = faces.iter().flat_map(|f| [f[0], f[1], f[2], f[0], f[2], f[3]]).collect();
-    add_mesh(&mut desc, &mut buffers, "slab", v, t, 1);
+    add_box(&mut desc, &mut buffers, "slab", [-1.5, -2.0, 1.0], [1.5, 2.0, 1.3], 1);
     desc.lights.push(sun([0.0, 0.0, -1.0], e, h, Default::default()));
-    let eye = Vec3A::new(4.0, 0.0, 2.0);
-    let fwd = (-eye).normalize();
-    let right = fwd.cross(Vec3A::Z).normalize();
-    let up = right.cross(fwd);
-    desc.camera = CameraDesc {
-        focal_length: 120.0,
-        to_world: [
-            [right.x, up.x, -fwd.x, eye.x],
-            [right.y, up.y, -fwd.y, eye.y],
-            [right.z, up.z, -fwd.z, eye.z],
-            [0.0, 0.0, 0.0, 1.0],
-        ],
-        ..Default::default()
-    };
+    desc.camera =
+        CameraDesc { focal_length: 120.0, to_world: look_at([4.0, 0.0, 2.0], [0.0; 3]), ..Default::default() };
     // Fresnel's unpolarised reflectance at incidence cos ci from outside.
     let fresnel = |ci: f64| {
         let st2 = (1.0 - ci * ci) / (n * n);

@@ -774,16 +774,6 @@ fn bidirectional_adds_the_point_light_caustic_that_backward_misses() {
     assert!(total(&k) < 0.85 * total(&b), "backward {} should miss the caustic ({} with it)", total(&k), total(&b));
 }
 
-/// Camera → world rows for a camera at `eye` looking at `target`, world Z up.
-fn look_at(eye: [f32; 3], target: [f32; 3]) -> [[f32; 4]; 4] {
-    let eye = Vec3A::from(eye);
-    let f = (Vec3A::from(target) - eye).normalize();
-    let r = f.cross(Vec3A::Z).normalize();
-    let u = r.cross(f);
-    let z = -f;
-    [[r.x, u.x, z.x, eye.x], [r.y, u.y, z.y, eye.y], [r.z, u.z, z.z, eye.z], [0.0, 0.0, 0.0, 1.0]]
-}
-
 #[test]
 fn forward_needs_a_perspective_camera_and_time_limited_mono_scenes_say_so() {
     let (mut desc, buffers) = furnace_scene(0.5, 0.5);

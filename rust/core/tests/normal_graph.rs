@@ -7,8 +7,7 @@ mod common;
 use common::*;
 use polychrome_core::camera::{CameraDesc, Projection};
 use polychrome_core::render::{render, RenderControl, ResolvedSettings};
-use polychrome_core::scene::{BsdfDesc, Buffer, LightDesc, MaterialDesc, SceneDesc};
-use polychrome_core::spectrum::SpectrumDesc;
+use polychrome_core::scene::{BsdfDesc, Buffer, SceneDesc};
 use serde_json::json;
 
 /// A Diffuse BSDF (grey 0.5) whose Normal is linked from `normal` (nodes before it).
@@ -31,25 +30,12 @@ fn plane_under_sun(bsdf: BsdfDesc, sun: [f32; 3]) -> f64 {
 
 /// A plane z = 0 under a sun shining along `sun`, seen straight down from above (or
 /// straight up from below) by an orthographic camera, 8², 2 spp.
-fn render_plane(bsdf: BsdfDesc, sun: [f32; 3], from_below: bool) -> polychrome_core::render::RenderOutput {
+fn render_plane(bsdf: BsdfDesc, sun_direction: [f32; 3], from_below: bool) -> polychrome_core::render::RenderOutput {
     let mut desc = SceneDesc::default();
     let mut buffers: Vec<Buffer> = Vec::new();
-    desc.materials.push(MaterialDesc {
-        name: "plane".into(),
-        bsdf,
-        emission: None,
-        volume: None,
-        one_sided: false,
-        see_through: false,
-    });
+    desc.materials.push(material("plane", bsdf));
     add_square(&mut desc, &mut buffers, "plane", 4.0, 0);
-    desc.lights.push(LightDesc::Distant {
-        name: "sun".into(),
-        direction: sun,
-        irradiance: SpectrumDesc::constant(2.0),
-        angle: 0.0,
-        visibility: Default::default(),
-    });
+    desc.lights.push(common::sun(sun_direction, 2.0, 0.0));
     desc.camera = CameraDesc {
         projection: Projection::Orthographic,
         ortho_scale: 2.0,
@@ -182,14 +168,7 @@ fn a_mesh_without_tangents_uses_its_uvs_with_the_bitangent_sign() {
         ];
         let mut desc = SceneDesc::default();
         let mut buffers: Vec<Buffer> = Vec::new();
-        desc.materials.push(MaterialDesc {
-            name: "plane".into(),
-            bsdf: diffuse_with_normal(nm),
-            emission: None,
-            volume: None,
-            one_sided: false,
-            see_through: false,
-        });
+        desc.materials.push(material("plane", diffuse_with_normal(nm)));
         let s = 4.0;
         let m = add_mesh(
             &mut desc,
@@ -201,12 +180,7 @@ fn a_mesh_without_tangents_uses_its_uvs_with_the_bitangent_sign() {
         );
         buffers.push(Buffer::F32(vec![1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0]));
         desc.meshes[m].uvs = Some(buffers.len() - 1);
-        desc.camera = CameraDesc {
-            projection: Projection::Orthographic,
-            ortho_scale: 2.0,
-            to_world: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 5.0], [0.0, 0.0, 0.0, 1.0]],
-            ..Default::default()
-        };
+        desc.camera = ortho_down(2.0);
         let settings = ResolvedSettings { width: 8, height: 8, samples: 2, max_bounces: 1, ..Default::default() };
         let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
         let worst = out

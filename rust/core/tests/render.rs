@@ -3,7 +3,6 @@
 mod common;
 
 use common::*;
-use polychrome_core::camera::{CameraDesc, Projection};
 use polychrome_core::render::{render, RenderControl, ResolvedSettings};
 use polychrome_core::scene::{BsdfDesc, Buffer, LightDesc, MaterialDesc, SceneDesc};
 use polychrome_core::spectrum::SpectrumDesc;
@@ -67,12 +66,7 @@ fn point_light_on_diffuse_plane_matches_inverse_square_cosine_law() {
         visibility: Default::default(),
     });
     // Orthographic camera 5 units above looking down −Z, 4 units wide.
-    desc.camera = CameraDesc {
-        projection: Projection::Orthographic,
-        ortho_scale: 4.0,
-        to_world: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 5.0], [0.0, 0.0, 0.0, 1.0]],
-        ..Default::default()
-    };
+    desc.camera = ortho_down(4.0);
     let (w, hh) = (41u32, 41u32);
     let settings = ResolvedSettings { width: w, height: hh, samples: 64, max_bounces: 1, ..Default::default() };
     let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
@@ -154,19 +148,8 @@ fn uniform_world_and_sun_on_a_diffuse_plane_render_without_noise() {
     desc.materials.push(diffuse("plane", rho, None));
     add_square(&mut desc, &mut buffers, "plane", 50.0, 0);
     desc.world = Some(uniform_world(&SpectrumDesc::constant(l)));
-    desc.lights.push(LightDesc::Distant {
-        name: "sun".into(),
-        direction: [0.0, 0.0, -1.0],
-        irradiance: SpectrumDesc::constant(e),
-        angle: 0.0,
-        visibility: Default::default(),
-    });
-    desc.camera = CameraDesc {
-        projection: Projection::Orthographic,
-        ortho_scale: 2.0,
-        to_world: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 5.0], [0.0, 0.0, 0.0, 1.0]],
-        ..Default::default()
-    };
+    desc.lights.push(sun([0.0, 0.0, -1.0], e, 0.0));
+    desc.camera = ortho_down(2.0);
     let settings = ResolvedSettings { width: 8, height: 8, samples: 16, max_bounces: 4, ..Default::default() };
     let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();
     let expected = (rho * (l + e / std::f32::consts::PI)) as f64;

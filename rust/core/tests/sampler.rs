@@ -8,11 +8,9 @@
 mod common;
 
 use common::*;
-use polychrome_core::camera::{CameraDesc, Projection};
 use polychrome_core::render::{render, RenderControl, ResolvedSettings};
 use polychrome_core::sampling::Sampler;
-use polychrome_core::scene::{BsdfDesc, Buffer, LightDesc, MaterialDesc, SceneDesc};
-use polychrome_core::spectrum::SpectrumDesc;
+use polychrome_core::scene::{BsdfDesc, Buffer, SceneDesc};
 use serde_json::json;
 
 const THETA0: f32 = 50.0 * std::f32::consts::PI / 180.0;
@@ -24,28 +22,10 @@ fn plane_under_sun(sampler: Sampler, seed: u64) -> Vec<f64> {
     let mut buffers: Vec<Buffer> = Vec::new();
     let bsdf = json!({"type": "ShaderNodeBsdfDiffuse", "name": "D", "inputs": {"Color": [0.5, 0.5, 0.5, 1.0]}});
     let graph = json!({"nodes": [bsdf], "output": {"surface": [0, "BSDF"]}});
-    desc.materials.push(MaterialDesc {
-        name: "plane".into(),
-        bsdf: BsdfDesc::Graph(serde_json::from_value(graph).unwrap()),
-        emission: None,
-        volume: None,
-        one_sided: false,
-        see_through: false,
-    });
+    desc.materials.push(material("plane", BsdfDesc::Graph(serde_json::from_value(graph).unwrap())));
     add_square(&mut desc, &mut buffers, "plane", 4.0, 0);
-    desc.lights.push(LightDesc::Distant {
-        name: "sun".into(),
-        direction: [-THETA0.sin(), 0.0, -THETA0.cos()],
-        irradiance: SpectrumDesc::constant(IRRADIANCE),
-        angle: 10f32.to_radians(),
-        visibility: Default::default(),
-    });
-    desc.camera = CameraDesc {
-        projection: Projection::Orthographic,
-        ortho_scale: 2.0,
-        to_world: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 5.0], [0.0, 0.0, 0.0, 1.0]],
-        ..Default::default()
-    };
+    desc.lights.push(sun([-THETA0.sin(), 0.0, -THETA0.cos()], IRRADIANCE, 10f32.to_radians()));
+    desc.camera = ortho_down(2.0);
     let settings =
         ResolvedSettings { width: 24, height: 24, samples: 16, max_bounces: 1, sampler, seed, ..Default::default() };
     let out = render(&desc, &buffers, &settings, &RenderControl::new()).unwrap();

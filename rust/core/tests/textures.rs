@@ -5,7 +5,7 @@
 mod common;
 
 use common::*;
-use polychrome_core::camera::{CameraDesc, Projection};
+use polychrome_core::camera::CameraDesc;
 use polychrome_core::material::texture::{srgb_decode, Texture, Wrap};
 use polychrome_core::render::{render, RenderControl, RenderOutput, ResolvedSettings};
 use polychrome_core::scene::{
@@ -215,12 +215,7 @@ fn importance_sampling_a_sun_reduces_variance_without_bias() {
         );
         let t = add_texture(&mut desc, &mut buffers, "sun", w, h, rgb.clone());
         desc.world = Some(world_texture(t, 1.0, 0.0, importance));
-        desc.camera = CameraDesc {
-            projection: Projection::Orthographic,
-            ortho_scale: 2.0,
-            to_world: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 5.0], [0.0, 0.0, 0.0, 1.0]],
-            ..Default::default()
-        };
+        desc.camera = ortho_down(2.0);
         (desc, buffers)
     };
     let settings = ResolvedSettings { width: 24, height: 24, samples: 4, max_bounces: 1, ..Default::default() };

@@ -1,8 +1,15 @@
 //! Scene-building helpers shared by the core's integration tests.
 #![allow(dead_code)]
 
-use polychrome_core::scene::{Buffer, MeshDesc, SceneDesc, WorldDesc};
+use glam::Vec3A;
+use polychrome_core::camera::{CameraDesc, Projection};
+use polychrome_core::scene::{BsdfDesc, Buffer, LightDesc, MaterialDesc, MeshDesc, SceneDesc, WorldDesc};
 use polychrome_core::spectrum::SpectrumDesc;
+
+/// A two-sided material of `bsdf` without emission or volume.
+pub fn material(name: &str, bsdf: BsdfDesc) -> MaterialDesc {
+    MaterialDesc { name: name.into(), bsdf, emission: None, volume: None, one_sided: false, see_through: false }
+}
 
 /// A UV sphere of `radius` around `center` (outward winding), as vertices and triangles.
 pub fn uv_sphere(center: [f32; 3], radius: f32, rings: u32, segments: u32) -> (Vec<f32>, Vec<u32>) {
@@ -41,6 +48,21 @@ pub fn add_square(desc: &mut SceneDesc, buffers: &mut Vec<Buffer>, name: &str, h
         vec![0, 1, 2, 0, 2, 3],
         material,
     )
+}
+
+/// Adds the axis-aligned box [lo, hi] (12 triangles wound outwards) as a mesh.
+pub fn add_box(desc: &mut SceneDesc, buffers: &mut Vec<Buffer>, name: &str, lo: [f32; 3], hi: [f32; 3], material: u32) {
+    let mut v = Vec::new();
+    for z in [lo[2], hi[2]] {
+        for y in [lo[1], hi[1]] {
+            for x in [lo[0], hi[0]] {
+                v.extend_from_slice(&[x, y, z]);
+            }
+        }
+    }
+    let faces = [[0u32, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+    let t: Vec<u32> = faces.iter().flat_map(|f| [f[0], f[1], f[2], f[0], f[2], f[3]]).collect();
+    add_mesh(desc, buffers, name, v, t, material);
 }
 
 /// Adds a mesh to the description, returning its index.
@@ -85,4 +107,36 @@ pub fn mean_and_standard_error(rgba: &[f32]) -> (f64, f64) {
 /// at their defaults).
 pub fn uniform_world(radiance: &SpectrumDesc) -> WorldDesc {
     serde_json::from_value(serde_json::json!({ "radiance": radiance })).expect("world description")
+}
+
+/// A sun (distant light) shining along `direction` with irradiance `e` (W/m² per unit
+/// spectrum) and angular diameter `angle` (0: a parallel light).
+pub fn sun(direction: [f32; 3], e: f32, angle: f32) -> LightDesc {
+    LightDesc::Distant {
+        name: "sun".into(),
+        direction,
+        irradiance: SpectrumDesc::constant(e),
+        angle,
+        visibility: Default::default(),
+    }
+}
+
+/// An orthographic camera at z = 5 looking down −z, `scale` wide.
+pub fn ortho_down(scale: f32) -> CameraDesc {
+    CameraDesc {
+        projection: Projection::Orthographic,
+        ortho_scale: scale,
+        to_world: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 5.0], [0.0, 0.0, 0.0, 1.0]],
+        ..Default::default()
+    }
+}
+
+/// Camera → world rows for a camera at `eye` looking at `target`, world Z up.
+pub fn look_at(eye: [f32; 3], target: [f32; 3]) -> [[f32; 4]; 4] {
+    let eye = Vec3A::from(eye);
+    let f = (Vec3A::from(target) - eye).normalize();
+    let r = f.cross(Vec3A::Z).normalize();
+    let u = r.cross(f);
+    let z = -f;
+    [[r.x, u.x, z.x, eye.x], [r.y, u.y, z.y, eye.y], [r.z, u.z, z.z, eye.z], [0.0, 0.0, 0.0, 1.0]]
 }
