@@ -95,3 +95,49 @@ def test_graph_pixels_replace_non_finite_values(tmp_path):
     assert np.allclose(r["got"], [[0.5, 2.0, 0.25, 1.0], [0.0, 1.0, 0.0, 1.0], [0.0, 0.0, 3.0, 0.5], [0.1, 0.2, 0.3, 0.4]]), r
     assert np.array_equal(r["gb"], [[51, 102, 153, 255], [255, 0, 128, 128]]), r
     assert r["same"] is True
+
+
+def test_image_without_pixels_reads_magenta_as_in_cycles(tmp_path):
+    """An Image Texture whose file is missing, or with no image at all (what Blender's USD
+    importer leaves for a missing file: usd-wg's AlphaBlendModeTest and ShaderBall with a
+    texture absent), made the render fail ("node 'Image Texture': has no 'texture'").
+    Cycles reads both as magenta (1, 0, 1) with alpha 1: a large plane under a white world
+    (radiance 1) with the node on a Diffuse BSDF's colour has radiance (1, 0, 1) in Cycles
+    and in Polychrome, and on a Principled Base Color the two agree; one warning names the
+    material and the image without pixels (none for the empty node: Cycles gives none, and
+    test_node_graph's probe of every node has them empty)."""
+    proc, res = run_bpy(
+        tmp_path,
+        """
+    sc = empty_scene(16, 16)
+    sc.world = bpy.data.worlds.new('W'); sc.world.use_nodes = True
+    sc.world.node_tree.nodes['Background'].inputs['Color'].default_value = (1, 1, 1, 1)
+    add_camera(sc, (0, 0, 3))
+    bpy.ops.mesh.primitive_plane_add(size=20)
+    plane = bpy.context.object
+    gone = bpy.data.images.new('gone', 4, 4); gone.source = 'FILE'; gone.filepath = '/nonexistent/gone.png'; gone.reload()
+    for kind in ('diffuse', 'principled', 'diffuse-no-image'):
+        img = None if kind.endswith('no-image') else gone
+        m = bpy.data.materials.new(kind); m.use_nodes = True; nt = m.node_tree
+        tex = nt.nodes.new('ShaderNodeTexImage'); tex.image = img
+        if kind.startswith('diffuse'):
+            d = nt.nodes.new('ShaderNodeBsdfDiffuse'); nt.links.new(tex.outputs['Color'], d.inputs['Color'])
+            nt.links.new(d.outputs['BSDF'], nt.nodes['Material Output'].inputs['Surface'])
+        else:
+            nt.links.new(tex.outputs['Color'], nt.nodes['Principled BSDF'].inputs['Base Color'])
+        plane.data.materials.clear(); plane.data.materials.append(m)
+        ref, test = cycles_and_polychrome(sc, 16, 4)
+        emit(kind=kind, size=list(gone.size), ref=ref.reshape(-1, 3).mean(0).tolist(), test=test.reshape(-1, 3).mean(0).tolist(),
+             err=Engine.last_error, warn=Engine.last_warnings)
+    """,
+    )
+    diffuse, principled, empty = check(proc, res, 3)
+    assert diffuse["size"] == [0, 0], diffuse  # the image really has no pixels
+    for r in (diffuse, principled, empty):
+        assert r["err"] is None, r
+        np.testing.assert_allclose(r["test"], r["ref"], atol=0.01)
+    for r in (diffuse, principled):
+        assert len(r["warn"]) == 1 and f"material '{r['kind']}'" in r["warn"][0] and "'gone'" in r["warn"][0], r
+    assert empty["warn"] == [], empty
+    for r in (diffuse, empty):
+        np.testing.assert_allclose(r["ref"], [1.0, 0.0, 1.0], atol=1e-3)

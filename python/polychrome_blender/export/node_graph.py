@@ -16,7 +16,7 @@ them only for the materials that need them.
 
 import math
 
-from .textures import graph_texture
+from .textures import graph_texture, missing_texture
 
 #: Nodes the core evaluates (docs/shading.md, issue 12's list); any other node keeps its
 #: output's default value with a warning.
@@ -534,6 +534,9 @@ class GraphExport:
             if node.image is not None:
                 props["alpha_mode"] = node.image.alpha_mode
                 self._images.append((props, node, name, len(self.nodes)))  # its index once appended
+            else:  # magenta, as Cycles reads it, silently (a node not yet given an image is no error;
+                # Blender's USD importer leaves a missing file's node so, and says so itself)
+                props["texture"], props["associated"] = missing_texture(), False
         elif t == "ShaderNodeTexCoord" and node.object is not None:
             self.warnings.add(
                 ("texcoord-object", self.name, name),

@@ -61,6 +61,10 @@ def blender_texture(node, owner, warnings):
     return pc.Texture.from_array(px, "srgb" if srgb else "linear", wrap, img.name)
 
 
+#: What an Image Texture node without an image, or whose image has no pixels (a missing
+#: file), reads in Cycles (IMAGE_TEXTURE_MISSING_RGBA; measured with bpy 4.5).
+MISSING_RGBA = (1.0, 0.0, 1.0, 1.0)
+
 #: 8-bit colour spaces whose bytes are used as they are (linear values or data).
 LINEAR_BYTES = ("Linear Rec.709", "Non-Color")
 SRGB_BYTES = ("sRGB", "sRGB EOTF")
@@ -89,7 +93,9 @@ def graph_rgba(img, owner, warnings):
         warnings.add(("udim", img.name), f"{owner}: image '{img.name}' is a UDIM image; only its first tile is used")
     px = image_pixels(img)
     if px is None:
-        warnings.add(("img", img.name), f"{owner}: image '{img.name}' has no pixels (missing file?); its node reads black")
+        warnings.add(
+            ("img", img.name), f"{owner}: image '{img.name}' has no pixels (missing file?); its node reads magenta (1, 0, 1), as in Cycles"
+        )
         return None
     if px.shape[2] != 4:  # grey or RGB: make it RGBA
         rgb = np.repeat(px[:, :, :1], 3, axis=2) if px.shape[2] < 3 else px[:, :, :3]
@@ -111,6 +117,12 @@ def graph_rgba(img, owner, warnings):
     return finite(buf), "linear"
 
 
+def missing_texture():
+    """The 1 × 1 RGBA texture of MISSING_RGBA: what Cycles reads from an Image Texture
+    node without an image or whose image has no pixels."""
+    return pc.Texture.from_array(np.array([[MISSING_RGBA]], np.float32), "linear", "REPEAT", "missing image")
+
+
 def graph_texture(node, owner, node_name, warnings, cache, user=None, associate=False, ignore_alpha=False):
     """The RGBA Texture of an Image or Environment Texture node for the shading graph, or
     None. ``associate``: colour × alpha (in the stored encoding, as Cycles associates 8-bit
@@ -122,7 +134,7 @@ def graph_texture(node, owner, node_name, warnings, cache, user=None, associate=
     def convert(own):
         got = graph_rgba(img, owner, own)
         if got is None:
-            return None
+            return missing_texture()
         px, encoding = got
         if ignore_alpha:
             px = px[:, :, :3]
