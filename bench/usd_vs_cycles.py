@@ -16,9 +16,12 @@ The table: stage, mean CIEDE2000 over 4 × 4 blocks of (a) and of (b) against (c
 (`gltf_vs_cycles.delta_e`: colour-science, Rec.709 linear, white = Cycles' 99th-percentile
 Y), the reader's and the add-on's warnings, the render times. Blender's importer reads
 a DistantLight with its own export convention (strength = 4 × intensity, angle = 2 ×
-angle; docs/usd.md, Lights), not UsdLux's; the bench sets the imported sun back to the
-wrapper's irradiance and angle (`--raw-import` keeps what the importer made), so that
-(b) and (c) see the light the stage describes. That is the only edit after the import.
+angle; docs/usd.md, Lights), not UsdLux's; the bench undoes that on every imported sun
+(strength / 4, angle / 2: the wrapper's sun is 3 W/m² and 1° again, and a stage's own
+unnormalized DistantLight gets UsdLux's irradiance L·π·sin²(θ/2) in Cycles;
+`--raw-import` keeps what the importer made), so that (b) and (c) see the lights the
+stage describes. That is the only edit after the import (none of these stages is
+Blender-authored, whose suns the importer reads right).
 
     python bench/usd_vs_cycles.py [--stages A,B] [--size 96] [--samples 64]
         [--assets DIR | --source GITDIR] [--out DIR] [--images DIR] [--raw-import]
@@ -322,11 +325,11 @@ def blender_half(wrapper: str, size: int, samples: int, out: str, raw: bool, t0:
     if not cams:
         raise ValueError("Blender's importer made no WrapCamera")
     sc.camera = cams[0]
-    suns = [o.data for o in sc.objects if o.type == "LIGHT" and o.name.startswith("WrapSun")]
-    imported = [(s.energy, math.degrees(s.angle)) for s in suns]
+    suns = {o.name: o.data for o in sc.objects if o.type == "LIGHT" and o.data.type == "SUN"}
+    imported = {name: (s.energy, math.degrees(s.angle)) for name, s in suns.items()}
     if not raw:
-        for s in suns:
-            s.energy, s.angle = SUN_IRRADIANCE, math.radians(SUN_ANGLE)
+        for s in suns.values():
+            s.energy, s.angle = s.energy / 4.0, s.angle / 2.0
     engine_settings(sc, samples, BOUNCES)
     engine = polychrome_blender.engine.PolychromeRenderEngine
     cyc, t_c = render(sc, "CYCLES", Path(out) / "cycles.exr")
@@ -432,7 +435,7 @@ def main() -> int:
             print(f"{name}: Blender importer: {w}", flush=True)
         print(
             f"{name}: {r['how']}, upAxis {r['up']}, metersPerUnit {r['metersPerUnit']}, time {r['time']}, "
-            f"own domes off {r['domes_off']}, imported sun (strength, angle°) {r['imported_sun']}",
+            f"own domes off {r['domes_off']}, imported suns (strength, angle°) {r['imported_sun']}",
             flush=True,
         )
         if args.images and STAGES[name][3]:
