@@ -24,7 +24,12 @@ stage describes. That is the only edit after the import (none of these stages is
 Blender-authored, whose suns the importer reads right).
 
     python bench/usd_vs_cycles.py [--stages A,B] [--size 96] [--samples 64]
-        [--assets DIR | --source GITDIR] [--out DIR] [--images DIR] [--raw-import]
+        [--assets DIR | --source GITDIR] [--out DIR] [--images DIR] [--raw-import] [--unbound 0.8]
+
+`--unbound 0.8` gives (a) a copy of the wrapper whose gprims bound to no material have
+displayColor 0.8, what Blender's importer shows them as (it ignores displayColor without
+a material; the reader, like Hydra, renders it, else the preview surface's 0.18 grey): what
+is left of (a)'s difference once that importer difference is taken out.
 
 Stages are files of usd-wg/assets (STAGES, below) under `--assets` (a checkout; default
 $POLYCHROME_USD_ASSETS, else ~/.cache/polychrome/usd-wg-assets). `--source GITDIR`
@@ -349,14 +354,41 @@ def blender_half(wrapper: str, size: int, samples: int, out: str, raw: bool, t0:
     }
 
 
-def compare(asset: Path, size: int = 96, samples: int = 64, tmp: Path | None = None, raw: bool = False, timeout: float = 900) -> dict:
+def grey_unbound(wrapper: Path, out: Path, grey: float) -> int:
+    """Writes `out`: `wrapper` with displayColor `grey` on every gprim bound to no material
+    (what Blender's default material shows, 0.8, where the importer ignores displayColor);
+    returns how many."""
+    from pxr import Gf, Usd, UsdGeom, UsdShade
+
+    stage = Usd.Stage.Open(str(wrapper))
+    n = 0
+    for prim in stage.Traverse():
+        if prim.IsA(UsdGeom.Gprim) and not UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()[0]:
+            UsdGeom.Gprim(prim).CreateDisplayColorPrimvar(UsdGeom.Tokens.constant).Set([Gf.Vec3f(grey, grey, grey)])
+            n += 1
+    stage.GetRootLayer().Export(str(out))
+    return n
+
+
+def compare(
+    asset: Path,
+    size: int = 96,
+    samples: int = 64,
+    tmp: Path | None = None,
+    raw: bool = False,
+    timeout: float = 900,
+    unbound: float | None = None,
+) -> dict:
     """One stage, the three renders: {'cycles', 'blender', 'read_stage' (images),
     'de_blender', 'de_read' ((mean, p95) against Cycles), warnings, times}."""
     tmp = Path(tmp or tempfile.mkdtemp(prefix="usd_vs_cycles_"))
     tmp.mkdir(parents=True, exist_ok=True)
     wrapper = tmp / "wrap.usda"
     info = wrap_stage(asset, wrapper, size)
-    ours, read_warnings, t_read = render_read_stage(wrapper, size, samples, info["time"])
+    if unbound is not None:  # (a) only; Blender's importer reads the original wrapper
+        info["greyed"] = grey_unbound(wrapper, tmp / "wrap_unbound.usda", unbound)
+    read = tmp / "wrap_unbound.usda" if unbound is not None else wrapper
+    ours, read_warnings, t_read = render_read_stage(read, size, samples, info["time"])
     script = tmp / "blender_worker.py"
     script.write_text(
         BLENDER_WORKER.format(bench=str(HERE), wrapper=str(wrapper), size=size, samples=samples, out=str(tmp), raw=raw, time=info["time"])
@@ -406,6 +438,12 @@ def main() -> int:
     ap.add_argument("--out", type=Path, default=None, help="directory for the wrappers and renders (default: a temp dir)")
     ap.add_argument("--images", type=Path, default=None, help="directory for PNGs: Cycles | Polychrome via Blender | via read_stage")
     ap.add_argument("--raw-import", action="store_true", help="keep the sun Blender's importer makes (see the docstring)")
+    ap.add_argument(
+        "--unbound",
+        type=float,
+        default=None,
+        help="for (a), displayColor GREY on gprims bound to no material (0.8: what Blender's importer shows them as)",
+    )
     ap.add_argument("--timeout", type=float, default=900, help="seconds for each stage's Blender subprocess")
     args = ap.parse_args()
     out = Path(args.out or tempfile.mkdtemp(prefix="usd_vs_cycles_"))
@@ -422,7 +460,7 @@ def main() -> int:
             print(rows[-1], flush=True)
             continue
         try:
-            r = compare(path, args.size, args.samples, out / name, args.raw_import, args.timeout)
+            r = compare(path, args.size, args.samples, out / name, args.raw_import, args.timeout, args.unbound)
         except Exception as e:  # noqa: BLE001 - one stage failing must not stop the table
             rows.append(f"| {name} | – | – | failed: {str(e)[-300:]} | – | – | {STAGES[name][2]} |")
             print(rows[-1], flush=True)
