@@ -68,7 +68,7 @@ def test_world_volume_and_a_camera_inside_a_box_are_beer_lambert():
         if world is not None:
             scene.world_volume = pc.Medium(absorption=world)
         if box_medium is not None:
-            v, t = box(4.0, 6.0, 3.0)
+            v, t = box((-3.0, -3.0, 4.0), (3.0, 3.0, 6.0))
             scene.add_mesh("tank", v, t, material=pc.Volume(pc.Medium(absorption=box_medium), name="tank"))
         out = pc.render(scene, width=4, height=4, samples=1)
         assert np.allclose(luminance(out.rgba) / clear, math.exp(-tau), rtol=1e-4), (world, box_medium)

@@ -67,7 +67,7 @@ def test_motion_blur_matches_cycles(tmp_path):
         script(
             """
     def block_de(a, b):
-        return cd.image_delta_e(blocks(a), blocks(b), white_luminance=1.0)
+        return cd.image_delta_e(block_means(a), block_means(b), white_luminance=1.0)
     sc.render.use_motion_blur = False
     still = render(sc, 'CYCLES', 'c0')  # the frame itself: where blocks differ from it, motion shows
     sc.render.use_motion_blur = True

@@ -29,7 +29,7 @@ def test_blender_exported_hair_curves_cover_what_cycles_covers(tmp_path):
     p.inputs['Specular IOR Level'].default_value = 0.0; p.inputs['Roughness'].default_value = 1.0
     c.materials[0] = m
     sc.render.engine = 'CYCLES'; sc.render.filepath = os.path.abspath('ref.exr'); bpy.ops.render.render(write_still=True)
-    a = rgb('ref.exr')
+    a = exr_rgb('ref.exr')
     bpy.ops.wm.usd_export(filepath=os.path.abspath('hair.usda'))
     import warnings
     with warnings.catch_warnings(record=True) as caught:
@@ -40,14 +40,14 @@ def test_blender_exported_hair_curves_cover_what_cycles_covers(tmp_path):
     types = sorted({str(q.GetTypeName()) for q in written.Traverse()})
     b = pc.render(scene, width=64, height=48, samples=64, max_bounces=0).rgba[..., :3]
     white = float(np.percentile(a[..., 1], 99))
-    de = float(cd.image_delta_e(blocks(a), blocks(b), white_luminance=white).mean())
+    de = float(cd.image_delta_e(block_means(a), block_means(b), white_luminance=white).mean())
     # Control: the exported widths × 0.7 must be seen.
     for q in written.Traverse():
         if q.GetTypeName() == 'BasisCurves':
             wa = q.GetAttribute('widths'); wa.Set([0.7 * x for x in wa.Get()])
     written.Export(os.path.abspath('thin.usda'))
     thin = pc.render(usd.read_stage('thin.usda', resolution=(64, 48)), width=64, height=48, samples=64, max_bounces=0).rgba[..., :3]
-    control = float(cd.image_delta_e(blocks(a), blocks(thin), white_luminance=white).mean())
+    control = float(cd.image_delta_e(block_means(a), block_means(thin), white_luminance=white).mean())
     emit(de=de, control=control, ratio=(b.mean(axis=(0, 1)) / np.maximum(a.mean(axis=(0, 1)), 1e-9)).tolist(),
          warnings=[str(w.message) for w in caught], types=types)
     """
