@@ -211,7 +211,10 @@ def test_aux_passes_see_through_mirrors_and_glass(front):
         expected = (1 - f0) / (1 + f0)
         ratio = behind.mean(axis=0) / wall[0]
         # 256 spp × 120 pixels of a Bernoulli (reflected paths escape, adding 0): σ ≈ 0.1 %.
-        np.testing.assert_allclose(ratio, expected, rtol=0.01)
+        np.testing.assert_allclose(ratio, expected, rtol=4e-3)
+        # Grey glass keeps the wall's colour: a chain that Russian roulette ends inside the
+        # slab adds nothing (keeping the glass' white albedo there made B 1 % high).
+        np.testing.assert_allclose(ratio, ratio.mean(), rtol=1e-4)
         assert abs(r.normal[15, 15, 1]) > 0.95
 
 

@@ -106,8 +106,10 @@ impl CameraMis for PowerHeuristic {
 /// albedo weighted by the path's throughput (their Fresnel reflectance/transmittance),
 /// as Open Image Denoise expects and Cycles writes its denoising passes
 /// (intern/cycles/kernel/film/denoising_passes.h). A chain of such surfaces that leaves
-/// the scene gives zero, as an escaped camera ray; one that ends otherwise (bounce limit,
-/// Russian roulette) keeps the first hit's values.
+/// the scene gives zero, as an escaped camera ray; one that Russian roulette ends gives
+/// zero albedo too (the survivors, divided by their survival probability, carry its
+/// share: keeping the first hit's glass albedo there added ~0.1 % white behind a glass
+/// slab); one cut by the bounce limit keeps the first hit's values.
 ///
 /// Through a dispersive glass the path goes on with one wavelength (eq. 9) and the chain
 /// with it: from there the albedo is weighted by [`FirstHit::weight`], each wavelength's
@@ -283,6 +285,12 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
             g.radiance(&ctx.hit, &mut scratch.le);
             let w = self.mis.emission(scene, v, st);
             self.gathered.add_emitted(beta, &scratch.le, w);
+        }
+    }
+
+    fn rouletted(&mut self) {
+        if let Some(out) = self.first_hit.take() {
+            out.albedo.fill(0.0);
         }
     }
 
@@ -625,6 +633,9 @@ fn scatter_single(
     });
     let st = state.after(scene, v, &sc, ctx.front_face);
     if roulette && !russian_roulette(&mut b, st.depth, walk.rr_depth, rng) {
+        if let Some(a) = aux {
+            a.albedo.fill(0.0); // as CameraPath::rouletted
+        }
         return 0.0;
     }
     trace_single(scene, walk, st, b, aux, rng, scratch)

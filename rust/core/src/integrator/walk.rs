@@ -144,6 +144,9 @@ pub trait PathHooks<T: Throughput> {
         _scratch: &mut Scratch,
     ) {
     }
+    /// Russian roulette ended the path: in expectation what it would have gathered on is
+    /// carried by the paths that survived (divided by their survival probability).
+    fn rouletted(&mut self) {}
     /// The path passed through see-through emitter `v` (`Material::see_through`, a
     /// light's surface): gather its emission; the ray goes on behind it. Draws no random
     /// numbers.
@@ -321,7 +324,11 @@ impl Walk {
                             media: st.media,
                             traveled: 0.0,
                         };
-                        if !beta.is_alive() || !russian_roulette(beta, st.depth, self.rr_depth, rng) {
+                        if !beta.is_alive() {
+                            return End::Done;
+                        }
+                        if !russian_roulette(beta, st.depth, self.rr_depth, rng) {
+                            hooks.rouletted();
                             return End::Done;
                         }
                         continue;
@@ -443,6 +450,7 @@ impl Walk {
                 return End::Collapsed { index, state: st };
             }
             if !russian_roulette(beta, st.depth, self.rr_depth, rng) {
+                hooks.rouletted();
                 return End::Done;
             }
         }
