@@ -141,3 +141,33 @@ def test_image_without_pixels_reads_magenta_as_in_cycles(tmp_path):
     assert empty["warn"] == [], empty
     for r in (diffuse, empty):
         np.testing.assert_allclose(r["ref"], [1.0, 0.0, 1.0], atol=1e-3)
+
+
+def test_environment_texture_without_pixels_is_a_magenta_world_as_in_cycles(tmp_path):
+    """The world's Environment Texture with no image, or with an image whose file is
+    missing: Cycles' sky is its missing-image magenta (1, 0, 1) × the Background strength
+    (EnvironmentTextureNode::compile); Polychrome's was the Background's default colour.
+    The camera sees only the sky; one warning names the world and the image without pixels."""
+    proc, res = run_bpy(
+        tmp_path,
+        """
+    sc = empty_scene(8, 8)
+    add_camera(sc, (0, 0, 3))
+    gone = bpy.data.images.new('gone', 4, 4); gone.source = 'FILE'; gone.filepath = '/nonexistent/sky.exr'; gone.reload()
+    for kind in ('missing-file', 'no-image'):
+        w = bpy.data.worlds.new(kind); w.use_nodes = True; sc.world = w
+        bg = w.node_tree.nodes['Background']; bg.inputs['Color'].default_value = (0.2, 0.3, 0.4, 1); bg.inputs['Strength'].default_value = 0.5
+        env = w.node_tree.nodes.new('ShaderNodeTexEnvironment'); env.image = gone if kind == 'missing-file' else None
+        w.node_tree.links.new(env.outputs['Color'], bg.inputs['Color'])
+        ref, test = cycles_and_polychrome(sc, 8, 4)
+        emit(kind=kind, ref=ref.reshape(-1, 3).mean(0).tolist(), test=test.reshape(-1, 3).mean(0).tolist(),
+             err=Engine.last_error, warn=Engine.last_warnings)
+    """,
+    )
+    missing, empty = check(proc, res, 2)
+    for r in (missing, empty):
+        assert r["err"] is None, r
+        np.testing.assert_allclose(r["ref"], [0.5, 0.0, 0.5], atol=1e-3)
+        np.testing.assert_allclose(r["test"], r["ref"], atol=0.01)
+    assert len(missing["warn"]) == 1 and "world 'missing-file'" in missing["warn"][0] and "'gone'" in missing["warn"][0], missing
+    assert empty["warn"] == [], empty

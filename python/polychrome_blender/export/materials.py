@@ -21,6 +21,7 @@ import numpy as np
 import polychrome as pc
 
 from .lights import blackbody_white
+from .textures import MISSING_RGBA
 from .volumes import export_volume
 from .warnings import Warnings
 from .node_graph import GraphExport
@@ -151,7 +152,7 @@ class MaterialExport:
                     f"{self.owner}: the Vector input of '{src.name}' is ignored (the active UV map is used)",
                 )
             tex = self.textures.texture(src, self.owner, self.warnings, user=("MATERIAL", self.name))
-            return _rgb(sock.default_value) if tex is None else tex
+            return _rgb(MISSING_RGBA) if tex is None else tex  # no pixels: as Cycles
         if src.type == "TEX_IMAGE" and src.image is not None:
             img = src.image
             w, h = img.size

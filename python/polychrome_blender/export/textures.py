@@ -49,7 +49,7 @@ def blender_texture(node, owner, warnings):
         return None
     px = image_pixels(img)
     if px is None:
-        warnings.add(("img", img.name), f"{owner}: image '{img.name}' has no pixels (missing file?); its node is ignored")
+        warnings.add(("img", img.name), f"{owner}: image '{img.name}' has no pixels (missing file?); Cycles' missing-image magenta is used")
         return None
     extension = getattr(node, "extension", "REPEAT")  # an Environment Texture has none
     wrap = WRAPS.get(extension)

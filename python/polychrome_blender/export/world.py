@@ -5,6 +5,7 @@ world's Volume output as a medium filling all space (``export/volumes.py``)."""
 import numpy as np
 import polychrome as pc
 
+from .textures import MISSING_RGBA
 from .volumes import export_world_volume
 
 
@@ -54,9 +55,13 @@ def export_world(depsgraph, scene, warnings, textures):
         colour = tuple(float(c) for c in csock.default_value[:3])
         if csock.is_linked:
             src = csock.links[0].from_node
-            if src.type == "TEX_ENVIRONMENT" and src.image is not None and _hdri(scene, world, src, strength, warnings, textures):
-                return
-            if src.type != "TEX_ENVIRONMENT" or src.image is None:
+            if src.type == "TEX_ENVIRONMENT":
+                if src.image is not None and _hdri(scene, world, src, strength, warnings, textures):
+                    return
+                # No image, or one without pixels (its warning said so): Cycles' missing-image
+                # magenta (EnvironmentTextureNode::compile), as the Image Texture's.
+                colour = MISSING_RGBA[:3]
+            else:
                 warnings.add(("world", src.name), f"world '{world.name}': node '{src.name}' is not supported; its default colour is used")
     if strength > 0.0 and max(colour) > 0.0:
         if not all(np.isfinite(colour)) or not np.isfinite(strength):
