@@ -67,6 +67,17 @@ impl Ggx {
     pub fn roughness(&self) -> f32 {
         (self.alpha_x * self.alpha_y).sqrt().sqrt()
     }
+    /// The isotropic lobe whose albedo tables stand in for this one in energy
+    /// compensation: alpha = √(alpha_x·alpha_y), as Cycles reads its E(μ, roughness)
+    /// tables at roughness √√(alpha_x·alpha_y) (`microfacet_ggx_preserve_energy`,
+    /// intern/cycles/kernel/closure/bsdf_microfacet.h). An isotropic lobe is itself.
+    pub fn energy_equivalent(&self) -> Self {
+        if self.is_isotropic() {
+            *self
+        } else {
+            Self::isotropic((self.alpha_x * self.alpha_y).sqrt())
+        }
+    }
     /// Whether the lobe is so narrow it should be handled as a mirror.
     pub fn effectively_smooth(&self) -> bool {
         self.alpha_x * self.alpha_y < SMOOTH_ALPHA * SMOOTH_ALPHA

@@ -425,6 +425,8 @@ mod tests {
             thin_film_ior: 1.33,
             specular_ior_level: 0.5,
             diffuse_roughness: 0.0,
+            anisotropic: 0.0,
+            anisotropic_rotation: 0.0,
             coat: None,
             sheen: None,
             normals: None,

@@ -231,6 +231,16 @@ pub enum BsdfDesc {
         reflectance: SpectrumDesc,
         #[serde(default)]
         roughness: f32,
+        /// Blender's Glossy Anisotropy (−1..1, clamped to ±0.99; 0: isotropic).
+        #[serde(default)]
+        anisotropy: f32,
+        /// Blender's Rotation of the tangent about the normal, in turns (1 = 360°).
+        #[serde(default)]
+        rotation: f32,
+        /// The tangent at a hit of a graph, in the lobe's shading frame (None: the
+        /// frame's first axis; not part of the scene format).
+        #[serde(skip)]
+        tangent: Option<[f32; 3]>,
     },
     /// Blender's Principled BSDF: a diffuse base (`base_color`) under a dielectric GGX
     /// specular layer (Fresnel at `ior`, optional thin film), blended towards a metal
@@ -261,6 +271,13 @@ pub enum BsdfDesc {
         /// Blender's Diffuse Roughness of the base (0: Lambertian, else Oren–Nayar).
         #[serde(default)]
         diffuse_roughness: f32,
+        /// Blender's Anisotropic (0..1) of the specular and metal lobes, along the
+        /// tangent (a graph's Tangent input at a hit; else the shading frame's first axis).
+        #[serde(default)]
+        anisotropic: f32,
+        /// Blender's Anisotropic Rotation of the tangent about the normal, in turns.
+        #[serde(default)]
+        anisotropic_rotation: f32,
         /// Blender's Coat: a dielectric layer over everything else (absent: none).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         coat: Option<CoatDesc>,
@@ -381,6 +398,8 @@ pub struct PrincipledNormals {
     pub base: Option<[f32; 3]>,
     pub coat: Option<[f32; 3]>,
     pub sheen: Option<[f32; 3]>,
+    /// The anisotropic lobes' tangent (a graph's Tangent input, in the vertex's frame).
+    pub tangent: Option<[f32; 3]>,
 }
 
 /// The Principled BSDF's Sheen (Cycles' first layer): the microfibre sheen of
@@ -682,7 +701,7 @@ impl BsdfDesc {
         use SpectrumUse::{Index, Surface};
         match self {
             BsdfDesc::Diffuse { reflectance }
-            | BsdfDesc::Glossy { reflectance, roughness: _ }
+            | BsdfDesc::Glossy { reflectance, .. }
             | BsdfDesc::RoughDiffuse { reflectance, roughness: _ } => f(Spectrum(Surface, reflectance)),
             BsdfDesc::Translucent { color }
             | BsdfDesc::Transparent { color }

@@ -4,7 +4,9 @@
 
 use super::{BsdfDesc, BuildUplift, MixFactorDesc};
 use crate::color::uplift::Uplift;
+use crate::material::microfacet::TangentRotation;
 use crate::material::mix::MixFactor;
+use crate::material::oriented::LobeFrame;
 use crate::material::principled::{Principled, PrincipledParams};
 use crate::material::{
     Black, Bsdf, Diffuse, IndexOfRefraction, Layered, MixBsdf, OrenNayar, Oriented, Sheen, SpectralParam, Texture,
@@ -118,11 +120,16 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
             let k = k.as_ref().map(|d| b.spectrum(d, SpectrumRole::Unbounded, material, "k")).transpose()?;
             super::optics::build_conductor(material, metal.as_deref(), eta, k, *roughness, b.grid)?
         }
-        BsdfDesc::Glossy { reflectance, roughness } => super::optics::build_glossy(
-            material,
-            b.spectrum(reflectance, SpectrumRole::Reflectance, material, "reflectance")?,
-            *roughness,
-        )?,
+        BsdfDesc::Glossy { reflectance, roughness, anisotropy, rotation, tangent } => {
+            super::optics::build_glossy_anisotropic(
+                material,
+                b.spectrum(reflectance, SpectrumRole::Reflectance, material, "reflectance")?,
+                *roughness,
+                *anisotropy,
+                *rotation,
+                *tangent,
+            )?
+        }
         BsdfDesc::Principled {
             base_color,
             metallic,
@@ -134,6 +141,8 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
             thin_film_ior,
             specular_ior_level,
             diffuse_roughness,
+            anisotropic,
+            anisotropic_rotation,
             coat,
             sheen,
             normals,
@@ -172,6 +181,20 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
             } else {
                 None
             };
+            let n = normals.as_deref().cloned().unwrap_or_default();
+            if !anisotropic.is_finite() || !anisotropic_rotation.is_finite() {
+                return Err(Error::object(
+                    "material",
+                    material,
+                    format!("anisotropic {anisotropic} and anisotropic_rotation {anisotropic_rotation} must be finite"),
+                ));
+            }
+            // The tangent in the frame the lobes are evaluated in (about the base normal
+            // when it is oriented); Cycles turns it about N by Anisotropic Rotation × 2π.
+            let t = n.tangent.map_or(Vec3A::X, |t| match n.base {
+                Some(nb) => LobeFrame::new(Vec3A::from(nb)).to_lobe(Vec3A::from(t)),
+                None => Vec3A::from(t),
+            });
             let mut out: Box<dyn Bsdf> = Box::new(Principled::new(
                 PrincipledParams {
                     base_color,
@@ -184,10 +207,11 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
                     thin_film,
                     diffuse_roughness: unit_weight(material, "diffuse_roughness", *diffuse_roughness)?,
                     glass,
+                    anisotropic: anisotropic.clamp(0.0, 1.0),
+                    tangent: TangentRotation::new(t, *anisotropic_rotation),
                 },
                 b.grid,
             ));
-            let n = normals.as_deref().cloned().unwrap_or_default();
             if let Some(b) = n.base {
                 out = Box::new(Oriented::new(Vec3A::from(b), out));
             }

@@ -282,7 +282,8 @@ fn graph_bsdf(
         compiled.program.clone(),
         compiled.template.clone(),
         Box::new(build),
-        compiled.normal.is_some(),
+        // Lobe normals and anisotropic tangents are placed in the vertex's frame.
+        compiled.normal.is_some() || compiled.template.needs_tangent(),
     )
 }
 
@@ -474,11 +475,16 @@ impl Scene {
                     let k = k.as_ref().map(|d| spectrum(d, SpectrumRole::Unbounded, "k")).transpose()?;
                     optics::build_conductor(&m.name, metal.as_deref(), eta, k, *roughness, &grid)?
                 }
-                BsdfDesc::Glossy { reflectance, roughness } => optics::build_glossy(
-                    &m.name,
-                    spectrum(reflectance, SpectrumRole::Reflectance, "reflectance")?,
-                    *roughness,
-                )?,
+                BsdfDesc::Glossy { reflectance, roughness, anisotropy, rotation, tangent } => {
+                    optics::build_glossy_anisotropic(
+                        &m.name,
+                        spectrum(reflectance, SpectrumRole::Reflectance, "reflectance")?,
+                        *roughness,
+                        *anisotropy,
+                        *rotation,
+                        *tangent,
+                    )?
+                }
                 BsdfDesc::Principled { .. }
                 | BsdfDesc::Mix { .. }
                 | BsdfDesc::Add { .. }

@@ -3,7 +3,7 @@
 
 use crate::light::{DistantLight, Light, SpotLight};
 use crate::material::conductor::{ComplexFresnel, SchlickFresnel};
-use crate::material::microfacet::Ggx;
+use crate::material::microfacet::{Ggx, TangentRotation};
 use crate::material::{
     Bsdf, Conductor, Dielectric, Glossy, IndexOfRefraction, IorDesc, RoughDielectric, SpectralParam,
 };
@@ -93,7 +93,30 @@ pub fn build_conductor(
 
 /// Blender's Glossy BSDF: GGX with Schlick's Fresnel tinted by `reflectance`.
 pub fn build_glossy(material: &str, r: SampledSpectrum, roughness: f32) -> Result<Box<dyn Bsdf>> {
+    build_glossy_anisotropic(material, r, roughness, 0.0, 0.0, None)
+}
+
+/// Blender's Glossy BSDF with its Anisotropy (−1..1) along `tangent` (in the lobe's
+/// shading frame; None: the frame's first axis) turned by `rotation` turns about the
+/// normal: Cycles' `svm_node_closure_bsdf` (CLOSURE_BSDF_MICROFACET_GGX_ID and its
+/// multiscatter variant, intern/cycles/kernel/svm/closure.h) clamps the anisotropy to
+/// ±0.99 and keeps the lobe isotropic below |0.0001|.
+pub fn build_glossy_anisotropic(
+    material: &str,
+    r: SampledSpectrum,
+    roughness: f32,
+    anisotropy: f32,
+    rotation: f32,
+    tangent: Option<[f32; 3]>,
+) -> Result<Box<dyn Bsdf>> {
     let roughness = check_roughness(material, roughness)?;
+    if !anisotropy.is_finite() || !rotation.is_finite() {
+        return Err(Error::object(
+            "material",
+            material,
+            format!("glossy anisotropy {anisotropy} and rotation {rotation} must be finite"),
+        ));
+    }
     if r.max_value() > 1.0 {
         return Err(Error::object(
             "material",
@@ -101,7 +124,13 @@ pub fn build_glossy(material: &str, r: SampledSpectrum, roughness: f32) -> Resul
             format!("reflectance {} exceeds 1 (not energy conserving)", r.max_value()),
         ));
     }
-    Ok(Box::new(Glossy::new(SchlickFresnel { reflectance: SpectralParam::Constant(r) }, roughness)))
+    let glossy = Glossy::new(SchlickFresnel { reflectance: SpectralParam::Constant(r) }, roughness);
+    let g = Ggx::glossy_anisotropic(roughness, anisotropy);
+    if g.is_isotropic() {
+        return Ok(Box::new(glossy));
+    }
+    let t = TangentRotation::new(tangent.map_or(Vec3A::X, Vec3A::from), rotation);
+    Ok(Box::new(glossy.with_distribution(g, t)))
 }
 
 fn unit_direction(light: &str, d: [f32; 3]) -> Result<Vec3A> {

@@ -162,6 +162,12 @@ impl Orient {
         }
     }
 
+    /// A Tangent input's value in the vertex's frame (None: no register, or a zero vector).
+    fn tangent(&self, v: &dyn Fn(Reg) -> Vec3, reg: Option<Reg>) -> Option<[f32; 3]> {
+        let t = v(reg?);
+        (t.is_finite() && t.length_squared() > 0.0).then(|| self.frame.to_local(t.into()).to_array())
+    }
+
     /// `n` in the vertex's frame; None when it is the frame's own normal (nothing to orient).
     fn local(&self, n: Vec3) -> Option<[f32; 3]> {
         let l = self.frame.to_local(n.into());
@@ -254,6 +260,11 @@ pub enum Template {
         thin_film_ior: F,
         specular_ior_level: F,
         diffuse_roughness: F,
+        /// Anisotropic (0..1), its rotation in turns and the Tangent's register (None
+        /// when the anisotropy is a constant 0: no tangent is read).
+        anisotropic: F,
+        anisotropic_rotation: F,
+        tangent: Option<Reg>,
         coat: Option<CoatT>,
         sheen: Option<SheenT>,
         /// A linked Normal (None: the smooth normal).
@@ -269,9 +280,14 @@ pub enum Template {
         color: Col,
         roughness: F,
     },
+    /// The Glossy BSDF: `anisotropy` −1..1, `rotation` in turns, the Tangent's register
+    /// (None when the lobe is isotropic).
     Glossy {
         color: Col,
         roughness: F,
+        anisotropy: F,
+        rotation: F,
+        tangent: Option<Reg>,
     },
     /// White glass: the dielectric; tinted: a transmissive Principled.
     Glass {
@@ -303,6 +319,15 @@ impl F {
         match *self {
             F::C(x) => x,
             F::R(r, lo, hi) => v(r).x.clamp(lo, hi),
+        }
+    }
+    /// `at`, with a non-finite value (a NaN from the graph) read as 0.
+    fn finite_at(&self, v: &dyn Fn(Reg) -> Vec3) -> f32 {
+        let x = self.at(v);
+        if x.is_finite() {
+            x
+        } else {
+            0.0
         }
     }
     fn is_const(&self) -> bool {
@@ -371,6 +396,17 @@ impl Template {
         }
     }
 
+    /// Whether a lobe reads a tangent (an anisotropic Principled or Glossy): its hit's
+    /// BSDF is then built in the vertex's frame (`Orient`), as for lobe normals.
+    pub fn needs_tangent(&self) -> bool {
+        match self {
+            Template::Principled { tangent, .. } | Template::Glossy { tangent, .. } => tangent.is_some(),
+            Template::Mix { a, b, .. } | Template::Add { a, b } => a.needs_tangent() || b.needs_tangent(),
+            Template::Oriented { t, .. } => t.needs_tangent(),
+            _ => false,
+        }
+    }
+
     /// Whether every parameter is a constant.
     pub fn is_constant(&self) -> bool {
         match self {
@@ -386,11 +422,17 @@ impl Template {
                 thin_film_ior,
                 specular_ior_level,
                 diffuse_roughness,
+                anisotropic,
+                anisotropic_rotation,
+                tangent,
                 coat,
                 sheen,
                 normal,
             } => {
                 normal.is_none()
+                    && tangent.is_none()
+                    && anisotropic.is_const()
+                    && anisotropic_rotation.is_const()
                     && coat.as_ref().is_none_or(|c| c.is_const() && c.normal.is_none())
                     && sheen.as_ref().is_none_or(SheenT::is_const)
                     && base_color.is_const()
@@ -408,8 +450,13 @@ impl Template {
                     .iter()
                     .all(|f| f.is_const())
             }
-            Template::Diffuse { color, roughness } | Template::Glossy { color, roughness } => {
-                color.is_const() && roughness.is_const()
+            Template::Diffuse { color, roughness } => color.is_const() && roughness.is_const(),
+            Template::Glossy { color, roughness, anisotropy, rotation, tangent } => {
+                color.is_const()
+                    && roughness.is_const()
+                    && anisotropy.is_const()
+                    && rotation.is_const()
+                    && tangent.is_none()
             }
             Template::Sheen { color, roughness } => color.is_const() && roughness.is_const(),
             Template::Glass { color, roughness, ior } => {
@@ -431,7 +478,8 @@ impl Template {
                     || !transmission.is_const()
                     || coat.as_ref().is_some_and(|c| !c.roughness.is_const() || !c.weight.is_const())
             }
-            Template::Glossy { roughness, .. } | Template::Glass { roughness, .. } => !roughness.is_const(),
+            Template::Glossy { roughness, anisotropy, .. } => !roughness.is_const() || !anisotropy.is_const(),
+            Template::Glass { roughness, .. } => !roughness.is_const(),
             Template::Mix { a, b, .. } | Template::Add { a, b } => a.may_be_specular() || b.may_be_specular(),
             Template::Oriented { t, .. } => t.may_be_specular(),
             _ => false,
@@ -454,6 +502,9 @@ impl Template {
                 thin_film_ior,
                 specular_ior_level,
                 diffuse_roughness,
+                anisotropic,
+                anisotropic_rotation,
+                tangent,
                 coat,
                 sheen,
                 normal,
@@ -475,6 +526,7 @@ impl Template {
                         sheen: sheen_desc
                             .as_ref()
                             .and_then(|_| o.local((n + (c - n) * w).try_normalize().unwrap_or(n))),
+                        tangent: o.tangent(v, *tangent),
                     })
                 });
                 BsdfDesc::Principled {
@@ -488,15 +540,23 @@ impl Template {
                     thin_film_ior: thin_film_ior.at(v),
                     specular_ior_level: specular_ior_level.at(v),
                     diffuse_roughness: diffuse_roughness.at(v),
+                    anisotropic: anisotropic.finite_at(v),
+                    anisotropic_rotation: anisotropic_rotation.finite_at(v),
                     coat: coat_desc,
                     sheen: sheen_desc,
                     normals,
                 }
             }
             Template::Oriented { normal, t } => {
-                let inner = t.instantiate(v, o);
+                let mut inner = t.instantiate(v, o);
                 let Some(o) = o else { return inner };
                 let n = o.normal(v, *normal);
+                if let (BsdfDesc::Glossy { tangent: Some(t), .. }, Some(nl)) = (&mut inner, o.local(n)) {
+                    // The Glossy's tangent in its own lobe's frame (Cycles builds the
+                    // anisotropic frame about the closure's N: make_orthonormals_tangent).
+                    let l = crate::material::oriented::LobeFrame::new(glam::Vec3A::from(nl));
+                    *t = l.to_lobe(glam::Vec3A::from(*t)).to_array();
+                }
                 // Cycles dims a diffuse closure bent off the smooth normal towards the
                 // smooth surface's horizon (bump_shadowing_term, kernel/closure/bsdf.h).
                 let smooth =
@@ -514,9 +574,13 @@ impl Template {
                     BsdfDesc::Diffuse { reflectance: color.at(v) }
                 }
             }
-            Template::Glossy { color, roughness } => {
-                BsdfDesc::Glossy { reflectance: color.at(v), roughness: roughness.at(v) }
-            }
+            Template::Glossy { color, roughness, anisotropy, rotation, tangent } => BsdfDesc::Glossy {
+                reflectance: color.at(v),
+                roughness: roughness.at(v),
+                anisotropy: anisotropy.finite_at(v),
+                rotation: rotation.finite_at(v),
+                tangent: o.and_then(|o| o.tangent(v, *tangent)),
+            },
             Template::Glass { color, roughness, ior } => {
                 let c = color.at(v);
                 let glass = BsdfDesc::Dielectric { ior: ior.at(v), roughness: roughness.at(v) };
@@ -678,6 +742,17 @@ impl<'c, 'a> Lowering<'c, 'a> {
         }
     }
 
+    /// An anisotropic closure's rotation (turns) and Tangent register; nothing is read
+    /// for an isotropic one. An unlinked Tangent is Cycles' default (sockets.rs
+    /// `Implicit::Tangent`: the radial tangent of Generated coordinates about Z).
+    fn tangent_frame(&mut self, node: usize, isotropic: bool, rotation: &str) -> Result<(F, Option<Reg>)> {
+        if isotropic {
+            return Ok((F::C(0.0), None));
+        }
+        let r = self.float(node, rotation, f32::NEG_INFINITY, f32::INFINITY)?;
+        Ok((r, Some(self.c.input_reg(node, "Tangent")?)))
+    }
+
     /// Lowers the closure at output `out` of node `node`.
     pub fn closure(&mut self, node: usize, out: &str, depth: usize) -> Result<(Template, Option<Emission>)> {
         let nodes = self.c.nodes;
@@ -725,12 +800,10 @@ impl<'c, 'a> Lowering<'c, 'a> {
             "ShaderNodeBsdfPrincipled" => {
                 let normal = self.normal(node, "Normal")?;
                 let alpha = self.float(node, "Alpha", 0.0, 1.0)?;
-                for (id, default, what) in [
-                    ("Subsurface Weight", 0.0, "no subsurface scattering yet"),
-                    ("Anisotropic", 0.0, "no anisotropy yet"),
-                ] {
-                    self.ignored(node, id, default, what)?;
-                }
+                self.ignored(node, "Subsurface Weight", 0.0, "no subsurface scattering yet")?;
+                let anisotropic = self.float(node, "Anisotropic", 0.0, 1.0)?;
+                let isotropic = matches!(anisotropic, F::C(a) if a <= 0.0);
+                let (anisotropic_rotation, tangent) = self.tangent_frame(node, isotropic, "Anisotropic Rotation")?;
                 let emission = self.emission(node, "Emission Color", "Emission Strength")?;
                 if let Some(InputDesc::Number(x)) = self.c.nodes[node].inputs.get("Specular IOR Level") {
                     if *x > 1.0 {
@@ -748,6 +821,9 @@ impl<'c, 'a> Lowering<'c, 'a> {
                     thin_film_ior: self.float(node, "Thin Film IOR", 1.0, 10.0)?,
                     specular_ior_level: self.float(node, "Specular IOR Level", 0.0, 1.0)?,
                     diffuse_roughness: self.float(node, "Diffuse Roughness", 0.0, 1.0)?,
+                    anisotropic,
+                    anisotropic_rotation,
+                    tangent,
                     coat: self.coat(node)?,
                     sheen: self.sheen(node)?,
                     normal,
@@ -777,9 +853,14 @@ impl<'c, 'a> Lowering<'c, 'a> {
             }
             "ShaderNodeBsdfAnisotropic" | "ShaderNodeBsdfGlossy" => {
                 let n = self.normal(node, "Normal")?;
-                self.ignored(node, "Anisotropy", 0.0, "no anisotropy yet")?;
                 let color = self.color(node, "Color")?;
-                let t = Template::Glossy { color, roughness: self.float(node, "Roughness", 0.0, 1.0)? };
+                let roughness = self.float(node, "Roughness", 0.0, 1.0)?;
+                // Cycles clamps the Glossy's Anisotropy to ±0.99 and keeps the lobe
+                // isotropic at |anisotropy| ≤ 1e-4 (svm_node_closure_bsdf).
+                let anisotropy = self.float(node, "Anisotropy", -0.99, 0.99)?;
+                let isotropic = matches!(anisotropy, F::C(a) if a.abs() <= 1e-4);
+                let (rotation, tangent) = self.tangent_frame(node, isotropic, "Rotation")?;
+                let t = Template::Glossy { color, roughness, anisotropy, rotation, tangent };
                 (oriented(t, n, true), None)
             }
             "ShaderNodeBsdfGlass" | "ShaderNodeBsdfRefraction" => {

@@ -46,6 +46,19 @@ pub fn fresnel_dielectric_cos(cosi: f32, eta: f32) -> f32 {
     }
 }
 
+/// The default of an unlinked Tangent input (Principled, Glossy): Cycles links it to
+/// Geometry › Tangent (`ShaderGraph::default_inputs`, `SocketType::LINK_TANGENT`,
+/// intern/cycles/scene/shader_graph.cpp), which is `primitive_tangent`
+/// (kernel/geom/primitive.h): the radial tangent about the object's Z axis of the
+/// Generated coordinates, (−(g.y − ½), g.x − ½, 0), taken to world space as a normal
+/// (`object_normal_transform`) and projected onto the shading normal's plane,
+/// cross(N, normalize(cross(t, N))). Zero on the Z axis itself.
+pub fn radial_tangent(sp: &ShadingPoint) -> Vec3 {
+    let g = sp.generated;
+    let t = sp.normal_to_world * Vec3::new(-(g.y - 0.5), g.x - 0.5, 0.0);
+    sp.normal.cross(t.cross(sp.normal).normalize_or_zero())
+}
+
 fn f(x: f32) -> Vec3 {
     Vec3::new(x, 0.0, 0.0)
 }
@@ -130,7 +143,7 @@ impl Input {
             Input::Generated => o[0] = sp.generated,
             Input::Uv => o[0] = sp.uv.extend(0.0),
             Input::Normal => o[0] = sp.normal,
-            Input::Tangent => o[0] = sp.tangent,
+            Input::Tangent => o[0] = radial_tangent(sp),
             Input::Incoming => o[0] = -sp.incoming,
         }
     }
@@ -156,5 +169,37 @@ mod tests {
         let sp = ShadingPoint { incoming: grazing, ..sp };
         Input::LayerWeight.eval(&[Vec3::splat(0.25), Vec3::Z], &mut o, &sp);
         assert!((o[1].x - (1.0 - 0.6f32.powf(0.5))).abs() < 1e-6);
+    }
+
+    /// Cycles' default tangent: on a sphere about the object's origin (Generated 0..1
+    /// across its bounding box) it runs along the parallels, eastwards about +Z, and it
+    /// is taken to world space as a normal is.
+    #[test]
+    fn radial_tangent_runs_along_the_parallels_about_z() {
+        let sp = ShadingPoint { generated: Vec3::new(1.0, 0.5, 0.5), normal: Vec3::X, ..Default::default() };
+        assert!((radial_tangent(&sp) - Vec3::Y).length() < 1e-6, "{}", radial_tangent(&sp));
+        let n = Vec3::new(-1.0, -1.0, 1.0).normalize();
+        let sp = ShadingPoint { generated: Vec3::new(0.0, 0.0, 1.0), normal: n, ..Default::default() };
+        let t = radial_tangent(&sp);
+        assert!((t - Vec3::new(1.0, -1.0, 0.0).normalize()).length() < 1e-6 && t.dot(n).abs() < 1e-6, "{t}");
+        // An object turned 90° about Z: the tangent turns with it.
+        let m = glam::Mat3::from_rotation_z(std::f32::consts::FRAC_PI_2);
+        let sp = ShadingPoint {
+            generated: Vec3::new(1.0, 0.5, 0.5),
+            normal: Vec3::Y,
+            normal_to_world: m,
+            ..Default::default()
+        };
+        assert!((radial_tangent(&sp) + Vec3::X).length() < 1e-6, "{}", radial_tangent(&sp));
+        // On the axis itself there is none.
+        let sp = ShadingPoint { generated: Vec3::new(0.5, 0.5, 1.0), normal: Vec3::Z, ..Default::default() };
+        assert_eq!(radial_tangent(&sp), Vec3::ZERO);
+        let mut o = [Vec3::ZERO];
+        Input::Tangent.eval(
+            &[],
+            &mut o,
+            &ShadingPoint { generated: Vec3::new(1.0, 0.5, 0.5), normal: Vec3::X, ..Default::default() },
+        );
+        assert!((o[0] - Vec3::Y).length() < 1e-6);
     }
 }

@@ -467,3 +467,48 @@ fn only_specular_closures_bend_their_normal() {
     let mirror = 2.0 * g.dot(Vec3::Z) * g - Vec3::Z;
     assert!((mirror.z - 0.01).abs() < 1e-3 && g.y.abs() < 1e-6 && g.x > 0.0, "glossy {g}: mirror {mirror}");
 }
+
+/// An anisotropic Principled and Glossy read a tangent (Cycles' default: the radial
+/// tangent of Generated coordinates, `input::radial_tangent`) and are built per hit in
+/// the vertex's frame, with no warning; Anisotropic 0 reads none and stays constant.
+#[test]
+fn anisotropic_closures_read_the_default_tangent_per_hit() {
+    let c = compile(json!({
+        "nodes": [
+            {"type": "ShaderNodeBsdfPrincipled", "name": "P",
+             "inputs": {"Metallic": 1.0, "Anisotropic": 0.8, "Anisotropic Rotation": 0.25}},
+            {"type": "ShaderNodeBsdfAnisotropic", "name": "G", "inputs": {"Anisotropy": -0.5, "Rotation": 0.1}},
+            {"type": "ShaderNodeAddShader", "name": "A", "inputs": {"Shader": {"link": [0, "BSDF"]}, "Shader_001": {"link": [1, "BSDF"]}}}
+        ],
+        "output": {"surface": [2, "Shader"]}
+    }))
+    .unwrap();
+    assert!(c.warnings.is_empty(), "{:?}", c.warnings);
+    assert!(c.template.needs_tangent() && !c.template.is_constant());
+    let sp = ShadingPoint {
+        generated: Vec3::new(1.0, 0.5, 0.5),
+        normal: Vec3::X,
+        true_normal: Vec3::X,
+        incoming: Vec3::X,
+        ..Default::default()
+    };
+    let mut regs = Vec::new();
+    c.program.run(&sp, &mut regs);
+    let frame = crate::geometry::Frame::from_normal(glam::Vec3A::X);
+    let o = closure::Orient::at(&sp, frame);
+    let BsdfDesc::Add { a: p, b: g } = c.template.instantiate(&|r| regs[r as usize], Some(&o)) else { panic!() };
+    let BsdfDesc::Principled { anisotropic, anisotropic_rotation, normals: Some(n), .. } = &*p else { panic!("{p:?}") };
+    assert!((*anisotropic - 0.8).abs() < 1e-6 && (*anisotropic_rotation - 0.25).abs() < 1e-6);
+    let t = frame.to_world(glam::Vec3A::from(n.tangent.expect("a tangent")));
+    assert!((t - glam::Vec3A::Y).length() < 1e-5, "{t}");
+    let BsdfDesc::Glossy { anisotropy, rotation, tangent: Some(gt), .. } = &*g else { panic!("{g:?}") };
+    assert!((*anisotropy + 0.5).abs() < 1e-6 && (*rotation - 0.1).abs() < 1e-6);
+    assert!((frame.to_world(glam::Vec3A::from(*gt)) - glam::Vec3A::Y).length() < 1e-5);
+    // Isotropic: no tangent, a constant surface.
+    let c = compile(json!({
+        "nodes": [{"type": "ShaderNodeBsdfPrincipled", "name": "P", "inputs": {"Anisotropic": 0.0, "Anisotropic Rotation": 0.3}}],
+        "output": {"surface": [0, "BSDF"]}
+    }))
+    .unwrap();
+    assert!(!c.template.needs_tangent() && c.template.is_constant() && c.warnings.is_empty());
+}
