@@ -330,7 +330,16 @@ fn sun_on_a_plane_gives_irradiance_times_cosine() {
 #[test]
 fn metals_in_a_uniform_world() {
     for (bsdf, check) in [
-        (BsdfDesc::Glossy { reflectance: SpectrumDesc::constant(1.0), roughness: 0.0 }, 0),
+        (
+            BsdfDesc::Glossy {
+                reflectance: SpectrumDesc::constant(1.0),
+                roughness: 0.0,
+                anisotropy: 0.0,
+                rotation: 0.0,
+                tangent: None,
+            },
+            0,
+        ),
         (BsdfDesc::Conductor { metal: Some("gold".into()), eta: None, k: None, roughness: 0.3 }, 1),
     ] {
         let (mut desc, buffers) = furnace_scene(IorDesc::Constant { ior: 1.5 }, 0.0);
@@ -412,8 +421,16 @@ fn extremes_give_finite_results() {
     for roughness in [0.0f32, 0.05, 1.0] {
         desc.materials
             .push(material("gold", BsdfDesc::Conductor { metal: Some("gold".into()), eta: None, k: None, roughness }));
-        desc.materials
-            .push(material("glossy", BsdfDesc::Glossy { reflectance: SpectrumDesc::constant(1.0), roughness }));
+        desc.materials.push(material(
+            "glossy",
+            BsdfDesc::Glossy {
+                reflectance: SpectrumDesc::constant(1.0),
+                roughness,
+                anisotropy: 0.0,
+                rotation: 0.0,
+                tangent: None,
+            },
+        ));
     }
     let scene = build(&desc, &[]);
     let n = scene.grid.len();

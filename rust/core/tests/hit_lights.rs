@@ -73,8 +73,16 @@ fn a_mirror_shows_the_suns_disk() {
     let (e, h, refl) = (3.0f32, 0.2f32, 0.8f32);
     let mut desc = SceneDesc::default();
     let mut buffers = Vec::new();
-    desc.materials
-        .push(material("mirror", BsdfDesc::Glossy { reflectance: SpectrumDesc::constant(refl), roughness: 0.0 }));
+    desc.materials.push(material(
+        "mirror",
+        BsdfDesc::Glossy {
+            reflectance: SpectrumDesc::constant(refl),
+            roughness: 0.0,
+            anisotropy: 0.0,
+            rotation: 0.0,
+            tangent: None,
+        },
+    ));
     add_square(&mut desc, &mut buffers, "mirror", 50.0, 0);
     desc.lights.push(sun([0.0, 0.0, -1.0], e, h, Default::default()));
     let f = 45.0;
@@ -227,8 +235,16 @@ fn a_rough_glossy_plane_agrees_with_next_event_only() {
     for &(roughness, alpha, h) in &[(0.3f32, 0.15f32, 0.15f32), (0.15, 0.05, 0.05), (0.5, 0.4, 0.3)] {
         let mut desc = SceneDesc::default();
         let mut buffers = Vec::new();
-        desc.materials
-            .push(material("glossy", BsdfDesc::Glossy { reflectance: SpectrumDesc::constant(1.0), roughness }));
+        desc.materials.push(material(
+            "glossy",
+            BsdfDesc::Glossy {
+                reflectance: SpectrumDesc::constant(1.0),
+                roughness,
+                anisotropy: 0.0,
+                rotation: 0.0,
+                tangent: None,
+            },
+        ));
         add_square(&mut desc, &mut buffers, "plane", 4.0, 0);
         desc.lights.push(sun([alpha.sin(), 0.0, -alpha.cos()], 1.0, h, Default::default()));
         desc.camera = ortho_down(2.0);

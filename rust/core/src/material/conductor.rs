@@ -80,7 +80,7 @@ impl<F: MetalFresnel> MicrofacetReflection<F> {
         }
     }
     #[inline]
-    fn from_lobe(&self, v: Vec3A) -> Vec3A {
+    fn lobe_to_shading(&self, v: Vec3A) -> Vec3A {
         if self.distribution.is_isotropic() {
             v
         } else {
@@ -171,7 +171,7 @@ impl<F: MetalFresnel> Bsdf for MicrofacetReflection<F> {
         self.fresnel.eval(ctx, c, &mut f);
         f.scale(g.g(wo, wi) / g.g1(wo));
         throughput.mul_assign(&f);
-        Some(BsdfSample { wi: self.from_lobe(wi), pdf, specular: false, collapsed_to: None })
+        Some(BsdfSample { wi: self.lobe_to_shading(wi), pdf, specular: false, collapsed_to: None })
     }
     /// A smooth metal reflects every wavelength the same way: F_λ (chosen with probability 1).
     fn specular_weights(

@@ -468,7 +468,7 @@ impl Principled {
     }
 
     #[inline]
-    fn from_lobe(&self, v: Vec3A) -> Vec3A {
+    fn lobe_to_shading(&self, v: Vec3A) -> Vec3A {
         if self.distribution.is_isotropic() {
             v
         } else {
@@ -831,7 +831,7 @@ impl Bsdf for Principled {
                     collapsed_to: None,
                 });
             }
-            let wm = self.from_lobe(self.distribution.sample_wm(self.to_lobe(o), u));
+            let wm = self.lobe_to_shading(self.distribution.sample_wm(self.to_lobe(o), u));
             let wi = reflect(o, wm);
             if wi.z <= 0.0 {
                 return None;
@@ -853,7 +853,7 @@ impl Bsdf for Principled {
                     collapsed_to: None,
                 });
             }
-            let wm = self.from_lobe(self.distribution.sample_wm(self.to_lobe(o), u));
+            let wm = self.lobe_to_shading(self.distribution.sample_wm(self.to_lobe(o), u));
             let wi = reflect(o, wm);
             if wi.z <= 0.0 {
                 return None;

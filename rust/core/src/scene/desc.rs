@@ -196,6 +196,9 @@ impl TryFrom<RawMaterialDesc> for MaterialDesc {
     }
 }
 
+// The Principled variant is the largest by far (its many inputs); a description is built
+// once per material, or once per hit of a varying graph and dropped after the BSDF is built.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum BsdfDesc {

@@ -175,6 +175,15 @@ impl Orient {
     }
 }
 
+/// The Principled BSDF's Anisotropic (0..1), Anisotropic Rotation (turns) and the
+/// Tangent's register.
+#[derive(Clone, Debug)]
+pub struct AnisoT {
+    pub anisotropic: F,
+    pub rotation: F,
+    pub tangent: Reg,
+}
+
 /// The Principled BSDF's Sheen parameters (see [`SheenLayerDesc`]).
 #[derive(Clone, Debug)]
 pub struct SheenT {
@@ -260,11 +269,8 @@ pub enum Template {
         thin_film_ior: F,
         specular_ior_level: F,
         diffuse_roughness: F,
-        /// Anisotropic (0..1), its rotation in turns and the Tangent's register (None
-        /// when the anisotropy is a constant 0: no tangent is read).
-        anisotropic: F,
-        anisotropic_rotation: F,
-        tangent: Option<Reg>,
+        /// Anisotropic (None when a constant 0: no tangent is read).
+        anisotropy: Option<Box<AnisoT>>,
         coat: Option<CoatT>,
         sheen: Option<SheenT>,
         /// A linked Normal (None: the smooth normal).
@@ -400,7 +406,8 @@ impl Template {
     /// BSDF is then built in the vertex's frame (`Orient`), as for lobe normals.
     pub fn needs_tangent(&self) -> bool {
         match self {
-            Template::Principled { tangent, .. } | Template::Glossy { tangent, .. } => tangent.is_some(),
+            Template::Principled { anisotropy, .. } => anisotropy.is_some(),
+            Template::Glossy { tangent, .. } => tangent.is_some(),
             Template::Mix { a, b, .. } | Template::Add { a, b } => a.needs_tangent() || b.needs_tangent(),
             Template::Oriented { t, .. } => t.needs_tangent(),
             _ => false,
@@ -422,17 +429,13 @@ impl Template {
                 thin_film_ior,
                 specular_ior_level,
                 diffuse_roughness,
-                anisotropic,
-                anisotropic_rotation,
-                tangent,
+                anisotropy,
                 coat,
                 sheen,
                 normal,
             } => {
                 normal.is_none()
-                    && tangent.is_none()
-                    && anisotropic.is_const()
-                    && anisotropic_rotation.is_const()
+                    && anisotropy.is_none()
                     && coat.as_ref().is_none_or(|c| c.is_const() && c.normal.is_none())
                     && sheen.as_ref().is_none_or(SheenT::is_const)
                     && base_color.is_const()
@@ -502,9 +505,7 @@ impl Template {
                 thin_film_ior,
                 specular_ior_level,
                 diffuse_roughness,
-                anisotropic,
-                anisotropic_rotation,
-                tangent,
+                anisotropy,
                 coat,
                 sheen,
                 normal,
@@ -526,7 +527,7 @@ impl Template {
                         sheen: sheen_desc
                             .as_ref()
                             .and_then(|_| o.local((n + (c - n) * w).try_normalize().unwrap_or(n))),
-                        tangent: o.tangent(v, *tangent),
+                        tangent: o.tangent(v, anisotropy.as_ref().map(|a| a.tangent)),
                     })
                 });
                 BsdfDesc::Principled {
@@ -540,8 +541,8 @@ impl Template {
                     thin_film_ior: thin_film_ior.at(v),
                     specular_ior_level: specular_ior_level.at(v),
                     diffuse_roughness: diffuse_roughness.at(v),
-                    anisotropic: anisotropic.finite_at(v),
-                    anisotropic_rotation: anisotropic_rotation.finite_at(v),
+                    anisotropic: anisotropy.as_ref().map_or(0.0, |a| a.anisotropic.finite_at(v)),
+                    anisotropic_rotation: anisotropy.as_ref().map_or(0.0, |a| a.rotation.finite_at(v)),
                     coat: coat_desc,
                     sheen: sheen_desc,
                     normals,
@@ -803,7 +804,8 @@ impl<'c, 'a> Lowering<'c, 'a> {
                 self.ignored(node, "Subsurface Weight", 0.0, "no subsurface scattering yet")?;
                 let anisotropic = self.float(node, "Anisotropic", 0.0, 1.0)?;
                 let isotropic = matches!(anisotropic, F::C(a) if a <= 0.0);
-                let (anisotropic_rotation, tangent) = self.tangent_frame(node, isotropic, "Anisotropic Rotation")?;
+                let (rotation, tangent) = self.tangent_frame(node, isotropic, "Anisotropic Rotation")?;
+                let anisotropy = tangent.map(|tangent| Box::new(AnisoT { anisotropic, rotation, tangent }));
                 let emission = self.emission(node, "Emission Color", "Emission Strength")?;
                 if let Some(InputDesc::Number(x)) = self.c.nodes[node].inputs.get("Specular IOR Level") {
                     if *x > 1.0 {
@@ -821,9 +823,7 @@ impl<'c, 'a> Lowering<'c, 'a> {
                     thin_film_ior: self.float(node, "Thin Film IOR", 1.0, 10.0)?,
                     specular_ior_level: self.float(node, "Specular IOR Level", 0.0, 1.0)?,
                     diffuse_roughness: self.float(node, "Diffuse Roughness", 0.0, 1.0)?,
-                    anisotropic,
-                    anisotropic_rotation,
-                    tangent,
+                    anisotropy,
                     coat: self.coat(node)?,
                     sheen: self.sheen(node)?,
                     normal,
