@@ -44,6 +44,10 @@ FEATURES = {
         "ShaderNodeBsdfPrincipled",
         {"Base Color": (0.9, 0.9, 0.9), "Metallic": 1.0, "Roughness": 0.4, "Anisotropic": 0.8},
     ),
+    "anisotropic_glossy": (
+        "ShaderNodeBsdfAnisotropic",
+        {"Color": (0.9, 0.7, 0.5), "Roughness": 0.3, "Anisotropy": 0.7, "Rotation": 0.1},
+    ),
     "alpha": ("ShaderNodeBsdfPrincipled", {"Base Color": (0.8, 0.2, 0.2), "Alpha": 0.35}),
     "rough_glass": ("ShaderNodeBsdfPrincipled", {"Transmission Weight": 1.0, "Roughness": 0.5}),
     "diffuse_roughness": ("ShaderNodeBsdfPrincipled", {"Diffuse Roughness": 1.0}),
@@ -73,9 +77,8 @@ FEATURES = {
 # (0.69 after, 128 spp); before suns were hittable by BSDF rays (MIS with light sampling): coat 1.55
 # (the sun's reflection in the near-smooth coat one noisy block), 1.12 after (with the light sample
 # leaving out the uniform world; 1.95 without that, from one pixel of BSDF-sampled hits of the sun's
-# disk; 0.70 at 512 spp).
+# disk; 0.70 at 512 spp). Before anisotropic GGX: anisotropic_metal 2.8 (warned), 0.85 after.
 XFAIL = {
-    "anisotropic_metal": "Principled Anisotropic not supported yet (warned): dE00 2.8",
     "subsurface": "no subsurface scattering yet (warned): dE00 2.7",
     "translucent_bsdf": "Translucent BSDF borderline: dE00 1.26-1.52 between runs",
     "transparent_bsdf": "tint passed twice: Cycles squares the RGB, Polychrome the uplifted spectrum: dE00 1.61",
