@@ -60,6 +60,7 @@ fn scene_desc() -> (SceneDesc, Vec<Buffer>) {
         intensity: SpectrumDesc::constant(0.5),
         radius: 0.0,
         visibility: Default::default(),
+        profile: None,
     });
     desc.camera.to_world = [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, -1.0, -0.95], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
     desc.camera.focal_length = 18.0;

@@ -197,6 +197,7 @@ fn a_diffuse_plane_under_a_sphere_light_has_the_irradiance() {
             intensity: SpectrumDesc::constant(intensity),
             radius: r,
             visibility: Default::default(),
+            profile: None,
         });
         let (w, scale) = (8u32, 1.0f32);
         desc.camera = ortho_down(scale);

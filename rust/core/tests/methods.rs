@@ -262,6 +262,7 @@ fn every_method_and_direction_agrees_under_a_sphere_light_over_glass() {
         intensity: SpectrumDesc { kind: SpectrumKind::Blackbody { temperature: 4000.0 }, scale: 1.5 },
         radius: 0.2,
         visibility: Default::default(),
+        profile: None,
     });
     desc.materials.push(MaterialDesc {
         name: "glass".into(),

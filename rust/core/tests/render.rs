@@ -64,6 +64,7 @@ fn point_light_on_diffuse_plane_matches_inverse_square_cosine_law() {
         intensity: SpectrumDesc::constant(intensity),
         radius: 0.0,
         visibility: Default::default(),
+        profile: None,
     });
     // Orthographic camera 5 units above looking down −Z, 4 units wide.
     desc.camera = ortho_down(4.0);

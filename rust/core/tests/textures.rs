@@ -285,6 +285,7 @@ fn constant_colour_and_one_texel_texture_render_identically() {
             intensity: SpectrumDesc::constant(20.0),
             radius: 0.0,
             visibility: Default::default(),
+            profile: None,
         });
         (desc, buffers)
     };
@@ -360,6 +361,7 @@ fn texture_errors_name_the_texture_or_material() {
         intensity: SpectrumDesc::new(SpectrumKind::Texture { texture: 0 }),
         radius: 0.0,
         visibility: Default::default(),
+        profile: None,
     });
     let err =
         render(&desc, &[] as &[Buffer], &ResolvedSettings::default(), &RenderControl::new()).err().unwrap().to_string();

@@ -6,6 +6,7 @@ pub mod distant;
 pub mod environment;
 pub mod mesh;
 pub mod point;
+pub mod profile;
 pub mod spot;
 
 use crate::spectrum::SampledSpectrum;
@@ -16,6 +17,7 @@ pub use distant::DistantLight;
 pub use environment::{ImageEnvironment, UniformEnvironment};
 pub use mesh::{MeshLight, SurfaceEmission};
 pub use point::PointLight;
+pub use profile::Profile;
 pub use spot::SpotLight;
 
 /// Incident radiance sampled from a light towards a shading point.

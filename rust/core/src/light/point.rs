@@ -12,7 +12,7 @@
 //! blocks nothing (a ray goes on behind it, as Cycles' lights are transparent bounces).
 //! Radius 0 stays a delta light, reached by light sampling only.
 
-use super::{EmissionSample, Light, LightSample};
+use super::{EmissionSample, Light, LightSample, Profile};
 use crate::geometry::Frame;
 use crate::sampling::{cosine_hemisphere, uniform_sphere};
 use crate::spectrum::SampledSpectrum;
@@ -25,6 +25,19 @@ pub struct PointLight {
     pub intensity: SampledSpectrum,
     /// Radius of the emitting sphere (0: a point).
     pub radius: f32,
+    /// Scales the intensity per direction (an IES profile).
+    pub profile: Option<Profile>,
+}
+
+impl PointLight {
+    /// The profile's factor towards `p` from the centre (1 without a profile).
+    fn toward(&self, p: Vec3A) -> f32 {
+        match (&self.profile, super::direction_to(self.position, p)) {
+            (Some(prof), Some((w, _, _))) => prof.eval(w),
+            (Some(_), None) => 0.0,
+            (None, _) => 1.0,
+        }
+    }
 }
 
 /// Light sampling of a point (radius 0) or sphere light at `center`, whose radiant
@@ -107,10 +120,11 @@ pub(crate) fn sphere_le(
 
 impl Light for PointLight {
     fn power(&self, weights: &[f32]) -> f64 {
-        4.0 * PI as f64 * self.intensity.dot(weights) as f64
+        let mean = self.profile.as_ref().map_or(1.0, |p| p.mean()) as f64;
+        4.0 * PI as f64 * self.intensity.dot(weights) as f64 * mean
     }
     fn sample_li(&self, p: Vec3A, u: Vec2, le: &mut SampledSpectrum) -> Option<LightSample> {
-        sample_point_or_sphere(self.position, self.radius, &self.intensity, 1.0, p, u, le)
+        sample_point_or_sphere(self.position, self.radius, &self.intensity, self.toward(p), p, u, le)
     }
     fn pdf_li(&self, p: Vec3A, wi: Vec3A, _distance: f32) -> f32 {
         if self.radius > 0.0 {
@@ -123,16 +137,21 @@ impl Light for PointLight {
         self.radius > 0.0
     }
     fn hit(&self, p: Vec3A, wi: Vec3A, le: &mut SampledSpectrum) -> Option<f32> {
-        sphere_hit(self.position, self.radius, &self.intensity, 1.0, p, wi, le)
+        sphere_hit(self.position, self.radius, &self.intensity, self.toward(p), p, wi, le)
     }
     fn sample_le(&self, u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
+        let along = |w: Vec3A| self.profile.as_ref().map_or(1.0, |p| p.eval(w));
         if self.radius > 0.0 {
-            return sphere_le(self.position, self.radius, &self.intensity, u_pos, u_dir, le);
+            let es = sphere_le(self.position, self.radius, &self.intensity, u_pos, u_dir, le)?;
+            le.scale(along(es.direction));
+            return Some(es);
         }
+        let direction = uniform_sphere(u_dir);
         le.copy_from(&self.intensity);
+        le.scale(along(direction));
         Some(EmissionSample {
             origin: self.position,
-            direction: uniform_sphere(u_dir),
+            direction,
             normal: None,
             pdf_pos: 1.0,
             pdf_dir: 1.0 / (4.0 * PI),
@@ -162,8 +181,12 @@ mod tests {
     #[test]
     fn sphere_irradiance_is_pi_l_r2_over_d2() {
         for &(r, d) in &[(0.25f32, 2.0f32), (1.0, 1.5), (0.01, 3.0), (2.0, 2.2)] {
-            let light =
-                PointLight { position: Vec3A::new(0.0, 0.0, d), intensity: SampledSpectrum::splat(1, 3.0), radius: r };
+            let light = PointLight {
+                position: Vec3A::new(0.0, 0.0, d),
+                intensity: SampledSpectrum::splat(1, 3.0),
+                radius: r,
+                profile: None,
+            };
             let radiance = 3.0 / (PI * r * r);
             let mut rng = Rng::new(7, 1);
             let mut le = SampledSpectrum::zeros(1);
@@ -187,7 +210,8 @@ mod tests {
 
     #[test]
     fn inside_the_sphere_no_sample_and_power_is_the_points() {
-        let light = PointLight { position: Vec3A::ZERO, intensity: SampledSpectrum::splat(1, 1.0), radius: 1.0 };
+        let light =
+            PointLight { position: Vec3A::ZERO, intensity: SampledSpectrum::splat(1, 1.0), radius: 1.0, profile: None };
         let mut le = SampledSpectrum::zeros(1);
         assert!(light.sample_li(Vec3A::new(0.5, 0.0, 0.0), Vec2::splat(0.5), &mut le).is_none());
         // Emitted rays carry the point light's power: Le·cos/(pdf_pos·pdf_dir) = 4π I.
@@ -203,8 +227,12 @@ mod tests {
     /// `pdf_li` = the sample's pdf); rays past it reach nothing; radius 0 stays a delta.
     #[test]
     fn sampled_directions_hit_the_sphere_with_their_pdf() {
-        let light =
-            PointLight { position: Vec3A::new(0.5, 1.0, 2.0), intensity: SampledSpectrum::splat(1, 3.0), radius: 0.7 };
+        let light = PointLight {
+            position: Vec3A::new(0.5, 1.0, 2.0),
+            intensity: SampledSpectrum::splat(1, 3.0),
+            radius: 0.7,
+            profile: None,
+        };
         assert!(light.hittable());
         let p = Vec3A::new(0.1, -0.3, 0.0);
         let mut rng = Rng::new(11, 2);

@@ -7,7 +7,7 @@
 //! point seen from the centre (Cycles' spot lights are spheres too, Blender 4.x),
 //! reached by camera and BSDF rays as a sphere light is.
 
-use super::{EmissionSample, Light, LightSample};
+use super::{EmissionSample, Light, LightSample, Profile};
 use crate::geometry::Frame;
 use crate::spectrum::SampledSpectrum;
 use glam::{Vec2, Vec3A};
@@ -25,6 +25,8 @@ pub struct SpotLight {
     pub smooth: f32,
     /// Radius of the emitting sphere (0: a point).
     pub radius: f32,
+    /// Scales the intensity per direction (an IES profile), on top of the cone.
+    pub profile: Option<Profile>,
 }
 
 impl SpotLight {
@@ -33,13 +35,36 @@ impl SpotLight {
     pub fn new(position: Vec3A, direction: Vec3A, intensity: SampledSpectrum, spot_size: f32, spot_blend: f32) -> Self {
         let cos_half_angle = (0.5 * spot_size.clamp(0.0, PI)).cos();
         let smooth = (1.0 - cos_half_angle) * spot_blend.clamp(0.0, 1.0);
-        Self { position, direction: direction.normalize(), intensity, cos_half_angle, smooth, radius: 0.0 }
+        Self {
+            position,
+            direction: direction.normalize(),
+            intensity,
+            cos_half_angle,
+            smooth,
+            radius: 0.0,
+            profile: None,
+        }
     }
 
     /// The same spot as a sphere light of `radius` (≥ 0).
     pub fn with_radius(mut self, radius: f32) -> Self {
         self.radius = radius.max(0.0);
         self
+    }
+
+    /// The same spot with its intensity scaled per direction by `profile`.
+    pub fn with_profile(mut self, profile: Option<Profile>) -> Self {
+        self.profile = profile;
+        self
+    }
+
+    /// The cone's falloff times the profile along unit direction `w` (from the light).
+    fn emitted(&self, w: Vec3A) -> f32 {
+        let f = self.falloff(w);
+        match &self.profile {
+            Some(p) if f > 0.0 => f * p.eval(w),
+            _ => f,
+        }
     }
 
     /// Fraction of the axis intensity emitted along unit direction `w` (from the light).
@@ -60,11 +85,13 @@ impl Light for SpotLight {
     fn power(&self, weights: &[f32]) -> f64 {
         // The cone's solid angle (the blended edge counted in full: an upper bound
         // that is only used to choose lights).
-        2.0 * PI as f64 * (1.0 - self.cos_half_angle as f64) * self.intensity.dot(weights) as f64
+        // A profile counts with its mean over the sphere (it may gather inside the cone).
+        let mean = self.profile.as_ref().map_or(1.0, |p| p.mean()) as f64;
+        2.0 * PI as f64 * (1.0 - self.cos_half_angle as f64) * self.intensity.dot(weights) as f64 * mean
     }
     fn sample_li(&self, p: Vec3A, u: Vec2, le: &mut SampledSpectrum) -> Option<LightSample> {
         let (wi, _, _) = super::direction_to(p, self.position)?;
-        let fall = self.falloff(-wi);
+        let fall = self.emitted(-wi);
         if fall <= 0.0 {
             return None;
         }
@@ -73,7 +100,7 @@ impl Light for SpotLight {
     fn pdf_li(&self, p: Vec3A, wi: Vec3A, _distance: f32) -> f32 {
         // sample_li samples nothing where the falloff towards p is 0.
         match super::direction_to(self.position, p) {
-            Some((w, _, _)) if self.radius > 0.0 && self.falloff(w) > 0.0 => {
+            Some((w, _, _)) if self.radius > 0.0 && self.emitted(w) > 0.0 => {
                 super::sphere_cone_pdf(self.position, self.radius, p, wi)
             }
             _ => 0.0,
@@ -85,13 +112,13 @@ impl Light for SpotLight {
     fn hit(&self, p: Vec3A, wi: Vec3A, le: &mut SampledSpectrum) -> Option<f32> {
         // The falloff towards p seen from the centre, as `sample_li`.
         let (w, _, _) = super::direction_to(self.position, p)?;
-        super::point::sphere_hit(self.position, self.radius, &self.intensity, self.falloff(w), p, wi, le)
+        super::point::sphere_hit(self.position, self.radius, &self.intensity, self.emitted(w), p, wi, le)
     }
     fn sample_le(&self, u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
         if self.radius > 0.0 {
             // From the sphere, the falloff of the emitted direction.
             let es = super::point::sphere_le(self.position, self.radius, &self.intensity, u_pos, u_dir, le)?;
-            le.scale(self.falloff(es.direction));
+            le.scale(self.emitted(es.direction));
             return Some(es);
         }
         // Uniform in the cone.
@@ -105,7 +132,7 @@ impl Light for SpotLight {
         let local = Vec3A::new(sin * phi.cos(), sin * phi.sin(), cos);
         let direction = Frame::from_normal(self.direction).to_world(local);
         le.copy_from(&self.intensity);
-        le.scale(self.falloff(direction));
+        le.scale(self.emitted(direction));
         Some(EmissionSample {
             origin: self.position,
             direction,

@@ -255,6 +255,7 @@ mod tests {
             intensity,
             radius: 0.0,
             visibility: Default::default(),
+            profile: None,
         }
     }
 

@@ -537,6 +537,9 @@ pub enum LightDesc {
         /// it); shadow does not apply.
         #[serde(default)]
         visibility: crate::geometry::visibility::LightVisibilityDesc,
+        /// Scales the intensity per direction (an IES profile).
+        #[serde(default)]
+        profile: Option<ProfileDesc>,
     },
     /// Blender's spot light: radiant intensity on the axis, cone of full angle
     /// `spot_size` (radians, default 45°), edge softened over `spot_blend` (default 0.15).
@@ -559,6 +562,9 @@ pub enum LightDesc {
         /// it); shadow does not apply.
         #[serde(default)]
         visibility: crate::geometry::visibility::LightVisibilityDesc,
+        /// Scales the intensity per direction (an IES profile).
+        #[serde(default)]
+        profile: Option<ProfileDesc>,
     },
     /// A sun: light travelling along `direction` with spectral irradiance on a surface
     /// facing it, from a disk of directions of angular diameter `angle` (radians, 0:
@@ -576,6 +582,33 @@ pub enum LightDesc {
         #[serde(default)]
         visibility: crate::geometry::visibility::LightVisibilityDesc,
     },
+}
+
+/// A goniometric profile (`light::Profile`): Cycles' processed IES table, angles in
+/// radians (h ∈ [0, 2π], v ∈ [0, π] from the light's −Z), `values[i · len(v) + j]` at
+/// (h[i], v[j]), and the light's orientation as the rows of the rotation from world to
+/// the light's frame (identity: the light shines down world −Z).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProfileDesc {
+    pub h_angles: Vec<f32>,
+    pub v_angles: Vec<f32>,
+    pub values: Vec<f32>,
+    #[serde(default = "identity3")]
+    pub to_local: [[f32; 3]; 3],
+}
+
+fn identity3() -> [[f32; 3]; 3] {
+    [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+}
+
+impl ProfileDesc {
+    /// The profile, or an error naming the light.
+    pub fn build(&self, light: &str) -> crate::error::Result<crate::light::Profile> {
+        let m = glam::Mat3A::from_cols_array_2d(&self.to_local).transpose(); // rows given
+        crate::light::Profile::new(self.h_angles.clone(), self.v_angles.clone(), self.values.clone(), m)
+            .map_err(|e| crate::error::Error::object("light", light, e))
+    }
 }
 
 fn default_spot_size() -> f32 {

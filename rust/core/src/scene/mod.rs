@@ -760,7 +760,7 @@ impl Scene {
             light_visibility.resize(lights.len(), crate::geometry::visibility::ALL);
             light_visibility.push(visibility);
             match l {
-                LightDesc::Point { name, position, intensity, radius, .. } => {
+                LightDesc::Point { name, position, intensity, radius, profile, .. } => {
                     let position = Vec3A::from(*position);
                     if !position.is_finite() {
                         return Err(Error::object("light", name, "position is not finite"));
@@ -772,9 +772,20 @@ impl Scene {
                         position,
                         intensity: SampledSpectrum::from_slice(&intensity),
                         radius,
+                        profile: profile.as_ref().map(|p| p.build(name)).transpose()?,
                     }));
                 }
-                LightDesc::Spot { name, position, direction, intensity, spot_size, spot_blend, radius, .. } => {
+                LightDesc::Spot {
+                    name,
+                    position,
+                    direction,
+                    intensity,
+                    spot_size,
+                    spot_blend,
+                    radius,
+                    profile,
+                    ..
+                } => {
                     let intensity =
                         rgb.evaluate(intensity, &grid, SpectrumRole::Illuminant, "light", name, "intensity")?;
                     lights.push(optics::build_spot(
@@ -785,6 +796,7 @@ impl Scene {
                         *spot_size,
                         *spot_blend,
                         *radius,
+                        profile.as_ref().map(|p| p.build(name)).transpose()?,
                     )?);
                 }
                 LightDesc::Distant { name, direction, irradiance, angle, .. } => {

@@ -151,6 +151,7 @@ pub fn build_spot(
     spot_size: f32,
     spot_blend: f32,
     radius: f32,
+    profile: Option<crate::light::Profile>,
 ) -> Result<Box<dyn Light>> {
     let radius = light_radius(name, radius)?;
     let p = Vec3A::from(position);
@@ -164,7 +165,7 @@ pub fn build_spot(
     if !(spot_blend.is_finite() && (0.0..=1.0).contains(&spot_blend)) {
         return Err(Error::object("light", name, format!("spot_blend {spot_blend} must be in 0..1")));
     }
-    Ok(Box::new(SpotLight::new(p, d, intensity, spot_size, spot_blend).with_radius(radius)))
+    Ok(Box::new(SpotLight::new(p, d, intensity, spot_size, spot_blend).with_radius(radius).with_profile(profile)))
 }
 
 /// A distant (sun) light; `irradiance` already evaluated on the grid.
