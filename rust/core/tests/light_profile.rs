@@ -91,6 +91,10 @@ fn a_bad_profile_is_an_error_naming_the_light() {
         visibility: Default::default(),
         profile: Some(bad),
     });
-    let e = render(&desc, &[] as &[polychrome_core::scene::Buffer], &ResolvedSettings::default(), &RenderControl::new()).err().unwrap().to_string();
+    let e =
+        render(&desc, &[] as &[polychrome_core::scene::Buffer], &ResolvedSettings::default(), &RenderControl::new())
+            .err()
+            .unwrap()
+            .to_string();
     assert!(e.contains("Odd Lamp") && e.contains("values"), "{e}");
 }
