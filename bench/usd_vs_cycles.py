@@ -25,6 +25,12 @@ Blender-authored, whose suns the importer reads right).
 
     python bench/usd_vs_cycles.py [--stages A,B] [--size 96] [--samples 64]
         [--assets DIR | --source GITDIR] [--out DIR] [--images DIR] [--raw-import] [--unbound 0.8]
+        [--import-subdiv] [--subdivision-level N]
+
+`--import-subdiv` turns on the importer's `import_subdiv` for (b) and (c) (Subdivision
+Surface modifiers on catmullClark meshes, whose levels it prints); without it they render
+control cages while (a) refines catmullClark meshes at read_stage's level
+(`--subdivision-level`, default 2; 0 = the cage).
 
 `--unbound 0.8` gives (a) a copy of the wrapper whose gprims bound to no material have
 displayColor 0.8, what Blender's importer shows them as (it ignores displayColor without
@@ -280,7 +286,7 @@ def wrap_stage(asset: Path, out: Path, size: int = 96) -> dict:
     return {"up": up, "metersPerUnit": mpu, "radius": radius, "how": how, "time": t0, "domes_off": domes}
 
 
-def render_read_stage(wrapper: Path, size: int, samples: int, t0: float = 0.0):
+def render_read_stage(wrapper: Path, size: int, samples: int, t0: float = 0.0, level: int | None = None):
     """(a): (linear RGB (H, W, 3), the reader's and the core's warnings, seconds)."""
     import polychrome as pc
     from polychrome import usd
@@ -288,7 +294,7 @@ def render_read_stage(wrapper: Path, size: int, samples: int, t0: float = 0.0):
     t = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        scene = usd.read_stage(wrapper, resolution=(size, size), time=t0)
+        scene = usd.read_stage(wrapper, resolution=(size, size), time=t0, subdivision_level=level)
         rgb = pc.render(scene, width=size, height=size, samples=samples, seed=1, max_bounces=BOUNCES).rgba[..., :3]
     said = [str(w.message).replace(f"{wrapper}: ", "") for w in caught]
     return np.asarray(rgb, np.float64), said, time.perf_counter() - t
@@ -303,15 +309,16 @@ import polychrome_blender
 polychrome_blender.register()
 atexit.register(polychrome_blender.unregister)
 from usd_vs_cycles import blender_half
-print("RESULT " + json.dumps(blender_half({wrapper!r}, {size}, {samples}, {out!r}, {raw}, {time!r})), flush=True)
+print("RESULT " + json.dumps(blender_half({wrapper!r}, {size}, {samples}, {out!r}, {raw}, {time!r}, {subdiv!r})), flush=True)
 polychrome_blender.unregister()
 atexit.unregister(polychrome_blender.unregister)
 """
 
 
-def blender_half(wrapper: str, size: int, samples: int, out: str, raw: bool, t0: float = 0.0) -> dict:
+def blender_half(wrapper: str, size: int, samples: int, out: str, raw: bool, t0: float = 0.0, subdiv: bool = False) -> dict:
     """(b) and (c), inside the bpy subprocess: imports the wrapper with Blender's USD
-    importer (into an empty scene with a world, which the importer's DomeLight fills),
+    importer (into an empty scene with a world, which the importer's DomeLight fills;
+    `subdiv`: its import_subdiv, Subdivision Surface modifiers for catmullClark meshes),
     renders Cycles and Polychrome; the images go to OUT/{cycles,blender}.npy."""
     import bpy
     import polychrome_blender
@@ -320,7 +327,15 @@ def blender_half(wrapper: str, size: int, samples: int, out: str, raw: bool, t0:
     sc = bpy.context.scene
     sc.world = bpy.data.worlds.new("World")
     sc.world.use_nodes = True
-    bpy.ops.wm.usd_import(filepath=wrapper)
+    bpy.ops.wm.usd_import(filepath=wrapper, import_subdiv=subdiv)
+    subsurfs = sorted(
+        {
+            (m.levels, m.render_levels, m.use_limit_surface, m.boundary_smooth)
+            for o in sc.objects
+            for m in getattr(o, "modifiers", ())
+            if m.type == "SUBSURF"
+        }
+    )
     sc.frame_set(round(t0))  # Blender frame = USD time code (the importer sets its fps)
     sc.render.resolution_x = sc.render.resolution_y = size
     sc.render.resolution_percentage = 100
@@ -347,6 +362,7 @@ def blender_half(wrapper: str, size: int, samples: int, out: str, raw: bool, t0:
     return {
         "imported_sun": imported,
         "meshes": sum(o.type == "MESH" for o in sc.objects),
+        "subsurf": [list(x) for x in subsurfs],
         "warnings": list(engine.last_warnings),
         "error": engine.last_error,
         "t_cycles": t_c,
@@ -378,6 +394,8 @@ def compare(
     raw: bool = False,
     timeout: float = 900,
     unbound: float | None = None,
+    subdiv: bool = False,
+    level: int | None = None,
 ) -> dict:
     """One stage, the three renders: {'cycles', 'blender', 'read_stage' (images),
     'de_blender', 'de_read' ((mean, p95) against Cycles), warnings, times}."""
@@ -388,10 +406,12 @@ def compare(
     if unbound is not None:  # (a) only; Blender's importer reads the original wrapper
         info["greyed"] = grey_unbound(wrapper, tmp / "wrap_unbound.usda", unbound)
     read = tmp / "wrap_unbound.usda" if unbound is not None else wrapper
-    ours, read_warnings, t_read = render_read_stage(read, size, samples, info["time"])
+    ours, read_warnings, t_read = render_read_stage(read, size, samples, info["time"], level)
     script = tmp / "blender_worker.py"
     script.write_text(
-        BLENDER_WORKER.format(bench=str(HERE), wrapper=str(wrapper), size=size, samples=samples, out=str(tmp), raw=raw, time=info["time"])
+        BLENDER_WORKER.format(
+            bench=str(HERE), wrapper=str(wrapper), size=size, samples=samples, out=str(tmp), raw=raw, time=info["time"], subdiv=subdiv
+        )
     )
     env = dict(os.environ, BLENDER_USER_RESOURCES=str(tmp / "blender_user"))
     proc = subprocess.run(
@@ -445,6 +465,17 @@ def main() -> int:
         help="for (a), displayColor GREY on gprims bound to no material (0.8: what Blender's importer shows them as)",
     )
     ap.add_argument("--timeout", type=float, default=900, help="seconds for each stage's Blender subprocess")
+    ap.add_argument(
+        "--import-subdiv",
+        action="store_true",
+        help="Blender's importer with import_subdiv (Subdivision Surface modifiers on catmullClark meshes; off by default, as in Blender)",
+    )
+    ap.add_argument(
+        "--subdivision-level",
+        type=int,
+        default=None,
+        help="read_stage's subdivision_level for (a) (default: the reader's, 2; 0 = the cage)",
+    )
     args = ap.parse_args()
     out = Path(args.out or tempfile.mkdtemp(prefix="usd_vs_cycles_"))
     rows = []
@@ -460,7 +491,17 @@ def main() -> int:
             print(rows[-1], flush=True)
             continue
         try:
-            r = compare(path, args.size, args.samples, out / name, args.raw_import, args.timeout, args.unbound)
+            r = compare(
+                path,
+                args.size,
+                args.samples,
+                out / name,
+                args.raw_import,
+                args.timeout,
+                args.unbound,
+                args.import_subdiv,
+                args.subdivision_level,
+            )
         except Exception as e:  # noqa: BLE001 - one stage failing must not stop the table
             rows.append(f"| {name} | – | – | failed: {str(e)[-300:]} | – | – | {STAGES[name][2]} |")
             print(rows[-1], flush=True)
@@ -473,7 +514,8 @@ def main() -> int:
             print(f"{name}: Blender importer: {w}", flush=True)
         print(
             f"{name}: {r['how']}, upAxis {r['up']}, metersPerUnit {r['metersPerUnit']}, time {r['time']}, "
-            f"own domes off {r['domes_off']}, imported suns (strength, angle°) {r['imported_sun']}",
+            f"own domes off {r['domes_off']}, imported suns (strength, angle°) {r['imported_sun']}, "
+            f"importer's subsurf modifiers (levels, render_levels, limit, boundary) {r['subsurf']}",
             flush=True,
         )
         if args.images and STAGES[name][3]:

@@ -349,6 +349,7 @@ def test_polygons_face_varying_data_and_instancing(tmp_path):
     mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(pts))
     mesh.CreateFaceVertexCountsAttr([6, 4])
     mesh.CreateFaceVertexIndicesAttr([0, 1, 2, 3, 4, 5, 0, 6, 7, 1])
+    mesh.CreateSubdivisionSchemeAttr("none")  # polygons (catmullClark, USD's default, would be refined)
     st = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.faceVarying)
     st.Set(Vt.Vec2fArray.FromNumpy(np.arange(20, dtype=np.float32).reshape(10, 2) / 20))
     inst = UsdGeom.PointInstancer.Define(stage, "/Instancer")

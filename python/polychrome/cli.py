@@ -132,6 +132,16 @@ def _add_render_parser(subparsers) -> None:
         "in place of the last run of '#' (zero-padded to its length), else appended as 4 digits; with --scheduler the frames are tasks",
     )
     p.add_argument("--frame-step", metavar="N", type=int, default=1, help="with --frames: every N-th frame (default 1)")
+    # A reader option (how the stage's geometry is tessellated), not a render setting: a
+    # .blend's Subdivision Surface modifiers carry their own levels.
+    p.add_argument(
+        "--subdivision-level",
+        metavar="N",
+        type=int,
+        default=None,
+        help="USD stages: refine subdivision surfaces (subdivisionScheme catmullClark, USD's default, or bilinear) "
+        "N times, 0 to 6; 0 renders the control cage (default 2; a prim's polychrome:subdivisionLevel wins)",
+    )
     groups = {}
     for spec in SETTINGS.values():
         group = groups.get(spec["group"])
@@ -209,7 +219,7 @@ def _settings_from(values: dict):
     return RenderSettings(**{k: v for k, v in values.items() if k in SETTINGS})
 
 
-def _load_usd(path: str, overrides: dict, time=None):
+def _load_usd(path: str, overrides: dict, time=None, subdivision_level=None):
     from . import usd
 
     stored = usd.read_settings(path)
@@ -218,7 +228,7 @@ def _load_usd(path: str, overrides: dict, time=None):
         # flags, else the default width).
         from .render import RenderSettings
 
-        scene = usd.read_stage(path, time=time)  # camera fitted to its own aperture: kept as is
+        scene = usd.read_stage(path, time=time, subdivision_level=subdivision_level)  # camera fitted to its own aperture: kept as is
         cam = scene.camera
         aspect = cam.sensor_width / cam.sensor_height if cam.sensor_height > 0 else 4 / 3
         if "height" in overrides:
@@ -228,7 +238,7 @@ def _load_usd(path: str, overrides: dict, time=None):
             stored = {**stored, "width": width, "height": max(1, round(width / aspect))}
         return scene, _settings_from(_merge_size(stored, overrides))
     settings = _settings_from(_merge_size(stored, overrides))
-    scene = usd.read_stage(path, resolution=(settings.width, settings.height), time=time)
+    scene = usd.read_stage(path, resolution=(settings.width, settings.height), time=time, subdivision_level=subdivision_level)
     return scene, settings
 
 
@@ -281,6 +291,11 @@ def cmd_render(args: argparse.Namespace) -> int:
         raise ValueError(f"{out}: unsupported image type '{out.suffix}' (use .exr or .png)")
     overrides = _render_overrides(args)
     suffix = Path(args.scene).suffix.lower()
+    level = getattr(args, "subdivision_level", None)
+    if level is not None and not 0 <= level <= 6:
+        raise ValueError(f"--subdivision-level: must be from 0 to 6, got {level}")
+    if level is not None and suffix not in USD_SUFFIXES:
+        raise ValueError("--subdivision-level: USD stages only (a .blend's Subdivision Surface modifiers have their own levels)")
     if args.frames is not None:
         if overrides.get("checkpoint"):
             raise ValueError("--checkpoint: not with --frames (each frame is written when done; --resume skips those)")
@@ -292,7 +307,7 @@ def cmd_render(args: argparse.Namespace) -> int:
 
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            scene, settings = _load_usd(args.scene, overrides)
+            scene, settings = _load_usd(args.scene, overrides, subdivision_level=level)
         for w in caught:  # unsupported prims etc.: one line each
             print(f"polychrome render: warning: {w.message}", file=sys.stderr)
     elif suffix == ".blend":
@@ -358,7 +373,7 @@ def _render_frames(args: argparse.Namespace, out, overrides: dict, suffix: str) 
             for frame in frames:
                 with warnings.catch_warnings(record=True) as caught:
                     warnings.simplefilter("always")
-                    loaded = _load_usd(args.scene, overrides, time=frame)
+                    loaded = _load_usd(args.scene, overrides, time=frame, subdivision_level=args.subdivision_level)
                 for w in caught:
                     print(f"polychrome render: warning: frame {frame}: {w.message}", file=sys.stderr)
                 yield loaded

@@ -38,6 +38,9 @@ NAME = "polychrome:name"
 MESH_INDEX = "polychrome:meshIndex"
 #: string: the name of the instance placed by this prim (the Mesh, or the instanceable Xform)
 INSTANCE_NAME = "polychrome:instanceName"
+#: int on a subdivision-surface Mesh: its refinement level, instead of the reader's
+#: (UsdGeom has no per-prim level)
+SUBDIVISION_LEVEL = "polychrome:subdivisionLevel"
 
 # -- camera (on the UsdGeom.Camera prim) ----------------------------------------
 #: string (JSON object): the Blender-style camera of polychrome.Camera (focal length
@@ -107,6 +110,7 @@ ALL = [
     NAME,
     MESH_INDEX,
     INSTANCE_NAME,
+    SUBDIVISION_LEVEL,
     CAMERA,
     POWER,
     COLOR,

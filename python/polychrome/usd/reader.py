@@ -31,6 +31,10 @@ from . import attributes as A
 
 #: Tessellation of the intrinsic shapes (Sphere, Cylinder, Cone).
 GPRIM_RINGS, GPRIM_SEGMENTS = 24, 48
+# Subdivision surfaces: refinement levels (read_stage's subdivision_level, the CLI's
+# --subdivision-level). 2 = Blender's Subdivision Surface render default and usdview's
+# "High" complexity; usdview's default ("Low", complexity 1.0) is refine level 0.
+DEFAULT_SUBDIVISION_LEVEL, MAX_SUBDIVISION_LEVEL = 2, 6
 #: Segments of the polygon standing in for a DiskLight.
 DISK_SEGMENTS = 32
 #: Sides of the prism standing in for a CylinderLight.
@@ -206,7 +210,7 @@ def _spectrum_from_dict(d: dict[str, Any]):
 
 
 class _Reader:
-    def __init__(self, path: Path, resolution=None, time=None):
+    def __init__(self, path: Path, resolution=None, time=None, subdivision_level=None):
         Gf, Sdf, Usd, UsdGeom, UsdLux, UsdRender, UsdShade = _pxr()
         self.Gf, self.Sdf, self.Usd, self.UsdGeom, self.UsdLux, self.UsdRender, self.UsdShade = (
             Gf,
@@ -237,6 +241,7 @@ class _Reader:
         self.correction = c
         self.identity_correction = bool(np.array_equal(c, np.eye(4)))
         self.resolution = resolution
+        self.subdivision_level = _check_level(DEFAULT_SUBDIVISION_LEVEL if subdivision_level is None else subdivision_level)
         self.warned: set[str] = set()
         # Collected, then turned into a Scene at the end.
         self.materials: list[Any] = []
@@ -1001,24 +1006,14 @@ class _Reader:
                 where.pathString, f"faceVertexIndices[{bad}] = {int(idx[bad])} is out of range (the mesh has {len(pts)} points)"
             )
         n_faces, n_corners = len(counts), len(idx)
-        first = np.concatenate([[0], np.cumsum(counts)[:-1]])
-        keep = counts >= 3
+        hole = np.zeros(n_faces, bool)
         holes = mesh.GetHoleIndicesAttr().Get(self.time)
         if holes is not None and len(holes):
             h = np.asarray(holes, dtype=np.int64)
-            keep[h[(h >= 0) & (h < n_faces)]] = False
-        # Fan triangulation, vectorised: face f gives (c0, ck, ck+1) for k = 1 .. n−2.
-        ntri = np.where(keep, counts - 2, 0)
-        total = int(ntri.sum())
-        if total == 0:
+            hole[h[(h >= 0) & (h < n_faces)]] = True
+        if not np.any((counts >= 3) & ~hole):
             return None
-        face_of_tri = np.repeat(np.arange(n_faces), ntri)
-        tri_start = np.cumsum(ntri) - ntri
-        k = np.arange(total) - np.repeat(tri_start, ntri) + 1
-        base = first[face_of_tri]
-        corners = np.stack([base, base + k, base + k + 1], axis=1)
-        if self.get(mesh.GetOrientationAttr(), "rightHanded") == "leftHanded":
-            corners = corners[:, [0, 2, 1]]
+        left_handed = self.get(mesh.GetOrientationAttr(), "rightHanded") == "leftHanded"
 
         # Normals (primvars:normals wins over normals) and texture coordinates.
         normals = self.primvar(prim, "normals", "primvars:normals", len(pts), n_corners, n_faces, 3)
@@ -1054,7 +1049,7 @@ class _Reader:
                 face_material[f] = self.bound_material(subset.GetPrim())
             if np.any(face_material < 0):
                 face_material[face_material < 0] = self.bound_material(prim)
-            material_ids = face_material[face_of_tri]
+            material_ids = face_material
         else:
             material = self.bound_material(prim)
         # Named UV sets and primvars that some material's network reads.
@@ -1102,8 +1097,45 @@ class _Reader:
             if checked is not None:
                 extras[(kind, pv_name)] = checked
 
+        # Subdivision surfaces refined (subdivision.py); face_src: the control face of each face.
         per_vertex = [("normals", normals), ("uvs", uvs)] + list(extras.items())
-        if any(d is not None and d[1] == "corner" for _, d in per_vertex):
+        face_src = np.arange(n_faces)
+        refined = self.subdivide(prim, mesh, pts, counts, idx, hole, per_vertex, left_handed)
+        if refined is not None:
+            pts, counts, idx, face_src, per_vertex, hole = refined
+            n_faces, n_corners = len(counts), len(idx)
+            normals, uvs = per_vertex[0][1], per_vertex[1][1]
+        # Fan triangulation, vectorised: face f gives (c0, ck, ck+1) for k = 1 .. n−2.
+        first = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        keep = (counts >= 3) & ~hole[face_src]
+        ntri = np.where(keep, counts - 2, 0)
+        total = int(ntri.sum())
+        if total == 0:
+            return None
+        face_of_tri = np.repeat(np.arange(n_faces), ntri)
+        tri_start = np.cumsum(ntri) - ntri
+        k = np.arange(total) - np.repeat(tri_start, ntri) + 1
+        base = first[face_of_tri]
+        corners = np.stack([base, base + k, base + k + 1], axis=1)
+        if left_handed:
+            corners = corners[:, [0, 2, 1]]
+        if material_ids is not None:
+            material_ids = material_ids[face_src[face_of_tri]]
+        if refined is not None and any(d is not None and d[1] == "corner" for _, d in per_vertex):
+            # A refined mesh: vertex data is per vertex, so only the face-varying data splits
+            # vertices (subdivision.weld: hashed rows, millions of corners in about a second).
+            from .subdivision import weld
+
+            corner_cols = [
+                np.ascontiguousarray(d[0], dtype=np.float32).view(np.int32) for _, d in per_vertex if d is not None and d[1] == "corner"
+            ]
+            first_corner, inverse = weld(
+                np.concatenate([idx.astype(np.int64)[:, None].view(np.int32).reshape(n_corners, 2), *corner_cols], axis=1)
+            )
+            vertices = pts[idx[first_corner]]
+            tris = inverse[corners]
+            out = {key: (d[0][first_corner] if d[1] == "corner" else d[0][idx[first_corner]]) for key, d in per_vertex if d is not None}
+        elif any(d is not None and d[1] == "corner" for _, d in per_vertex):
             # Split vertices whose corners disagree (as Blender's exporter does).
             cols = [idx.astype(np.int64)[:, None].view(np.int32).reshape(n_corners, 2)]
             corner_data = {}
@@ -1153,6 +1185,101 @@ class _Reader:
             "material_ids": material_ids,
             "material": material,
         }
+
+    def subdivision_level_of(self, prim) -> int:
+        """The prim's ``polychrome:subdivisionLevel`` (UsdGeom has no per-prim level), else
+        the reader's ``subdivision_level``."""
+        own = self.custom(prim, A.SUBDIVISION_LEVEL)
+        if own is None:
+            return self.subdivision_level
+        try:
+            level = int(own)
+        except (TypeError, ValueError):
+            level = -1
+        if not 0 <= level <= MAX_SUBDIVISION_LEVEL:
+            raise self.error(prim, f"{A.SUBDIVISION_LEVEL} {own!r} must be a whole number from 0 to {MAX_SUBDIVISION_LEVEL}")
+        return level
+
+    def subdivide(self, prim, mesh, pts, counts, idx, hole, per_vertex, left_handed):
+        """A catmullClark / bilinear (/ loop, read as catmullClark) mesh refined at its
+        level (docs/usd.md, "Subdivision surfaces"): (points, counts, indices, control face
+        of each face, per_vertex data refined, holes per control face); None for a
+        polygon mesh (scheme "none") or level 0 (the control cage)."""
+        from . import subdivision
+
+        where = prim.GetPath()
+        scheme = str(self.get(mesh.GetSubdivisionSchemeAttr(), "catmullClark"))
+        if scheme == "none":
+            return None
+        level = self.subdivision_level_of(prim)
+        if level == 0:
+            return None
+        if scheme == "loop":
+            self.warn(f"loop:{where}", f"prim {where}: subdivisionScheme 'loop' is not supported; refined as catmullClark")
+            scheme = "catmullClark"
+        elif scheme not in ("catmullClark", "bilinear"):
+            self.warn(f"scheme:{where}", f"prim {where}: subdivisionScheme '{scheme}' is unknown; rendered as its control cage")
+            return None
+        boundary = str(self.get(mesh.GetInterpolateBoundaryAttr(), "edgeAndCorner"))
+        if boundary not in subdivision.BOUNDARIES:
+            self.warn(f"boundary:{where}", f"prim {where}: interpolateBoundary '{boundary}' is unknown; read as edgeAndCorner")
+            boundary = "edgeAndCorner"
+        if str(self.get(mesh.GetTriangleSubdivisionRuleAttr(), "catmullClark")) == "smooth":
+            self.warn(f"trirule:{where}", f"prim {where}: triangleSubdivisionRule 'smooth' is read as catmullClark")
+
+        def arr(attr, dtype):
+            v = attr.Get(self.time) if attr and attr.HasAuthoredValue() else None
+            return None if v is None or len(v) == 0 else np.asarray(v, dtype)
+
+        valid = counts >= 3  # points and lines take no part
+        corner_ok = np.repeat(valid, counts)
+        columns, layout, face_varying = [np.asarray(pts, np.float64)], [], []
+        for key, d in per_vertex:
+            if d is None or key == "normals":  # authored normals do not apply to a subdivided surface
+                layout.append((key, None, 0))
+            elif d[1] == "vertex":
+                layout.append((key, "vertex", d[0].shape[1]))
+                columns.append(np.asarray(d[0], np.float64))
+            else:
+                layout.append((key, "corner", len(face_varying)))
+                face_varying.append(d[0][corner_ok])
+        try:
+            r = subdivision.refine(
+                np.concatenate(columns, axis=1),
+                counts[valid],
+                idx[corner_ok],
+                level,
+                scheme=scheme,
+                boundary=boundary,
+                crease_indices=arr(mesh.GetCreaseIndicesAttr(), np.int64),
+                crease_lengths=arr(mesh.GetCreaseLengthsAttr(), np.int64),
+                crease_sharpnesses=arr(mesh.GetCreaseSharpnessesAttr(), np.float64),
+                corner_indices=arr(mesh.GetCornerIndicesAttr(), np.int64),
+                corner_sharpnesses=arr(mesh.GetCornerSharpnessesAttr(), np.float64),
+                face_varying=face_varying,
+            )
+        except ValueError as e:
+            raise self.error(prim, str(e)) from None
+        data = r["points"]
+        new_pts = data[:, :3].astype(np.float32)
+        face_src = np.nonzero(valid)[0][r["face"]]
+        hole = hole.copy()
+        hole[np.nonzero(valid)[0][r["boundary_holes"]]] = True
+        normals = subdivision.smooth_normals(data[:, :3], r["indices"])
+        if left_handed:
+            normals = -normals
+        out, col = [], 3
+        for key, kind, width in layout:
+            if key == "normals":
+                out.append((key, (normals.astype(np.float32), "vertex")))
+            elif kind is None:
+                out.append((key, None))
+            elif kind == "vertex":
+                out.append((key, (data[:, col : col + width].astype(np.float32), "vertex")))
+                col += width
+            else:
+                out.append((key, (r["face_varying"][width].astype(np.float32), "corner")))
+        return new_pts, r["counts"], r["indices"], face_src, out, hole
 
     def mesh_key(self, prim) -> str | None:
         key = self.key_of(prim)
@@ -2082,14 +2209,23 @@ def read_settings_from_stage(stage, path) -> dict[str, Any]:
     return out
 
 
-def read_stage(path, *, resolution=None, time=None):
+def _check_level(level) -> int:
+    if isinstance(level, bool) or not isinstance(level, (int, np.integer)) or not 0 <= int(level) <= MAX_SUBDIVISION_LEVEL:
+        raise ValueError(f"subdivision_level must be a whole number from 0 to {MAX_SUBDIVISION_LEVEL}, got {level!r}")
+    return int(level)
+
+
+def read_stage(path, *, resolution=None, time=None, subdivision_level=None):
     """Reads the USD stage at ``path`` into a :class:`polychrome.Scene`.
 
     ``resolution`` (width, height) decides how the camera's aperture is conformed to the
     image (UsdRender's expandAperture); by default the stage's render settings' resolution,
     else the aperture's own aspect. ``time``: the time code to read animated values at
-    (an animation's frame number); by default the earliest."""
-    reader = _Reader(Path(path), resolution, time)
+    (an animation's frame number); by default the earliest. ``subdivision_level``: how
+    many times subdivision surfaces (``subdivisionScheme`` catmullClark, USD's default,
+    or bilinear) are refined, 0 to 6 (default 2; 0 renders the control cage); a prim's
+    own ``polychrome:subdivisionLevel`` wins."""
+    reader = _Reader(Path(path), resolution, time, subdivision_level)
     try:
         return reader.read()
     except Exception as e:  # noqa: BLE001 - pxr's Tf.ErrorException is not importable by name here

@@ -1,0 +1,278 @@
+"""Subdivision surfaces of UsdGeom.Mesh (polychrome/usd/subdivision.py, read_stage's
+``subdivision_level``) against independent references: Catmull–Clark's level-1 rules
+worked by hand on a cube; infinitely sharp creases keeping edges straight; and Blender's
+own Subdivision Surface modifier (OpenSubdiv) in a bpy subprocess — the same cages
+(a cube, a cube with creases of sharpness 2 and 0.5 and a corner of sharpness 3, an
+open bumpy grid, a prism with pentagon caps and triangles) at level 2 with
+``use_limit_surface`` off (the level-2 points, not the limit), compared as point sets."""
+
+import json
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pxr = pytest.importorskip("pxr")
+from pxr import Usd, UsdGeom, Vt  # noqa: E402
+
+from polychrome import usd  # noqa: E402
+from polychrome.usd import reader as usd_reader  # noqa: E402
+from polychrome.usd import subdivision  # noqa: E402
+
+CUBE_POINTS = [(x, y, z) for z in (-1.0, 1.0) for y in (-1.0, 1.0) for x in (-1.0, 1.0)]
+CUBE_QUADS = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+
+
+def grid(n=3, bump=0.4):
+    """An open n × n quad grid over [-1, 1]², z a bump (non-planar, so boundaries matter)."""
+    u = np.linspace(-1, 1, n + 1)
+    x, y = np.meshgrid(u, u, indexing="ij")
+    z = bump * np.cos(x * 1.3) * np.cos(y * 0.9) + 0.1 * x * y
+    pts = np.stack([x, y, z], -1).reshape(-1, 3)
+    a = (np.arange(n)[:, None] * (n + 1) + np.arange(n)[None, :]).ravel()
+    quads = np.stack([a, a + n + 1, a + n + 2, a + 1], 1)
+    return pts, [4] * len(quads), quads.ravel().tolist()
+
+
+def prism():
+    """A pentagonal prism: two pentagon caps (n-gons), its sides split into triangles."""
+    ang = np.linspace(0, 2 * np.pi, 5, endpoint=False)
+    ring = np.stack([np.cos(ang), np.sin(ang)], 1)
+    pts = np.concatenate([np.c_[ring, -np.ones(5)], np.c_[ring * 0.7, np.ones(5)]])
+    counts, idx = [5, 5], list(range(4, -1, -1)) + list(range(5, 10))
+    for k in range(5):
+        k1 = (k + 1) % 5
+        counts += [3, 3]
+        idx += [k, k1, 5 + k1, k, 5 + k1, 5 + k]
+    return pts, counts, idx
+
+
+# Each case: points, counts, indices, creases [(a, b, sharpness)], corners [(v, sharpness)], interpolateBoundary.
+CASES = {
+    "cube": (CUBE_POINTS, [4] * 6, [i for q in CUBE_QUADS for i in q], [], [], "edgeAndCorner"),
+    "creased_cube": (
+        CUBE_POINTS,
+        [4] * 6,
+        [i for q in CUBE_QUADS for i in q],
+        [(4, 5, 2.0), (5, 7, 2.0), (7, 6, 2.0), (6, 4, 2.0), (0, 1, 0.5)],
+        [(2, 3.0)],
+        "edgeAndCorner",
+    ),
+    "grid": (*grid(), [], [], "edgeAndCorner"),
+    "grid_edge_only": (*grid(), [], [], "edgeOnly"),
+    "prism": (*prism(), [(5, 6, 1.5)], [], "edgeAndCorner"),
+}
+
+
+def as_lists(case):
+    pts, counts, idx, creases, corners, boundary = case
+    return [np.asarray(pts, float).tolist(), list(counts), [int(i) for i in idx], creases, corners, boundary]
+
+
+def write_stage(path, case, level=None):
+    pts, counts, idx, creases, corners, boundary = case
+    stage = Usd.Stage.CreateNew(str(path))
+    UsdGeom.SetStageUpAxis(stage, "Z")
+    mesh = UsdGeom.Mesh.Define(stage, "/m")  # subdivisionScheme unauthored: catmullClark
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(np.asarray(pts, np.float32)))
+    mesh.CreateFaceVertexCountsAttr(list(counts))
+    mesh.CreateFaceVertexIndicesAttr([int(i) for i in idx])
+    mesh.CreateInterpolateBoundaryAttr(boundary)
+    if creases:
+        mesh.CreateCreaseIndicesAttr([int(v) for a, b, _ in creases for v in (a, b)])
+        mesh.CreateCreaseLengthsAttr([2] * len(creases))
+        mesh.CreateCreaseSharpnessesAttr([float(s) for _, _, s in creases])
+    if corners:
+        mesh.CreateCornerIndicesAttr([int(v) for v, _ in corners])
+        mesh.CreateCornerSharpnessesAttr([float(s) for _, s in corners])
+    if level is not None:
+        mesh.GetPrim().CreateAttribute("polychrome:subdivisionLevel", pxr.Sdf.ValueTypeNames.Int).Set(level)
+    stage.GetRootLayer().Save()
+    return path
+
+
+def read_mesh(path, **kw):
+    """The reader's arrays of /m (vertices, triangles, normals, ...)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # no camera
+        r = usd_reader._Reader(Path(path), **kw)
+        return r.mesh_arrays(r.stage.GetPrimAtPath("/m"))
+
+
+def point_set_distance(a, b):
+    """The largest nearest-neighbour distance from either set to the other."""
+    d = np.linalg.norm(np.asarray(a, float)[:, None, :] - np.asarray(b, float)[None, :, :], axis=2)
+    return max(d.min(axis=1).max(), d.min(axis=0).max())
+
+
+def test_cube_level_one_by_hand():
+    """Face points are the face centroids, edge points (v0 + v1 + f0 + f1) / 4, an old
+    vertex (Q + 2R + (n − 3)S) / n with n = 3 — worked out for the cube [-1, 1]³."""
+    r = subdivision.refine(CUBE_POINTS, [4] * 6, [i for q in CUBE_QUADS for i in q], 1)
+    p = r["points"]
+    assert len(p) == 8 + 12 + 6 and len(r["counts"]) == 24
+    S = np.array(CUBE_POINTS)
+    faces = np.array([S[list(q)].mean(axis=0) for q in CUBE_QUADS])  # (±1, 0, 0) ...
+    np.testing.assert_allclose(np.sort(np.abs(p[20:]), axis=0), np.sort(np.abs(faces), axis=0), atol=1e-12)
+    # Edge (-1,-1,-1)-(1,-1,-1): its faces' points (0,-1,0), (0,0,-1): (0, -3/4, -3/4).
+    edges = p[8:20]
+    assert np.allclose(np.sort(np.abs(edges), axis=1), [0, 0.75, 0.75])
+    # Vertex (-1,-1,-1): Q = mean of (-1,0,0), (0,-1,0), (0,0,-1) = -1/3 each; R = mean
+    # of the edge midpoints (0,-1,-1), (-1,0,-1), (-1,-1,0) = -2/3 each; n = 3.
+    q, rr, n = -1 / 3, -2 / 3, 3
+    expected = (q + 2 * rr + (n - 3) * -1.0) / n
+    np.testing.assert_allclose(p[:8], S * abs(expected), atol=1e-12)
+    assert abs(expected - -5 / 9) < 1e-15
+
+
+def test_infinitely_sharp_creases_keep_edges_straight():
+    """Sharpness 10 (infinite) on all 12 cube edges: every vertex a corner (3 sharp edges),
+    so at level 3 the cube stays a cube: every point on its faces, each edge's 7 new points
+    evenly spaced on the straight edge. On the top ring alone (a crease loop, vertices
+    with 2 sharp edges: (a + 6S + b) / 8) the ring's points stay in the plane z = 1."""
+    idx = [i for q in CUBE_QUADS for i in q]
+    edges = sorted({tuple(sorted((q[k], q[(k + 1) % 4]))) for q in CUBE_QUADS for k in range(4)})
+    r = subdivision.refine(
+        CUBE_POINTS, [4] * 6, idx, 3, crease_indices=[v for e in edges for v in e], crease_lengths=[2] * 12, crease_sharpnesses=[10.0] * 12
+    )
+    p = r["points"]
+    np.testing.assert_allclose(np.abs(p).max(axis=1), 1.0, atol=1e-12)
+    on_edges = p[(np.isclose(np.abs(p), 1.0, atol=1e-12).sum(axis=1) >= 2)]
+    assert len(on_edges) == 8 + 12 * 7
+    x_edge = on_edges[np.isclose(on_edges[:, 1], -1) & np.isclose(on_edges[:, 2], -1)]
+    np.testing.assert_allclose(np.sort(x_edge[:, 0]), np.linspace(-1, 1, 9), atol=1e-12)
+    ring = [(4, 5), (5, 7), (7, 6), (6, 4)]
+    r = subdivision.refine(
+        CUBE_POINTS, [4] * 6, idx, 1, crease_indices=[v for e in ring for v in e], crease_lengths=[2] * 4, crease_sharpnesses=[10.0] * 4
+    )
+    p = r["points"]
+    np.testing.assert_allclose(p[4:8], np.array(CUBE_POINTS[4:]) * [0.75, 0.75, 1.0], atol=1e-12)  # (a + 6S + b) / 8
+
+
+def test_bilinear():
+    """bilinear: the refined points lie on the cage's faces (a cube stays a cube)."""
+    r = subdivision.refine(CUBE_POINTS, [4] * 6, [i for q in CUBE_QUADS for i in q], 2, scheme="bilinear")
+    assert np.allclose(np.abs(r["points"]).max(axis=1), 1.0)
+
+
+def test_reader_levels(tmp_path):
+    """Level 0 is the cage (no normals: flat), the default level 2 (98 points, 96 quads),
+    smooth outward normals; a prim's polychrome:subdivisionLevel wins over the reader's."""
+    path = write_stage(tmp_path / "cube.usda", CASES["cube"])
+    cage = read_mesh(path, subdivision_level=0)
+    assert len(cage["vertices"]) == 8 and len(cage["triangles"]) == 12 and cage["normals"] is None
+    default = read_mesh(path)
+    assert len(default["vertices"]) == 98 and len(default["triangles"]) == 2 * 96  # level 2
+    n = default["normals"]
+    np.testing.assert_allclose(np.linalg.norm(n, axis=1), 1.0, rtol=1e-6)
+    assert np.all(np.sum(n * default["vertices"], axis=1) > 0)  # outward, as the winding
+    own = read_mesh(write_stage(tmp_path / "own.usda", CASES["cube"], level=1), subdivision_level=3)
+    assert len(own["vertices"]) == 26
+    with pytest.raises(ValueError, match="subdivision_level"):
+        read_mesh(path, subdivision_level=-1)
+
+
+def test_uv_and_holes(tmp_path):
+    """Face-varying st refined bilinearly inside each face (a quad's st stays bilinear in
+    its parameters); a hole's children are left out; GeomSubset materials follow the faces."""
+    stage = Usd.Stage.CreateNew(str(tmp_path / "g.usda"))
+    pts, counts, idx = grid(2, 0.0)
+    mesh = UsdGeom.Mesh.Define(stage, "/m")
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(np.asarray(pts, np.float32)))
+    mesh.CreateFaceVertexCountsAttr(counts)
+    mesh.CreateFaceVertexIndicesAttr(idx)
+    mesh.CreateHoleIndicesAttr([3])
+    st = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar("st", pxr.Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.faceVarying)
+    st.Set(Vt.Vec2fArray.FromNumpy((np.asarray(pts)[idx, :2] * 0.5 + 0.5).astype(np.float32)))
+    stage.GetRootLayer().Save()
+    m = read_mesh(tmp_path / "g.usda", subdivision_level=2)
+    assert len(m["triangles"]) == 2 * 16 * 3  # 3 of 4 faces, 16 quads each
+    # A flat grid with corners kept: st = (x, y) / 2 + 1/2 everywhere on the refined points too.
+    np.testing.assert_allclose(m["uvs"], m["vertices"][:, :2] * 0.5 + 0.5, atol=1e-6)
+
+
+BLENDER_BODY = """
+cases = json.loads(open('cases.json').read())
+out = {}
+for name, (pts, counts, idx, creases, corners, boundary) in cases.items():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    faces, k = [], 0
+    for c in counts:
+        faces.append(idx[k:k + c]); k += c
+    me = bpy.data.meshes.new(name)
+    me.from_pydata(pts, [], faces)
+    me.update()
+    sharp = lambda s: math.sqrt(min(s, 10.0) / 10.0)  # Blender: sharpness = 10 · crease²
+    if creases:
+        attr = me.attributes.new('crease_edge', 'FLOAT', 'EDGE')
+        lookup = {tuple(sorted(e.vertices)): e.index for e in me.edges}
+        for a, b, s in creases:
+            attr.data[lookup[tuple(sorted((a, b)))]].value = sharp(s)
+    if corners:
+        attr = me.attributes.new('crease_vert', 'FLOAT', 'POINT')
+        for v, s in corners:
+            attr.data[v].value = sharp(s)
+    ob = bpy.data.objects.new(name, me)
+    bpy.context.scene.collection.objects.link(ob)
+    mod = ob.modifiers.new('S', 'SUBSURF')
+    mod.subdivision_type = 'CATMULL_CLARK'
+    mod.levels = mod.render_levels = 2
+    mod.use_limit_surface = False
+    mod.use_creases = True
+    mod.boundary_smooth = 'PRESERVE_CORNERS' if boundary == 'edgeAndCorner' else 'ALL'
+    dg = bpy.context.evaluated_depsgraph_get()
+    ev = ob.evaluated_get(dg).data
+    co = np.empty(len(ev.vertices) * 3, np.float32)
+    ev.attributes['position'].data.foreach_get('vector', co)
+    out[name] = {'points': co.reshape(-1, 3).tolist(), 'faces': len(ev.polygons)}
+emit(**out)
+"""
+
+
+def test_against_blender_subdivision_modifier(tmp_path):
+    """Blender's Subdivision Surface modifier (OpenSubdiv) at level 2, limit surface off,
+    creases on (Blender's crease c is OpenSubdiv sharpness 10·c²), 'keep corners'
+    boundaries = edgeAndCorner, 'all' = edgeOnly: the same point sets as the reader's
+    level-2 meshes, within 1e-4 of the cage's size."""
+    from blender.bhelper import check, run_bpy
+
+    (tmp_path / "cases.json").write_text(json.dumps({k: as_lists(v) for k, v in CASES.items()}))
+    proc, results = run_bpy(tmp_path, BLENDER_BODY, timeout=180)
+    blender = check(proc, results)[0]
+    worst = {}
+    for name, case in CASES.items():
+        ours = read_mesh(write_stage(tmp_path / f"{name}.usda", case), subdivision_level=2)
+        size = np.ptp(np.asarray(case[0], float), axis=0).max()
+        ref = np.asarray(blender[name]["points"])
+        assert len(ours["vertices"]) == len(ref), name
+        assert len(ours["triangles"]) == 2 * blender[name]["faces"], name
+        worst[name] = point_set_distance(ours["vertices"], ref) / size
+    assert max(worst.values()) < 1e-4, worst
+
+
+def test_cli_flag(tmp_path, monkeypatch, capsys):
+    """`polychrome render --subdivision-level N` reaches read_stage (a reader option, not a
+    render setting); out-of-range values and a .blend exit 2 with one line."""
+    from polychrome import cli
+
+    path = write_stage(tmp_path / "cube.usda", CASES["cube"])
+    seen = []
+    real = usd.read_stage
+
+    def spy(*a, **kw):
+        seen.append(kw.get("subdivision_level"))
+        return real(*a, **kw)
+
+    monkeypatch.setattr(usd, "read_stage", spy)
+    args = ["render", str(path), "-o", str(tmp_path / "x.png"), "--quiet", "--width", "8", "--height", "8", "--samples", "1"]
+    assert cli.main(args + ["--subdivision-level", "0"]) == 0
+    assert cli.main(args) == 0
+    assert seen == [0, None]
+    for bad in (["--subdivision-level", "7"], ["--subdivision-level", "-1"]):
+        assert cli.main(args + bad) == 2
+        assert "--subdivision-level" in capsys.readouterr().err
+    blend = tmp_path / "x.blend"
+    blend.write_bytes(b"")
+    assert cli.main(["render", str(blend), "-o", str(tmp_path / "y.png"), "--subdivision-level", "1"]) == 2
+    assert "USD stages only" in capsys.readouterr().err
