@@ -427,3 +427,50 @@ def test_cylinder_light_lights_the_floor_with_its_closed_form_irradiance(tmp_pat
     got = luminance(result.rgba)
     # Mean over the 64 pixels (a thin light is a noisy one per pixel).
     assert np.mean(got / want) == pytest.approx(1.0, abs=0.02), np.mean(got / want)
+
+
+@pytest.mark.parametrize("normalize", [False, True])
+def test_ies_shaping_scales_a_sphere_light_by_the_relative_profile(tmp_path, normalize):
+    """UsdLux ShapingAPI's shaping:ies:file on a SphereLight (radius 0, intensity I,
+    turned 30° about X): the floor reads ρ/π · I · c(h, v)/s · cos θ / d², c the file's
+    candela in the light's frame and s its largest value, or with shaping:ies:normalize
+    its mean over the sphere (of tests/ies_files.py's closed form, on a fine grid); a
+    missing file is one warning naming the prim."""
+    from ies_files import candela, quadrant_file
+
+    (tmp_path / "q.ies").write_text(quadrant_file())
+    rho, intensity, height, n = 0.5, 10.0, 1.5, 16
+    path = tmp_path / "ies.usda"
+    stage = new_stage(path)
+    floor_mesh(stage, "/floor", 5.0, preview_material(stage, "/Looks/grey", (rho, rho, rho)))
+    top_camera(stage, "/cam", 3.0, 3.0)
+    light = UsdLux.SphereLight.Define(stage, "/lamp")
+    light.CreateIntensityAttr(intensity)
+    light.CreateRadiusAttr(0.0)  # a point: intensity is the radiant intensity (normalize off)
+    light.AddTranslateOp().Set(Gf.Vec3d(0.2, 0.1, height))
+    light.AddRotateXOp().Set(30.0)
+    shaping = UsdLux.ShapingAPI.Apply(light.GetPrim())
+    shaping.CreateShapingIesFileAttr(Sdf.AssetPath("q.ies"))
+    shaping.CreateShapingIesNormalizeAttr(normalize)
+    gone = UsdLux.SphereLight.Define(stage, "/gone")
+    gone.CreateIntensityAttr(0.0)
+    UsdLux.ShapingAPI.Apply(gone.GetPrim()).CreateShapingIesFileAttr(Sdf.AssetPath("nowhere.ies"))
+    stage.Save()
+    scene, caught = read(path)
+    assert any("/gone" in w and "nowhere.ies" in w for w in caught) and not any("/lamp" in w for w in caught), caught
+    out = pc.render(scene, width=n, height=n, samples=16, max_bounces=1, seed=3)
+    y = luminance(out.rgba[..., :3])
+    # The profile's scale: its largest candela, or its mean over the sphere (fine grid).
+    cv = np.linspace(1, -1, 801)
+    vv, hh = np.meshgrid(np.degrees(np.arccos(0.5 * (cv[1:] + cv[:-1]))), np.linspace(0.25, 359.75, 720), indexing="ij")
+    scale = candela(hh, vv).mean() if normalize else candela(0.0, 0.0)
+    c30, s30 = math.cos(math.radians(30)), math.sin(math.radians(30))
+    to_local = np.array([[1, 0, 0], [0, c30, s30], [0, -s30, c30]])  # world → light (rotate X by −30°)
+    for px, py in [(8, 8), (11, 8), (13, 3), (3, 10), (6, 13)]:
+        x, yy = (px + 0.5) / n * 3 - 1.5, 1.5 - (py + 0.5) / n * 3
+        d = np.array([x - 0.2, yy - 0.1, -height])
+        dist = np.linalg.norm(d)
+        w = to_local @ (d / dist)
+        v_deg, h_deg = math.degrees(math.acos(-w[2])), math.degrees(math.atan2(w[0], w[1]) + math.pi)
+        want = rho / math.pi * intensity * candela(h_deg, v_deg) / scale * (height / dist) / dist**2
+        assert y[py, px] == pytest.approx(want, rel=0.04), (px, py, normalize)

@@ -14,7 +14,7 @@ __version__ = "0.1.0"
 from . import spectra
 from .render import RenderResult, RenderSettings, render
 from .scene import Camera, Diffuse, Emitter, Material, PointLight, Scene, look_at
-from . import denoise, ior
+from . import denoise, ies, ior
 from .scene import Conductor, Dielectric, Glossy, SpotLight, SunLight
 from .scene import Add, Fresnel, LayerWeight, Medium, Mix, NodeMaterial, Principled, Volume
 from .texture import Texture
@@ -36,6 +36,7 @@ __all__ = [
     "SpotLight",
     "SunLight",
     "denoise",
+    "ies",
     "ior",
     "Diffuse",
     "Emitter",

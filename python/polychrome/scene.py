@@ -365,6 +365,10 @@ class PointLight:
     radius: float = 0.0
     #: the kinds of rays that see it, e.g. ``{"diffuse": False}``, ``{"camera": True}`` (``LIGHT_RAY_KINDS``)
     visibility: Any = None
+    #: an IES profile scaling the intensity per direction (:func:`polychrome.ies.read`, or a path to an .ies file)
+    profile: Any = None
+    #: the light's axes (3 × 3, columns: its local X, Y, Z in world space; it shines down −Z): turns the profile
+    orientation: Any = None
 
     def to_dict(self) -> dict[str, Any]:
         pos = _finite_floats(self.position, f"light '{self.name}': position")
@@ -373,7 +377,20 @@ class PointLight:
         _finite_floats([self.power], f"light '{self.name}': power")
         intensity = as_spectrum(self.color) * (float(self.power) / (4.0 * math.pi))
         d = {"type": "point", "name": self.name, "position": pos, "intensity": intensity.to_dict()}
+        _with_profile(d, self.profile, self.orientation)
         return _with_light_visibility(_with_radius(d, self.radius, self.name), self.visibility, self.name)
+
+
+def _with_profile(d: dict[str, Any], profile: Any, orientation: Any) -> dict[str, Any]:
+    """``d`` with the light's IES ``profile`` (an IESProfile or a path) turned by ``orientation``."""
+    if profile is None:
+        return d
+    from . import ies
+
+    if not isinstance(profile, ies.IESProfile):
+        profile = ies.read(profile)
+    d["profile"] = profile.to_dict(orientation)
+    return d
 
 
 #: The kinds of rays a light's ``visibility`` names (Cycles' light ray visibility): the
@@ -490,6 +507,10 @@ class SpotLight:
     radius: float = 0.0
     #: the kinds of rays that see it, e.g. ``{"diffuse": False}``, ``{"camera": True}`` (``LIGHT_RAY_KINDS``)
     visibility: Any = None
+    #: an IES profile scaling the intensity per direction, on top of the cone (see PointLight)
+    profile: Any = None
+    #: the light's axes (3 × 3, columns: local X, Y, Z in world space): turns the profile
+    orientation: Any = None
 
     def to_dict(self) -> dict[str, Any]:
         pos = _finite_floats(self.position, f"light '{self.name}': position")
@@ -507,6 +528,7 @@ class SpotLight:
             "spot_size": float(self.spot_size),
             "spot_blend": float(self.spot_blend),
         }
+        _with_profile(out, self.profile, self.orientation)
         return _with_light_visibility(_with_radius(out, self.radius, self.name), self.visibility, self.name)
 
 

@@ -1466,6 +1466,7 @@ class _Reader:
         # I/(πr²), the spec's (intensity, or intensity/(4πr²) normalised).
         sphere = 0.0 if treat_as_point else r
         spectrum = self.emitted(scalar * factor, colour, blackbody)
+        profile, axes = None, None
         if prim.HasAPI(self.UsdLux.ShapingAPI):
             shaping = self.UsdLux.ShapingAPI(prim)
             cone = float(self.get(shaping.GetShapingConeAngleAttr(), 90.0))
@@ -1474,7 +1475,8 @@ class _Reader:
             if float(self.get(shaping.GetShapingFocusAttr(), 0.0)) != 0.0:
                 self.warn(f"focus:{prim.GetPath()}", f"prim {prim.GetPath()}: shaping:focus is not supported and is ignored")
             if ies is not None and getattr(ies, "path", ""):
-                self.warn(f"ies:{prim.GetPath()}", f"prim {prim.GetPath()}: IES profiles are not supported and are ignored")
+                profile = self.ies_profile(prim, shaping, ies)
+                axes = m[:3, :3] / np.where(np.linalg.norm(m[:3, :3], axis=0) > 0, np.linalg.norm(m[:3, :3], axis=0), 1.0)
             if not (math.isfinite(cone) and math.isfinite(softness)):
                 raise self.error(prim, "its shaping cone angle or softness is not finite")
             if cone < 90.0:
@@ -1489,10 +1491,44 @@ class _Reader:
                         spot_blend=min(max(softness, 0.0), 1.0),
                         name=name,
                         radius=sphere,
+                        profile=profile,
+                        orientation=axes,
                     )
                 )
                 return
-        self.lights.append(PointLight(pos, power=4.0 * math.pi, color=spectrum, name=name, radius=sphere))
+        self.lights.append(
+            PointLight(pos, power=4.0 * math.pi, color=spectrum, name=name, radius=sphere, profile=profile, orientation=axes)
+        )
+
+    def ies_profile(self, prim, shaping, asset):
+        """The light's ``shaping:ies:file`` as a profile of relative values: the file's
+        candela over its largest (a shape of at most 1 multiplying the light's intensity:
+        UsdLux gives IES files no absolute unit), or with ``shaping:ies:normalize`` over
+        its mean on the sphere (the light emits the power it has without the profile).
+        None, after a warning naming the prim, if the file is missing or unreadable."""
+        from .. import ies
+
+        path = self.asset_path(asset, prim, "IES file")
+        if path is None:
+            return None
+        try:
+            profile = ies.read(path)
+        except ValueError as e:
+            self.warn(f"ies:{prim.GetPath()}", f"prim {prim.GetPath()}: {e}; the light has no profile")
+            return None
+        if float(self.get(shaping.GetShapingIesAngleScaleAttr(), 0.0)) != 0.0:
+            self.warn(f"iesscale:{prim.GetPath()}", f"prim {prim.GetPath()}: shaping:ies:angleScale is not supported and is ignored")
+        if bool(self.get(shaping.GetShapingIesNormalizeAttr(), False)):
+            scale = profile.sphere_mean()
+        else:
+            scale = float(profile.values.max())
+        if not scale > 0.0:
+            self.warn(
+                f"ies:{prim.GetPath()}", f"prim {prim.GetPath()}: IES file '{path.name}' is dark everywhere; the light has no profile"
+            )
+            return None
+        profile.values = profile.values / scale
+        return profile
 
     def add_emitter_polygon(self, prim, pts2d: np.ndarray, size: float, normalize: bool, scalar, colour, blackbody) -> None:
         """An emissive polygon in the light's local XY plane emitting from its −Z face

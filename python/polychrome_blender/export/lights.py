@@ -71,6 +71,105 @@ def light_colour(ld, name, warnings):
     return pc.spectra.rgb(*col)
 
 
+def light_nodes(ld, name, warnings):
+    """What a point or spot light's node tree (Cycles' light shader) changes:
+    ``(colour, strength, profile)`` — the Emission node's Color as RGB (or a
+    Blackbody's temperature, as a float) multiplying the light's colour, its Strength
+    multiplying the power, and an IES Texture on that Strength as a
+    :class:`polychrome.ies.IESProfile` (its own Strength folded into the profile's).
+    ``(None, 1.0, None)`` without nodes; anything else warns once and is left out."""
+    nt = ld.node_tree if getattr(ld, "use_nodes", False) else None
+    if nt is None:
+        return None, 1.0, None
+    out = nt.get_output_node("CYCLES") or nt.get_output_node("ALL")
+    sock = None if out is None else out.inputs.get("Surface")
+    if sock is None or not sock.is_linked:
+        return None, 1.0, None
+    em = sock.links[0].from_node
+    if em.type != "EMISSION":
+        warnings.add(
+            ("light-node", name),
+            f"light '{name}': node '{em.name}' on its Surface is not supported; the light's own colour and power are used",
+        )
+        return None, 1.0, None
+    colour, strength, profile = None, 1.0, None
+    c = em.inputs["Color"]
+    if not c.is_linked:
+        colour = tuple(float(x) for x in c.default_value[:3])
+    else:
+        src = c.links[0].from_node
+        if src.type == "BLACKBODY" and not src.inputs["Temperature"].is_linked:
+            colour = float(src.inputs["Temperature"].default_value)
+        else:
+            warnings.add(
+                ("light-node", name, src.name), f"light '{name}': node '{src.name}' on the Emission Color is not supported; white is used"
+            )
+    st = em.inputs["Strength"]
+    if not st.is_linked:
+        strength = float(st.default_value)
+    else:
+        src = st.links[0].from_node
+        if src.type == "TEX_IES":
+            profile = _ies_profile(src, name, warnings)
+        else:
+            warnings.add(
+                ("light-node", name, src.name), f"light '{name}': node '{src.name}' on the Emission Strength is not supported; 1 is used"
+            )
+    if not math.isfinite(strength) or (isinstance(colour, tuple) and not all(map(math.isfinite, colour))):
+        raise ValueError(f"light '{name}': its Emission node's colour or strength is not finite")
+    return colour, strength, profile
+
+
+def _ies_profile(node, name, warnings):
+    """The IES Texture node's profile (internal text or external file) × its Strength."""
+    import bpy
+    from polychrome import ies
+
+    if node.inputs["Vector"].is_linked:
+        warnings.add(
+            ("light-ies", name), f"light '{name}': the Vector input of '{node.name}' is ignored (the light's own direction is used)"
+        )
+    if node.inputs["Strength"].is_linked:
+        warnings.add(("light-ies-s", name), f"light '{name}': the linked Strength of '{node.name}' is ignored (1 is used)")
+    try:
+        if node.mode == "INTERNAL":
+            if node.ies is None:
+                raise ValueError("no text block")
+            profile = ies.parse(node.ies.as_string(), name=node.ies.name)
+        else:
+            profile = ies.read(bpy.path.abspath(node.filepath))
+    except ValueError as e:
+        # One warning; the light keeps its colour and power, without the profile.
+        warnings.add(("light-ies-bad", name), f"light '{name}': IES Texture '{node.name}': {e}; the light is left without its profile")
+        return None
+    if not node.inputs["Strength"].is_linked:
+        profile.values = profile.values * float(node.inputs["Strength"].default_value)
+    return profile
+
+
+def _with_node_colour(spec, colour, ld, name, warnings):
+    """The light's spectrum ``spec`` times its Emission node's colour (RGB, or a
+    blackbody temperature)."""
+    if colour is None:
+        return spec
+    base = tuple(float(c) for c in ld.color[:3])
+    if isinstance(colour, float):
+        if getattr(ld, "use_temperature", False):
+            warnings.add(("light-bb", name), f"light '{name}': both its temperature and a Blackbody node colour it; the node's is used")
+        return pc.spectra.tinted(blackbody_white(colour), *base)
+    rgb = tuple(a * b for a, b in zip(base, colour))
+    if getattr(ld, "use_temperature", False):
+        return pc.spectra.tinted(blackbody_white(float(ld.temperature)), *rgb)
+    return pc.spectra.rgb(*rgb)
+
+
+def _orientation(m):
+    """The light's local axes (columns, unit length) from its world matrix."""
+    r = np.array(m[:3, :3], np.float64)
+    n = np.linalg.norm(r, axis=0)
+    return (r / np.where(n > 0, n, 1.0)).tolist()
+
+
 def _normalized(ld):
     return bool(getattr(ld, "normalize", True))  # Blender 4.5+; normalised before
 
@@ -179,28 +278,39 @@ def export_lights(depsgraph, scene, warnings):
         if not np.all(np.isfinite(m)):
             raise ValueError(f"light '{name}': its transform is not finite")
         pos = m[:3, 3]
+        if ld.type in ("POINT", "SPOT"):
+            colour, node_strength, profile = light_nodes(ld, name, warnings)
+        elif getattr(ld, "use_nodes", False):
+            warnings.add(
+                ("light-nodes", name),
+                f"light '{name}': the node tree of a {ld.type.lower()} light is not supported; its own colour and power are used",
+            )
         if ld.type == "POINT":
-            spec = light_colour(ld, name, warnings)
+            spec = _with_node_colour(light_colour(ld, name, warnings), colour, ld, name, warnings)
             radius = _radius(ld, name, warnings)
             scene.add_light(
                 pc.PointLight(
                     pos.tolist(),
-                    _point_power(ld, name),
+                    _point_power(ld, name) * node_strength,
                     spec,
                     name=name,
                     radius=radius,
                     visibility=point_light_visibility(ob, name, warnings),
+                    profile=profile,
+                    orientation=_orientation(m),
                 )
             )
         elif ld.type == "AREA":
             export_area(scene, ld, name, m, warnings, light_visibility(ob, name, warnings))
         elif ld.type == "SPOT":
-            spec = light_colour(ld, name, warnings)
+            spec = _with_node_colour(light_colour(ld, name, warnings), colour, ld, name, warnings)
             scene.add_light(
                 pc.SpotLight(
                     pos.tolist(),
                     _axis(m, name),
-                    power=_point_power(ld, name),
+                    power=_point_power(ld, name) * node_strength,
+                    profile=profile,
+                    orientation=_orientation(m),
                     color=spec,
                     spot_size=float(ld.spot_size),
                     spot_blend=float(ld.spot_blend),
