@@ -4,7 +4,10 @@ worked by hand on a cube; infinitely sharp creases keeping edges straight; and B
 own Subdivision Surface modifier (OpenSubdiv) in a bpy subprocess — the same cages
 (a cube, a cube with creases of sharpness 2 and 0.5 and a corner of sharpness 3, an
 open bumpy grid, a prism with pentagon caps and triangles) at level 2 with
-``use_limit_surface`` off (the level-2 points, not the limit), compared as point sets."""
+``use_limit_surface`` off (the level-2 points, not the limit), compared as point sets;
+and its UVs for every faceVaryingLinearInterpolation (Blender's UV Smooth options) on
+four UV layouts with seams, corners, a junction of three regions, concave corners and a
+dart, compared as sets of (position, uv) corners."""
 
 import json
 import warnings
@@ -276,3 +279,109 @@ def test_cli_flag(tmp_path, monkeypatch, capsys):
     blend.write_bytes(b"")
     assert cli.main(["render", str(blend), "-o", str(tmp_path / "y.png"), "--subdivision-level", "1"]) == 2
     assert "USD stages only" in capsys.readouterr().err
+
+
+# faceVaryingLinearInterpolation → the Subdivision Surface modifier's UV Smooth (Blender
+# maps these to OpenSubdiv's FVAR_LINEAR_* options).
+UV_SMOOTH = {
+    "all": "NONE",
+    "cornersOnly": "PRESERVE_CORNERS",
+    "cornersPlus1": "PRESERVE_CORNERS_AND_JUNCTIONS",
+    "cornersPlus2": "PRESERVE_CORNERS_JUNCTIONS_AND_CONCAVE",
+    "boundaries": "PRESERVE_BOUNDARIES",
+    "none": "SMOOTH_ALL",
+}
+
+
+def uv_layouts():
+    """The 3 × 3 grid's face-varying st for four layouts of UV islands (each island a
+    smooth non-affine map of the grid, offset by half a tile): quadrants meeting at an
+    interior vertex (4 corners); three regions there (a junction: two corners and a value
+    of two faces); an L of three faces against the rest (a corner and a concave corner
+    at interior vertices); one island with a seam from the boundary ending inside (a dart)."""
+    pts, counts, idx = grid(3)
+    g = np.stack(np.meshgrid(np.arange(4), np.arange(4), indexing="ij"), -1).reshape(-1, 2).astype(float)
+
+    def layout(island_of_face):
+        uv = []
+        for f in range(9):
+            i, j = divmod(f, 3)
+            island = island_of_face(i, j)
+            for v in idx[4 * f : 4 * f + 4]:
+                x, y = g[v]
+                uv.append([x / 6 + 0.04 * np.sin(2.1 * y) + 0.5 * (island % 2), y / 6 + 0.03 * np.cos(1.7 * x) + 0.5 * (island // 2)])
+        return np.array(uv)
+
+    out = {
+        "quadrants": layout(lambda i, j: (i >= 1) + 2 * (j >= 1)),
+        "three": layout(lambda i, j: 0 if (i == 0 and j <= 1) else (1 if (i, j) == (1, 0) else 2)),
+        "concave": layout(lambda i, j: 0 if (i, j) in ((0, 0), (0, 1), (1, 0)) else 3),
+    }
+    dart = layout(lambda i, j: 0)
+    dart[[k for k in range(4) if tuple(g[idx[k]]) == (1.0, 0.0)]] += [0.1, 0.05]  # face (0, 0) at the boundary vertex (1, 0)
+    out["dart"] = dart
+    return pts, counts, idx, out
+
+
+UV_BODY = """
+d = json.loads(open('uv.json').read())
+out = {}
+for lay, uvs in d['layouts'].items():
+    for mode, smooth in d['modes'].items():
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        faces, k = [], 0
+        for c in d['counts']:
+            faces.append(d['idx'][k:k + c]); k += c
+        me = bpy.data.meshes.new(mode); me.from_pydata(d['pts'], [], faces); me.update()
+        me.uv_layers.new(name='st').uv.foreach_set('vector', np.asarray(uvs, np.float32).ravel())  # loops in face order
+        ob = bpy.data.objects.new(mode, me); bpy.context.scene.collection.objects.link(ob)
+        mod = ob.modifiers.new('S', 'SUBSURF'); mod.levels = mod.render_levels = 2; mod.use_limit_surface = False
+        mod.boundary_smooth = 'PRESERVE_CORNERS'; mod.uv_smooth = smooth
+        ev = ob.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
+        co = np.empty(len(ev.vertices) * 3, np.float32); ev.attributes['position'].data.foreach_get('vector', co)
+        cv = np.empty(len(ev.loops), np.int32); ev.attributes['.corner_vert'].data.foreach_get('value', cv)
+        u = np.empty(len(ev.loops) * 2, np.float32); ev.uv_layers.active.uv.foreach_get('vector', u)
+        rows = np.concatenate([co.reshape(-1, 3)[cv], u.reshape(-1, 2)], 1)
+        out[lay + ':' + mode] = np.unique(np.round(rows, 6), axis=0).tolist()
+emit(**out)
+"""
+
+
+def test_face_varying_against_blender(tmp_path):
+    """Smooth face-varying st (each faceVaryingLinearInterpolation) at level 2 against
+    Blender's UV Smooth options: the sets of (position, uv) corners agree within 1e-5 on
+    every layout and mode, where the modes differ from each other by 0.016 or more."""
+    from blender.bhelper import check, run_bpy
+
+    pts, counts, idx, layouts = uv_layouts()
+    (tmp_path / "uv.json").write_text(
+        json.dumps(
+            {"pts": pts.tolist(), "counts": counts, "idx": idx, "layouts": {k: v.tolist() for k, v in layouts.items()}, "modes": UV_SMOOTH}
+        )
+    )
+    proc, results = run_bpy(tmp_path, UV_BODY, timeout=300)
+    blender = check(proc, results)[0]
+    worst, apart = {}, []
+    for lay, uv in layouts.items():
+        for mode in UV_SMOOTH:
+            stage = Usd.Stage.CreateNew(str(tmp_path / f"{lay}_{mode}.usda"))
+            mesh = UsdGeom.Mesh.Define(stage, "/m")
+            mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(pts.astype(np.float32)))
+            mesh.CreateFaceVertexCountsAttr(counts)
+            mesh.CreateFaceVertexIndicesAttr(idx)
+            mesh.CreateFaceVaryingLinearInterpolationAttr(mode)
+            st = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar("st", pxr.Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.faceVarying)
+            st.Set(Vt.Vec2fArray.FromNumpy(uv.astype(np.float32)))
+            stage.GetRootLayer().Save()
+            m = read_mesh(tmp_path / f"{lay}_{mode}.usda", subdivision_level=2)
+            ours = np.concatenate([m["vertices"], m["uvs"]], 1)
+            ref = np.asarray(blender[f"{lay}:{mode}"])
+            assert len(ours) == len(ref), (lay, mode)
+            worst[(lay, mode)] = point_set_distance(ours, ref)
+        if lay == "concave":
+            apart = [
+                point_set_distance(np.asarray(blender[f"{lay}:{a}"]), np.asarray(blender[f"{lay}:{b}"]))
+                for a, b in (("all", "none"), ("cornersOnly", "boundaries"), ("cornersPlus1", "cornersPlus2"))
+            ]
+    assert max(worst.values()) < 1e-5, worst
+    assert min(apart) > 0.01, apart

@@ -1224,6 +1224,10 @@ class _Reader:
         if boundary not in subdivision.BOUNDARIES:
             self.warn(f"boundary:{where}", f"prim {where}: interpolateBoundary '{boundary}' is unknown; read as edgeAndCorner")
             boundary = "edgeAndCorner"
+        fv_mode = str(self.get(mesh.GetFaceVaryingLinearInterpolationAttr(), "cornersPlus1"))
+        if fv_mode not in subdivision.FACE_VARYING:
+            self.warn(f"fvlinear:{where}", f"prim {where}: faceVaryingLinearInterpolation '{fv_mode}' is unknown; read as cornersPlus1")
+            fv_mode = "cornersPlus1"
         if str(self.get(mesh.GetTriangleSubdivisionRuleAttr(), "catmullClark")) == "smooth":
             self.warn(f"trirule:{where}", f"prim {where}: triangleSubdivisionRule 'smooth' is read as catmullClark")
 
@@ -1257,6 +1261,7 @@ class _Reader:
                 corner_indices=arr(mesh.GetCornerIndicesAttr(), np.int64),
                 corner_sharpnesses=arr(mesh.GetCornerSharpnessesAttr(), np.float64),
                 face_varying=face_varying,
+                face_varying_interpolation=fv_mode,
             )
         except ValueError as e:
             raise self.error(prim, str(e)) from None

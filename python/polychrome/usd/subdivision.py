@@ -27,9 +27,9 @@ Subdivision Surface modifier all use:
 * holes (``holeIndices``): refined with the rest (their neighbours see them) and left out.
 
 Primvars: vertex data (``vertex``/``varying``) follows the vertex rules (as points);
-face-varying data (``st``) is refined bilinearly inside each face — what OpenSubdiv does for
-``faceVaryingLinearInterpolation = "all"``, whatever the authored value (the smooth
-face-varying rules with their seams are not implemented).
+face-varying data (``st``) per ``faceVaryingLinearInterpolation``: bilinear inside each
+face for ``all``, else refined as a mesh of its own whose seams are boundaries
+(:func:`_face_varying_mesh`).
 """
 
 from __future__ import annotations
@@ -39,6 +39,7 @@ import numpy as np
 #: OpenSubdiv's Sdc::Crease::SHARPNESS_INFINITE: this sharpness and above never decay.
 INFINITE = 10.0
 BOUNDARIES = ("edgeAndCorner", "edgeOnly", "none")
+FACE_VARYING = ("none", "cornersOnly", "cornersPlus1", "cornersPlus2", "boundaries", "all")
 
 
 def _child_sharpness(s: np.ndarray) -> np.ndarray:
@@ -187,13 +188,16 @@ def refine(
     corner_indices=None,
     corner_sharpnesses=None,
     face_varying=(),
+    face_varying_interpolation: str = "all",
 ) -> dict:
     """Refines a polygon mesh ``level`` times.
 
     ``points`` (V, k): the positions, optionally with vertex primvars as further columns
     (refined by the same rules); ``counts``/``indices``: faceVertexCounts/Indices (faces of
     fewer than 3 vertices must be removed first); ``face_varying``: arrays of one row per
-    face-vertex, refined bilinearly. Returns ``points`` (V', k), ``counts`` (all 4),
+    face-vertex, refined per ``face_varying_interpolation`` (USD's
+    faceVaryingLinearInterpolation: "all" bilinear, else smooth, see
+    :func:`_face_varying_mesh`). Returns ``points`` (V', k), ``counts`` (all 4),
     ``indices``, ``face`` (the control face each refined face comes from) and
     ``face_varying`` (one row per refined face-vertex). ValueError for malformed crease or
     corner data."""
@@ -201,6 +205,8 @@ def refine(
         raise ValueError(f"subdivision scheme '{scheme}' is not supported (catmullClark, bilinear)")
     if boundary not in BOUNDARIES:
         raise ValueError(f"interpolateBoundary '{boundary}' is not one of {', '.join(BOUNDARIES)}")
+    if face_varying_interpolation not in FACE_VARYING:
+        raise ValueError(f"faceVaryingLinearInterpolation '{face_varying_interpolation}' is not one of {', '.join(FACE_VARYING)}")
     pts = np.asarray(points, np.float64)
     pts = pts.reshape(len(pts), -1)
     counts = np.asarray(counts, np.int64)
@@ -253,10 +259,88 @@ def refine(
         on_boundary = np.zeros(n_points, bool)
         on_boundary[e0[open_edges]] = on_boundary[e1[open_edges]] = True
         holes = np.bincount(np.repeat(np.arange(len(counts)), counts), weights=on_boundary[idx], minlength=len(counts)) > 0
+    smooth_fv = []
+    if face_varying_interpolation != "all" and not bilinear and level > 0:
+        # Smooth face-varying data: each array refined as a mesh of its own (below), not bilinearly.
+        smooth_fv = [_face_varying_mesh(a, counts, idx, keys, values, vs, boundary, face_varying_interpolation, level) for a in fv]
+        fv = []
     for _ in range(int(level)):
         pts, counts, idx, parent, (keys, values), vs, fv = _step(pts, counts, idx, keys, values, vs, boundary, bilinear, fv)
         face = face[parent]
+    if smooth_fv:
+        fv = smooth_fv
     return {"points": pts, "counts": counts, "indices": idx, "face": face, "face_varying": fv, "boundary_holes": holes}
+
+
+def _face_varying_mesh(values, counts, idx, keys, sharpness, vs, boundary, mode, level):
+    """Smooth refinement of face-varying data, OpenSubdiv's way: corners of a vertex with
+    equal values are one face-varying vertex; where they differ (a seam) the values are on
+    a face-varying boundary, whose edges are infinitely sharp. The data is then refined as
+    a mesh of its own (faces = the mesh's faces, vertices = the distinct values) with the
+    vertex rules, the mesh's creases and corners, and values pinned per ``mode``:
+    ``none`` none (but the mesh's own pinned corners), ``cornersOnly`` a value of a single
+    face, ``cornersPlus1`` also every value of a vertex where three or more regions meet,
+    ``cornersPlus2`` also both values of a vertex of two whose one is a corner (the other a
+    concave corner) and darts (a seam ending inside the mesh), ``boundaries`` every value
+    on a face-varying boundary. Returns one row per refined
+    face-vertex."""
+    n_points = len(vs)
+    rows = np.ascontiguousarray(
+        np.concatenate(
+            [idx.astype(np.int64)[:, None].view(np.int32).reshape(len(idx), 2), np.ascontiguousarray(values, np.float64).view(np.int32)],
+            axis=1,
+        )
+    )
+    first, fi = weld(rows)
+    n_values = len(first)
+    vertex_of = idx[first]
+    face_of_corner, nxt, _, corner_edge, e0, e1, _ = _topology(counts, fi, n_values)
+    # The mesh's creases on the face-varying edges.
+    s_corner = _lookup(np.minimum(idx, idx[nxt]) * n_points + np.maximum(idx, idx[nxt]), keys, sharpness)
+    sharp = np.nonzero(s_corner > 0)[0]
+    f_vs = np.asarray(vs, np.float64)[vertex_of].copy()
+    # Pins: the mesh's own corners (edgeAndCorner: a boundary vertex of a single face) and the mode's.
+    faces_of_edge = np.bincount(corner_edge, minlength=len(e0))
+    open_edges = faces_of_edge < 2
+    on_fv_boundary = np.zeros(n_values, bool)
+    on_fv_boundary[e0[open_edges]] = on_fv_boundary[e1[open_edges]] = True
+    faces_of_value = np.bincount(fi, minlength=n_values)
+    faces_of_vertex = np.bincount(idx, minlength=n_points)
+    siblings = np.bincount(vertex_of, minlength=n_points)
+    pin = np.zeros(n_values, bool)
+    if boundary == "edgeAndCorner":
+        pin |= faces_of_vertex[vertex_of] == 1
+    if mode in ("cornersOnly", "cornersPlus1", "cornersPlus2"):
+        pin |= on_fv_boundary & (faces_of_value == 1)
+    if mode in ("cornersPlus1", "cornersPlus2"):
+        pin |= siblings[vertex_of] >= 3
+    if mode == "cornersPlus2":
+        # A vertex of two values one of which is a corner (the other then a concave corner): both.
+        corner = on_fv_boundary & (faces_of_value == 1)
+        with_corner = np.bincount(vertex_of, weights=corner, minlength=n_points) > 0
+        pin |= (siblings[vertex_of] == 2) & with_corner[vertex_of]
+        # Darts: a seam ending inside the mesh (one value, on a face-varying boundary).
+        _, _, _, m_edge, m0, m1, _ = _topology(counts, idx, n_points)
+        m_open = np.bincount(m_edge, minlength=len(m0)) < 2
+        on_mesh_boundary = np.zeros(n_points, bool)
+        on_mesh_boundary[m0[m_open]] = on_mesh_boundary[m1[m_open]] = True
+        pin |= on_fv_boundary & (siblings[vertex_of] == 1) & ~on_mesh_boundary[vertex_of]
+    if mode == "boundaries":
+        pin |= on_fv_boundary
+    f_vs[pin] = INFINITE
+    r = refine(
+        np.asarray(values, np.float64)[first],
+        counts,
+        fi,
+        level,
+        boundary="edgeOnly",
+        crease_indices=np.stack([fi[sharp], fi[nxt[sharp]]], 1).ravel(),
+        crease_lengths=np.full(len(sharp), 2),
+        crease_sharpnesses=s_corner[sharp],
+        corner_indices=np.arange(n_values)[f_vs > 0],
+        corner_sharpnesses=f_vs[f_vs > 0],
+    )
+    return r["points"][r["indices"]]
 
 
 def smooth_normals(points: np.ndarray, quads: np.ndarray) -> np.ndarray:
