@@ -1,7 +1,8 @@
 """Time to read a subdivision-surface USD stage (polychrome/usd/subdivision.py): a bumpy
 open grid of N × N quads (catmullClark, USD's default scheme, face-varying st), written
 as .usdc with pxr, read by `read_stage` at levels 0 (the cage), 1, 2 and 3; the
-refinement alone (`subdivision.refine`) timed beside it.
+refinement alone (`subdivision.refine`, face-varying st bilinear) timed beside it; the
+reader refines st with the default cornersPlus1 rules (a second refinement, of the st mesh).
 
     python bench/usd_subdivision.py [--side 316] [--levels 0,1,2,3] [--repeat 2] [--write docs/BENCHMARKS.md]
 """
@@ -9,6 +10,7 @@ refinement alone (`subdivision.refine`) timed beside it.
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 import platform
 import sys
@@ -76,7 +78,8 @@ def main() -> int:
         print(rows[-1], tris, flush=True)
     body = (
         f"A {args.side} × {args.side} grid ({len(counts):,} quads, face-varying st) as .usdc; best of {args.repeat}; "
-        f"Python {platform.python_version()}, numpy {np.__version__}.\n\n"
+        f"Python {platform.python_version()}, numpy {np.__version__}; load average {os.getloadavg()[0]:.1f} on this 2-core machine "
+        "when it ended (other jobs' load inflates every time).\n\n"
         "| level | faces | triangles | `subdivision.refine` (s) | `read_stage` (s) |\n| ---: | ---: | ---: | ---: | ---: |\n"
         + "\n".join(rows)
     )

@@ -1102,7 +1102,7 @@ class _Reader:
         face_src = np.arange(n_faces)
         refined = self.subdivide(prim, mesh, pts, counts, idx, hole, per_vertex, left_handed)
         if refined is not None:
-            pts, counts, idx, face_src, per_vertex, hole = refined
+            pts, counts, idx, face_src, per_vertex, hole, fv_mesh = refined
             n_faces, n_corners = len(counts), len(idx)
             normals, uvs = per_vertex[0][1], per_vertex[1][1]
         # Fan triangulation, vectorised: face f gives (c0, ck, ck+1) for k = 1 .. n−2.
@@ -1121,7 +1121,17 @@ class _Reader:
             corners = corners[:, [0, 2, 1]]
         if material_ids is not None:
             material_ids = material_ids[face_src[face_of_tri]]
-        if refined is not None and any(d is not None and d[1] == "corner" for _, d in per_vertex):
+        n_fv = sum(d is not None and d[1] == "corner" for _, d in per_vertex)
+        if refined is not None and n_fv == 1:
+            # One face-varying array: its refined face-varying vertices are the vertices
+            # (each lies on one point), no welding needed.
+            values, value_of_corner = fv_mesh[0]
+            vertex_of = np.empty(len(values), np.int64)
+            vertex_of[value_of_corner] = idx
+            vertices = pts[vertex_of]
+            tris = value_of_corner[corners]
+            out = {key: (values.astype(np.float32) if d[1] == "corner" else d[0][vertex_of]) for key, d in per_vertex if d is not None}
+        elif refined is not None and n_fv:
             # A refined mesh: vertex data is per vertex, so only the face-varying data splits
             # vertices (subdivision.weld: hashed rows, millions of corners in about a second).
             from .subdivision import weld
@@ -1284,7 +1294,7 @@ class _Reader:
                 col += width
             else:
                 out.append((key, (r["face_varying"][width].astype(np.float32), "corner")))
-        return new_pts, r["counts"], r["indices"], face_src, out, hole
+        return new_pts, r["counts"], r["indices"], face_src, out, hole, r["face_varying_mesh"]
 
     def mesh_key(self, prim) -> str | None:
         key = self.key_of(prim)

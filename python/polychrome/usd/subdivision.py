@@ -131,14 +131,16 @@ def _step(points, counts, idx, crease_keys, crease_values, vertex_sharpness, bou
 
     crease_p, rule_p = crease_and_rule(es, vs)
     es_c, vs_c = _child_sharpness(es), _child_sharpness(vs)
-    crease_c, rule_c = crease_and_rule(es_c, vs_c)
+    semi_sharp = np.any((es > 0) & (es < INFINITE)) or np.any((vs > 0) & (vs < INFINITE))
+    # Without semi-sharp features the children keep their parents' rules: no blending.
+    crease_c, rule_c = crease_and_rule(es_c, vs_c) if semi_sharp else (crease_p, rule_p)
 
     def apply(rule, crease):
         return np.where((rule == 2)[:, None], points, np.where((rule == 1)[:, None], crease, smooth))
 
     vertex_points = apply(rule_p, crease_p)
     blend = (rule_p != rule_c) & (rule_p != 0)
-    if np.any(blend):
+    if semi_sharp and np.any(blend):
         # Sdc's fractional weight: the mean of the sharpnesses that reach 0 this level.
         vt = (vs > 0) & (vs_c <= 0)
         et = (es > 0) & (es_c <= 0)
@@ -199,7 +201,8 @@ def refine(
     faceVaryingLinearInterpolation: "all" bilinear, else smooth, see
     :func:`_face_varying_mesh`). Returns ``points`` (V', k), ``counts`` (all 4),
     ``indices``, ``face`` (the control face each refined face comes from) and
-    ``face_varying`` (one row per refined face-vertex). ValueError for malformed crease or
+    ``face_varying`` (one row per refined face-vertex; ``face_varying_mesh`` the same as
+    (distinct values, value of each face-vertex) pairs). ValueError for malformed crease or
     corner data."""
     if scheme not in ("catmullClark", "bilinear"):
         raise ValueError(f"subdivision scheme '{scheme}' is not supported (catmullClark, bilinear)")
@@ -259,17 +262,26 @@ def refine(
         on_boundary = np.zeros(n_points, bool)
         on_boundary[e0[open_edges]] = on_boundary[e1[open_edges]] = True
         holes = np.bincount(np.repeat(np.arange(len(counts)), counts), weights=on_boundary[idx], minlength=len(counts)) > 0
-    smooth_fv = []
-    if face_varying_interpolation != "all" and not bilinear and level > 0:
-        # Smooth face-varying data: each array refined as a mesh of its own (below), not bilinearly.
-        smooth_fv = [_face_varying_mesh(a, counts, idx, keys, values, vs, boundary, face_varying_interpolation, level) for a in fv]
-        fv = []
+    # Face-varying data: each array refined as a mesh of its own (its values welded per
+    # vertex), so the refined corners come with their face-varying vertex.
+    fv_mesh = []
+    if level > 0:
+        mode = "all" if bilinear else face_varying_interpolation
+        fv_mesh = [_face_varying_mesh(a, counts, idx, keys, values, vs, boundary, mode, level) for a in fv]
     for _ in range(int(level)):
-        pts, counts, idx, parent, (keys, values), vs, fv = _step(pts, counts, idx, keys, values, vs, boundary, bilinear, fv)
+        pts, counts, idx, parent, (keys, values), vs, _ = _step(pts, counts, idx, keys, values, vs, boundary, bilinear, [])
         face = face[parent]
-    if smooth_fv:
-        fv = smooth_fv
-    return {"points": pts, "counts": counts, "indices": idx, "face": face, "face_varying": fv, "boundary_holes": holes}
+    if fv_mesh:
+        fv = [v[i] for v, i in fv_mesh]
+    return {
+        "points": pts,
+        "counts": counts,
+        "indices": idx,
+        "face": face,
+        "face_varying": fv,
+        "face_varying_mesh": fv_mesh,
+        "boundary_holes": holes,
+    }
 
 
 def _face_varying_mesh(values, counts, idx, keys, sharpness, vs, boundary, mode, level):
@@ -328,6 +340,9 @@ def _face_varying_mesh(values, counts, idx, keys, sharpness, vs, boundary, mode,
     if mode == "boundaries":
         pin |= on_fv_boundary
     f_vs[pin] = INFINITE
+    if mode == "all":  # bilinear inside each face: the bilinear scheme on the face-varying mesh
+        r = refine(np.asarray(values, np.float64)[first], counts, fi, level, scheme="bilinear")
+        return r["points"], r["indices"]
     r = refine(
         np.asarray(values, np.float64)[first],
         counts,
@@ -340,7 +355,7 @@ def _face_varying_mesh(values, counts, idx, keys, sharpness, vs, boundary, mode,
         corner_indices=np.arange(n_values)[f_vs > 0],
         corner_sharpnesses=f_vs[f_vs > 0],
     )
-    return r["points"][r["indices"]]
+    return r["points"], r["indices"]
 
 
 def smooth_normals(points: np.ndarray, quads: np.ndarray) -> np.ndarray:
