@@ -294,11 +294,14 @@ UV_SMOOTH = {
 
 
 def uv_layouts():
-    """The 3 × 3 grid's face-varying st for four layouts of UV islands (each island a
-    smooth non-affine map of the grid, offset by half a tile): quadrants meeting at an
-    interior vertex (4 corners); three regions there (a junction: two corners and a value
-    of two faces); an L of three faces against the rest (a corner and a concave corner
-    at interior vertices); one island with a seam from the boundary ending inside (a dart)."""
+    """Meshes with face-varying st: the 3 × 3 grid with four layouts of UV islands (each
+    island a smooth non-affine map of the grid, offset by half a tile): quadrants meeting
+    at an interior vertex (4 corners); three regions there (a junction: two corners and a
+    value of two faces); an L of three faces against the rest (a corner and a concave
+    corner at interior vertices); one island with a seam from the boundary ending inside
+    (a dart). And the creased cube (creases 2 and 0.5, a corner of 3) with a strip of three
+    faces unfolded as a net (bottom, front, top) beside three faces of their own:
+    {name: (points, counts, indices, creases, corners, st)}."""
     pts, counts, idx = grid(3)
     g = np.stack(np.meshgrid(np.arange(4), np.arange(4), indexing="ij"), -1).reshape(-1, 2).astype(float)
 
@@ -312,37 +315,63 @@ def uv_layouts():
                 uv.append([x / 6 + 0.04 * np.sin(2.1 * y) + 0.5 * (island % 2), y / 6 + 0.03 * np.cos(1.7 * x) + 0.5 * (island // 2)])
         return np.array(uv)
 
-    out = {
+    layouts = {
         "quadrants": layout(lambda i, j: (i >= 1) + 2 * (j >= 1)),
         "three": layout(lambda i, j: 0 if (i == 0 and j <= 1) else (1 if (i, j) == (1, 0) else 2)),
         "concave": layout(lambda i, j: 0 if (i, j) in ((0, 0), (0, 1), (1, 0)) else 3),
     }
     dart = layout(lambda i, j: 0)
     dart[[k for k in range(4) if tuple(g[idx[k]]) == (1.0, 0.0)]] += [0.1, 0.05]  # face (0, 0) at the boundary vertex (1, 0)
-    out["dart"] = dart
-    return pts, counts, idx, out
+    layouts["dart"] = dart
+    out = {name: (pts, counts, idx, [], [], uv) for name, uv in layouts.items()}
+
+    cube_pts, cube_counts, cube_idx, creases, corners, _ = CASES["creased_cube"]
+    p = np.asarray(cube_pts, float)
+    strip = {0: lambda x, y, z: (x, y), 2: lambda x, y, z: (x, -2 - z), 1: lambda x, y, z: (x, -4 - y)}  # a net: bottom, front, top
+    uv = []
+    for f in range(6):
+        for k, v in enumerate(cube_idx[4 * f : 4 * f + 4]):
+            if f in strip:
+                U, V = strip[f](*p[v])
+                uv.append([0.2 * U + 0.5 + 0.03 * np.sin(2 * V), 0.12 * V + 0.6 + 0.02 * U * U])
+            else:
+                a, b = [(0, 0), (1, 0), (1, 1), (0, 1)][k]
+                uv.append([f / 6 + 0.15 * a + 0.02 * np.sin(3 * p[v][2]), 0.45 * b + 0.01 * p[v][0]])
+    out["creased_cube_strip"] = (p, cube_counts, cube_idx, creases, corners, np.array(uv))
+    return out
 
 
 UV_BODY = """
-d = json.loads(open('uv.json').read())
+cases = json.loads(open('uv.json').read())
+modes = cases.pop('_modes')
 out = {}
-for lay, uvs in d['layouts'].items():
-    for mode, smooth in d['modes'].items():
+sharp = lambda s: math.sqrt(min(s, 10.0) / 10.0)  # Blender: sharpness = 10 · crease²
+for name, (pts, counts, idx, creases, corners, uvs) in cases.items():
+    for mode, smooth in modes.items():
         bpy.ops.wm.read_factory_settings(use_empty=True)
         faces, k = [], 0
-        for c in d['counts']:
-            faces.append(d['idx'][k:k + c]); k += c
-        me = bpy.data.meshes.new(mode); me.from_pydata(d['pts'], [], faces); me.update()
+        for c in counts:
+            faces.append(idx[k:k + c]); k += c
+        me = bpy.data.meshes.new(mode); me.from_pydata(pts, [], faces); me.update()
         me.uv_layers.new(name='st').uv.foreach_set('vector', np.asarray(uvs, np.float32).ravel())  # loops in face order
+        if creases:
+            attr = me.attributes.new('crease_edge', 'FLOAT', 'EDGE')
+            lookup = {tuple(sorted(e.vertices)): e.index for e in me.edges}
+            for a, b, s in creases:
+                attr.data[lookup[tuple(sorted((a, b)))]].value = sharp(s)
+        if corners:
+            attr = me.attributes.new('crease_vert', 'FLOAT', 'POINT')
+            for v, s in corners:
+                attr.data[v].value = sharp(s)
         ob = bpy.data.objects.new(mode, me); bpy.context.scene.collection.objects.link(ob)
         mod = ob.modifiers.new('S', 'SUBSURF'); mod.levels = mod.render_levels = 2; mod.use_limit_surface = False
-        mod.boundary_smooth = 'PRESERVE_CORNERS'; mod.uv_smooth = smooth
+        mod.use_creases = True; mod.boundary_smooth = 'PRESERVE_CORNERS'; mod.uv_smooth = smooth
         ev = ob.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
         co = np.empty(len(ev.vertices) * 3, np.float32); ev.attributes['position'].data.foreach_get('vector', co)
         cv = np.empty(len(ev.loops), np.int32); ev.attributes['.corner_vert'].data.foreach_get('value', cv)
         u = np.empty(len(ev.loops) * 2, np.float32); ev.uv_layers.active.uv.foreach_get('vector', u)
         rows = np.concatenate([co.reshape(-1, 3)[cv], u.reshape(-1, 2)], 1)
-        out[lay + ':' + mode] = np.unique(np.round(rows, 6), axis=0).tolist()
+        out[name + ':' + mode] = np.unique(np.round(rows, 6), axis=0).tolist()
 emit(**out)
 """
 
@@ -350,37 +379,38 @@ emit(**out)
 def test_face_varying_against_blender(tmp_path):
     """Smooth face-varying st (each faceVaryingLinearInterpolation) at level 2 against
     Blender's UV Smooth options: the sets of (position, uv) corners agree within 1e-5 on
-    every layout and mode, where the modes differ from each other by 0.016 or more."""
+    every mesh and mode, where the modes differ from each other by 0.016 or more.
+    (A UV map folded over an edge — opposite UV winding on its two faces — is a seam to
+    Blender, not to OpenSubdiv's face-varying topology, so the layouts keep the winding.)"""
     from blender.bhelper import check, run_bpy
 
-    pts, counts, idx, layouts = uv_layouts()
-    (tmp_path / "uv.json").write_text(
-        json.dumps(
-            {"pts": pts.tolist(), "counts": counts, "idx": idx, "layouts": {k: v.tolist() for k, v in layouts.items()}, "modes": UV_SMOOTH}
-        )
-    )
+    cases = uv_layouts()
+    payload = {
+        name: [np.asarray(p, float).tolist(), list(c), [int(i) for i in x], cr, co, uv.tolist()]
+        for name, (p, c, x, cr, co, uv) in cases.items()
+    }
+    payload["_modes"] = UV_SMOOTH
+    (tmp_path / "uv.json").write_text(json.dumps(payload))
     proc, results = run_bpy(tmp_path, UV_BODY, timeout=300)
     blender = check(proc, results)[0]
     worst, apart = {}, []
-    for lay, uv in layouts.items():
+    for name, (p, c, x, creases, corners, uv) in cases.items():
         for mode in UV_SMOOTH:
-            stage = Usd.Stage.CreateNew(str(tmp_path / f"{lay}_{mode}.usda"))
-            mesh = UsdGeom.Mesh.Define(stage, "/m")
-            mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(pts.astype(np.float32)))
-            mesh.CreateFaceVertexCountsAttr(counts)
-            mesh.CreateFaceVertexIndicesAttr(idx)
+            path = write_stage(tmp_path / f"{name}_{mode}.usda", (p, c, x, creases, corners, "edgeAndCorner"))
+            stage = Usd.Stage.Open(str(path))
+            mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/m"))
             mesh.CreateFaceVaryingLinearInterpolationAttr(mode)
             st = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar("st", pxr.Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.faceVarying)
             st.Set(Vt.Vec2fArray.FromNumpy(uv.astype(np.float32)))
             stage.GetRootLayer().Save()
-            m = read_mesh(tmp_path / f"{lay}_{mode}.usda", subdivision_level=2)
+            m = read_mesh(path, subdivision_level=2)
             ours = np.concatenate([m["vertices"], m["uvs"]], 1)
-            ref = np.asarray(blender[f"{lay}:{mode}"])
-            assert len(ours) == len(ref), (lay, mode)
-            worst[(lay, mode)] = point_set_distance(ours, ref)
-        if lay == "concave":
+            ref = np.asarray(blender[f"{name}:{mode}"])
+            assert len(ours) == len(ref), (name, mode)
+            worst[(name, mode)] = point_set_distance(ours, ref)
+        if name == "concave":
             apart = [
-                point_set_distance(np.asarray(blender[f"{lay}:{a}"]), np.asarray(blender[f"{lay}:{b}"]))
+                point_set_distance(np.asarray(blender[f"{name}:{a}"]), np.asarray(blender[f"{name}:{b}"]))
                 for a, b in (("all", "none"), ("cornersOnly", "boundaries"), ("cornersPlus1", "cornersPlus2"))
             ]
     assert max(worst.values()) < 1e-5, worst
