@@ -1002,19 +1002,28 @@ class Scene:
             ids = per_point[tri_point]
         return self.add_mesh(name, v, t, normals=n, uvs=uv, material=material, material_ids=ids, transform=transform, place=place)
 
-    def add_instance(self, mesh: int, transform: Any, name: str = "", *, motion: Any = None, visibility: Any = None) -> None:
+    def add_instance(
+        self, mesh: int, transform: Any, name: str = "", *, motion: Any = None, visibility: Any = None, random: float | None = None
+    ) -> None:
         """Places mesh ``mesh`` again with ``transform``; instances share the mesh's data.
         ``motion``: object → world transforms (K ≥ 2, 4×4 each) evenly spaced from
         shutter open to close, for motion blur; ``transform`` is then its placement at
         the frame (docs/camera.md). ``visibility``: the kinds of rays that see it, a dict
         of ``camera``, ``shadow``, ``diffuse``, ``glossy``, ``transmission`` booleans
-        (missing ones True), as Cycles' ray visibility (docs/blender.md)."""
+        (missing ones True), as Cycles' ray visibility (docs/blender.md). ``random``: what
+        Object Info › Random reads on it, 0..1 (default: Cycles' hash of the name, as for a
+        Blender object that is no instance)."""
         if not 0 <= mesh < len(self._meshes):
             raise ValueError(f"instance '{name}': mesh {mesh} does not exist")
         label = name or self._meshes[mesh]["name"]
         entry = {"name": label, "mesh": int(mesh), "transform": _matrix(transform, f"instance '{label}'")}
         if motion is not None:
             entry["motion"] = _motion_matrices(motion, f"instance '{label}'")
+        if random is not None:
+            r = float(random)
+            if not (math.isfinite(r) and 0.0 <= r <= 1.0):
+                raise ValueError(f"instance '{label}': random {random} must be in 0..1")
+            entry["random"] = r
         if visibility is not None:
             vis = dict(visibility)
             unknown = sorted(set(vis) - set(RAY_KINDS))

@@ -244,7 +244,10 @@ class Exporter:
             if not np.all(np.isfinite(m)):
                 raise ValueError(f"object '{name}': its transform is not finite")
             moves = None if self._motion is None else self._motion.instance_motion(inst)
-            scene.add_instance(mesh, m, name, motion=moves, visibility=object_visibility(ob, name, warnings))
+            # Object Info › Random: a Blender instance's random_id, as Cycles (an object's own
+            # is the core's hash of its name, Cycles' for non-instances).
+            rnd = (inst.random_id & 0xFFFFFFFF) / 0xFFFFFFFF if inst.is_instance else None
+            scene.add_instance(mesh, m, name, motion=moves, visibility=object_visibility(ob, name, warnings), random=rnd)
         # what no object shows any more (deleted, hidden, re-evaluated) is dropped
         self._meshes = {k: v for k, v in self._meshes.items() if k in used}
         self._materials = {k: v for k, v in self._materials.items() if k in materials}

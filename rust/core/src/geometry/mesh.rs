@@ -179,6 +179,20 @@ pub struct Instance {
     pub motion: Option<TransformMotion>,
     /// The kinds of rays that see it (`visibility::ALL` unless the scene says otherwise).
     pub visibility: u8,
+    /// Object Info › Random: Cycles' `hash_uint2(hash_string(name), 0)` over 2³² − 1
+    /// (scene/object.cpp `random_number`), unless the scene gives one (Blender's
+    /// instances: their `random_id`).
+    pub random: f32,
+}
+
+/// Cycles' `hash_string` (util/hash.h): i = 37·i + byte.
+fn hash_string(s: &str) -> u32 {
+    s.bytes().fold(0u32, |i, c| i.wrapping_mul(37).wrapping_add(c as u32))
+}
+
+/// Cycles' object random number of an object named `name` (see [`Instance::random`]).
+pub fn object_random(name: &str) -> f32 {
+    (crate::procedural::hash::hash_uint2(hash_string(name), 0) as f64 / u32::MAX as f64) as f32
 }
 
 impl Instance {
@@ -200,6 +214,7 @@ impl Instance {
             normal_to_world: to_object.matrix3.transpose(),
             motion: None,
             visibility: super::visibility::ALL,
+            random: object_random(name),
         })
     }
 

@@ -517,6 +517,9 @@ pub struct InstanceDesc {
     /// The kinds of rays that see it (Cycles' ray visibility; all when absent).
     #[serde(default)]
     pub visibility: crate::geometry::visibility::VisibilityDesc,
+    /// Object Info › Random in 0..1 (default: Cycles' hash of `name`).
+    #[serde(default)]
+    pub random: Option<f32>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]

@@ -99,15 +99,6 @@ impl MeshShadingData {
     }
 }
 
-/// Cycles' `hash_uint` of the object index into 0..1 (Object Info › Random).
-fn object_random(i: u32) -> f32 {
-    let mut h = i.wrapping_mul(0x9e37_79b9) ^ 0x85eb_ca6b;
-    h ^= h >> 16;
-    h = h.wrapping_mul(0x7feb_352d);
-    h ^= h >> 15;
-    (h >> 8) as f32 / (1u32 << 24) as f32
-}
-
 impl Scene {
     /// The shading point of a hit for a graph reading `requests`.
     pub fn shading_point(&self, ray: &Ray, si: &SurfaceInteraction, requests: &[AttributeRequest]) -> ShadingPoint {
@@ -199,7 +190,7 @@ pub(crate) fn shading_point_of(
         object_color: [1.0; 4],
         object_index: si.instance as f32,
         material_index: si.material as f32,
-        object_random: object_random(si.instance),
+        object_random: inst.random,
         attributes,
     }
 }

@@ -621,6 +621,12 @@ impl Scene {
                         Instance::with_motion(&i.name, i.mesh, to_world, &keys)?
                     };
                     inst.visibility = i.visibility.mask();
+                    if let Some(r) = i.random {
+                        if !(r.is_finite() && (0.0..=1.0).contains(&r)) {
+                            return Err(Error::object("instance", &i.name, format!("random {r} must be in 0..1")));
+                        }
+                        inst.random = r;
+                    }
                     Ok(inst)
                 })
                 .collect::<Result<_>>()?,
