@@ -195,6 +195,27 @@ def test_uv_and_holes(tmp_path):
     np.testing.assert_allclose(m["uvs"], m["vertices"][:, :2] * 0.5 + 0.5, atol=1e-6)
 
 
+def test_vertex_and_varying_primvars(tmp_path):
+    """A vertex primvar follows the vertex rules (as the points), a varying one is linear
+    (the bilinear scheme): st = (x, y) of the cube's points at level 1 — varying st at the
+    old vertices stays (±1, ±1), vertex st moves with the points to (±5/9, ±5/9)."""
+    path = write_stage(tmp_path / "cube.usda", CASES["cube"])
+    stage = Usd.Stage.Open(str(path))
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/m"))
+    xy = np.asarray(CUBE_POINTS, np.float32)[:, :2]
+    for interp in ("vertex", "varying"):
+        st = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar("st", pxr.Sdf.ValueTypeNames.TexCoord2fArray, interp)
+        st.Set(Vt.Vec2fArray.FromNumpy(xy))
+        stage.GetRootLayer().Save()
+        m = read_mesh(path, subdivision_level=1)
+        corners = np.all(np.isclose(np.abs(m["vertices"]), 5 / 9, atol=1e-6), axis=1)
+        assert corners.sum() == 8
+        want = np.sign(m["vertices"][corners, :2]) * (5 / 9 if interp == "vertex" else 1.0)
+        np.testing.assert_allclose(m["uvs"][corners], want, atol=1e-6)
+        if interp == "vertex":
+            np.testing.assert_allclose(m["uvs"], m["vertices"][:, :2], atol=1e-6)
+
+
 BLENDER_BODY = """
 cases = json.loads(open('cases.json').read())
 out = {}

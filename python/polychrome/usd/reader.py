@@ -694,7 +694,8 @@ class _Reader:
             raise self.error(prim, f"{what}[{bad}] is not finite")
         if interp in ("uniform", "constant"):
             return None  # flat data: the geometric normal / no texture variation does the same
-        return arr, ("corner" if interp == "faceVarying" else "vertex")
+        # "varying" is per vertex too; subdivision surfaces interpolate it linearly (subdivide).
+        return arr, {"faceVarying": "corner", "varying": "varying"}.get(str(interp), "vertex")
 
     def gprim_arrays(self, prim) -> dict[str, Any] | None:
         """Triangles for the intrinsic UsdGeom shapes (Sphere, Cube, Cylinder, Cone, Capsule, Plane)."""
@@ -1247,13 +1248,16 @@ class _Reader:
 
         valid = counts >= 3  # points and lines take no part
         corner_ok = np.repeat(valid, counts)
-        columns, layout, face_varying = [np.asarray(pts, np.float64)], [], []
+        columns, layout, face_varying, varying = [np.asarray(pts, np.float64)], [], [], []
         for key, d in per_vertex:
             if d is None or key == "normals":  # authored normals do not apply to a subdivided surface
                 layout.append((key, None, 0))
             elif d[1] == "vertex":
                 layout.append((key, "vertex", d[0].shape[1]))
                 columns.append(np.asarray(d[0], np.float64))
+            elif d[1] == "varying":  # linear: the bilinear scheme on the same faces
+                layout.append((key, "varying", len(varying)))
+                varying.append(np.asarray(d[0], np.float64))
             else:
                 layout.append((key, "corner", len(face_varying)))
                 face_varying.append(d[0][corner_ok])
@@ -1273,6 +1277,7 @@ class _Reader:
                 face_varying=face_varying,
                 face_varying_interpolation=fv_mode,
             )
+            linear = [subdivision.refine(v, counts[valid], idx[corner_ok], level, scheme="bilinear")["points"] for v in varying]
         except ValueError as e:
             raise self.error(prim, str(e)) from None
         data = r["points"]
@@ -1292,6 +1297,8 @@ class _Reader:
             elif kind == "vertex":
                 out.append((key, (data[:, col : col + width].astype(np.float32), "vertex")))
                 col += width
+            elif kind == "varying":
+                out.append((key, (linear[width].astype(np.float32), "vertex")))
             else:
                 out.append((key, (r["face_varying"][width].astype(np.float32), "corner")))
         return new_pts, r["counts"], r["indices"], face_src, out, hole, r["face_varying_mesh"]
