@@ -25,12 +25,13 @@ Blender-authored, whose suns the importer reads right).
 
     python bench/usd_vs_cycles.py [--stages A,B] [--size 96] [--samples 64]
         [--assets DIR | --source GITDIR] [--out DIR] [--images DIR] [--raw-import] [--unbound 0.8]
-        [--import-subdiv] [--subdivision-level N]
+        [--no-import-subdiv] [--subdivision-level N]
 
-`--import-subdiv` turns on the importer's `import_subdiv` for (b) and (c) (Subdivision
-Surface modifiers on catmullClark meshes, whose levels it prints); without it they render
-control cages while (a) refines catmullClark meshes at read_stage's level
-(`--subdivision-level`, default 2; 0 = the cage).
+Subdivision surfaces: the importer runs with `import_subdiv` on for (b) and (c)
+(Subdivision Surface modifiers on catmullClark meshes, whose levels it prints; off in
+Blender's own default), as (a) refines catmullClark meshes at read_stage's level
+(`--subdivision-level`, default 2; 0 = the cage). `--no-import-subdiv` makes (b) and (c)
+render control cages (compare with `--subdivision-level 0`).
 
 `--unbound 0.8` gives (a) a copy of the wrapper whose gprims bound to no material have
 displayColor 0.8, what Blender's importer shows them as (it ignores displayColor without
@@ -467,8 +468,10 @@ def main() -> int:
     ap.add_argument("--timeout", type=float, default=900, help="seconds for each stage's Blender subprocess")
     ap.add_argument(
         "--import-subdiv",
-        action="store_true",
-        help="Blender's importer with import_subdiv (Subdivision Surface modifiers on catmullClark meshes; off by default, as in Blender)",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="Blender's importer with import_subdiv: Subdivision Surface modifiers on catmullClark meshes (default on, "
+        "as read_stage refines them; Blender's own default is off)",
     )
     ap.add_argument(
         "--subdivision-level",
