@@ -216,6 +216,20 @@ def test_vertex_and_varying_primvars(tmp_path):
             np.testing.assert_allclose(m["uvs"], m["vertices"][:, :2], atol=1e-6)
 
 
+def test_level_capped_by_face_count(tmp_path, monkeypatch):
+    """A level that would make more than MAX_REFINED_FACES faces is lowered to the highest
+    that fits, with one warning naming the prim (the cube's 24 corners: 24 · 4^(n−1) quads)."""
+    monkeypatch.setattr(usd_reader, "MAX_REFINED_FACES", 24 * 16)
+    path = write_stage(tmp_path / "cube.usda", CASES["cube"])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        r = usd_reader._Reader(Path(path), subdivision_level=5)
+        m = r.mesh_arrays(r.stage.GetPrimAtPath("/m"))
+    assert len(m["triangles"]) == 2 * 24 * 16  # level 3
+    said = [str(w.message) for w in caught if "subdivision level" in str(w.message)]
+    assert len(said) == 1 and "/m" in said[0] and "level 3" in said[0]
+
+
 BLENDER_BODY = """
 cases = json.loads(open('cases.json').read())
 out = {}

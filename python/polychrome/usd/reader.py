@@ -35,6 +35,9 @@ GPRIM_RINGS, GPRIM_SEGMENTS = 24, 48
 # --subdivision-level). 2 = Blender's Subdivision Surface render default and usdview's
 # "High" complexity; usdview's default ("Low", complexity 1.0) is refine level 0.
 DEFAULT_SUBDIVISION_LEVEL, MAX_SUBDIVISION_LEVEL = 2, 6
+#: Most faces a refined mesh may have (each level multiplies them by about 4): a prim
+#: whose level would exceed it is refined at the highest level within it, with a warning.
+MAX_REFINED_FACES = 1 << 24
 #: Segments of the polygon standing in for a DiskLight.
 DISK_SEGMENTS = 32
 #: Sides of the prism standing in for a CylinderLight.
@@ -1248,6 +1251,18 @@ class _Reader:
 
         valid = counts >= 3  # points and lines take no part
         corner_ok = np.repeat(valid, counts)
+        # Level 1 makes one quad per corner, every further level 4 of each.
+        quads = lambda n: int(corner_ok.sum()) * 4 ** (n - 1)  # noqa: E731
+        if quads(level) > MAX_REFINED_FACES:
+            fits = max([n for n in range(1, level) if quads(n) <= MAX_REFINED_FACES], default=0)
+            self.warn(
+                f"sublevel:{where}",
+                f"prim {where}: subdivision level {level} would make {quads(level):,} faces; refined at level {fits} "
+                f"(at most {MAX_REFINED_FACES:,} faces)",
+            )
+            if fits == 0:
+                return None
+            level = fits
         columns, layout, face_varying, varying = [np.asarray(pts, np.float64)], [], [], []
         for key, d in per_vertex:
             if d is None or key == "normals":  # authored normals do not apply to a subdivided surface
