@@ -106,6 +106,16 @@ impl Scene {
     }
 }
 
+/// Blender's automatic texture space of a mesh with bounds (lo, hi), as the corner and
+/// extent Generated coordinates map to 0..1 (BKE_mesh_texspace_calc): an axis of zero
+/// extent gets half-size 1 (a flat plane's Generated z is 0.5), one below 1e-5 gets 1e-5.
+fn texture_space((lo, hi): (Vec3, Vec3)) -> (Vec3, Vec3) {
+    let mid = 0.5 * (lo + hi);
+    let half = (0.5 * (hi - lo)).to_array().map(|h| if h == 0.0 { 1.0 } else { h.max(1e-5) });
+    let half = Vec3::from_array(half);
+    (mid - half, 2.0 * half)
+}
+
 pub(crate) fn shading_point_in(
     instances: &[Instance],
     meshes: &[Mesh],
@@ -138,9 +148,8 @@ pub(crate) fn shading_point_of(
     let flip = |n: Vec3A| Vec3::from(if backfacing { -n } else { n });
     let normal = flip(si.ns);
     let object_position = Vec3::from(to_object.transform_point3a(si.p));
-    let (lo, hi) = data.bounds;
-    let size = hi - lo;
-    let generated = Vec3::select(size.cmpgt(Vec3::ZERO), (object_position - lo) / size, Vec3::ZERO);
+    let (lo, size) = texture_space(data.bounds);
+    let generated = (object_position - lo) / size;
     let n2w = Mat3::from(normal_to_world);
     // Tangent: the mesh's MikkTSpace tangent or smooth_tangents', else the triangle's ∂p/∂u.
     let (tangent, tangent_sign) = match &data.tangents {
@@ -225,7 +234,7 @@ fn differentials(
         let mut d = Delta {
             position: Vec3::from(w.transform_vector3a(e * s)),
             object_position: de,
-            generated: Vec3::select(size.cmpgt(Vec3::ZERO), de / size, Vec3::ZERO),
+            generated: de / texture_space(data.bounds).1,
             uv: mesh.uvs.as_ref().map_or(Vec2::ZERO, |uv| (uv[i] - uv[i0]) * s),
             attributes: [[0.0; 4]; MAX_ATTRIBUTES],
         };
