@@ -110,10 +110,6 @@ def test_constant_node_matches_cycles(constant, family):
     assert not bad, f"{len(bad)}/{len(rows)} cases off:\n" + "\n".join(bad)
 
 
-def core_gap(family, reason):
-    return pytest.param(family, marks=pytest.mark.xfail(reason=f"core: {reason}"))
-
-
 HIT_FAMILIES = [
     "Texture Coordinate",
     "Mapping",
