@@ -2,10 +2,11 @@
 //! Python: mesh from flat buffers, then `Accel::build`, timed, with the bytes the BLAS
 //! keeps and the peak RSS; then closest-hit rays per second on one thread.
 //!
-//!     cargo run --release -p polychrome-core --example build_scale -- 10 [repeats] [chunk]
+//!     cargo run --release -p polychrome-core --example build_scale -- 10 [repeats] [chunk] [rays]
 //!
-//! The first argument is millions of triangles; `chunk` (triangles, 0 for none) cuts
-//! the mesh into chunks of that size instead of the library's own choice.
+//! The first argument is millions of triangles; `chunk` (triangles, 0 for none, `-` for
+//! the library's own choice) cuts the mesh into chunks of that size; `rays` (1000000 unless
+//! given) is the number of closest-hit rays traced after each build.
 
 use polychrome_core::accel::Accel;
 use polychrome_core::geometry::{Instance, Mesh, Ray};
@@ -34,6 +35,7 @@ fn main() {
     let millions: f64 = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(1.0);
     let repeats: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(1);
     let chunk: Option<usize> = args.get(3).and_then(|s| s.parse().ok());
+    let rays: usize = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(1_000_000);
     let tris = (millions * 1e6) as usize;
     let n = ((tris as f64 / 2.0).sqrt().ceil() as usize) + 1;
     let mut pos = Vec::with_capacity(n * n * 3);
@@ -85,7 +87,6 @@ fn main() {
             state ^= state << 5;
             state as f32 / u32::MAX as f32
         };
-        let rays = 1_000_000;
         let (t2, c2, mut found) = (Instant::now(), cpu_seconds(), 0usize);
         for _ in 0..rays {
             let o = glam::Vec3A::new(rnd() * 2.0 - 1.0, rnd() * 2.0 - 3.0, 1.5);

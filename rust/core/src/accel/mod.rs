@@ -12,12 +12,18 @@ use crate::geometry::visibility;
 use crate::geometry::{Instance, Mesh, Ray};
 use glam::Vec3A;
 use obvhs::aabb::Aabb;
+use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
+use obvhs::bvh2::Bvh2;
 use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::cwbvh::CwBvh;
+use obvhs::ploc::PlocBuilder;
 use obvhs::ray::{Ray as BvhRay, RayHit};
 use obvhs::BvhBuildParams;
 use rayon::prelude::*;
+use std::sync::Mutex;
 use std::time::Duration;
+
+mod convert;
 
 /// The closest intersection of a ray.
 #[derive(Clone, Copy, Debug)]
@@ -41,35 +47,73 @@ struct MeshBvh {
 
 impl MeshBvh {
     /// The BVH over the mesh's triangles `ids` (all of them when None), built with
-    /// `params`.
-    fn build(m: &Mesh, ids: Option<&[u32]>, params: BvhBuildParams) -> Self {
+    /// `params` in the buffers of `ws`.
+    fn build(ws: &mut Workspace, m: &Mesh, ids: Option<&[u32]>, params: BvhBuildParams) -> Self {
         let count = ids.map_or(m.indices.len(), |v| v.len());
         let mesh_index = |k: usize| ids.map_or(k, |v| v[k] as usize);
         let keys = m.motion.as_ref().map_or(0, |v| v.key_count());
-        let aabbs: Vec<Aabb> = (0..count)
-            .map(|k| {
-                let i = mesh_index(k);
-                let [a, b, c] = m.triangle(i);
-                let mut bb = Aabb::new(a.min(b).min(c), a.max(b).max(c));
-                for k in 0..keys {
-                    for p in m.triangle_at(i, k as f32 / (keys - 1) as f32) {
-                        bb.extend(p);
-                    }
+        ws.aabbs.clear();
+        ws.aabbs.extend((0..count).map(|k| {
+            let i = mesh_index(k);
+            let [a, b, c] = m.triangle(i);
+            let mut bb = Aabb::new(a.min(b).min(c), a.max(b).max(c));
+            for k in 0..keys {
+                for p in m.triangle_at(i, k as f32 / (keys - 1) as f32) {
+                    bb.extend(p);
                 }
-                bb
-            })
-            .collect();
-        let mut bvh = build_cwbvh(&aabbs, params, &mut Duration::default());
-        drop(aabbs);
-        // obvhs reserves one 80-byte node per primitive and fills about a quarter of
-        // them: without this a chunked mesh kept the rest, in pages the allocator had
-        // already touched for earlier chunks' transients (heaptrack: 80 B/tri).
-        bvh.nodes.shrink_to_fit();
-        bvh.primitive_indices.shrink_to_fit();
-        for p in &mut bvh.primitive_indices {
-            *p = mesh_index(*p as usize) as u32;
+            }
+            bb
+        }));
+        // What obvhs's `build_cwbvh` does (PLOC, reinsertion, wide conversion), with
+        // the builder's, binary BVH's and conversion's buffers reused across builds.
+        ws.ploc.build_with_bvh(
+            &mut ws.bvh2,
+            params.ploc_search_distance,
+            &ws.aabbs,
+            (0..count as u32).collect(),
+            params.sort_precision,
+            params.search_depth_threshold,
+        );
+        ws.reinsertion.run(&mut ws.bvh2, params.reinsertion_batch_ratio, None);
+        let mut bvh = ws.convert.convert(&ws.bvh2, params.max_prims_per_leaf);
+        // obvhs's own checks, which its `build_cwbvh` runs in debug builds.
+        #[cfg(debug_assertions)]
+        {
+            ws.bvh2.validate(&ws.aabbs, false, false);
+            bvh.validate(&ws.aabbs, false);
+        }
+        if ids.is_some() {
+            for p in &mut bvh.primitive_indices {
+                *p = mesh_index(*p as usize) as u32;
+            }
         }
         MeshBvh { bvh }
+    }
+}
+
+/// Build buffers of one thread, reused by its next build (fresh ones per build cost
+/// page faults and zeroing: a fifth of the conversion). They live only during
+/// [`Accel::build_chunked`].
+#[derive(Default)]
+struct Workspace {
+    aabbs: Vec<Aabb>,
+    ploc: PlocBuilder,
+    bvh2: Bvh2,
+    reinsertion: ReinsertionOptimizer,
+    convert: convert::Converter,
+}
+
+/// Workspaces for the builds in flight: each build takes one (or makes one) and gives
+/// it back.
+#[derive(Default)]
+struct Workspaces(Mutex<Vec<Workspace>>);
+
+impl Workspaces {
+    fn build(&self, m: &Mesh, ids: Option<&[u32]>, params: BvhBuildParams) -> MeshBvh {
+        let mut ws = self.0.lock().unwrap_or_else(|e| e.into_inner()).pop().unwrap_or_default();
+        let out = MeshBvh::build(&mut ws, m, ids, params);
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).push(ws);
+        out
     }
 }
 
@@ -150,6 +194,7 @@ impl Accel {
     /// `chunk`: for tests (chunks of small meshes) and benchmarks (other sizes).
     pub fn build_chunked(meshes: &[Mesh], instances: &[Instance], above: usize, chunk: usize) -> Self {
         let threads = rayon::current_num_threads().max(1);
+        let workspaces = Workspaces::default();
         let mesh_bvhs: Vec<Vec<MeshBvh>> = meshes
             .par_iter()
             .map(|m| {
@@ -159,7 +204,7 @@ impl Accel {
                     return Vec::new();
                 }
                 if n <= above {
-                    return vec![MeshBvh::build(m, None, params)];
+                    return vec![workspaces.build(m, None, params)];
                 }
                 let mut parts = chunks(m, chunk);
                 let mut out = Vec::with_capacity(parts.len());
@@ -168,12 +213,13 @@ impl Accel {
                 while !parts.is_empty() {
                     let batch: Vec<Vec<u32>> = parts.drain(..threads.min(parts.len())).collect();
                     out.extend(
-                        batch.into_par_iter().map(|ids| MeshBvh::build(m, Some(&ids), params)).collect::<Vec<_>>(),
+                        batch.into_par_iter().map(|ids| workspaces.build(m, Some(&ids), params)).collect::<Vec<_>>(),
                     );
                 }
                 out
             })
             .collect();
+        drop(workspaces);
         let mut tlas_instances = Vec::new();
         let mut boxes = Vec::new();
         for (k, inst) in instances.iter().enumerate() {
