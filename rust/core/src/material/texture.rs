@@ -274,6 +274,81 @@ impl Texture {
         })
     }
 
+    /// Bicubic (uniform cubic B-spline) filtered linear RGB, Cycles' Cubic (and Smart)
+    /// interpolation on the CPU (`interp_cubic`, kernel/device/cpu/image.h).
+    pub fn lookup_cubic_with(&self, uv: Vec2, wrap_u: Wrap, wrap_v: Wrap) -> [f32; 3] {
+        self.bicubic(uv, wrap_u, wrap_v, |x, y| self.texel(x, y))
+    }
+
+    /// Bicubic alpha, as [`Texture::lookup_alpha_with`] with the cubic weights.
+    pub fn lookup_alpha_cubic_with(&self, uv: Vec2, wrap_u: Wrap, wrap_v: Wrap) -> f32 {
+        self.bicubic(uv, wrap_u, wrap_v, |x, y| [self.texel_alpha(x, y)])[0]
+    }
+
+    /// Bicubic colour in its stored encoding and alpha, as [`Texture::lookup_encoded_with`].
+    pub fn lookup_encoded_cubic_with(&self, uv: Vec2, wrap_u: Wrap, wrap_v: Wrap) -> [f32; 4] {
+        self.bicubic(uv, wrap_u, wrap_v, |x, y| {
+            let [r, g, b] = self.texel_encoded(x, y);
+            [r, g, b, self.texel_alpha(x, y)]
+        })
+    }
+
+    /// Along one axis of `n` texels: the four texels a cubic lookup at `t` weighs (None
+    /// = outside the image under CLIP: black) and their B-spline weights
+    /// (SET_CUBIC_SPLINE_WEIGHTS, centred by the same −0.5 texel as the bilinear filter).
+    #[inline]
+    fn cubic_axis(t: f32, n: u32, wrap: Wrap) -> ([Option<usize>; 4], [f32; 4]) {
+        let x = t * n as f32 - 0.5;
+        let x0 = x.floor();
+        let f = x - x0;
+        let w = [
+            (((-1.0 / 6.0) * f + 0.5) * f - 0.5) * f + 1.0 / 6.0,
+            ((0.5 * f - 1.0) * f) * f + 2.0 / 3.0,
+            ((-0.5 * f + 0.5) * f + 0.5) * f + 1.0 / 6.0,
+            (1.0 / 6.0) * f * f * f,
+        ];
+        let n = n as i64;
+        // Repeat wraps any coordinate; the others only need it near the image.
+        let i = if wrap == Wrap::Repeat { (x0 as i64).rem_euclid(n) } else { x0.clamp(-4.0, n as f32 + 4.0) as i64 };
+        let taps = std::array::from_fn(|k| {
+            let j = i - 1 + k as i64;
+            match wrap {
+                Wrap::Repeat => Some(j.rem_euclid(n) as usize),
+                Wrap::Extend => Some(j.clamp(0, n - 1) as usize),
+                Wrap::Clip => (0..n).contains(&j).then_some(j as usize),
+            }
+        });
+        (taps, w)
+    }
+
+    /// Bicubic filter of `texel` values (0 outside the image under CLIP; 0 for a
+    /// non-finite coordinate).
+    fn bicubic<const N: usize>(
+        &self,
+        uv: Vec2,
+        wrap_u: Wrap,
+        wrap_v: Wrap,
+        texel: impl Fn(usize, usize) -> [f32; N],
+    ) -> [f32; N] {
+        if !(uv.x.is_finite() && uv.y.is_finite()) {
+            return [0.0; N];
+        }
+        let (xs, wx) = Self::cubic_axis(uv.x, self.width, wrap_u);
+        let (ys, wy) = Self::cubic_axis(1.0 - uv.y, self.height, wrap_v);
+        let mut out = [0.0; N];
+        for (yi, wy) in ys.iter().zip(wy) {
+            for (xi, wx) in xs.iter().zip(wx) {
+                if let (Some(a), Some(b)) = (xi, yi) {
+                    let t = texel(*a, *b);
+                    for c in 0..N {
+                        out[c] += wx * wy * t[c];
+                    }
+                }
+            }
+        }
+        out
+    }
+
     /// Bilinear filter of `texel` values (0 outside the image under CLIP; 0 for a
     /// non-finite coordinate).
     #[inline]
@@ -321,6 +396,26 @@ mod tests {
         let c = Texture { wrap: Wrap::Clip, ..t };
         assert_eq!(c.lookup(Vec2::new(-1.0, 0.5)), [0.0; 3]);
         assert!((c.lookup(Vec2::new(0.0, 0.5))[0] - 0.5).abs() < 1e-6);
+    }
+
+    /// The cubic B-spline filter reproduces linear data exactly (its weights sum to 1
+    /// and have mean offset 0) and at a texel centre gives (c₋₁ + 4c₀ + c₁)/6.
+    #[test]
+    fn bicubic_is_the_cubic_b_spline() {
+        let row: Vec<f32> = (0..8).flat_map(|i| [i as f32, 0.0, 0.0]).collect();
+        let t = Texture::from_linear("t", 8, 1, 3, &row, Wrap::Extend).unwrap();
+        for &u in &[0.3f32, 0.41, 0.5, 0.62] {
+            let linear = u * 8.0 - 0.5; // the texel index at u
+            assert!((t.lookup_cubic_with(Vec2::new(u, 0.5), Wrap::Extend, Wrap::Extend)[0] - linear).abs() < 1e-5);
+        }
+        let spiky: Vec<f32> = (0..8).flat_map(|i| [if i == 4 { 6.0 } else { 0.0 }, 0.0, 0.0]).collect();
+        let s = Texture::from_linear("s", 8, 1, 3, &spiky, Wrap::Repeat).unwrap();
+        let at = |i: f32| s.lookup_cubic_with(Vec2::new((i + 0.5) / 8.0, 0.5), Wrap::Repeat, Wrap::Repeat)[0];
+        assert!((at(4.0) - 4.0).abs() < 1e-5 && (at(3.0) - 1.0).abs() < 1e-5 && at(6.0).abs() < 1e-6);
+        // Repeat wraps the taps; Clip reads black beyond the edge.
+        assert!((at(4.0 + 8.0) - 4.0).abs() < 1e-4);
+        let c = s.lookup_cubic_with(Vec2::new(-0.5 / 8.0, 0.5), Wrap::Clip, Wrap::Clip)[0];
+        assert_eq!(c, 0.0);
     }
 
     #[test]

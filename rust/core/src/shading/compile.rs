@@ -449,6 +449,7 @@ impl<'a> Compiler<'a> {
         let interpolation = match p.string("interpolation")?.unwrap_or("Linear") {
             "Closest" => Interpolation::Closest,
             "Linear" => Interpolation::Linear,
+            "Cubic" | "Smart" => Interpolation::Cubic,
             other => {
                 self.warn(node, format!("{other} interpolation is evaluated as Linear"));
                 Interpolation::Linear

@@ -10,6 +10,8 @@ use std::sync::Arc;
 pub enum Interpolation {
     Linear,
     Closest,
+    /// Cubic B-spline (Blender's Cubic and Smart: Cycles' CPU kernel filters both so).
+    Cubic,
 }
 
 /// Image Texture: Vector → Color, Alpha (the flat projection).
@@ -54,7 +56,11 @@ fn srgb_to_linear(c: f32) -> f32 {
 
 impl Image {
     pub fn lookup(&self, v: Vec3) -> [f32; 3] {
-        self.texture.lookup_with(self.uv(v), self.wrap, self.wrap)
+        let uv = self.uv(v);
+        if self.interpolation == Interpolation::Cubic {
+            return self.texture.lookup_cubic_with(uv, self.wrap, self.wrap);
+        }
+        self.texture.lookup_with(uv, self.wrap, self.wrap)
     }
 
     /// The texture coordinates of the lookup at vector `v` (projection, mirror, closest).
@@ -82,8 +88,13 @@ impl Image {
     pub fn lookup_rgba(&self, v: Vec3) -> (Vec3, f32) {
         let uv = self.uv(v);
         let t = &self.texture;
+        let cubic = self.interpolation == Interpolation::Cubic;
         if self.unassociate {
-            let [r, g, b, a] = t.lookup_encoded_with(uv, self.wrap, self.wrap);
+            let [r, g, b, a] = if cubic {
+                t.lookup_encoded_cubic_with(uv, self.wrap, self.wrap)
+            } else {
+                t.lookup_encoded_with(uv, self.wrap, self.wrap)
+            };
             let mut c = Vec3::new(r, g, b);
             if a != 1.0 && a != 0.0 {
                 c /= a;
@@ -93,10 +104,13 @@ impl Image {
             }
             return (c, a);
         }
-        let c = Vec3::from(t.lookup_with(uv, self.wrap, self.wrap));
+        let c = Vec3::from(self.lookup(v));
         // Alpha is 1 everywhere unless the image has some, or CLIP fades it at the edge.
-        let a =
-            if t.has_alpha() || self.wrap == Wrap::Clip { t.lookup_alpha_with(uv, self.wrap, self.wrap) } else { 1.0 };
+        let a = match (t.has_alpha() || self.wrap == Wrap::Clip, cubic) {
+            (false, _) => 1.0,
+            (true, false) => t.lookup_alpha_with(uv, self.wrap, self.wrap),
+            (true, true) => t.lookup_alpha_cubic_with(uv, self.wrap, self.wrap),
+        };
         (c, a)
     }
 
