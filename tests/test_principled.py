@@ -225,3 +225,33 @@ def test_textured_base_colour_of_principled_and_inside_mix():
     red = pc.Texture.from_array(np.tile(np.array([0.8, 0.1, 0.1], np.float32), (4, 4, 1)), name="red")
     out = pc.render(convex_scene(pc.Mix(pc.Diffuse(red), pc.Diffuse((0.1, 0.1, 0.8)), 0.5)), width=12, height=12, samples=16, max_bounces=2)
     assert np.allclose(on_sphere(out).mean(axis=0), [0.45, 0.1, 0.45], atol=0.01)
+
+
+def test_subsurface_white_sphere_is_invisible_under_a_coat_in_a_white_world():
+    """The subsurface random walk through the Python API (Blender's inputs): a white
+    sphere whose base all walks (albedo 1, a chromatic radius of its own size) under the
+    specular layer and a coat returns every bit of light that entered, so it keeps the
+    world's colour; and it does not warn on the default BACKWARD direction."""
+    mat = pc.Principled(
+        (1.0, 1.0, 1.0),
+        subsurface_weight=1.0,
+        subsurface_radius=(1.0, 0.5, 0.25),
+        subsurface_scale=8.0,
+        subsurface_anisotropy=0.3,
+        coat_weight=1.0,
+        coat_roughness=0.2,
+    )
+    assert mat.bsdf_dict()["subsurface"]["radius"] == [1.0, 0.5, 0.25]
+    out = pc.render(convex_scene(mat), width=12, height=12, samples=32, max_bounces=16)
+    rgb = on_sphere(out).mean(axis=0)
+    assert np.allclose(rgb, 1.0, atol=0.015), rgb
+    assert out.stats["nonfinite_samples"] == 0
+    assert not [w for w in out.stats.get("warnings", []) if "subsurface" in w]
+
+
+@pytest.mark.parametrize(
+    "kw", [dict(subsurface_radius=(1.0, float("nan"), 0.1)), dict(subsurface_radius=(-1.0, 0.2, 0.1)), dict(subsurface_scale=-0.1)]
+)
+def test_subsurface_bad_radius_is_rejected_naming_the_material(kw):
+    with pytest.raises(ValueError, match="'wax'.*subsurface"):
+        pc.Principled(0.8, subsurface_weight=1.0, name="wax", **kw)

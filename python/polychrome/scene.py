@@ -601,6 +601,11 @@ class Principled(Material):
     ``coat_roughness`` and ``coat_ior`` whose ``coat_tint`` absorbs the light reaching the
     layers below), ``sheen_weight`` the microfibre sheen (``sheen_roughness``,
     ``sheen_tint``) over the coat, stacked as Cycles does (docs/materials.md).
+    ``subsurface_weight`` of the base scatters inside the mesh as Cycles' random walk,
+    with mean free path from ``subsurface_radius`` (per Rec.709 channel, made a spectrum
+    by the uplift) × ``subsurface_scale`` (scene units), Henyey–Greenstein
+    ``subsurface_anisotropy`` inside, ``subsurface_method`` ``"random_walk"`` or
+    ``"random_walk_skin"`` (which enters through ``subsurface_ior``).
     Defaults are Blender's."""
 
     def __init__(
@@ -623,6 +628,12 @@ class Principled(Material):
         sheen_weight: float = 0.0,
         sheen_roughness: float = 0.5,
         sheen_tint: Any = None,
+        subsurface_weight: float = 0.0,
+        subsurface_radius: tuple[float, float, float] = (1.0, 0.2, 0.1),
+        subsurface_scale: float = 0.05,
+        subsurface_ior: float = 1.4,
+        subsurface_anisotropy: float = 0.0,
+        subsurface_method: str = "random_walk",
         emission: Any = None,
         name: str = "Principled",
     ):
@@ -653,6 +664,20 @@ class Principled(Material):
         self.sheen_weight = _unit(sheen_weight, "sheen_weight", name)
         self.sheen_roughness = _unit(sheen_roughness, "sheen_roughness", name)
         self.sheen_tint = None if sheen_tint is None else as_spectrum(sheen_tint)
+        self.subsurface_weight = _unit(subsurface_weight, "subsurface_weight", name)
+        radius = tuple(float(r) for r in subsurface_radius)
+        if len(radius) != 3 or not all(math.isfinite(r) and r >= 0.0 for r in radius):
+            raise ValueError(f"material '{name}': subsurface_radius {subsurface_radius} must be three finite values ≥ 0")
+        scale = float(subsurface_scale)
+        if not (math.isfinite(scale) and scale >= 0.0):
+            raise ValueError(f"material '{name}': subsurface_scale {subsurface_scale} must be finite and ≥ 0")
+        sior, aniso = float(subsurface_ior), float(subsurface_anisotropy)
+        if not (math.isfinite(sior) and math.isfinite(aniso)):
+            raise ValueError(f"material '{name}': subsurface_ior and subsurface_anisotropy must be finite")
+        if subsurface_method not in ("random_walk", "random_walk_skin"):
+            raise ValueError(f"material '{name}': subsurface_method {subsurface_method!r} is not 'random_walk' or 'random_walk_skin'")
+        self.subsurface_radius, self.subsurface_scale = radius, scale
+        self.subsurface_ior, self.subsurface_anisotropy, self.subsurface_method = sior, aniso, subsurface_method
         self.emission = None if emission is None else as_spectrum(emission)
         self.name = name
 
@@ -680,6 +705,15 @@ class Principled(Material):
             d["sheen"] = {"weight": self.sheen_weight, "roughness": self.sheen_roughness}
             if self.sheen_tint is not None:
                 d["sheen"]["tint"] = self.sheen_tint.to_dict()
+        if self.subsurface_weight > 0.0:
+            d["subsurface"] = {
+                "weight": self.subsurface_weight,
+                "radius": list(self.subsurface_radius),
+                "scale": self.subsurface_scale,
+                "ior": self.subsurface_ior,
+                "anisotropy": self.subsurface_anisotropy,
+                "method": self.subsurface_method,
+            }
         return d
 
 

@@ -17,6 +17,8 @@ One :class:`MaterialExport` exports one Blender material; the :class:`~.exporter
 keeps the result (and its warnings) until the material changes.
 """
 
+import math
+
 import numpy as np
 import polychrome as pc
 
@@ -240,7 +242,6 @@ class MaterialExport:
         # Sockets looked up with .get() are absent in some Blender versions the add-on
         # supports (Diffuse Roughness: 4.3+).
         for lobe, value in (
-            ("Subsurface Weight", 0.0),
             ("Alpha", 1.0),
             ("Anisotropic", 0.0),
         ):
@@ -261,6 +262,11 @@ class MaterialExport:
             "Sheen Weight",
             "Sheen Roughness",
             "Diffuse Roughness",
+            "Subsurface Weight",
+            "Subsurface Radius",
+            "Subsurface Scale",
+            "Subsurface IOR",
+            "Subsurface Anisotropy",
         ):
             sock = node.inputs.get(socket)
             src = _linked_node(sock) if sock is not None else None
@@ -299,6 +305,7 @@ class MaterialExport:
             extra["diffuse_roughness"] = _clamp01(dr.default_value)
         if "coat_weight" in extra:
             extra["coat_ior"] = min(max(_input_value(node, "Coat IOR"), 1.0), 10.0)
+        extra.update(self.subsurface(node))
         return pc.Principled(
             base,
             metallic=_clamp01(_input_value(node, "Metallic")),
@@ -312,6 +319,39 @@ class MaterialExport:
             name=name,
             **extra,
         )
+
+    def subsurface(self, node):
+        """The Principled's Subsurface inputs as ``polychrome.Principled`` keywords (none when
+        its weight is 0): radius and scale clamped below at 0 as Cycles
+        (``svm_node_closure_bsdf``), Christensen–Burley walked as Random Walk (warned)."""
+        sock = node.inputs.get("Subsurface Weight")
+        weight = _clamp01(sock.default_value) if sock is not None else 0.0
+        if weight <= 0.0:
+            return {}
+        radius = tuple(float(c) for c in node.inputs["Subsurface Radius"].default_value)
+        clean = tuple(c if math.isfinite(c) and c > 0.0 else 0.0 for c in radius)
+        scale = float(_input_value(node, "Subsurface Scale"))
+        if clean != radius or not (math.isfinite(scale) and scale >= 0.0):
+            self.warnings.add(
+                ("sss-radius", self.name),
+                f"{self.owner}: '{node.name}' Subsurface Radius {radius} × Scale {scale:.3g} is clamped to values ≥ 0",
+            )
+            scale = scale if math.isfinite(scale) and scale > 0.0 else 0.0
+        method = getattr(node, "subsurface_method", "RANDOM_WALK")
+        if method not in ("RANDOM_WALK", "RANDOM_WALK_SKIN"):
+            self.warnings.add(
+                ("sss-method", self.name), f"{self.owner}: '{node.name}' Subsurface Method {method} is rendered as Random Walk"
+            )
+        anisotropy = float(_input_value(node, "Subsurface Anisotropy"))
+        sior = float(_input_value(node, "Subsurface IOR"))
+        return {
+            "subsurface_weight": weight,
+            "subsurface_radius": clean,
+            "subsurface_scale": scale,
+            "subsurface_ior": sior if math.isfinite(sior) else 1.4,
+            "subsurface_anisotropy": anisotropy if math.isfinite(anisotropy) else 0.0,
+            "subsurface_method": "random_walk_skin" if method == "RANDOM_WALK_SKIN" else "random_walk",
+        }
 
     def hair(self, node):
         """Principled Hair BSDF (and the older Hair BSDF) → a Principled BSDF of the hair's

@@ -252,6 +252,31 @@ impl Accel {
     /// Closest hit along `ray` within (tmin, tmax), among `instances` of `meshes` (those
     /// the structure was built over).
     pub fn intersect(&self, meshes: &[Mesh], instances: &[Instance], ray: &Ray) -> Option<Hit> {
+        self.closest(meshes, instances, ray, None, None)
+    }
+
+    /// Closest hit along `ray` on instance `only` alone, whatever its ray visibility,
+    /// never on its triangle `skip` (Cycles' `scene_intersect_local` with `ray.self`: a
+    /// subsurface walk sees its own object, its first ray not the entry triangle).
+    pub fn intersect_instance(
+        &self,
+        meshes: &[Mesh],
+        instances: &[Instance],
+        ray: &Ray,
+        only: u32,
+        skip: Option<u32>,
+    ) -> Option<Hit> {
+        self.closest(meshes, instances, ray, Some(only), skip)
+    }
+
+    fn closest(
+        &self,
+        meshes: &[Mesh],
+        instances: &[Instance],
+        ray: &Ray,
+        only: Option<u32>,
+        skip: Option<u32>,
+    ) -> Option<Hit> {
         let tlas = self.tlas.as_ref()?;
         let mut best: Option<Hit> = None;
         let mut hit = RayHit::none();
@@ -259,8 +284,13 @@ impl Accel {
         tlas.ray_traverse(world_ray, &mut hit, |r, slot| {
             let (inst_id, chunk) = self.tlas_instances[slot];
             let inst = &instances[inst_id as usize];
-            if !visibility::sees(inst.visibility, ray.kind) {
-                return f32::INFINITY; // the ray goes on through instances its kind does not see
+            match only {
+                Some(o) if o != inst_id => return f32::INFINITY,
+                Some(_) => {}
+                None if !visibility::sees(inst.visibility, ray.kind) => {
+                    return f32::INFINITY; // the ray goes on through instances its kind does not see
+                }
+                None => {}
             }
             let (mesh, mb) = (&meshes[inst.mesh as usize], &self.meshes[inst.mesh as usize][chunk as usize]);
             // Object space: the direction is not renormalised, so t is the same in both spaces.
@@ -272,7 +302,11 @@ impl Accel {
             let mut local_hit = RayHit::none();
             let mut bary = (0.0, 0.0);
             mb.bvh.ray_traverse(local, &mut local_hit, |lr, tri| {
-                let [a, b, c] = mesh.triangle_at(mb.bvh.primitive_indices[tri] as usize, ray.time);
+                let id = mb.bvh.primitive_indices[tri];
+                if skip == Some(id) {
+                    return f32::INFINITY;
+                }
+                let [a, b, c] = mesh.triangle_at(id as usize, ray.time);
                 match wt.intersect(a, b, c, lr.tmin, lr.tmax) {
                     Some((t, b1, b2)) => {
                         bary = (b1, b2);

@@ -290,6 +290,9 @@ fn with_policy<P: WavelengthPolicy>(settings: &ResolvedSettings, policy: P) -> I
         medium_sampling: settings.medium_sampling,
         split_k: split_k.filter(|_| !settings.dispersion_splitting),
         stratified_collapse: collapse == Collapse::Stratified,
+        // Subsurface random walks on BACKWARD camera paths; light paths and bidirectional
+        // MIS see subsurface lobes as a diffuse of their base colour (warned).
+        subsurface: settings.direction == Direction::Backward,
         ..Walk::camera(settings.max_bounces, split)
     };
     let light = Walk { stratified_collapse: collapse != Collapse::Energy, ..Walk::light(settings.max_bounces) };

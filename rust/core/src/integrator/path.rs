@@ -619,7 +619,11 @@ fn scatter_single(
 ) -> f32 {
     ctx.single_wavelength = Some(b.index);
     let arriving = b.value;
-    let Some(sc) = b.scatter(v, ctx, rng, &mut scratch.tp) else {
+    // The vertex is scattered here, outside the walk: a subsurface lobe acts as a diffuse.
+    let walk_subsurface = std::mem::replace(&mut ctx.subsurface_walk, false);
+    let scattered = b.scatter(v, ctx, rng, &mut scratch.tp);
+    ctx.subsurface_walk = walk_subsurface;
+    let Some(sc) = scattered else {
         return 0.0;
     };
     // The aux chain (its grid-wide throughput kept where it reached `v`) takes the

@@ -17,8 +17,9 @@ use super::throughput::Throughput;
 use super::volume::{self, Flight};
 use super::{facing, Facing, Scatter, Scratch};
 use crate::geometry::{offset_ray_origin, Frame, Ray};
+use crate::material::subsurface::SubsurfaceEvent;
 use crate::material::{BsdfFlags, Material, ShadingContext};
-use crate::medium::MediumStack;
+use crate::medium::{Boundary, MediumStack, SubsurfaceMedium};
 use crate::render::MediumSampling;
 use crate::sampling::Rng;
 use crate::scene::media::VOLUME_BOUNDS_MAX;
@@ -224,6 +225,9 @@ pub struct Walk {
     pub stratified_collapse: bool,
     /// How whole-spectrum paths sample distances in scattering media.
     pub medium_sampling: MediumSampling,
+    /// Subsurface lobes are walked (`medium::random_walk`; BACKWARD camera paths), else
+    /// they act as a diffuse of their base colour.
+    pub subsurface: bool,
 }
 
 /// Bounces before Russian roulette may end a path.
@@ -240,6 +244,7 @@ impl Walk {
             split_k: None,
             stratified_collapse: false,
             medium_sampling: MediumSampling::default(),
+            subsurface: false,
         }
     }
     /// Light paths whose camera connections have at most `max_bounces` scattering events.
@@ -252,6 +257,7 @@ impl Walk {
             split_k: None,
             stratified_collapse: false,
             medium_sampling: MediumSampling::default(),
+            subsurface: false,
         }
     }
 
@@ -269,6 +275,11 @@ impl Walk {
     ) -> End<'s> {
         let media = scene.has_media();
         let mut crossings = 0;
+        if !self.subsurface {
+            ctx.subsurface_walk = false;
+        } else if st.depth == 0 {
+            ctx.subsurface_walk = true;
+        }
         loop {
             let hit = scene.intersect(&st.ray);
             let d = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
@@ -407,54 +418,150 @@ impl Walk {
             }
             // Surfaces are two-sided: shade on the side the ray arrived from.
             let Facing { wo, ng, ns, material, frame } = facing(scene, &st.ray, &si, ctx);
-            let v =
+            let mut v =
                 Vertex { si, wo, ng, ns, material, frame, wo_local: frame.to_local(wo), flags: material.bsdf.flags() };
             hooks.reached(scene, ctx, &v, &st, beta, scratch);
             if st.depth >= self.max_bounces || v.wo_local.z == 0.0 {
                 return End::Done;
             }
-            // Stratified draws line up vertex by vertex across a pixel's samples.
-            rng.start_vertex();
-            hooks.connect(scene, ctx, &v, &st, beta, rng, scratch);
-            if st.depth >= self.scatter_below {
-                return End::Done;
-            }
-            if v.flags.dispersive && ctx.single_wavelength.is_none() {
-                if self.split_dispersion {
-                    return End::Split { vertex: v, state: st };
+            // The vertex, then the exit of each subsurface walk it (or its exit) enters.
+            loop {
+                // Stratified draws line up vertex by vertex across a pixel's samples.
+                rng.start_vertex();
+                hooks.connect(scene, ctx, &v, &st, beta, rng, scratch);
+                if st.depth >= self.scatter_below {
+                    return End::Done;
                 }
-                if let Some(index) = beta.hero() {
-                    return End::Terminated { index, vertex: v, state: st };
+                if v.flags.dispersive && ctx.single_wavelength.is_none() {
+                    if self.split_dispersion {
+                        return End::Split { vertex: v, state: st };
+                    }
+                    if let Some(index) = beta.hero() {
+                        return End::Terminated { index, vertex: v, state: st };
+                    }
+                    if self.stratified_collapse {
+                        ctx.collapse_u = scratch.strata.map(|s| s.uniform(st.depth));
+                    }
                 }
-                if self.stratified_collapse {
-                    ctx.collapse_u = scratch.strata.map(|s| s.uniform(st.depth));
+                let scattered = beta.scatter(&v, ctx, rng, &mut scratch.tp);
+                ctx.collapse_u = None;
+                let entered = ctx.subsurface.take();
+                let Some(sc) = scattered else {
+                    return End::Done;
+                };
+                if !beta.is_alive() {
+                    return End::Done;
                 }
-            }
-            let scattered = beta.scatter(&v, ctx, rng, &mut scratch.tp);
-            ctx.collapse_u = None;
-            let Some(sc) = scattered else {
-                return End::Done;
-            };
-            if !beta.is_alive() {
-                return End::Done;
-            }
-            let collapsed = sc.sample.collapsed_to.filter(|_| ctx.single_wavelength.is_none());
-            if let Some(i) = collapsed {
-                ctx.single_wavelength = Some(i);
-            }
-            if !hooks.scattered(scene, ctx, &v, &st, &sc, beta) {
-                return End::Done;
-            }
-            st = st.after(scene, &v, &sc, ctx.front_face);
-            if let Some(index) = collapsed {
-                return End::Collapsed { index, state: st };
-            }
-            if !russian_roulette(beta, st.depth, self.rr_depth, rng) {
-                hooks.rouletted();
-                return End::Done;
+                if let Some(ev) = entered {
+                    // Into a subsurface lobe: walk to where the path leaves the mesh and go on
+                    // from a white Lambertian there, at the same depth (Cycles counts the
+                    // BSSRDF bounce once, at the exit's BSDF sample). Later subsurface lobes
+                    // act as a diffuse (Cycles' PATH_RAY_DIFFUSE_ANCESTOR).
+                    let Some((exit, exit_state)) = subsurface_exit(scene, ctx, &v, &st, &sc, ev, beta, rng) else {
+                        return End::Done;
+                    };
+                    ctx.subsurface_walk = false;
+                    if !beta.is_alive() || exit.wo_local.z == 0.0 {
+                        return End::Done;
+                    }
+                    v = exit;
+                    st = exit_state;
+                    continue;
+                }
+                let collapsed = sc.sample.collapsed_to.filter(|_| ctx.single_wavelength.is_none());
+                if let Some(i) = collapsed {
+                    ctx.single_wavelength = Some(i);
+                }
+                if !hooks.scattered(scene, ctx, &v, &st, &sc, beta) {
+                    return End::Done;
+                }
+                st = st.after(scene, &v, &sc, ctx.front_face);
+                if let Some(index) = collapsed {
+                    return End::Collapsed { index, state: st };
+                }
+                if !russian_roulette(beta, st.depth, self.rr_depth, rng) {
+                    hooks.rouletted();
+                    return End::Done;
+                }
+                break;
             }
         }
     }
+}
+
+/// The mesh around a subsurface walk: the entered instance alone (Cycles'
+/// `scene_intersect_local` on the entry's object), its first ray from the entry point
+/// itself, not seeing the entry triangle (Cycles' `ray.self.prim`; an offset origin
+/// would start the walk a sizeable fraction of a short mean free path deep).
+struct MeshBoundary<'s> {
+    scene: &'s Scene,
+    instance: u32,
+    triangle: u32,
+    time: f32,
+}
+
+impl Boundary for MeshBoundary<'_> {
+    type Hit = (crate::accel::Hit, Ray);
+    fn intersect(&mut self, origin: Vec3A, dir: Vec3A, tmax: f32, first: bool) -> Option<(f32, Self::Hit)> {
+        // obvhs 0.4 culls every BVH box the ray leaves before t = 1e-4 (cwbvh/node.rs,
+        // EPSILON): steps shorter than that would never find the surface. The ray starts
+        // BACK behind the point and counts hits from BACK on.
+        const BACK: f32 = 2e-4;
+        let ray = Ray { tmin: BACK, tmax: tmax + BACK, ..Ray::new(origin - dir * BACK, dir).with_time(self.time) };
+        let h = self.scene.intersect_instance(&ray, self.instance, first.then_some(self.triangle))?;
+        Some(((h.t - BACK).max(0.0), (h, ray)))
+    }
+}
+
+/// The random walk of the subsurface lobe `ev` that the BSDF at `v` (reached with `st`)
+/// entered along `sc`: every lane of `beta` walks the same path
+/// (`medium::random_walk`, spectral MIS over the lanes) inside `v`'s instance. Returns the
+/// exit vertex, shaded by the scene's white Lambertian about the exit's normal and seen
+/// from outside along the walk's last direction (Cycles' `subsurface_scatter` and
+/// `subsurface_shader_data_setup`), with the state arriving there; None when the walk
+/// is absorbed or finds no way out.
+#[allow(clippy::too_many_arguments)]
+fn subsurface_exit<'s, T: Throughput>(
+    scene: &'s Scene,
+    ctx: &mut ShadingContext,
+    v: &Vertex<'s>,
+    st: &PathState,
+    sc: &Scatter,
+    ev: SubsurfaceEvent,
+    beta: &mut T,
+    rng: &mut Rng,
+) -> Option<(Vertex<'s>, PathState)> {
+    let lanes = beta.lanes();
+    let (mut tp, mut albedo, mut mfp) =
+        (SampledSpectrum::zeros(lanes), SampledSpectrum::zeros(lanes), SampledSpectrum::zeros(lanes));
+    for j in 0..lanes {
+        let i = beta.lane_index(j);
+        tp.set(j, beta.lane(j));
+        albedo.set(j, ev.albedo.get(i));
+        mfp.set(j, ev.mfp.get(i));
+    }
+    let medium = SubsurfaceMedium::from_albedo(&albedo, &mfp, ev.anisotropy, &mut tp);
+    let mut boundary = MeshBoundary { scene, instance: v.si.instance, triangle: v.si.triangle, time: v.si.time };
+    let exit = medium.walk(&mut boundary, v.si.p, v.ns, sc.wi, rng, &mut tp)?;
+    for j in 0..lanes {
+        beta.set_lane(j, tp.get(j));
+    }
+    let (hit, ray) = exit.hit;
+    let si = scene.interaction(&ray, &hit);
+    let arrive = Ray::new(si.p + exit.direction, -exit.direction).with_time(v.si.time);
+    let Facing { wo, ng, ns, frame, .. } = facing(scene, &arrive, &si, ctx);
+    let material = &scene.subsurface_exit;
+    let exit_v = Vertex { si, wo, ng, ns, material, frame, wo_local: frame.to_local(wo), flags: material.bsdf.flags() };
+    let state = PathState {
+        ray: arrive,
+        specular: false,
+        prev_pdf: 0.0,
+        prev_p: v.si.p,
+        depth: st.depth,
+        media: st.media,
+        traveled: 0.0,
+    };
+    Some((exit_v, state))
 }
 
 /// Russian roulette after `depth` scattering events: from `rr_depth` on, a path survives

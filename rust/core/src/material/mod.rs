@@ -22,6 +22,7 @@ pub mod param;
 pub mod principled;
 pub mod sheen;
 pub mod sheen_ltc;
+pub mod subsurface;
 #[cfg(test)]
 pub mod testing;
 pub mod texture;
@@ -83,6 +84,13 @@ pub struct ShadingContext<'a> {
     /// The vertex's shading frame (world ↔ the local directions BSDFs see): lobes with
     /// their own normal ([`Oriented`]) are placed in it when the hit's BSDF is built.
     pub frame: crate::geometry::Frame,
+    /// Subsurface lobes walk (`material::subsurface`): set by the walks that follow them
+    /// (BACKWARD camera paths, until a path has left one walk); otherwise they act as a
+    /// diffuse of their base colour, as Cycles' BSSRDFs after a diffuse ancestor.
+    pub subsurface_walk: bool,
+    /// Set by a BSDF whose sample entered a subsurface lobe: the medium the path walks
+    /// from the sampled (inward) direction. The walk takes it after each scattering.
+    pub subsurface: std::cell::Cell<Option<subsurface::SubsurfaceEvent>>,
 }
 
 /// Which quantity a path transports, for the non-symmetric scattering of refraction.
@@ -107,6 +115,8 @@ impl<'a> ShadingContext<'a> {
             hit: Default::default(),
             collapse_u: None,
             frame: crate::geometry::Frame::from_normal(Vec3A::Z),
+            subsurface_walk: false,
+            subsurface: std::cell::Cell::new(None),
         }
     }
 }

@@ -52,6 +52,7 @@ use super::energy::{glass_e, glass_e_avg, multiscatter_color};
 use super::fresnel::{fresnel_dielectric_f64, reflect};
 use super::microfacet::{Ggx, TangentRotation};
 use super::oren_nayar::OrenNayarLobe;
+use super::subsurface::SubsurfaceLobe;
 use super::thinfilm::{metal_index_from_reflectance, thin_film_reflectance, ThinFilm};
 use super::{Bsdf, BsdfFlags, BsdfSample, ShadingContext, SpectralParam};
 use crate::sampling::cosine_hemisphere;
@@ -339,6 +340,8 @@ pub struct Principled {
     ms_table: Vec<f32>,
     ms_e_avg: f32,
     ms_inv: f32,
+    /// The subsurface lobe (`super::subsurface`), taking its weight of the base.
+    sss: Option<SubsurfaceLobe>,
 }
 
 /// Per-hit spectra: base colour, the metal's Fresnel at wo and its multiple-scattering
@@ -357,6 +360,8 @@ struct Lobes {
     metal: f32,
     metal_ms: f32,
     glass: f32,
+    /// The subsurface lobe (walked: its share of the base's diffuse albedo).
+    sss: f32,
 }
 
 impl Principled {
@@ -454,6 +459,24 @@ impl Principled {
             glass: if transmission > 0.0 { p.glass } else { None },
             e_table,
             inv_one_minus_eavg,
+            sss: None,
+        }
+    }
+
+    /// With a subsurface lobe taking `lobe.weight` of the base (Cycles: the BSSRDF
+    /// closure gets base colour × Subsurface Weight, the diffuse the rest).
+    pub fn with_subsurface(mut self, lobe: Option<SubsurfaceLobe>) -> Self {
+        self.sss = lobe.filter(|_| self.w_base > 0.0);
+        self
+    }
+
+    /// The share of the base that walks at this hit (0 when subsurface lobes act as a
+    /// diffuse here: `ShadingContext::subsurface_walk`).
+    #[inline]
+    fn sss_weight(&self, ctx: &ShadingContext) -> f32 {
+        match &self.sss {
+            Some(l) if ctx.subsurface_walk => l.weight,
+            _ => 0.0,
         }
     }
 
@@ -540,9 +563,11 @@ impl Principled {
             ms += h.fms.get(i);
             count += 1.0;
         }
+        let w_sss = self.sss_weight(ctx);
         let mut l = Lobes {
             spec: self.w_base * e / count,
-            diffuse: self.w_base * d / count,
+            diffuse: self.w_base * (1.0 - w_sss) * d / count,
+            sss: self.w_base * w_sss * d / count,
             metal: self.w_metal * m / count,
             metal_ms: if self.ms_inv > 0.0 {
                 self.w_metal * ms / count * (1.0 - lookup(&self.ms_table, mu_o))
@@ -551,7 +576,7 @@ impl Principled {
             },
             glass: if self.glass.is_some() { self.w_glass } else { 0.0 },
         };
-        let total = l.spec + l.diffuse + l.metal + l.metal_ms + l.glass;
+        let total = l.spec + l.diffuse + l.metal + l.metal_ms + l.glass + l.sss;
         if !(total > 0.0 && total.is_finite()) {
             return Lobes::default();
         }
@@ -560,6 +585,7 @@ impl Principled {
         l.metal /= total;
         l.metal_ms /= total;
         l.glass /= total;
+        l.sss /= total;
         l
     }
 
@@ -583,8 +609,9 @@ impl Principled {
             let (o, i) =
                 if wo.z < 0.0 { (Vec3A::new(wo.x, wo.y, -wo.z), Vec3A::new(wi.x, wi.y, -wi.z)) } else { (wo, wi) };
             let (mu_o, mu_i) = (o.z, i.z);
-            // Diffuse base.
-            if self.w_base > 0.0 {
+            // Diffuse base (what the subsurface lobe leaves of it).
+            let w_diffuse = self.w_base * (1.0 - self.sss_weight(ctx));
+            if w_diffuse > 0.0 {
                 // Lambert ρ/π·cos θi, or the Oren–Nayar lobe (ρ·(single + F_ms(ρ)·multi)).
                 let on = self.diffuse_on.map(|l| (l, l.terms(o, i)));
                 for k in 0..n {
@@ -596,7 +623,7 @@ impl Principled {
                         Some((l, (single, multi))) => rk * (single + l.multiscatter(rk) * multi),
                     };
                     let v = diffuse * (1.0 - lookup(t, mu_o)) * (1.0 - lookup(t, mu_i)) * self.inv_one_minus_eavg[r];
-                    out.set(k, self.w_base * v);
+                    out.set(k, w_diffuse * v);
                 }
                 pdf += lobes.diffuse * mu_i * FRAC_1_PI;
             }
@@ -865,6 +892,28 @@ impl Bsdf for Principled {
         } {
             // The diffuse base and the metal's multiple scattering are both cosine-sampled.
             flip(cosine_hemisphere(u))
+        } else if uc < {
+            c0 += lobes.sss;
+            c0
+        } {
+            // Into the subsurface medium (pdf 0 towards lights, a delta-like choice
+            // weighted by its own selection probability): the base's share ρ·(1 − E(μo))
+            // of the lobe; the walk divides ρ out and scatters it back.
+            let lobe = self.sss.as_ref()?;
+            if !(lobes.sss > 0.0) {
+                return None;
+            }
+            let wi = flip(lobe.entry(&self.distribution, o, u)?);
+            let w = self.w_base * lobe.weight / lobes.sss;
+            let mut f = SampledSpectrum::zeros(n);
+            for k in 0..n {
+                let rho = h.rho.get(k);
+                let rho = if rho.is_finite() { rho.clamp(0.0, 1.0) } else { 0.0 };
+                f.set(k, w * rho * (1.0 - lookup(&self.e_table[self.row(k)], mu_o)));
+            }
+            throughput.mul_assign(&f);
+            ctx.subsurface.set(Some(lobe.event(&h.rho)));
+            return Some(BsdfSample { wi, pdf: lobes.sss, specular: true, collapsed_to: None });
         } else {
             let glass = self.glass.as_ref()?;
             if !(lobes.glass > 0.0) {

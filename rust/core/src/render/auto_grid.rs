@@ -430,6 +430,7 @@ mod tests {
             anisotropic_rotation: 0.0,
             coat: None,
             sheen: None,
+            subsurface: None,
             normals: None,
         };
         assert!(grid_of(&scene(vec![material(principled(1.0))], vec![f11()])).len() >= 41);

@@ -287,6 +287,9 @@ pub enum BsdfDesc {
         /// Blender's Sheen: the microfibre sheen on top of the coat (absent: none).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         sheen: Option<SheenLayerDesc>,
+        /// Blender's Subsurface: a random walk under the base (absent: none).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        subsurface: Option<Box<SubsurfaceDesc>>,
         /// Its lobes' own normals at a hit of a graph (not part of the scene format).
         #[serde(skip)]
         normals: Option<Box<PrincipledNormals>>,
@@ -364,6 +367,25 @@ impl BsdfDesc {
         }
     }
 
+    /// Whether a subsurface lobe is anywhere in this description (a Principled with a
+    /// subsurface, or a graph's Principled with a Subsurface Weight set or linked).
+    pub fn has_subsurface(&self) -> bool {
+        match self {
+            BsdfDesc::Principled { subsurface, .. } => subsurface.as_ref().is_some_and(|s| s.weight > 0.0),
+            BsdfDesc::Mix { a, b, .. } | BsdfDesc::Add { a, b } => a.has_subsurface() || b.has_subsurface(),
+            BsdfDesc::Tint { bsdf, .. } | BsdfDesc::Oriented { bsdf, .. } => bsdf.has_subsurface(),
+            BsdfDesc::Graph(g) => g.nodes.iter().any(|n| {
+                n.kind == "ShaderNodeBsdfPrincipled"
+                    && match n.inputs.get("Subsurface Weight") {
+                        Some(crate::shading::InputDesc::Number(x)) => *x > 0.0,
+                        Some(crate::shading::InputDesc::Link { .. }) => true,
+                        _ => false,
+                    }
+            }),
+            _ => false,
+        }
+    }
+
     /// Whether a Transparent BSDF is anywhere in this description.
     pub fn has_transparent(&self) -> bool {
         match self {
@@ -417,6 +439,59 @@ pub struct SheenLayerDesc {
     /// White when absent.
     #[serde(default)]
     pub tint: Option<SpectrumDesc>,
+}
+
+/// The Principled BSDF's Subsurface (Cycles' random-walk BSSRDF, docs/materials.md):
+/// `weight` of the base scatters inside the mesh with mean free path from `radius`
+/// (per Rec.709 channel, made a spectrum by the uplift) × `scale` (scene units), base
+/// colour as its multiple-scattering albedo, Henyey–Greenstein `anisotropy` inside.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SubsurfaceDesc {
+    #[serde(default = "one")]
+    pub weight: f32,
+    #[serde(default = "default_subsurface_radius")]
+    pub radius: [f32; 3],
+    #[serde(default = "default_subsurface_scale")]
+    pub scale: f32,
+    /// The entry's index for `random_walk_skin` (`random_walk` enters through the
+    /// Principled's `ior`, as Cycles).
+    #[serde(default = "default_subsurface_ior")]
+    pub ior: f32,
+    #[serde(default)]
+    pub anisotropy: f32,
+    /// `random_walk` (Blender's default) or `random_walk_skin`.
+    #[serde(default = "default_subsurface_method")]
+    pub method: String,
+}
+
+fn default_subsurface_radius() -> [f32; 3] {
+    [1.0, 0.2, 0.1]
+}
+
+fn default_subsurface_scale() -> f32 {
+    0.05
+}
+
+fn default_subsurface_ior() -> f32 {
+    1.4
+}
+
+fn default_subsurface_method() -> String {
+    "random_walk".into()
+}
+
+impl Default for SubsurfaceDesc {
+    fn default() -> Self {
+        Self {
+            weight: 1.0,
+            radius: default_subsurface_radius(),
+            scale: default_subsurface_scale(),
+            ior: default_subsurface_ior(),
+            anisotropy: 0.0,
+            method: default_subsurface_method(),
+        }
+    }
 }
 
 fn one() -> f32 {

@@ -99,6 +99,70 @@ fn unit_weight(material: &str, what: &str, v: f32) -> Result<f32> {
     Ok(v)
 }
 
+/// The Principled's subsurface lobe from its description (validated, naming the
+/// material): the RGB radius × scale becomes a mean free path per grid wavelength through
+/// the scene's RGB → spectrum map (the reflectance map of radius/max, times max, so it is
+/// positive at every wavelength); `ior` is the Principled's own (Random Walk's entry).
+fn subsurface_lobe(
+    b: &BsdfBuild,
+    material: &str,
+    d: &super::SubsurfaceDesc,
+    ior: &IndexOfRefraction,
+) -> Result<Option<crate::material::subsurface::SubsurfaceLobe>> {
+    use crate::material::subsurface::{SubsurfaceLobe, SubsurfaceMethod};
+    let weight = unit_weight(material, "subsurface weight", d.weight)?;
+    if d.radius.iter().any(|r| !(r.is_finite() && *r >= 0.0)) {
+        return Err(Error::object(
+            "material",
+            material,
+            format!("subsurface radius {:?} must be finite and non-negative", d.radius),
+        ));
+    }
+    if !(d.scale.is_finite() && d.scale >= 0.0) {
+        return Err(Error::object(
+            "material",
+            material,
+            format!("subsurface scale {} must be finite and non-negative", d.scale),
+        ));
+    }
+    if !d.ior.is_finite() || !d.anisotropy.is_finite() {
+        return Err(Error::object(
+            "material",
+            material,
+            format!("subsurface ior {} and anisotropy {} must be finite", d.ior, d.anisotropy),
+        ));
+    }
+    let method = match d.method.as_str() {
+        "random_walk" => SubsurfaceMethod::RandomWalk,
+        "random_walk_skin" => SubsurfaceMethod::RandomWalkSkin,
+        m => {
+            return Err(Error::object(
+                "material",
+                material,
+                format!("subsurface method '{m}' is not one of random_walk, random_walk_skin"),
+            ))
+        }
+    };
+    let n = b.grid.len();
+    let peak = d.radius.iter().fold(0.0f32, |a, &r| a.max(r));
+    let radius = if peak > 0.0 {
+        let rgb = d.radius.map(|r| r / peak);
+        let desc = SpectrumDesc::new(SpectrumKind::Rgb { rgb });
+        let mut s = b.spectrum(&desc, SpectrumRole::Reflectance, material, "subsurface radius")?;
+        s.scale(peak * d.scale);
+        s
+    } else {
+        SampledSpectrum::zeros(n)
+    };
+    // Random Walk enters through the Principled's IOR (Cycles' `bssrdf->ior = eta`), one
+    // index for every wavelength (the walk is shared): their mean.
+    let entry_ior = match method {
+        SubsurfaceMethod::RandomWalk => (0..n).map(|i| ior.at(i)).sum::<f32>() / n.max(1) as f32,
+        SubsurfaceMethod::RandomWalkSkin => d.ior,
+    };
+    Ok(SubsurfaceLobe::new(weight, radius, d.anisotropy, entry_ior, method))
+}
+
 /// Builds any BSDF description (the Principled, Mix and Add arms of `Scene::build`,
 /// and every BSDF nested inside a Mix or Add).
 pub(super) fn build_bsdf(b: &BsdfBuild, material: &str, d: &BsdfDesc) -> Result<Box<dyn Bsdf>> {
@@ -145,6 +209,7 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
             anisotropic_rotation,
             coat,
             sheen,
+            subsurface,
             normals,
         } => {
             let base_color = b.reflectance(base_color, material, "base_color")?;
@@ -176,6 +241,10 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
                 return Err(Error::object("material", material, format!("thin_film_ior {n_film} must be in 1..10")));
             }
             let thin_film = Some(ThinFilm { thickness_nm: d_nm, ior: n_film }).filter(|f| f.active());
+            let sss = match subsurface {
+                Some(d) => subsurface_lobe(b, material, d, &index)?,
+                None => None,
+            };
             let glass = if transmission > 0.0 {
                 Some(super::optics::build_dielectric(material, ior, roughness, b.grid)?)
             } else {
@@ -195,23 +264,26 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
                 Some(nb) => LobeFrame::new(Vec3A::from(nb)).to_lobe(Vec3A::from(t)),
                 None => Vec3A::from(t),
             });
-            let mut out: Box<dyn Bsdf> = Box::new(Principled::new(
-                PrincipledParams {
-                    base_color,
-                    metallic,
-                    transmission,
-                    roughness,
-                    ior: index,
-                    specular_ior_level,
-                    specular_tint,
-                    thin_film,
-                    diffuse_roughness: unit_weight(material, "diffuse_roughness", *diffuse_roughness)?,
-                    glass,
-                    anisotropic: anisotropic.clamp(0.0, 1.0),
-                    tangent: TangentRotation::new(t, *anisotropic_rotation),
-                },
-                b.grid,
-            ));
+            let mut out: Box<dyn Bsdf> = Box::new(
+                Principled::new(
+                    PrincipledParams {
+                        base_color,
+                        metallic,
+                        transmission,
+                        roughness,
+                        ior: index,
+                        specular_ior_level,
+                        specular_tint,
+                        thin_film,
+                        diffuse_roughness: unit_weight(material, "diffuse_roughness", *diffuse_roughness)?,
+                        glass,
+                        anisotropic: anisotropic.clamp(0.0, 1.0),
+                        tangent: TangentRotation::new(t, *anisotropic_rotation),
+                    },
+                    b.grid,
+                )
+                .with_subsurface(sss),
+            );
             if let Some(b) = n.base {
                 out = Box::new(Oriented::new(Vec3A::from(b), out));
             }

@@ -208,6 +208,11 @@ pub struct Scene {
     /// The lights that are no geometry but that rays reach ([`Light::hittable`]: suns
     /// with an angle, sphere lights), which camera paths look for along every segment.
     pub hit_lights: Vec<usize>,
+    /// The white Lambertian a subsurface walk leaves through (Cycles'
+    /// `subsurface_shader_data_setup`), shaded at the exit point.
+    pub subsurface_exit: Material,
+    /// Materials with a subsurface lobe (messages: methods that do not walk it).
+    pub subsurface_materials: Vec<String>,
 }
 
 /// The RGB → spectrum map while building: where the grid has none, the first RGB
@@ -336,6 +341,8 @@ impl Scene {
         let mut warnings = Vec::new();
         let (mut media, mut material_medium, mut null_surface) = (Vec::new(), Vec::new(), Vec::new());
         let mut pass_through = Vec::new();
+        let subsurface_materials: Vec<String> =
+            desc.materials.iter().filter(|m| m.bsdf.has_subsurface()).map(|m| m.name.clone()).collect();
         for m in &desc.materials {
             let spectrum = |d, role, what| -> Result<SampledSpectrum> {
                 Ok(SampledSpectrum::from_slice(&rgb.evaluate(d, &grid, role, "material", &m.name, what)?))
@@ -936,6 +943,17 @@ impl Scene {
             hit_lights,
             world_medium,
             camera_media: crate::medium::MediumStack::default(),
+            subsurface_exit: Material {
+                name: "subsurface exit".into(),
+                bsdf: Box::new(Diffuse { reflectance: SpectralParam::Constant(SampledSpectrum::splat(n, 1.0)) }),
+                emission: None,
+                one_sided: false,
+                see_through: false,
+                hit_attributes: None,
+                graph_emission: None,
+                normal: None,
+            },
+            subsurface_materials,
         };
         if scene.has_media() {
             scene.camera_media = scene.media_at(scene.camera.position(), 0.5);
@@ -953,6 +971,11 @@ impl Scene {
     }
     pub fn occluded(&self, ray: &Ray) -> bool {
         self.accel.occluded(&self.meshes, &self.instances, ray)
+    }
+    /// Closest hit of `ray` on instance `instance` alone, never on its triangle `skip`
+    /// (a subsurface walk's boundary).
+    pub fn intersect_instance(&self, ray: &Ray, instance: u32, skip: Option<u32>) -> Option<Hit> {
+        self.accel.intersect_instance(&self.meshes, &self.instances, ray, instance, skip)
     }
 
     /// World-space geometry at a hit.

@@ -8,7 +8,7 @@ use super::compile::{Compiler, Value};
 use super::desc::InputDesc;
 use super::program::Reg;
 use crate::material::IorDesc;
-use crate::scene::{BsdfDesc, CoatDesc, MixFactorDesc, SheenLayerDesc};
+use crate::scene::{BsdfDesc, CoatDesc, MixFactorDesc, SheenLayerDesc, SubsurfaceDesc};
 use crate::spectrum::named::SpectrumKind;
 use crate::spectrum::SpectrumDesc;
 use crate::{Error, Result};
@@ -208,6 +208,21 @@ impl CoatT {
     }
 }
 
+/// The Principled BSDF's Subsurface parameters: the weight may vary per hit, the radius,
+/// scale, IOR, anisotropy and method are constants (see [`SubsurfaceDesc`]).
+#[derive(Clone, Debug)]
+pub struct SubsurfaceT {
+    pub weight: F,
+    pub desc: SubsurfaceDesc,
+}
+
+impl SubsurfaceT {
+    fn at(&self, v: &dyn Fn(Reg) -> Vec3) -> Option<SubsurfaceDesc> {
+        let weight = self.weight.at(v);
+        (weight > 0.0).then(|| SubsurfaceDesc { weight, ..self.desc.clone() })
+    }
+}
+
 impl SheenT {
     fn is_const(&self) -> bool {
         self.weight.is_const() && self.roughness.is_const() && self.tint.is_const()
@@ -255,6 +270,8 @@ impl PassProbability {
 
 /// The surface's closures with their parameters: what a hit instantiates into a
 /// fixed description once the program has run.
+// One per material, built when its graph is compiled.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
 pub enum Template {
     Fixed(BsdfDesc),
@@ -273,6 +290,7 @@ pub enum Template {
         anisotropy: Option<Box<AnisoT>>,
         coat: Option<CoatT>,
         sheen: Option<SheenT>,
+        subsurface: Option<SubsurfaceT>,
         /// A linked Normal (None: the smooth normal).
         normal: Option<Reg>,
     },
@@ -432,10 +450,12 @@ impl Template {
                 anisotropy,
                 coat,
                 sheen,
+                subsurface,
                 normal,
             } => {
                 normal.is_none()
                     && anisotropy.is_none()
+                    && subsurface.as_ref().is_none_or(|s| s.weight.is_const())
                     && coat.as_ref().is_none_or(|c| c.is_const() && c.normal.is_none())
                     && sheen.as_ref().is_none_or(SheenT::is_const)
                     && base_color.is_const()
@@ -508,6 +528,7 @@ impl Template {
                 anisotropy,
                 coat,
                 sheen,
+                subsurface,
                 normal,
             } => {
                 let tint = specular_tint.at(v);
@@ -545,6 +566,7 @@ impl Template {
                     anisotropic_rotation: anisotropy.as_ref().map_or(0.0, |a| a.rotation.finite_at(v)),
                     coat: coat_desc,
                     sheen: sheen_desc,
+                    subsurface: subsurface.as_ref().and_then(|s| s.at(v)).map(Box::new),
                     normals,
                 }
             }
@@ -722,6 +744,7 @@ impl<'c, 'a> Lowering<'c, 'a> {
     }
 
     /// Warns when an input this build ignores differs from Blender's default.
+    #[allow(dead_code)] // every Principled input is read now; kept for the next unsupported one
     fn ignored(&mut self, node: usize, id: &str, default: f32, what: &str) -> Result<()> {
         if self.c.linked(node, id).is_some() {
             self.c.warn(node, format!("{id} is not supported ({what}); its link is ignored"));
@@ -801,7 +824,6 @@ impl<'c, 'a> Lowering<'c, 'a> {
             "ShaderNodeBsdfPrincipled" => {
                 let normal = self.normal(node, "Normal")?;
                 let alpha = self.float(node, "Alpha", 0.0, 1.0)?;
-                self.ignored(node, "Subsurface Weight", 0.0, "no subsurface scattering yet")?;
                 let anisotropic = self.float(node, "Anisotropic", 0.0, 1.0)?;
                 let isotropic = matches!(anisotropic, F::C(a) if a <= 0.0);
                 let (rotation, tangent) = self.tangent_frame(node, isotropic, "Anisotropic Rotation")?;
@@ -826,6 +848,7 @@ impl<'c, 'a> Lowering<'c, 'a> {
                     anisotropy,
                     coat: self.coat(node)?,
                     sheen: self.sheen(node)?,
+                    subsurface: self.subsurface(node)?,
                     normal,
                 };
                 // Alpha: a transparent closure of weight 1 − alpha mixed in (Cycles'
@@ -944,6 +967,57 @@ impl<'c, 'a> Lowering<'c, 'a> {
             ior: self.float(node, "Coat IOR", 1.0, 10.0)?,
             tint: self.color(node, "Coat Tint")?,
         }))
+    }
+
+    /// The Principled Subsurface (None when its weight is a constant 0), as Cycles'
+    /// `svm_node_closure_bsdf`: radius × scale clamped below at 0, the method from the
+    /// node's `subsurface_method` (Christensen–Burley is walked as Random Walk, warned).
+    /// Radius, Scale, IOR and Anisotropy are constants here: a link is warned about and
+    /// the input's value used.
+    fn subsurface(&mut self, node: usize) -> Result<Option<SubsurfaceT>> {
+        let weight = self.float(node, "Subsurface Weight", 0.0, 1.0)?;
+        if matches!(weight, F::C(w) if !(w > 0.0)) {
+            return Ok(None);
+        }
+        let mut desc = SubsurfaceDesc::default();
+        let constant = |s: &mut Self, id: &str| -> Result<Option<Vec3>> {
+            let r = s.c.input_reg(node, id)?;
+            let v = s.c.const_of(r);
+            if v.is_none() {
+                s.c.warn(node, format!("a varying {id} is not supported yet; its default is used"));
+            }
+            Ok(v)
+        };
+        if let Some(r) = constant(self, "Subsurface Radius")? {
+            let raw = r.to_array();
+            if raw.iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
+                self.c.warn(node, format!("Subsurface Radius {raw:?} is clamped to finite values ≥ 0"));
+            }
+            desc.radius = raw.map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 });
+        }
+        if let Some(v) = constant(self, "Subsurface Scale")? {
+            if !(v.x.is_finite() && v.x >= 0.0) {
+                self.c.warn(node, format!("Subsurface Scale {} is clamped to 0", v.x));
+            }
+            desc.scale = if v.x.is_finite() { v.x.max(0.0) } else { 0.0 };
+        }
+        if let Some(v) = constant(self, "Subsurface IOR")? {
+            desc.ior = if v.x.is_finite() { v.x } else { desc.ior };
+        }
+        if let Some(v) = constant(self, "Subsurface Anisotropy")? {
+            desc.anisotropy = if v.x.is_finite() { v.x } else { 0.0 };
+        }
+        let method =
+            self.c.nodes[node].props.get("subsurface_method").and_then(|m| m.as_str()).unwrap_or("RANDOM_WALK");
+        desc.method = match method {
+            "RANDOM_WALK_SKIN" => "random_walk_skin".into(),
+            "RANDOM_WALK" => "random_walk".into(),
+            other => {
+                self.c.warn(node, format!("Subsurface Method {other} is rendered as Random Walk"));
+                "random_walk".into()
+            }
+        };
+        Ok(Some(SubsurfaceT { weight, desc }))
     }
 
     /// The Principled Sheen (None when its weight is a constant 0).
