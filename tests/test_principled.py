@@ -242,7 +242,7 @@ def test_subsurface_white_sphere_is_invisible_under_a_coat_in_a_white_world():
         coat_roughness=0.2,
     )
     assert mat.bsdf_dict()["subsurface"]["radius"] == [1.0, 0.5, 0.25]
-    out = pc.render(convex_scene(mat), width=12, height=12, samples=32, max_bounces=16)
+    out = pc.render(convex_scene(mat), width=12, height=12, samples=128, max_bounces=16)
     rgb = on_sphere(out).mean(axis=0)
     assert np.allclose(rgb, 1.0, atol=0.015), rgb
     assert out.stats["nonfinite_samples"] == 0

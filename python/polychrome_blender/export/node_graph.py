@@ -32,6 +32,7 @@ SUPPORTED = frozenset(
         "ShaderNodeBsdfTranslucent",
         "ShaderNodeBsdfTransparent",
         "ShaderNodeBsdfSheen",
+        "ShaderNodeSubsurfaceScattering",
         "ShaderNodeBsdfMetallic",
         "ShaderNodeEmission",
         "ShaderNodeMixShader",

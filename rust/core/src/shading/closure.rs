@@ -895,6 +895,42 @@ impl<'c, 'a> Lowering<'c, 'a> {
                 let roughness = self.float(node, "Roughness", 0.0, 1.0)?;
                 (oriented(Template::Glass { color, roughness, ior: self.ior(node, "IOR")? }, n, true), None)
             }
+            "ShaderNodeSubsurfaceScattering" => {
+                // Cycles' CLOSURE_BSSRDF node (svm_node_closure_bsdf): albedo and weight the
+                // Color, entry through GGX of alpha = Roughness at the node's IOR, no
+                // specular reflection; here a Principled whose base all walks, with no
+                // specular layer (Specular IOR Level 0) and roughness √Roughness.
+                let normal = self.normal(node, "Normal")?;
+                let base_color = self.color(node, "Color")?;
+                let r = self.c.input_reg(node, "Roughness")?;
+                let rough = match self.c.const_of(r) {
+                    Some(v) if v.x.is_finite() => v.x.clamp(0.0, 1.0),
+                    _ => {
+                        self.c.warn(node, "a varying Roughness is not supported yet; 1 is used");
+                        1.0
+                    }
+                };
+                let desc = self.subsurface_inputs(node, "", "falloff")?;
+                let white = SpectrumDesc::new(SpectrumKind::Rgb { rgb: [1.0; 3] });
+                let t = Template::Principled {
+                    base_color,
+                    metallic: F::C(0.0),
+                    roughness: F::C(rough.sqrt()),
+                    ior: Ior::C(IorDesc::Constant { ior: f64::from(desc.ior.max(1.0)) }),
+                    transmission: F::C(0.0),
+                    specular_tint: Col::C(white),
+                    thin_film_thickness: F::C(0.0),
+                    thin_film_ior: F::C(1.33),
+                    specular_ior_level: F::C(0.0),
+                    diffuse_roughness: F::C(0.0),
+                    anisotropy: None,
+                    coat: None,
+                    sheen: None,
+                    subsurface: Some(SubsurfaceT { weight: F::C(1.0), desc }),
+                    normal,
+                };
+                (t, None)
+            }
             "ShaderNodeBsdfTranslucent" => {
                 let n = self.normal(node, "Normal")?;
                 (oriented(Template::Translucent { color: self.color(node, "Color")? }, n, true), None)
@@ -979,6 +1015,14 @@ impl<'c, 'a> Lowering<'c, 'a> {
         if matches!(weight, F::C(w) if !(w > 0.0)) {
             return Ok(None);
         }
+        let desc = self.subsurface_inputs(node, "Subsurface ", "subsurface_method")?;
+        Ok(Some(SubsurfaceT { weight, desc }))
+    }
+
+    /// Radius, Scale, IOR and Anisotropy (input names after `prefix`) and the method
+    /// (node property `method`) of a Principled's Subsurface or a Subsurface Scattering
+    /// node.
+    fn subsurface_inputs(&mut self, node: usize, prefix: &str, method: &str) -> Result<SubsurfaceDesc> {
         let mut desc = SubsurfaceDesc::default();
         let constant = |s: &mut Self, id: &str| -> Result<Option<Vec3>> {
             let r = s.c.input_reg(node, id)?;
@@ -988,27 +1032,26 @@ impl<'c, 'a> Lowering<'c, 'a> {
             }
             Ok(v)
         };
-        if let Some(r) = constant(self, "Subsurface Radius")? {
+        if let Some(r) = constant(self, &format!("{prefix}Radius"))? {
             let raw = r.to_array();
             if raw.iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
                 self.c.warn(node, format!("Subsurface Radius {raw:?} is clamped to finite values ≥ 0"));
             }
             desc.radius = raw.map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 });
         }
-        if let Some(v) = constant(self, "Subsurface Scale")? {
+        if let Some(v) = constant(self, &format!("{prefix}Scale"))? {
             if !(v.x.is_finite() && v.x >= 0.0) {
                 self.c.warn(node, format!("Subsurface Scale {} is clamped to 0", v.x));
             }
             desc.scale = if v.x.is_finite() { v.x.max(0.0) } else { 0.0 };
         }
-        if let Some(v) = constant(self, "Subsurface IOR")? {
+        if let Some(v) = constant(self, &format!("{prefix}IOR"))? {
             desc.ior = if v.x.is_finite() { v.x } else { desc.ior };
         }
-        if let Some(v) = constant(self, "Subsurface Anisotropy")? {
+        if let Some(v) = constant(self, &format!("{prefix}Anisotropy"))? {
             desc.anisotropy = if v.x.is_finite() { v.x } else { 0.0 };
         }
-        let method =
-            self.c.nodes[node].props.get("subsurface_method").and_then(|m| m.as_str()).unwrap_or("RANDOM_WALK");
+        let method = self.c.nodes[node].props.get(method).and_then(|m| m.as_str()).unwrap_or("RANDOM_WALK");
         desc.method = match method {
             "RANDOM_WALK_SKIN" => "random_walk_skin".into(),
             "RANDOM_WALK" => "random_walk".into(),
@@ -1017,7 +1060,7 @@ impl<'c, 'a> Lowering<'c, 'a> {
                 "random_walk".into()
             }
         };
-        Ok(Some(SubsurfaceT { weight, desc }))
+        Ok(desc)
     }
 
     /// The Principled Sheen (None when its weight is a constant 0).

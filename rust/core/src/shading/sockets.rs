@@ -449,6 +449,20 @@ pub static NODES: &[NodeSpec] = &[
         outputs: &[("BSDF", Shader)],
     },
     NodeSpec {
+        idname: "ShaderNodeSubsurfaceScattering",
+        inputs: &[
+            i("Weight", Float, [0.0, 0.0, 0.0]),
+            i("Color", Color, [0.8, 0.8, 0.8]),
+            i("Scale", Float, [0.05, 0.0, 0.0]),
+            i("Radius", Vector, [1.0, 0.2, 0.1]),
+            i("IOR", Float, [1.4, 0.0, 0.0]),
+            i("Roughness", Float, [1.0, 0.0, 0.0]),
+            i("Anisotropy", Float, [0.0, 0.0, 0.0]),
+            i("Normal", Vector, [0.0, 0.0, 0.0]),
+        ],
+        outputs: &[("BSSRDF", Shader)],
+    },
+    NodeSpec {
         idname: "ShaderNodeBsdfTranslucent",
         inputs: &[
             i("Weight", Float, [0.0, 0.0, 0.0]),

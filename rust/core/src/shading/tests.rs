@@ -512,3 +512,36 @@ fn anisotropic_closures_read_the_default_tangent_per_hit() {
     .unwrap();
     assert!(!c.template.needs_tangent() && c.template.is_constant() && c.warnings.is_empty());
 }
+
+/// The Principled's Subsurface inputs and the Subsurface Scattering node lower to the
+/// random walk with Cycles' clamps: no "not supported" warning, the node as a Principled
+/// whose base all walks with no specular layer (roughness √Roughness), a negative
+/// radius clamped to 0 with a warning naming the node.
+#[test]
+fn subsurface_inputs_and_node_lower_to_the_walk() {
+    let c = compile(json!({
+        "nodes": [{"type": "ShaderNodeBsdfPrincipled", "name": "P", "props": {"subsurface_method": "RANDOM_WALK_SKIN"},
+                   "inputs": {"Subsurface Weight": 0.7, "Subsurface Radius": [2.0, 1.0, 0.5], "Subsurface Scale": 0.3,
+                              "Subsurface IOR": 1.33, "Subsurface Anisotropy": 0.2}}],
+        "output": {"surface": [0, "BSDF"]}
+    }))
+    .unwrap();
+    assert!(c.warnings.is_empty(), "{:?}", c.warnings);
+    let BsdfDesc::Principled { subsurface: Some(s), .. } = &c.constant_surface().unwrap() else { panic!() };
+    assert_eq!((s.weight, s.radius, s.scale, s.ior, s.anisotropy), (0.7, [2.0, 1.0, 0.5], 0.3, 1.33, 0.2));
+    assert_eq!(s.method, "random_walk_skin");
+    let c = compile(json!({
+        "nodes": [{"type": "ShaderNodeSubsurfaceScattering", "name": "S",
+                   "inputs": {"Color": [0.9, 0.6, 0.5, 1.0], "Radius": [1.0, -0.5, 0.25], "Roughness": 0.25}}],
+        "output": {"surface": [0, "BSSRDF"]}
+    }))
+    .unwrap();
+    assert!(c.warnings.iter().any(|w| w.contains("'S'") && w.contains("Radius")), "{:?}", c.warnings);
+    let BsdfDesc::Principled { subsurface: Some(s), specular_ior_level, roughness, .. } =
+        &c.constant_surface().unwrap()
+    else {
+        panic!()
+    };
+    assert_eq!((s.weight, s.radius, s.method.as_str()), (1.0, [1.0, 0.0, 0.25], "random_walk"));
+    assert_eq!((*specular_ior_level, *roughness), (0.0, 0.5));
+}
