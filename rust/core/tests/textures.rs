@@ -6,7 +6,7 @@ mod common;
 
 use common::*;
 use polychrome_core::camera::CameraDesc;
-use polychrome_core::material::texture::{srgb_decode, Texture, Wrap};
+use polychrome_core::material::texture::{srgb_decode, Filter, Texture, Wrap};
 use polychrome_core::render::{render, RenderControl, RenderOutput, ResolvedSettings};
 use polychrome_core::scene::{
     BsdfDesc, Buffer, LightDesc, MaterialDesc, SceneDesc, TextureDesc, TextureEncoding, WorldDesc,
@@ -243,7 +243,12 @@ fn importance_sampling_a_sun_reduces_variance_without_bias() {
         // dω = cos(el) dφ d(el) = 2π² cos(el) du dv; cos θ to the normal = sin(el).
         let jac = 2.0 * (PI as f64).powi(2) * (el.cos() * el.sin()) as f64 / (qu * qv) as f64;
         for i in 0..qu {
-            let c = tex.lookup_with(glam::Vec2::new((i as f32 + 0.5) / qu as f32, v), Wrap::Repeat, Wrap::Extend);
+            let c = tex.lookup_with(
+                glam::Vec2::new((i as f32 + 0.5) / qu as f32, v),
+                Wrap::Repeat,
+                Wrap::Extend,
+                Filter::Bilinear,
+            );
             e += luminance(&[c[0], c[1], c[2], 1.0]) * jac;
         }
     }

@@ -35,7 +35,7 @@ impl Light for UniformEnvironment {
 // Image (HDRI) environment.
 
 use crate::color::uplift::Uplift;
-use crate::material::texture::{Texture, Wrap};
+use crate::material::texture::{Filter, Texture, Wrap};
 use std::sync::Arc;
 
 /// Largest resolution of the importance-sampling distribution (cells along u and v):
@@ -289,7 +289,7 @@ impl ImageEnvironment {
     #[inline]
     pub fn radiance_into(&self, d: Vec3A, out: &mut SampledSpectrum) {
         let uv = self.direction_to_uv(d);
-        let rgb = self.texture.lookup_with(uv, Wrap::Repeat, Wrap::Extend);
+        let rgb = self.texture.lookup_with(uv, Wrap::Repeat, Wrap::Extend, Filter::Bilinear);
         self.uplift.illuminant_into(rgb, out.values_mut());
         if self.strength != 1.0 {
             out.scale(self.strength);

@@ -18,6 +18,14 @@ use glam::Vec2;
 use serde::{Deserialize, Serialize};
 
 /// What a lookup outside [0,1]² returns (Blender's Image Texture extension modes).
+/// How a lookup filters texels: bilinearly, or with Cycles' cubic B-spline (Blender's
+/// Cubic and Smart interpolation on the CPU, `interp_cubic` in kernel/device/cpu/image.h).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Filter {
+    Bilinear,
+    Cubic,
+}
+
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "SCREAMING_SNAKE_CASE")]
 pub enum Wrap {
@@ -250,47 +258,42 @@ impl Texture {
     /// wrap mode in both directions.
     #[inline]
     pub fn lookup(&self, uv: Vec2) -> [f32; 3] {
-        self.lookup_with(uv, self.wrap, self.wrap)
+        self.lookup_with(uv, self.wrap, self.wrap, Filter::Bilinear)
     }
 
-    /// Bilinearly filtered linear RGB with explicit wrap modes along u and v.
-    pub fn lookup_with(&self, uv: Vec2, wrap_u: Wrap, wrap_v: Wrap) -> [f32; 3] {
-        self.bilinear(uv, wrap_u, wrap_v, |x, y| self.texel(x, y))
+    /// Linear RGB filtered by `filter`, with explicit wrap modes along u and v.
+    pub fn lookup_with(&self, uv: Vec2, wrap_u: Wrap, wrap_v: Wrap, filter: Filter) -> [f32; 3] {
+        self.filtered(uv, wrap_u, wrap_v, filter, |x, y| self.texel(x, y))
     }
 
-    /// Bilinearly filtered alpha, with the same wrap modes and weights as the colour
-    /// (outside the image under CLIP alpha is 0, so a texture without an alpha plane
-    /// gives its coverage).
-    pub fn lookup_alpha_with(&self, uv: Vec2, wrap_u: Wrap, wrap_v: Wrap) -> f32 {
-        self.bilinear(uv, wrap_u, wrap_v, |x, y| [self.texel_alpha(x, y)])[0]
+    /// Alpha, with the same wrap modes and weights as the colour (outside the image under
+    /// CLIP alpha is 0, so a texture without an alpha plane gives its coverage).
+    pub fn lookup_alpha_with(&self, uv: Vec2, wrap_u: Wrap, wrap_v: Wrap, filter: Filter) -> f32 {
+        self.filtered(uv, wrap_u, wrap_v, filter, |x, y| [self.texel_alpha(x, y)])[0]
     }
 
-    /// Bilinearly filtered colour in its stored encoding (sRGB-encoded values for byte
-    /// textures, as Cycles filters 8-bit sRGB images before decoding them) and alpha.
-    pub fn lookup_encoded_with(&self, uv: Vec2, wrap_u: Wrap, wrap_v: Wrap) -> [f32; 4] {
-        self.bilinear(uv, wrap_u, wrap_v, |x, y| {
+    /// Colour in its stored encoding (sRGB-encoded values for byte textures, as Cycles
+    /// filters 8-bit sRGB images before decoding them) and alpha.
+    pub fn lookup_encoded_with(&self, uv: Vec2, wrap_u: Wrap, wrap_v: Wrap, filter: Filter) -> [f32; 4] {
+        self.filtered(uv, wrap_u, wrap_v, filter, |x, y| {
             let [r, g, b] = self.texel_encoded(x, y);
             [r, g, b, self.texel_alpha(x, y)]
         })
     }
 
-    /// Bicubic (uniform cubic B-spline) filtered linear RGB, Cycles' Cubic (and Smart)
-    /// interpolation on the CPU (`interp_cubic`, kernel/device/cpu/image.h).
-    pub fn lookup_cubic_with(&self, uv: Vec2, wrap_u: Wrap, wrap_v: Wrap) -> [f32; 3] {
-        self.bicubic(uv, wrap_u, wrap_v, |x, y| self.texel(x, y))
-    }
-
-    /// Bicubic alpha, as [`Texture::lookup_alpha_with`] with the cubic weights.
-    pub fn lookup_alpha_cubic_with(&self, uv: Vec2, wrap_u: Wrap, wrap_v: Wrap) -> f32 {
-        self.bicubic(uv, wrap_u, wrap_v, |x, y| [self.texel_alpha(x, y)])[0]
-    }
-
-    /// Bicubic colour in its stored encoding and alpha, as [`Texture::lookup_encoded_with`].
-    pub fn lookup_encoded_cubic_with(&self, uv: Vec2, wrap_u: Wrap, wrap_v: Wrap) -> [f32; 4] {
-        self.bicubic(uv, wrap_u, wrap_v, |x, y| {
-            let [r, g, b] = self.texel_encoded(x, y);
-            [r, g, b, self.texel_alpha(x, y)]
-        })
+    #[inline]
+    fn filtered<const N: usize>(
+        &self,
+        uv: Vec2,
+        wrap_u: Wrap,
+        wrap_v: Wrap,
+        filter: Filter,
+        texel: impl Fn(usize, usize) -> [f32; N],
+    ) -> [f32; N] {
+        match filter {
+            Filter::Bilinear => self.bilinear(uv, wrap_u, wrap_v, texel),
+            Filter::Cubic => self.bicubic(uv, wrap_u, wrap_v, texel),
+        }
     }
 
     /// Along one axis of `n` texels: the four texels a cubic lookup at `t` weighs (None
@@ -406,15 +409,17 @@ mod tests {
         let t = Texture::from_linear("t", 8, 1, 3, &row, Wrap::Extend).unwrap();
         for &u in &[0.3f32, 0.41, 0.5, 0.62] {
             let linear = u * 8.0 - 0.5; // the texel index at u
-            assert!((t.lookup_cubic_with(Vec2::new(u, 0.5), Wrap::Extend, Wrap::Extend)[0] - linear).abs() < 1e-5);
+            assert!(
+                (t.lookup_with(Vec2::new(u, 0.5), Wrap::Extend, Wrap::Extend, Filter::Cubic)[0] - linear).abs() < 1e-5
+            );
         }
         let spiky: Vec<f32> = (0..8).flat_map(|i| [if i == 4 { 6.0 } else { 0.0 }, 0.0, 0.0]).collect();
         let s = Texture::from_linear("s", 8, 1, 3, &spiky, Wrap::Repeat).unwrap();
-        let at = |i: f32| s.lookup_cubic_with(Vec2::new((i + 0.5) / 8.0, 0.5), Wrap::Repeat, Wrap::Repeat)[0];
+        let at = |i: f32| s.lookup_with(Vec2::new((i + 0.5) / 8.0, 0.5), Wrap::Repeat, Wrap::Repeat, Filter::Cubic)[0];
         assert!((at(4.0) - 4.0).abs() < 1e-5 && (at(3.0) - 1.0).abs() < 1e-5 && at(6.0).abs() < 1e-6);
         // Repeat wraps the taps; Clip reads black beyond the edge.
         assert!((at(4.0 + 8.0) - 4.0).abs() < 1e-4);
-        let c = s.lookup_cubic_with(Vec2::new(-0.5 / 8.0, 0.5), Wrap::Clip, Wrap::Clip)[0];
+        let c = s.lookup_with(Vec2::new(-0.5 / 8.0, 0.5), Wrap::Clip, Wrap::Clip, Filter::Cubic)[0];
         assert_eq!(c, 0.0);
     }
 
@@ -430,7 +435,11 @@ mod tests {
     fn srgb_bytes_decode_and_alpha_is_kept_apart() {
         let t = Texture::from_srgb8("s", 1, 1, 4, &[255, 128, 0, 7], Wrap::Repeat).unwrap();
         assert_eq!(t.bytes(), 4);
-        assert!((t.lookup_alpha_with(Vec2::new(0.3, 0.9), Wrap::Repeat, Wrap::Repeat) - 7.0 / 255.0).abs() < 1e-7);
+        assert!(
+            (t.lookup_alpha_with(Vec2::new(0.3, 0.9), Wrap::Repeat, Wrap::Repeat, Filter::Bilinear) - 7.0 / 255.0)
+                .abs()
+                < 1e-7
+        );
         // An opaque alpha channel stores no plane.
         let o = Texture::from_srgb8("o", 1, 1, 4, &[255, 128, 0, 255], Wrap::Repeat).unwrap();
         assert!(!o.has_alpha() && o.bytes() == 3);
@@ -446,7 +455,7 @@ mod tests {
         let px = [1.0, 0.0, 0.0, 0.2, 3.0, 0.0, 0.0, 0.6];
         let t = Texture::from_linear("t", 2, 1, 4, &px, Wrap::Extend).unwrap();
         assert!(t.has_alpha() && t.bytes() == 8 * 4);
-        let a = |t: &Texture, u: f32, w: Wrap| t.lookup_alpha_with(Vec2::new(u, 0.5), w, w);
+        let a = |t: &Texture, u: f32, w: Wrap| t.lookup_alpha_with(Vec2::new(u, 0.5), w, w, Filter::Bilinear);
         assert_eq!(a(&t, 0.25, Wrap::Extend), 0.2);
         assert!((a(&t, 0.5, Wrap::Extend) - 0.4).abs() < 1e-6);
         assert!((a(&t, 0.0, Wrap::Repeat) - 0.4).abs() < 1e-6);
@@ -457,7 +466,7 @@ mod tests {
         assert!(!rgb.has_alpha());
         assert_eq!(a(&rgb, 0.5, Wrap::Clip), 1.0);
         assert!((a(&rgb, 0.0, Wrap::Clip) - 0.5).abs() < 1e-6);
-        let e = t.lookup_encoded_with(Vec2::new(0.5, 0.5), Wrap::Extend, Wrap::Extend);
+        let e = t.lookup_encoded_with(Vec2::new(0.5, 0.5), Wrap::Extend, Wrap::Extend, Filter::Bilinear);
         assert!((e[0] - 2.0).abs() < 1e-6 && (e[3] - 0.4).abs() < 1e-6);
         // A non-finite alpha is an error like a non-finite colour.
         let e = Texture::from_linear("m", 1, 1, 4, &[0.0, 0.0, 0.0, f32::NAN], Wrap::Repeat).unwrap_err().to_string();

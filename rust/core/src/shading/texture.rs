@@ -1,7 +1,7 @@
 //! Texture nodes: Image Texture over the scene's textures, and every procedural texture
 //! through `crate::procedural` (already exact to Cycles).
 
-use crate::material::texture::{Texture, Wrap};
+use crate::material::texture::{Filter, Texture, Wrap};
 use crate::procedural::{Procedural, SocketValue};
 use glam::{Vec2, Vec3};
 use std::sync::Arc;
@@ -56,11 +56,15 @@ fn srgb_to_linear(c: f32) -> f32 {
 
 impl Image {
     pub fn lookup(&self, v: Vec3) -> [f32; 3] {
-        let uv = self.uv(v);
+        self.texture.lookup_with(self.uv(v), self.wrap, self.wrap, self.filter())
+    }
+
+    fn filter(&self) -> Filter {
         if self.interpolation == Interpolation::Cubic {
-            return self.texture.lookup_cubic_with(uv, self.wrap, self.wrap);
+            Filter::Cubic
+        } else {
+            Filter::Bilinear
         }
-        self.texture.lookup_with(uv, self.wrap, self.wrap)
     }
 
     /// The texture coordinates of the lookup at vector `v` (projection, mirror, closest).
@@ -88,13 +92,8 @@ impl Image {
     pub fn lookup_rgba(&self, v: Vec3) -> (Vec3, f32) {
         let uv = self.uv(v);
         let t = &self.texture;
-        let cubic = self.interpolation == Interpolation::Cubic;
         if self.unassociate {
-            let [r, g, b, a] = if cubic {
-                t.lookup_encoded_cubic_with(uv, self.wrap, self.wrap)
-            } else {
-                t.lookup_encoded_with(uv, self.wrap, self.wrap)
-            };
+            let [r, g, b, a] = t.lookup_encoded_with(uv, self.wrap, self.wrap, self.filter());
             let mut c = Vec3::new(r, g, b);
             if a != 1.0 && a != 0.0 {
                 c /= a;
@@ -106,10 +105,10 @@ impl Image {
         }
         let c = Vec3::from(self.lookup(v));
         // Alpha is 1 everywhere unless the image has some, or CLIP fades it at the edge.
-        let a = match (t.has_alpha() || self.wrap == Wrap::Clip, cubic) {
-            (false, _) => 1.0,
-            (true, false) => t.lookup_alpha_with(uv, self.wrap, self.wrap),
-            (true, true) => t.lookup_alpha_cubic_with(uv, self.wrap, self.wrap),
+        let a = if t.has_alpha() || self.wrap == Wrap::Clip {
+            t.lookup_alpha_with(uv, self.wrap, self.wrap, self.filter())
+        } else {
+            1.0
         };
         (c, a)
     }
