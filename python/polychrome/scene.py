@@ -848,6 +848,9 @@ class Scene:
         #: A :class:`Medium` filling all space (Blender's World > Volume): it adds to the
         #: media of closed meshes and surrounds the camera (docs/media.md).
         self.world_volume: Medium | None = None
+        #: Cycles' Film > Transparent: the background seen directly makes the image's
+        #: alpha 0 there (Holdout closures do so either way, docs/materials.md#holdout).
+        self.film_transparent = False
 
     # -- materials -------------------------------------------------------------
     def add_material(self, material: Material) -> int:
@@ -1108,6 +1111,8 @@ class Scene:
             "lights": [light.to_dict() for light in self.lights],
             "world": None if self.world is None else {"radiance": self.world.to_dict()},
         }
+        if self.film_transparent:
+            desc["film_transparent"] = True
         desc, buffers = self._resolve_textures(desc, self._buffers)
         volume = _medium(self.world_volume, "World")
         if volume is not None:

@@ -89,7 +89,6 @@ XFAIL = {
     "is high by fireflies (R 0.884 at 128 spp, 0.808 at 512); 1.52 at 512 spp, as without the sun (1.52). The sun "
     "reached through the glass by BSDF rays changed nothing measurable here (no floor for a caustic)",
     "refraction_bsdf": "Refraction BSDF rendered as Glass (warned), dE00 0.43",
-    "holdout": "Holdout not supported (warned, grey diffuse): dE00 100.8",
 }
 
 SCRIPT = """
@@ -111,16 +110,22 @@ for k, name in enumerate(names):
     m = bpy.data.materials.new(name); m.use_nodes = True; nt = m.node_tree
     for n in list(nt.nodes):
         if n.type != 'OUTPUT_MATERIAL': nt.nodes.remove(n)
-    node = nt.nodes.new(kind)
-    for key, v in inputs.items():
-        s = node.inputs[key]
-        s.default_value = (*v, 1.0) if isinstance(v, list) and s.type == 'RGBA' else v
+    if kind == 'MIX_HOLDOUT':   # Mix Shader (Fac) of a Holdout and a Diffuse BSDF (Color)
+        node = nt.nodes.new('ShaderNodeMixShader'); node.inputs['Fac'].default_value = inputs['Fac']
+        d = nt.nodes.new('ShaderNodeBsdfDiffuse'); d.inputs['Color'].default_value = (*inputs['Color'], 1.0)
+        nt.links.new(nt.nodes.new('ShaderNodeHoldout').outputs[0], node.inputs[1]); nt.links.new(d.outputs[0], node.inputs[2])
+    else:
+        node = nt.nodes.new(kind)
+        for key, v in inputs.items():
+            s = node.inputs[key]
+            s.default_value = (*v, 1.0) if isinstance(v, list) and s.type == 'RGBA' else v
     nt.links.new(node.outputs[0], nt.nodes['Material Output'].inputs['Surface'])
     col, row = k % COLS, k // COLS
     bpy.ops.mesh.primitive_uv_sphere_add(radius=0.4, location=(col - (COLS - 1) / 2, (rows - 1) / 2 - row, 0), segments=48, ring_count=24)
     bpy.ops.object.shade_smooth()
     bpy.context.object.data.materials.append(m)
 sc.render.image_settings.file_format = 'OPEN_EXR'; sc.render.image_settings.color_depth = '32'
+sc.render.film_transparent = {transparent}
 sc.render.engine = 'CYCLES'
 c = sc.cycles; c.device = 'CPU'; c.samples = SPP; c.use_denoising = False; c.use_adaptive_sampling = False
 c.pixel_filter_type = 'BOX'; c.filter_width = 1.0; c.max_bounces = 16; c.diffuse_bounces = 16; c.glossy_bounces = 16; c.transmission_bounces = 16
@@ -157,7 +162,7 @@ def grid(tmp_path_factory):
     import json
 
     tmp = tmp_path_factory.mktemp("bsdf_grid")
-    body = f"FEATURES_JSON = {json.dumps(json.dumps(FEATURES))!s}\n" + SCRIPT.format(cell=CELL, cols=COLS, spp=SPP)
+    body = f"FEATURES_JSON = {json.dumps(json.dumps(FEATURES))!s}\n" + SCRIPT.format(cell=CELL, cols=COLS, spp=SPP, transparent=False)
     proc, res = run_bpy(tmp, body, timeout=900)
     r = check(proc, res)[0]
     print("BSDF grid vs Cycles:")
@@ -179,3 +184,41 @@ def test_sphere_matches_cycles(grid, feature):
         assert s["polychrome"][3] == pytest.approx(s["cycles"][3], abs=0.05), s
     ours = [w for w in grid["warn"] if f"'{feature}'" in w]
     assert ours == [], ours
+
+
+# Film > Transparent (Cycles' integrate_surface_holdout and transparent background): a
+# Holdout, a Mix Shader of a Holdout and a Diffuse at Fac 0.3 and 0.5 (holdout weight 0.7,
+# 0.5), a Diffuse; Combined's alpha (mean over each sphere's inner blocks) vs Cycles'.
+TRANSPARENT = {
+    "holdout": ("ShaderNodeHoldout", {}),
+    "mix_holdout_0.3": ("MIX_HOLDOUT", {"Fac": 0.3, "Color": (0.8, 0.3, 0.2)}),
+    "mix_holdout_0.5": ("MIX_HOLDOUT", {"Fac": 0.5, "Color": (0.8, 0.3, 0.2)}),
+    "diffuse": ("ShaderNodeBsdfDiffuse", {"Color": (0.8, 0.3, 0.2)}),
+}
+
+
+@pytest.fixture(scope="module")
+def transparent_film(tmp_path_factory):
+    import json
+
+    tmp = tmp_path_factory.mktemp("bsdf_grid_transparent")
+    body = f"FEATURES_JSON = {json.dumps(json.dumps(TRANSPARENT))!s}\n" + SCRIPT.format(
+        cell=CELL, cols=len(TRANSPARENT), spp=32, transparent=True
+    )
+    proc, res = run_bpy(tmp, body, timeout=600)
+    r = check(proc, res)[0]
+    print("Film > Transparent vs Cycles:")
+    for k, v in r["spheres"].items():
+        print(f"  {k:20s} dE00 {v['de']:6.2f}  cycles {v['cycles']}  polychrome {v['polychrome']}")
+    print("warnings:", r["warn"])
+    return r
+
+
+@pytest.mark.parametrize("feature", list(TRANSPARENT))
+def test_holdout_alpha_with_a_transparent_film_matches_cycles(transparent_film, feature):
+    assert transparent_film["err"] is None, transparent_film["err"]
+    s = transparent_film["spheres"][feature]
+    # Cycles' alpha on the sphere: 0 (holdout), 1 − weight (mixes), 1 (diffuse).
+    assert s["polychrome"][3] == pytest.approx(s["cycles"][3], abs=0.02), s
+    assert s["de"] < BAR, s
+    assert [w for w in transparent_film["warn"] if f"'{feature}'" in w] == []

@@ -124,6 +124,8 @@ class Exporter:
         self._export_meshes(depsgraph, scene, warnings)
         export_lights(depsgraph, scene, warnings)
         export_world(depsgraph, scene, warnings, self.textures)
+        # Film > Transparent: the background leaves Combined's alpha 0 (holdouts always do).
+        scene.film_transparent = bool(depsgraph.scene.render.film_transparent)
         self.counts["images"] = self.textures.converted
         return scene, warnings.messages
 

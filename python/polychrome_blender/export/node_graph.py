@@ -37,6 +37,7 @@ SUPPORTED = frozenset(
         "ShaderNodeEmission",
         "ShaderNodeMixShader",
         "ShaderNodeAddShader",
+        "ShaderNodeHoldout",
         # inputs
         "ShaderNodeValue",
         "ShaderNodeRGB",

@@ -408,6 +408,7 @@ fn sums_dict<'py>(py: Python<'py>, b: FilmBuffer) -> PyResult<Bound<'py, PyDict>
     d.set_item("albedo_xyz", PyArray1::from_vec(py, flat3(b.albedo_xyz)).reshape([n, 3])?)?;
     d.set_item("depth", PyArray1::from_vec(py, b.depth))?;
     d.set_item("normal", PyArray1::from_vec(py, flat3(b.normal)).reshape([n, 3])?)?;
+    d.set_item("transparent", PyArray1::from_vec(py, b.transparent))?;
     d.set_item("count", PyArray1::from_vec(py, b.count))?;
     match b.spectral {
         Some(s) => d.set_item("spectral", PyArray1::from_vec(py, s))?,
@@ -450,6 +451,7 @@ fn sums_from_dict(d: &Bound<'_, PyDict>, pixels: usize, spectral_len: Option<usi
         albedo_xyz: rows(f64s("albedo_xyz", 3)?),
         depth: f64s("depth", 1)?,
         normal: rows(f64s("normal", 3)?),
+        transparent: f64s("transparent", 1)?,
         count,
         spectral,
         nonfinite: get("nonfinite")?.extract()?,

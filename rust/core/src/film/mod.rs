@@ -14,17 +14,28 @@ pub struct PixelSample {
     pub depth: f32,
     pub normal: Vec3A,
     pub albedo: SampledSpectrum,
+    /// How much of the sample the film's alpha loses (Cycles' holdout transparency:
+    /// the throughput-weighted holdout weight, and with a transparent film the
+    /// background seen directly): the pixel's alpha is 1 − its mean.
+    pub transparent: f32,
 }
 
 impl PixelSample {
     pub fn new(n: usize) -> Self {
-        Self { radiance: SampledSpectrum::zeros(n), depth: 0.0, normal: Vec3A::ZERO, albedo: SampledSpectrum::zeros(n) }
+        Self {
+            radiance: SampledSpectrum::zeros(n),
+            depth: 0.0,
+            normal: Vec3A::ZERO,
+            albedo: SampledSpectrum::zeros(n),
+            transparent: 0.0,
+        }
     }
     pub fn reset(&mut self) {
         self.radiance.fill(0.0);
         self.albedo.fill(0.0);
         self.depth = 0.0;
         self.normal = Vec3A::ZERO;
+        self.transparent = 0.0;
     }
 }
 
@@ -49,6 +60,7 @@ pub struct PixelSums {
     rows: [Vec<f64>; 6],
     depth: f64,
     normal: [f64; 3],
+    transparent: f64,
     count: u32,
     nonfinite: u64,
 }
@@ -93,6 +105,7 @@ impl PixelSums {
             rows,
             depth: 0.0,
             normal: [0.0; 3],
+            transparent: 0.0,
             count: 0,
             nonfinite: 0,
         }
@@ -105,7 +118,12 @@ impl PixelSums {
     pub fn add(&mut self, s: &PixelSample) {
         // Finite f32 spectra have finite f64 sums and XYZ: the per-sample XYZ check of
         // `FilmBuffer::add` reduces to these.
-        if !(s.radiance.is_finite() && s.depth.is_finite() && s.normal.is_finite() && s.albedo.is_finite()) {
+        if !(s.radiance.is_finite()
+            && s.depth.is_finite()
+            && s.normal.is_finite()
+            && s.albedo.is_finite()
+            && s.transparent.is_finite())
+        {
             self.nonfinite += 1;
             return;
         }
@@ -126,6 +144,7 @@ impl PixelSums {
         self.normal[0] += s.normal.x as f64;
         self.normal[1] += s.normal.y as f64;
         self.normal[2] += s.normal.z as f64;
+        self.transparent += s.transparent as f64;
         self.count += 1;
     }
 
@@ -141,6 +160,7 @@ impl PixelSums {
                 buf.normal[i][k] += self.normal[k];
             }
             buf.depth[i] += self.depth;
+            buf.transparent[i] += self.transparent;
             buf.count[i] += self.count;
             if let Some(sp) = &mut buf.spectral {
                 let n = self.n;
@@ -153,6 +173,7 @@ impl PixelSums {
         self.albedo.fill(0.0);
         self.depth = 0.0;
         self.normal = [0.0; 3];
+        self.transparent = 0.0;
         self.count = 0;
         self.nonfinite = 0;
     }
@@ -165,6 +186,8 @@ pub struct FilmBuffer {
     pub albedo_xyz: Vec<[f64; 3]>,
     pub depth: Vec<f64>,
     pub normal: Vec<[f64; 3]>,
+    /// Sums of the samples' [`PixelSample::transparent`]: alpha = 1 − transparent / count.
+    pub transparent: Vec<f64>,
     /// Samples that entered each pixel.
     pub count: Vec<u32>,
     /// Per-pixel spectral radiance sums (pixel-major), when requested.
@@ -179,6 +202,7 @@ impl FilmBuffer {
             albedo_xyz: vec![[0.0; 3]; pixels],
             depth: vec![0.0; pixels],
             normal: vec![[0.0; 3]; pixels],
+            transparent: vec![0.0; pixels],
             count: vec![0; pixels],
             spectral: spectral_len.map(|n| vec![0.0; pixels * n]),
             nonfinite: 0,
@@ -199,7 +223,11 @@ impl FilmBuffer {
         let axyz = observer.xyz_of_product(s.albedo.values(), albedo_white.values());
         // The auxiliary passes are guarded too: a NaN depth, normal or albedo would
         // otherwise reach its pass unseen (docs/design.md#extremes: no NaN in any pass).
-        if !(s.depth.is_finite() && s.normal.is_finite() && axyz.iter().all(|v| v.is_finite())) {
+        if !(s.depth.is_finite()
+            && s.normal.is_finite()
+            && s.transparent.is_finite()
+            && axyz.iter().all(|v| v.is_finite()))
+        {
             self.nonfinite += 1;
             return;
         }
@@ -211,6 +239,7 @@ impl FilmBuffer {
         self.normal[i][0] += s.normal.x as f64;
         self.normal[i][1] += s.normal.y as f64;
         self.normal[i][2] += s.normal.z as f64;
+        self.transparent[i] += s.transparent as f64;
         self.count[i] += 1;
         if let Some(sp) = &mut self.spectral {
             let n = s.radiance.len();
@@ -238,6 +267,19 @@ impl FilmBuffer {
         }
     }
 
+    /// Pixel `i`'s alpha: 1 − its mean transparency, in 0..1 (1 with no samples).
+    pub fn alpha(&self, i: usize) -> f32 {
+        if self.count[i] == 0 {
+            return 1.0;
+        }
+        let a = 1.0 - self.transparent[i] / self.count[i] as f64;
+        if a.is_finite() {
+            a.clamp(0.0, 1.0) as f32
+        } else {
+            1.0
+        }
+    }
+
     /// Adds another buffer of the same pixels (sums of other samples): buffers of
     /// different sample passes merge exactly this way.
     pub fn merge(&mut self, other: &FilmBuffer) {
@@ -249,6 +291,7 @@ impl FilmBuffer {
                 self.normal[i][k] += other.normal[i][k];
             }
             self.depth[i] += other.depth[i];
+            self.transparent[i] += other.transparent[i];
             self.count[i] += other.count[i];
         }
         if let (Some(dst), Some(src)) = (&mut self.spectral, &other.spectral) {
@@ -295,6 +338,7 @@ impl Film {
                     b.normal[i][k] += tile.normal[t][k];
                 }
                 b.depth[i] += tile.depth[t];
+                b.transparent[i] += tile.transparent[t];
                 b.count[i] += tile.count[t];
                 if let (Some(dst), Some(src), Some(n)) = (&mut b.spectral, &tile.spectral, self.spectral_len) {
                     for k in 0..n {
@@ -316,11 +360,13 @@ impl Film {
             for k in 0..3 {
                 px[k] = rgb[k] as f32;
             }
+            px[3] = b.alpha(i);
         }
         rgba
     }
 
-    /// Averages and converts to the working space: RGBA (alpha 1), depth, normal, albedo.
+    /// Averages and converts to the working space: RGBA (alpha 1 − the mean holdout
+    /// transparency, [`PixelSample::transparent`]), depth, normal, albedo.
     pub fn images(&self, space: &RgbSpace) -> FilmImages {
         let px = (self.width * self.height) as usize;
         let b = &self.buffer;
@@ -336,7 +382,7 @@ impl Film {
                 rgba[i * 4 + k] = rgb[k] as f32;
                 albedo[i * 3 + k] = alb[k] as f32;
             }
-            rgba[i * 4 + 3] = 1.0;
+            rgba[i * 4 + 3] = b.alpha(i);
             depth[i] = (b.depth[i] * inv) as f32;
             let n = Vec3A::new(b.normal[i][0] as f32, b.normal[i][1] as f32, b.normal[i][2] as f32).normalize_or_zero();
             normal[i * 3..i * 3 + 3].copy_from_slice(&[n.x, n.y, n.z]);
@@ -386,6 +432,7 @@ mod tests {
                     ps.albedo.set(i, rng.uniform());
                 }
                 ps.depth = 3.0 * rng.uniform();
+                ps.transparent = rng.uniform();
                 ps.normal = Vec3A::new(rng.uniform(), rng.uniform(), 1.0).normalize();
                 // Non-finite samples of every kind, in pixels 1 and 3.
                 match (px, k) {
@@ -414,6 +461,7 @@ mod tests {
                 assert!(close(per_sample.normal[px][k], per_pixel.normal[px][k], 1e-12));
             }
             assert!(close(per_sample.depth[px], per_pixel.depth[px], 1e-12));
+            assert!(close(per_sample.transparent[px], per_pixel.transparent[px], 1e-12));
         }
         // A pixel's samples are consecutive and the tile buffer starts at zero: the spectral
         // pass is bit-for-bit the same sums.

@@ -176,6 +176,20 @@ pub struct CameraPath<'a, 'b, T, M> {
     pub mis: M,
     pub gathered: &'a mut T,
     pub first_hit: Option<FirstHit<'b>>,
+    /// What the film's alpha loses ([`crate::film::PixelSample::transparent`]).
+    pub transparent: f32,
+}
+
+/// The mean throughput over the wavelengths a path carries (Cycles' `average` of the
+/// RGB throughput, for the alpha of holdouts and a transparent film's background).
+fn mean_throughput<T: Throughput>(beta: &T) -> f32 {
+    let n = beta.lanes();
+    let sum: f32 = (0..n).map(|j| beta.lane(j)).sum();
+    if n > 0 && sum.is_finite() {
+        sum / n as f32
+    } else {
+        0.0
+    }
 }
 
 impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
@@ -184,6 +198,12 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
             // Out through mirrors and glass: nothing seen, as a ray that escapes at once.
             out.albedo.fill(0.0);
             *out.normal = Vec3A::ZERO;
+        }
+        if scene.film_transparent && st.depth == 0 {
+            // Cycles' transparent background (integrate_background): the film shows
+            // nothing there, its alpha drops by the path's throughput.
+            self.transparent += mean_throughput(beta);
+            return;
         }
         if let Some(env) = &scene.environment {
             let w = self.mis.escape(scene, st, env.light);
@@ -292,6 +312,11 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
         if let Some(out) = self.first_hit.take() {
             out.albedo.fill(0.0);
         }
+    }
+
+    fn holdout(&mut self, weight: f32, beta: &T) -> bool {
+        self.transparent += weight * mean_throughput(beta);
+        true
     }
 
     fn passed_emitter(&mut self, scene: &Scene, ctx: &mut ShadingContext, v: &Vertex, st: &PathState, beta: &T) {
@@ -459,7 +484,7 @@ pub fn trace_camera<W: Wavelengths, M: CameraMis>(
     out: &mut PixelSample,
     scratch: &mut Scratch,
 ) {
-    let PixelSample { radiance, depth, normal, albedo } = out;
+    let PixelSample { radiance, depth, normal, albedo, transparent } = out;
     let mut ctx = ShadingContext::new(&scene.grid);
     ctx.single_wavelength = wl.single();
     let Some(ray) = scene.camera.generate_ray(film.x, film.y, rng) else {
@@ -477,8 +502,9 @@ pub fn trace_camera<W: Wavelengths, M: CameraMis>(
         unit.scale(beta.lane(0));
         aux.carry(unit, i, beta.lane(0));
     }
-    let mut hooks = CameraPath { mis, gathered: &mut gathered, first_hit: Some(aux) };
+    let mut hooks = CameraPath { mis, gathered: &mut gathered, first_hit: Some(aux), transparent: 0.0 };
     let end = walk.run(scene, &mut ctx, start, &mut beta, rng, &mut hooks, scratch);
+    *transparent = hooks.transparent;
     // The aux chain goes on through a dispersive surface with the single wavelength.
     let aux = hooks.first_hit.take();
     continue_single_wavelength(scene, walk, end, &mut ctx, &beta, &mut gathered, aux, rng, scratch);
@@ -663,7 +689,7 @@ fn trace_single(
     let mut ctx = ShadingContext::new(&scene.grid);
     ctx.single_wavelength = Some(beta.index);
     let mut gathered = beta.zero_like();
-    let mut hooks = CameraPath { mis: PowerHeuristic, gathered: &mut gathered, first_hit };
+    let mut hooks = CameraPath { mis: PowerHeuristic, gathered: &mut gathered, first_hit, transparent: 0.0 };
     walk.run(scene, &mut ctx, st, &mut beta, rng, &mut hooks, scratch);
     gathered.value
 }

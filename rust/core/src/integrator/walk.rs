@@ -148,6 +148,12 @@ pub trait PathHooks<T: Throughput> {
     /// Russian roulette ended the path: in expectation what it would have gathered on is
     /// carried by the paths that survived (divided by their survival probability).
     fn rouletted(&mut self) {}
+    /// The path, with only transparent bounces so far, reached Holdout closures of
+    /// summed weight `weight` (0..1; the scene's `Holdout`). True when the hooks applied
+    /// it (camera paths: the pixel's alpha), and then a full holdout ends the path.
+    fn holdout(&mut self, _weight: f32, _beta: &T) -> bool {
+        false
+    }
     /// The path passed through see-through emitter `v` (`Material::see_through`, a
     /// light's surface): gather its emission; the ray goes on behind it. Draws no random
     /// numbers.
@@ -414,6 +420,14 @@ impl Walk {
                     st.traveled += (origin - st.ray.origin).length();
                     st.ray = Ray { origin, tmin: 0.0, tmax: f32::INFINITY, ..st.ray };
                     continue;
+                }
+            }
+            if st.depth == 0 {
+                if let Some(h) = &scene.holdout[si.material as usize] {
+                    let w = h.weight_at(scene, &st.ray, &si);
+                    if w > 0.0 && hooks.holdout(w, beta) && w >= 1.0 {
+                        return End::Done;
+                    }
                 }
             }
             // Surfaces are two-sided: shade on the side the ray arrived from.

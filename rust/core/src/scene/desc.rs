@@ -60,6 +60,11 @@ pub struct SceneDesc {
     /// Referenced by index: `{"type": "texture", "texture": i}` in a diffuse
     /// reflectance, `world.texture` for an HDRI environment.
     pub textures: Vec<TextureDesc>,
+    /// Cycles' Film > Transparent: the background seen directly makes the Combined
+    /// pass's alpha 0 there (Holdout closures do whatever this says,
+    /// docs/materials.md#holdout).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub film_transparent: bool,
 }
 
 /// How a texture's pixels are encoded in its buffer.
@@ -771,7 +776,16 @@ impl SceneDesc {
     /// Calls `f` on every spectrum (and dielectric index) of the scene: materials, lights,
     /// world. Every variant is matched exhaustively, so a new one must say what it holds.
     pub fn for_each_spectrum(&self, f: &mut dyn FnMut(SpectralItem)) {
-        let SceneDesc { camera: _, materials, meshes: _, instances: _, lights, world, textures: _ } = self;
+        let SceneDesc {
+            camera: _,
+            materials,
+            meshes: _,
+            instances: _,
+            lights,
+            world,
+            textures: _,
+            film_transparent: _,
+        } = self;
         for m in materials {
             m.for_each_spectrum(f);
         }

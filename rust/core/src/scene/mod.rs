@@ -148,6 +148,35 @@ impl PassThrough {
     }
 }
 
+/// Cycles' Holdout (`integrate_surface_holdout`, kernel/integrator/shade_surface.h):
+/// where a camera path that has made only transparent bounces reaches a surface with
+/// Holdout closures, the pixel's alpha loses the path's mean throughput × `weight` (the
+/// holdout closures' summed weight), and a full holdout ends the path. Cycles' camera
+/// rays carry PATH_RAY_TRANSPARENT_BACKGROUND whatever Film > Transparent says (that
+/// setting only decides the background's alpha), so a holdout is black at alpha 0 with
+/// an opaque film too (measured in Blender 4.5, tests/blender/test_bsdf_grid.py); seen
+/// through a mirror or glass it is only black. The Holdout closure itself reflects
+/// nothing. A weight that varies per hit (a Mix Shader's Fac from a texture) is
+/// evaluated from the material's program and closure template.
+#[derive(Clone, Debug)]
+pub struct Holdout {
+    pub weight: f32,
+    pub varying: Option<(crate::shading::Program, crate::shading::closure::Template)>,
+}
+
+impl Holdout {
+    /// The holdout weight at hit `si` of `ray`, in 0..1.
+    pub fn weight_at(&self, scene: &Scene, ray: &Ray, si: &SurfaceInteraction) -> f32 {
+        let Some((program, template)) = &self.varying else { return self.weight };
+        let sp = scene.shading_point(ray, si, &program.attributes);
+        PASS_REGS.with(|regs| {
+            let mut regs = regs.borrow_mut();
+            program.run(&sp, &mut regs);
+            template.holdout_weight(&|r| regs[r as usize])
+        })
+    }
+}
+
 pub struct Scene {
     pub grid: WavelengthGrid,
     pub observer: Observer,
@@ -199,6 +228,11 @@ pub struct Scene {
     /// Per material: stochastic transparency (a top-level Transparent BSDF, Principled
     /// Alpha), see [`PassThrough`].
     pub pass_through: Vec<Option<PassThrough>>,
+    /// Per material: its Holdout closures, if any ([`Holdout`]).
+    pub holdout: Vec<Option<Holdout>>,
+    /// Cycles' Film > Transparent: the background seen directly (through transparent
+    /// bounces only) makes the film's alpha 0 there and adds no radiance.
+    pub film_transparent: bool,
     /// Per mesh: the named vertex data shading graphs read, and its bounds.
     pub mesh_data: Vec<hit::MeshShadingData>,
     /// Per light: the ray visibility of the instance it lies on (`visibility::ALL` for
@@ -343,6 +377,7 @@ impl Scene {
         let mut pass_through = Vec::new();
         let subsurface_materials: Vec<String> =
             desc.materials.iter().filter(|m| m.bsdf.has_subsurface()).map(|m| m.name.clone()).collect();
+        let mut holdout = Vec::new();
         for m in &desc.materials {
             let spectrum = |d, role, what| -> Result<SampledSpectrum> {
                 Ok(SampledSpectrum::from_slice(&rgb.evaluate(d, &grid, role, "material", &m.name, what)?))
@@ -352,6 +387,7 @@ impl Scene {
             let mut per_hit = None;
             let mut hit_attributes = None;
             let mut transparency = None;
+            let mut material_holdout = None;
             let mut compiled_program = None;
             let opaque_rest;
             let mut graph_emission = None;
@@ -392,6 +428,14 @@ impl Scene {
                         hit_attributes = Some(compiled.program.attributes.clone());
                     }
                     transparency = compiled.transparency.clone();
+                    material_holdout = compiled.template.has_holdout().then(|| {
+                        let init = &compiled.program.init;
+                        Holdout {
+                            weight: compiled.template.holdout_weight(&|r| init[r as usize]),
+                            varying: (!compiled.template.is_constant())
+                                .then(|| (compiled.program.clone(), compiled.template.clone())),
+                        }
+                    });
                     compiled_program = Some(&compiled.program);
                     (&constant, compiled.emission.as_ref())
                 }
@@ -411,6 +455,7 @@ impl Scene {
                     m.name
                 ));
             }
+            holdout.push(material_holdout);
             let varying = match (&transparency, &compiled_program) {
                 (Some((p @ crate::shading::closure::PassProbability::Register { reg, .. }, _)), Some(program)) => {
                     Some(VaryingPass { program: program.pruned_for(*reg), probability: *p })
@@ -551,6 +596,7 @@ impl Scene {
             material_medium.push(None);
             null_surface.push(false);
             pass_through.push(None);
+            holdout.push(None);
         }
 
         // Meshes.
@@ -938,6 +984,8 @@ impl Scene {
             material_medium,
             null_surface,
             pass_through,
+            holdout,
+            film_transparent: desc.film_transparent,
             mesh_data,
             light_visibility,
             hit_lights,

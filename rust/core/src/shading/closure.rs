@@ -336,6 +336,9 @@ pub enum Template {
         a: Box<Template>,
         b: Box<Template>,
     },
+    /// Blender's Holdout: reflects nothing; its weight makes the pixel transparent
+    /// ([`Template::holdout_weight`], the scene's `Holdout`).
+    Holdout,
 }
 
 impl F {
@@ -489,6 +492,54 @@ impl Template {
             Template::Oriented { normal, t } => normal.reg.is_none() && t.is_constant(),
             Template::Mix { factor, a, b, .. } => factor.is_const() && a.is_constant() && b.is_constant(),
             Template::Add { a, b } => a.is_constant() && b.is_constant(),
+            Template::Holdout => true,
+        }
+    }
+
+    /// Whether a Holdout is anywhere in the template.
+    pub fn has_holdout(&self) -> bool {
+        match self {
+            Template::Holdout => true,
+            Template::Mix { a, b, .. } | Template::Add { a, b } => a.has_holdout() || b.has_holdout(),
+            Template::Oriented { t, .. } => t.has_holdout(),
+            _ => false,
+        }
+    }
+
+    /// Whether a Holdout lies under a Mix Shader whose Fac is a Fresnel or Layer Weight
+    /// node (its holdout weight then uses the Mix's 0.5, not the view-dependent factor).
+    pub fn holdout_under_view_factor(&self) -> bool {
+        match self {
+            Template::Mix { factor_from: Some(_), a, b, .. } => a.has_holdout() || b.has_holdout(),
+            Template::Mix { a, b, .. } | Template::Add { a, b } => {
+                a.holdout_under_view_factor() || b.holdout_under_view_factor()
+            }
+            Template::Oriented { t, .. } => t.holdout_under_view_factor(),
+            _ => false,
+        }
+    }
+
+    /// The summed weight of the Holdout closures at register values `v`, clamped to
+    /// 0..1: Cycles' `surface_shader_apply_holdout` (kernel/integrator/surface_shader.h)
+    /// adds up the holdout closures' weights, which Mix Shaders scaled by 1 − Fac and Fac.
+    pub fn holdout_weight(&self, v: &dyn Fn(Reg) -> Vec3) -> f32 {
+        fn w(t: &Template, v: &dyn Fn(Reg) -> Vec3) -> f32 {
+            match t {
+                Template::Holdout => 1.0,
+                Template::Mix { factor, a, b, .. } => {
+                    let f = factor.at(v).clamp(0.0, 1.0);
+                    (1.0 - f) * w(a, v) + f * w(b, v)
+                }
+                Template::Add { a, b } => w(a, v) + w(b, v),
+                Template::Oriented { t, .. } => w(t, v),
+                _ => 0.0,
+            }
+        }
+        let x = w(self, v);
+        if x.is_finite() {
+            x.clamp(0.0, 1.0)
+        } else {
+            0.0
         }
     }
 
@@ -626,6 +677,9 @@ impl Template {
             Template::Add { a, b } => {
                 BsdfDesc::Add { a: Box::new(a.instantiate(v, o)), b: Box::new(b.instantiate(v, o)) }
             }
+            // What a holdout leaves of the surface: nothing (the scene's Holdout makes
+            // the film transparent there when it is).
+            Template::Holdout => BsdfDesc::None,
         }
     }
 }
@@ -952,10 +1006,7 @@ impl<'c, 'a> Lowering<'c, 'a> {
                 };
                 (Template::Fixed(BsdfDesc::Transparent { color }), None)
             }
-            "ShaderNodeHoldout" => {
-                self.c.warn(node, "is not supported yet; the surface reflects nothing here");
-                (Template::Fixed(BsdfDesc::None), None)
-            }
+            "ShaderNodeHoldout" => (Template::Holdout, None),
             "ShaderNodeAddShader" => {
                 let (a, ea) = self.shader_input(node, "Shader", depth)?;
                 let (b, eb) = self.shader_input(node, "Shader_001", depth)?;

@@ -64,6 +64,12 @@ pub fn compile_material(name: &str, graph: &GraphDesc, textures: &[Arc<Texture>]
         transparency = Some((p, color));
         template = rest;
     }
+    if template.holdout_under_view_factor() {
+        c.warnings.push(format!(
+            "material '{name}': a Holdout under a Mix Shader whose Fac is a Fresnel or Layer Weight node holds \
+             out with the Mix's weight 0.5, not the view-dependent factor"
+        ));
+    }
     if template.has_transparent() {
         c.warnings.push(format!(
             "material '{name}': a Transparent BSDF that is not the material's top closure (or one side of a \

@@ -510,6 +510,11 @@ pub static NODES: &[NodeSpec] = &[
         outputs: &[("BSDF", Shader)],
     },
     NodeSpec {
+        idname: "ShaderNodeHoldout",
+        inputs: &[i("Weight", Float, [0.0, 0.0, 0.0])],
+        outputs: &[("Holdout", Shader)],
+    },
+    NodeSpec {
         idname: "ShaderNodeBsdfMetallic",
         inputs: &[
             i("Weight", Float, [0.0, 0.0, 0.0]),
