@@ -65,6 +65,7 @@ FEATURES = {
     "sheen_bsdf": ("ShaderNodeBsdfSheen", {"Color": (0.8, 0.3, 0.3), "Roughness": 0.5}),
     "tinted_glass": ("ShaderNodeBsdfGlass", {"Color": (0.9, 0.5, 0.2), "Roughness": 0.0}),
     "refraction_bsdf": ("ShaderNodeBsdfRefraction", {"Roughness": 0.1}),
+    "refraction_rough_tinted": ("ShaderNodeBsdfRefraction", {"Roughness": 0.5, "IOR": 1.33, "Color": (0.9, 0.8, 0.7)}),
     "holdout": ("ShaderNodeHoldout", {}),
 }
 
@@ -88,7 +89,6 @@ XFAIL = {
     "tinted_glass": "the tint squared spectrally (as transparent_bsdf): dE00 3.22 at 128 spp, where Cycles' own mean "
     "is high by fireflies (R 0.884 at 128 spp, 0.808 at 512); 1.52 at 512 spp, as without the sun (1.52). The sun "
     "reached through the glass by BSDF rays changed nothing measurable here (no floor for a caustic)",
-    "refraction_bsdf": "Refraction BSDF rendered as Glass (warned), dE00 0.43",
 }
 
 SCRIPT = """

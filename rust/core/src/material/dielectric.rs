@@ -36,7 +36,7 @@ pub(super) fn relative(n: f32, ctx: &ShadingContext) -> f32 {
 }
 
 #[inline]
-fn radiance_scale(ctx: &ShadingContext, etap: f32) -> f32 {
+pub(super) fn radiance_scale(ctx: &ShadingContext, etap: f32) -> f32 {
     match ctx.mode {
         TransportMode::Radiance => 1.0 / (etap * etap),
         TransportMode::Importance => 1.0,
@@ -44,7 +44,7 @@ fn radiance_scale(ctx: &ShadingContext, etap: f32) -> f32 {
 }
 
 /// The index to use for every lane, or None when the ray must collapse.
-fn common_index(ior: &IndexOfRefraction, ctx: &ShadingContext) -> Option<f32> {
+pub(super) fn common_index(ior: &IndexOfRefraction, ctx: &ShadingContext) -> Option<f32> {
     match ctx.single_wavelength {
         Some(i) => Some(ior.at(i)),
         None if !ior.dispersive => Some(ior.at(0)),
@@ -53,7 +53,7 @@ fn common_index(ior: &IndexOfRefraction, ctx: &ShadingContext) -> Option<f32> {
 }
 
 /// Picks a lane with probability ∝ `weights` using `u`; returns (lane, probability).
-fn pick_lane(weights: &[f32], u: f32) -> Option<(usize, f32)> {
+pub(super) fn pick_lane(weights: &[f32], u: f32) -> Option<(usize, f32)> {
     let total: f32 = weights.iter().sum();
     if !(total > 0.0 && total.is_finite()) {
         return None;

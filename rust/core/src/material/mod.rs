@@ -20,6 +20,7 @@ pub mod oren_nayar;
 pub mod oriented;
 pub mod param;
 pub mod principled;
+pub mod refraction;
 pub mod sheen;
 pub mod sheen_ltc;
 pub mod subsurface;

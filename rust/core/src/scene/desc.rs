@@ -222,6 +222,17 @@ pub enum BsdfDesc {
         #[serde(default)]
         roughness: f32,
     },
+    /// Blender's Refraction BSDF: transmission only, no reflection and no Fresnel factor
+    /// (as Cycles; it does not conserve energy), smooth or rough on GGX (`beckmann`:
+    /// Beckmann, the node's default). See `material::refraction`.
+    Refraction {
+        #[serde(default)]
+        ior: crate::material::IorDesc,
+        #[serde(default)]
+        roughness: f32,
+        #[serde(default)]
+        beckmann: bool,
+    },
     /// A metal: a named measured metal ("gold", "silver", "copper", "aluminium") or
     /// a user complex index η + ik; GGX roughness as Blender's (alpha = roughness²).
     Conductor {
@@ -840,7 +851,9 @@ impl BsdfDesc {
                 bsdf.for_each_spectrum(f);
             }
             BsdfDesc::None | BsdfDesc::Null => {}
-            BsdfDesc::Dielectric { ior, roughness: _ } => f(SpectralItem::DielectricIor(ior)),
+            BsdfDesc::Dielectric { ior, roughness: _ } | BsdfDesc::Refraction { ior, .. } => {
+                f(SpectralItem::DielectricIor(ior))
+            }
             BsdfDesc::Conductor { metal: _, eta, k, roughness: _ } => {
                 for s in [eta, k].into_iter().flatten() {
                     f(Spectrum(Index, s));

@@ -179,6 +179,9 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
         }
         BsdfDesc::None | BsdfDesc::Null | BsdfDesc::Transparent { .. } => Box::new(Black),
         BsdfDesc::Dielectric { ior, roughness } => super::optics::build_dielectric(material, ior, *roughness, b.grid)?,
+        BsdfDesc::Refraction { ior, roughness, beckmann } => {
+            super::optics::build_refraction(material, ior, *roughness, *beckmann, b.grid)?
+        }
         BsdfDesc::Conductor { metal, eta, k, roughness } => {
             let eta = eta.as_ref().map(|d| b.spectrum(d, SpectrumRole::Unbounded, material, "eta")).transpose()?;
             let k = k.as_ref().map(|d| b.spectrum(d, SpectrumRole::Unbounded, material, "k")).transpose()?;

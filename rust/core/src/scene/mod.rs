@@ -522,6 +522,9 @@ impl Scene {
                 }
                 BsdfDesc::None | BsdfDesc::Null | BsdfDesc::Transparent { .. } => Box::new(Black),
                 BsdfDesc::Dielectric { ior, roughness } => optics::build_dielectric(&m.name, ior, *roughness, &grid)?,
+                BsdfDesc::Refraction { ior, roughness, beckmann } => {
+                    optics::build_refraction(&m.name, ior, *roughness, *beckmann, &grid)?
+                }
                 BsdfDesc::Conductor { metal, eta, k, roughness } => {
                     let eta = eta.as_ref().map(|d| spectrum(d, SpectrumRole::Unbounded, "eta")).transpose()?;
                     let k = k.as_ref().map(|d| spectrum(d, SpectrumRole::Unbounded, "k")).transpose()?;

@@ -53,6 +53,19 @@ pub fn build_dielectric(material: &str, ior: &IorDesc, roughness: f32, grid: &Wa
     })
 }
 
+/// Blender's Refraction BSDF: transmission only (`material::refraction`).
+pub fn build_refraction(
+    material: &str,
+    ior: &IorDesc,
+    roughness: f32,
+    beckmann: bool,
+    grid: &WavelengthGrid,
+) -> Result<Box<dyn Bsdf>> {
+    let roughness = check_roughness(material, roughness)?;
+    let ior = IndexOfRefraction::build(ior, grid, material)?;
+    Ok(Box::new(crate::material::refraction::Refraction::new(ior, roughness, beckmann)))
+}
+
 /// A conductor from a named metal or user (η, k) spectra (already on the grid).
 pub fn build_conductor(
     material: &str,

@@ -319,6 +319,14 @@ pub enum Template {
         roughness: F,
         ior: Ior,
     },
+    /// Blender's Refraction BSDF: transmission only, tinted by its colour (the closure
+    /// weight); `beckmann`: the node's Beckmann distribution (else GGX).
+    Refraction {
+        color: Col,
+        roughness: F,
+        ior: Ior,
+        beckmann: bool,
+    },
     Translucent {
         color: Col,
     },
@@ -489,6 +497,9 @@ impl Template {
                 color.is_const() && roughness.is_const() && matches!(ior, Ior::C(_))
             }
             Template::Translucent { color } => color.is_const(),
+            Template::Refraction { color, roughness, ior, .. } => {
+                color.is_const() && roughness.is_const() && matches!(ior, Ior::C(_))
+            }
             Template::Oriented { normal, t } => normal.reg.is_none() && t.is_constant(),
             Template::Mix { factor, a, b, .. } => factor.is_const() && a.is_constant() && b.is_constant(),
             Template::Add { a, b } => a.is_constant() && b.is_constant(),
@@ -553,7 +564,7 @@ impl Template {
                     || coat.as_ref().is_some_and(|c| !c.roughness.is_const() || !c.weight.is_const())
             }
             Template::Glossy { roughness, anisotropy, .. } => !roughness.is_const() || !anisotropy.is_const(),
-            Template::Glass { roughness, .. } => !roughness.is_const(),
+            Template::Glass { roughness, .. } | Template::Refraction { roughness, .. } => !roughness.is_const(),
             Template::Mix { a, b, .. } | Template::Add { a, b } => a.may_be_specular() || b.may_be_specular(),
             Template::Oriented { t, .. } => t.may_be_specular(),
             _ => false,
@@ -664,6 +675,15 @@ impl Template {
                     // Cycles: the Glass colour is the closure weight (reflection and
                     // transmission alike).
                     BsdfDesc::Tint { color: c, bsdf: Box::new(glass) }
+                }
+            }
+            Template::Refraction { color, roughness, ior, beckmann } => {
+                let c = color.at(v);
+                let r = BsdfDesc::Refraction { ior: ior.at(v), roughness: roughness.at(v), beckmann: *beckmann };
+                if is_white(&c) {
+                    r
+                } else {
+                    BsdfDesc::Tint { color: c, bsdf: Box::new(r) }
                 }
             }
             Template::Translucent { color } => BsdfDesc::Translucent { color: color.at(v) },
@@ -795,6 +815,13 @@ impl<'c, 'a> Lowering<'c, 'a> {
     /// the hit), None when no closure links a normal, and then nothing is oriented.
     fn shading_normal(&mut self) -> Option<Reg> {
         self.normals.first().copied()
+    }
+
+    /// A node's enum property `key` through `table` (Blender's spellings); `default`
+    /// when absent.
+    fn prop<T: Copy>(&self, node: usize, key: &str, table: &[(&str, T)], default: T) -> Result<T> {
+        let n = &self.c.nodes[node];
+        super::props::Props { map: &n.props, material: self.c.material, node: &n.name }.enumeration(key, table, default)
     }
 
     /// Warns when an input this build ignores differs from Blender's default.
@@ -940,11 +967,16 @@ impl<'c, 'a> Lowering<'c, 'a> {
                 let t = Template::Glossy { color, roughness, anisotropy, rotation, tangent };
                 (oriented(t, n, true), None)
             }
-            "ShaderNodeBsdfGlass" | "ShaderNodeBsdfRefraction" => {
+            "ShaderNodeBsdfRefraction" => {
                 let n = self.normal(node, "Normal")?;
-                if kind == "ShaderNodeBsdfRefraction" {
-                    self.c.warn(node, "Refraction BSDF is rendered as Glass (its reflection is kept)");
-                }
+                let beckmann = self.prop(node, "distribution", &[("BECKMANN", true), ("GGX", false)], true)?;
+                let color = self.color(node, "Color")?;
+                let roughness = self.float(node, "Roughness", 0.0, 1.0)?;
+                let ior = self.ior(node, "IOR")?;
+                (oriented(Template::Refraction { color, roughness, ior, beckmann }, n, true), None)
+            }
+            "ShaderNodeBsdfGlass" => {
+                let n = self.normal(node, "Normal")?;
                 let color = self.color(node, "Color")?;
                 let roughness = self.float(node, "Roughness", 0.0, 1.0)?;
                 (oriented(Template::Glass { color, roughness, ior: self.ior(node, "IOR")? }, n, true), None)
