@@ -109,13 +109,8 @@ impl Refraction {
     /// [`Ggx::effectively_smooth`]'s alpha.
     pub fn new(ior: IndexOfRefraction, roughness: f32, beckmann: bool) -> Self {
         let g = Ggx::from_roughness(roughness);
-        let distribution = (!g.effectively_smooth()).then(|| {
-            if beckmann {
-                Distribution::Beckmann(g.alpha_x)
-            } else {
-                Distribution::Ggx(g)
-            }
-        });
+        let d = if beckmann { Distribution::Beckmann(g.alpha_x) } else { Distribution::Ggx(g) };
+        let distribution = (!g.effectively_smooth()).then_some(d);
         Self { ior, distribution }
     }
 
