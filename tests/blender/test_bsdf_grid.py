@@ -67,6 +67,16 @@ FEATURES = {
     "refraction_bsdf": ("ShaderNodeBsdfRefraction", {"Roughness": 0.1}),
     "refraction_rough_tinted": ("ShaderNodeBsdfRefraction", {"Roughness": 0.5, "IOR": 1.33, "Color": (0.9, 0.8, 0.7)}),
     "holdout": ("ShaderNodeHoldout", {}),
+    # Metallic BSDF (Blender 4.3+): F82 Tint (the default) and Physical Conductor (a
+    # gold-like RGB index); ".name" keys set node properties.
+    "metallic_bsdf_f82": (
+        "ShaderNodeBsdfMetallic",
+        {"Base Color": (0.9, 0.6, 0.3), "Edge Tint": (0.95, 0.85, 0.6), "Roughness": 0.35},
+    ),
+    "metallic_bsdf_physical": (
+        "ShaderNodeBsdfMetallic",
+        {".fresnel_type": "PHYSICAL_CONDUCTOR", "IOR": (0.18, 0.42, 1.37), "Extinction": (3.42, 2.35, 1.77), "Roughness": 0.35},
+    ),
 }
 
 # Measured mean ΔE00 of the features that do not match Cycles yet (at 128 spp unless said; the grid
@@ -117,6 +127,8 @@ for k, name in enumerate(names):
     else:
         node = nt.nodes.new(kind)
         for key, v in inputs.items():
+            if key.startswith('.'):
+                setattr(node, key[1:], v); continue
             s = node.inputs[key]
             s.default_value = (*v, 1.0) if isinstance(v, list) and s.type == 'RGBA' else v
     nt.links.new(node.outputs[0], nt.nodes['Material Output'].inputs['Surface'])

@@ -14,6 +14,7 @@ pub mod energy;
 pub mod energy_tables;
 pub mod fresnel;
 pub mod layer;
+pub mod metallic;
 pub mod microfacet;
 pub mod mix;
 pub mod oren_nayar;

@@ -233,6 +233,18 @@ pub enum BsdfDesc {
         #[serde(default)]
         beckmann: bool,
     },
+    /// Blender's Metallic BSDF in Physical Conductor mode: GGX with the exact conductor
+    /// Fresnel of `eta` + i`k` (spectra, or RGB triples uplifted per wavelength as
+    /// unbounded data), with Multiscatter GGX's energy compensation when `multiscatter`
+    /// (`material::metallic`).
+    Metallic {
+        eta: SpectrumDesc,
+        k: SpectrumDesc,
+        #[serde(default)]
+        roughness: f32,
+        #[serde(default = "yes")]
+        multiscatter: bool,
+    },
     /// A metal: a named measured metal ("gold", "silver", "copper", "aluminium") or
     /// a user complex index η + ik; GGX roughness as Blender's (alpha = roughness²).
     Conductor {
@@ -853,6 +865,10 @@ impl BsdfDesc {
             BsdfDesc::None | BsdfDesc::Null => {}
             BsdfDesc::Dielectric { ior, roughness: _ } | BsdfDesc::Refraction { ior, .. } => {
                 f(SpectralItem::DielectricIor(ior))
+            }
+            BsdfDesc::Metallic { eta, k, .. } => {
+                f(Spectrum(Index, eta));
+                f(Spectrum(Index, k));
             }
             BsdfDesc::Conductor { metal: _, eta, k, roughness: _ } => {
                 for s in [eta, k].into_iter().flatten() {

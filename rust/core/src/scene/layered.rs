@@ -182,6 +182,11 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
         BsdfDesc::Refraction { ior, roughness, beckmann } => {
             super::optics::build_refraction(material, ior, *roughness, *beckmann, b.grid)?
         }
+        BsdfDesc::Metallic { eta, k, roughness, multiscatter } => {
+            let eta = b.spectrum(eta, SpectrumRole::Unbounded, material, "eta")?;
+            let k = b.spectrum(k, SpectrumRole::Unbounded, material, "k")?;
+            super::optics::build_metallic(material, eta, k, *roughness, *multiscatter)?
+        }
         BsdfDesc::Conductor { metal, eta, k, roughness } => {
             let eta = eta.as_ref().map(|d| b.spectrum(d, SpectrumRole::Unbounded, material, "eta")).transpose()?;
             let k = k.as_ref().map(|d| b.spectrum(d, SpectrumRole::Unbounded, material, "k")).transpose()?;

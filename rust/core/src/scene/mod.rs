@@ -545,6 +545,7 @@ impl Scene {
                 | BsdfDesc::Add { .. }
                 | BsdfDesc::RoughDiffuse { .. }
                 | BsdfDesc::Translucent { .. }
+                | BsdfDesc::Metallic { .. }
                 | BsdfDesc::Tint { .. }
                 | BsdfDesc::Sheen { .. }
                 | BsdfDesc::Oriented { .. }

@@ -66,6 +66,26 @@ pub fn build_refraction(
     Ok(Box::new(crate::material::refraction::Refraction::new(ior, roughness, beckmann)))
 }
 
+/// Blender's Metallic BSDF in Physical Conductor mode (`material::metallic`): η and k
+/// per wavelength (the node's RGB uplifted), clamped below at 0 as Cycles clamps the RGB
+/// (η at least 1e-4: a complex index of 0 has no Fresnel).
+pub fn build_metallic(
+    material: &str,
+    mut eta: SampledSpectrum,
+    mut k: SampledSpectrum,
+    roughness: f32,
+    multiscatter: bool,
+) -> Result<Box<dyn Bsdf>> {
+    let roughness = check_roughness(material, roughness)?;
+    if !(eta.is_finite() && k.is_finite()) {
+        return Err(Error::object("material", material, "the conductor's IOR and Extinction must be finite"));
+    }
+    eta.values_mut().iter_mut().for_each(|v| *v = v.max(1e-4));
+    k.values_mut().iter_mut().for_each(|v| *v = v.max(0.0));
+    let c = Conductor::new(ComplexFresnel { eta, k }, roughness);
+    Ok(if multiscatter { Box::new(crate::material::metallic::MultiscatterConductor::new(c)) } else { Box::new(c) })
+}
+
 /// A conductor from a named metal or user (η, k) spectra (already on the grid).
 pub fn build_conductor(
     material: &str,

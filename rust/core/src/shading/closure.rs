@@ -327,6 +327,14 @@ pub enum Template {
         ior: Ior,
         beckmann: bool,
     },
+    /// Blender's Metallic BSDF in Physical Conductor mode: constant RGB IOR and
+    /// Extinction (uplifted per wavelength at build).
+    Metallic {
+        eta: [f32; 3],
+        k: [f32; 3],
+        roughness: F,
+        multiscatter: bool,
+    },
     Translucent {
         color: Col,
     },
@@ -497,6 +505,7 @@ impl Template {
                 color.is_const() && roughness.is_const() && matches!(ior, Ior::C(_))
             }
             Template::Translucent { color } => color.is_const(),
+            Template::Metallic { roughness, .. } => roughness.is_const(),
             Template::Refraction { color, roughness, ior, .. } => {
                 color.is_const() && roughness.is_const() && matches!(ior, Ior::C(_))
             }
@@ -564,7 +573,9 @@ impl Template {
                     || coat.as_ref().is_some_and(|c| !c.roughness.is_const() || !c.weight.is_const())
             }
             Template::Glossy { roughness, anisotropy, .. } => !roughness.is_const() || !anisotropy.is_const(),
-            Template::Glass { roughness, .. } | Template::Refraction { roughness, .. } => !roughness.is_const(),
+            Template::Glass { roughness, .. }
+            | Template::Refraction { roughness, .. }
+            | Template::Metallic { roughness, .. } => !roughness.is_const(),
             Template::Mix { a, b, .. } | Template::Add { a, b } => a.may_be_specular() || b.may_be_specular(),
             Template::Oriented { t, .. } => t.may_be_specular(),
             _ => false,
@@ -685,6 +696,10 @@ impl Template {
                 } else {
                     BsdfDesc::Tint { color: c, bsdf: Box::new(r) }
                 }
+            }
+            Template::Metallic { eta, k, roughness, multiscatter } => {
+                let rgb = |c: &[f32; 3]| SpectrumDesc::new(SpectrumKind::Rgb { rgb: *c });
+                BsdfDesc::Metallic { eta: rgb(eta), k: rgb(k), roughness: roughness.at(v), multiscatter: *multiscatter }
             }
             Template::Translucent { color } => BsdfDesc::Translucent { color: color.at(v) },
             Template::Sheen { color, roughness } => BsdfDesc::Sheen { color: color.at(v), roughness: roughness.at(v) },
@@ -822,6 +837,19 @@ impl<'c, 'a> Lowering<'c, 'a> {
     fn prop<T: Copy>(&self, node: usize, key: &str, table: &[(&str, T)], default: T) -> Result<T> {
         let n = &self.c.nodes[node];
         super::props::Props { map: &n.props, material: self.c.material, node: &n.name }.enumeration(key, table, default)
+    }
+
+    /// A vector input's constant value clamped below at 0; a varying one warns and
+    /// reads `default` (Blender's).
+    fn const_vector(&mut self, node: usize, id: &str, default: [f32; 3]) -> Result<[f32; 3]> {
+        let r = self.c.input_reg(node, id)?;
+        match self.c.const_of(r) {
+            Some(v) if v.is_finite() => Ok(v.max(Vec3::ZERO).to_array()),
+            _ => {
+                self.c.warn(node, format!("a varying or non-finite {id} is not supported yet; using {default:?}"));
+                Ok(default)
+            }
+        }
     }
 
     /// Warns when an input this build ignores differs from Blender's default.
@@ -1016,6 +1044,55 @@ impl<'c, 'a> Lowering<'c, 'a> {
                     normal,
                 };
                 (t, None)
+            }
+            "ShaderNodeBsdfMetallic" => {
+                let n = self.normal(node, "Normal")?;
+                let roughness = self.float(node, "Roughness", 0.0, 1.0)?;
+                self.ignored(node, "Anisotropy", 0.0, "no anisotropy on the Metallic BSDF yet")?;
+                let distribution = self.prop(
+                    node,
+                    "distribution",
+                    &[("MULTI_GGX", "MULTI_GGX"), ("GGX", "GGX"), ("BECKMANN", "BECKMANN")],
+                    "MULTI_GGX",
+                )?;
+                let physical =
+                    self.prop(node, "fresnel_type", &[("F82", false), ("PHYSICAL_CONDUCTOR", true)], false)?;
+                if distribution == "BECKMANN" || (distribution == "GGX" && !physical) {
+                    self.c.warn(
+                        node,
+                        format!("distribution {distribution} is not supported here; it renders as Multiscatter GGX"),
+                    );
+                }
+                if physical {
+                    // Cycles clamps the RGB IOR and Extinction below at 0.
+                    let eta = self.const_vector(node, "IOR", [2.757, 2.513, 2.231])?;
+                    let k = self.const_vector(node, "Extinction", [3.867, 3.404, 3.009])?;
+                    let t = Template::Metallic { eta, k, roughness, multiscatter: distribution != "GGX" };
+                    (oriented(t, n, true), None)
+                } else {
+                    // F82 Tint: the Principled's metal lobe (Cycles' svm_node_closure_bsdf,
+                    // CLOSURE_BSDF_F82_CONDUCTOR: f0 = saturate(Base Color), f82 =
+                    // saturate(Edge Tint), bsdf_microfacet_setup_fresnel_f82_tint).
+                    let t = Template::Principled {
+                        base_color: self.color(node, "Base Color")?,
+                        metallic: F::C(1.0),
+                        roughness,
+                        ior: Ior::C(IorDesc::Constant { ior: 1.5 }),
+                        transmission: F::C(0.0),
+                        specular_tint: self.color(node, "Edge Tint")?,
+                        thin_film_thickness: F::C(0.0),
+                        thin_film_ior: F::C(1.33),
+                        specular_ior_level: F::C(0.5),
+                        diffuse_roughness: F::C(0.0),
+                        anisotropy: None,
+                        coat: None,
+                        sheen: None,
+                        subsurface: None,
+                        // The Principled orients its metal lobe about the valid Normal.
+                        normal: n,
+                    };
+                    (t, None)
+                }
             }
             "ShaderNodeBsdfTranslucent" => {
                 let n = self.normal(node, "Normal")?;
