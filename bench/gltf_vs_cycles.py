@@ -56,6 +56,7 @@ MODELS = {
     "TransmissionTest": "glTF-Binary",
     "SpecularTest": "glTF-Binary",
     "AnisotropyStrengthTest": "glTF-Binary",
+    "AnisotropyRotationTest": "glTF-Binary",  # an anisotropy texture: the importer's Tangent node (UV map)
 }
 RAW = "https://raw.githubusercontent.com/KhronosGroup/glTF-Sample-Assets/main/Models"
 

@@ -22,7 +22,8 @@ COLS = 5
 SPP = 256  # 128 until the subsurface walk: its noise in both renderers alone gave 1.49-1.65 there
 BAR = 1.5
 
-# name: (node type, {input: value}); Principled spheres start from Blender's default node.
+# name: (node type, {input: value}[, {Tangent node props}]); Principled spheres start from
+# Blender's default node; a third entry links a Tangent node to the Tangent input.
 FEATURES = {
     "principled_default": ("ShaderNodeBsdfPrincipled", {}),
     "coat": (
@@ -43,6 +44,16 @@ FEATURES = {
     "anisotropic_metal": (
         "ShaderNodeBsdfPrincipled",
         {"Base Color": (0.9, 0.9, 0.9), "Metallic": 1.0, "Roughness": 0.4, "Anisotropic": 0.8},
+    ),
+    "anisotropic_tangent_x": (
+        "ShaderNodeBsdfPrincipled",
+        {"Base Color": (0.9, 0.6, 0.3), "Metallic": 1.0, "Roughness": 0.4, "Anisotropic": 0.8},
+        {"direction_type": "RADIAL", "axis": "X"},
+    ),
+    "anisotropic_tangent_uv": (
+        "ShaderNodeBsdfPrincipled",
+        {"Base Color": (0.6, 0.7, 0.9), "Metallic": 1.0, "Roughness": 0.4, "Anisotropic": 0.8, "Anisotropic Rotation": 0.125},
+        {"direction_type": "UV_MAP", "uv_map": "UVMap"},
     ),
     "anisotropic_glossy": (
         "ShaderNodeBsdfAnisotropic",
@@ -116,7 +127,7 @@ so = bpy.data.objects.new('Sun', sd); sc.collection.objects.link(so); so.rotatio
 cd = bpy.data.cameras.new('Camera'); cd.type = 'ORTHO'; cd.ortho_scale = float(COLS)
 co = bpy.data.objects.new('Camera', cd); sc.collection.objects.link(co); sc.camera = co; co.location = (0, 0, 10)
 for k, name in enumerate(names):
-    kind, inputs = features[name]
+    kind, inputs = features[name][:2]
     m = bpy.data.materials.new(name); m.use_nodes = True; nt = m.node_tree
     for n in list(nt.nodes):
         if n.type != 'OUTPUT_MATERIAL': nt.nodes.remove(n)
@@ -132,6 +143,11 @@ for k, name in enumerate(names):
             s = node.inputs[key]
             s.default_value = (*v, 1.0) if isinstance(v, list) and s.type == 'RGBA' else v
     nt.links.new(node.outputs[0], nt.nodes['Material Output'].inputs['Surface'])
+    if len(features[name]) > 2:
+        tn = nt.nodes.new('ShaderNodeTangent')
+        for key, v in features[name][2].items():
+            setattr(tn, key, v)
+        nt.links.new(tn.outputs['Tangent'], node.inputs['Tangent'])
     col, row = k % COLS, k // COLS
     bpy.ops.mesh.primitive_uv_sphere_add(radius=0.4, location=(col - (COLS - 1) / 2, (rows - 1) / 2 - row, 0), segments=48, ring_count=24)
     bpy.ops.object.shade_smooth()

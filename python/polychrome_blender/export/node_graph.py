@@ -43,6 +43,7 @@ SUPPORTED = frozenset(
         "ShaderNodeRGB",
         "ShaderNodeTexCoord",
         "ShaderNodeUVMap",
+        "ShaderNodeTangent",
         "ShaderNodeNewGeometry",
         "ShaderNodeVertexColor",
         "ShaderNodeAttribute",
@@ -110,6 +111,7 @@ PER_HIT = frozenset(
     {
         "ShaderNodeTexCoord",
         "ShaderNodeUVMap",
+        "ShaderNodeTangent",
         "ShaderNodeNewGeometry",
         "ShaderNodeVertexColor",
         "ShaderNodeAttribute",
@@ -554,6 +556,8 @@ class GraphExport:
         need = []
         if t == "ShaderNodeUVMap":
             need.append(("uv", props.get("uv_map", "")))
+        elif t == "ShaderNodeTangent" and props.get("direction_type") == "UV_MAP":
+            need += [("uv", props.get("uv_map", "")), ("tangent", props.get("uv_map", ""))]
         elif t == "ShaderNodeNormalMap" and props.get("space") == "TANGENT":
             need += [("uv", props.get("uv_map", "")), ("tangent", props.get("uv_map", ""))]
         elif t == "ShaderNodeVertexColor":

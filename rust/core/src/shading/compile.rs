@@ -363,6 +363,13 @@ impl<'a> Compiler<'a> {
                 let name = p.string("attribute_name")?.unwrap_or("").to_string();
                 Kernel::Input(Input::Attribute(self.attribute(node, AttributeRequest::Generic(name))?))
             }
+            "ShaderNodeTangent" => {
+                // Cycles' svm_node_tangent: radial about an object axis, or the UV map's
+                // tangent (the mesh's tangents, as the Normal Map node reads them).
+                let uv = p.enumeration("direction_type", &[("RADIAL", false), ("UV_MAP", true)], false)?;
+                let axis = p.enumeration("axis", &[("X", 0u8), ("Y", 1), ("Z", 2)], 2)?;
+                Kernel::Input(Input::TangentNode { uv_map: uv, axis })
+            }
             "ShaderNodeObjectInfo" => Kernel::Input(Input::ObjectInfo),
             "ShaderNodeFresnel" => Kernel::Input(Input::Fresnel),
             "ShaderNodeLayerWeight" => Kernel::Input(Input::LayerWeight),

@@ -20,6 +20,12 @@ pub enum Input {
     Attribute(usize),
     /// Location, Color, Alpha, Object Index, Material Index, Random.
     ObjectInfo,
+    /// The Tangent node: the UV map's tangent, or radial about object axis `axis`
+    /// (0, 1, 2: X, Y, Z) of the Generated coordinates.
+    TangentNode {
+        uv_map: bool,
+        axis: u8,
+    },
     /// IOR, Normal → Fac.
     Fresnel,
     /// Blend, Normal → Fresnel, Facing.
@@ -54,8 +60,28 @@ pub fn fresnel_dielectric_cos(cosi: f32, eta: f32) -> f32 {
 /// (`object_normal_transform`) and projected onto the shading normal's plane,
 /// cross(N, normalize(cross(t, N))). Zero on the Z axis itself.
 pub fn radial_tangent(sp: &ShadingPoint) -> Vec3 {
-    let g = sp.generated;
-    let t = sp.normal_to_world * Vec3::new(-(g.y - 0.5), g.x - 0.5, 0.0);
+    tangent_node(sp, false, 2)
+}
+
+/// Cycles' `svm_node_tangent` (kernel/svm/tex_coord.h): the object-space tangent, radial
+/// about axis X (0, −(g.z − ½), g.y − ½), Y (−(g.z − ½), 0, g.x − ½) or Z
+/// (−(g.y − ½), g.x − ½, 0) of the Generated coordinates g, or the UV map's tangent (the
+/// mesh's, `ShadingPoint::tangent` taken back to object space), then taken to world
+/// space as a normal (`object_normal_transform`) and projected on the shading normal's
+/// plane, cross(N, normalize(cross(t, N))).
+pub fn tangent_node(sp: &ShadingPoint, uv_map: bool, axis: u8) -> Vec3 {
+    let g = sp.generated - Vec3::splat(0.5);
+    let t = if uv_map {
+        // World → object for a direction is mᵀ (m = L⁻ᵀ, the normal matrix).
+        sp.normal_to_world.transpose() * sp.tangent
+    } else {
+        match axis {
+            0 => Vec3::new(0.0, -g.z, g.y),
+            1 => Vec3::new(-g.z, 0.0, g.x),
+            _ => Vec3::new(-g.y, g.x, 0.0),
+        }
+    };
+    let t = sp.normal_to_world * t;
     sp.normal.cross(t.cross(sp.normal).normalize_or_zero())
 }
 
@@ -144,6 +170,7 @@ impl Input {
             Input::Uv => o[0] = sp.uv.extend(0.0),
             Input::Normal => o[0] = sp.normal,
             Input::Tangent => o[0] = radial_tangent(sp),
+            Input::TangentNode { uv_map, axis } => o[0] = tangent_node(sp, uv_map, axis),
             Input::Incoming => o[0] = -sp.incoming,
         }
     }
@@ -194,6 +221,11 @@ mod tests {
         // On the axis itself there is none.
         let sp = ShadingPoint { generated: Vec3::new(0.5, 0.5, 1.0), normal: Vec3::Z, ..Default::default() };
         assert_eq!(radial_tangent(&sp), Vec3::ZERO);
+        // The Tangent node: radial about X, and the UV map's (mesh) tangent projected.
+        let sp = ShadingPoint { generated: Vec3::new(0.5, 1.0, 0.5), normal: Vec3::Y, ..Default::default() };
+        assert!((tangent_node(&sp, false, 0) - Vec3::Z).length() < 1e-6, "{}", tangent_node(&sp, false, 0));
+        let sp = ShadingPoint { normal: Vec3::Z, tangent: Vec3::new(1.0, 1.0, 0.5), ..Default::default() };
+        assert!((tangent_node(&sp, true, 2) - Vec3::new(1.0, 1.0, 0.0).normalize()).length() < 1e-6);
         let mut o = [Vec3::ZERO];
         Input::Tangent.eval(
             &[],

@@ -189,6 +189,7 @@ pub static NODES: &[NodeSpec] = &[
         ],
     },
     NodeSpec { idname: "ShaderNodeUVMap", inputs: &[], outputs: &[("UV", Vector)] },
+    NodeSpec { idname: "ShaderNodeTangent", inputs: &[], outputs: &[("Tangent", Vector)] },
     NodeSpec {
         idname: "ShaderNodeNewGeometry",
         inputs: &[],
