@@ -84,8 +84,32 @@ pub struct Uplift {
     emission_exact: bool,
 }
 
+/// Maps solved so far in this process: every scene build (and the AUTO grid's choice)
+/// asks for one, nearly always for the same few grids, and solving the basis (an ADMM
+/// QP) took about 8 % of a 1M-triangle scene build's CPU time (issue 16).
+type UpliftCache = std::sync::Mutex<Vec<(WavelengthGrid, RgbSpace, UpliftMethod, Uplift)>>;
+static SOLVED: UpliftCache = std::sync::Mutex::new(Vec::new());
+/// Maps [`SOLVED`] keeps (the latest ones).
+const SOLVED_KEPT: usize = 8;
+
 impl Uplift {
+    /// The RGB → spectrum map of `method` for `grid` and `space` (solved once per process
+    /// for each; later calls return a copy of the same map).
     pub fn new(grid: &WavelengthGrid, space: &RgbSpace, method: UpliftMethod) -> Result<Self> {
+        let lock = || SOLVED.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((.., up)) = lock().iter().find(|(g, s, m, _)| g == grid && s == space && *m == method) {
+            return Ok(up.clone());
+        }
+        let up = Self::solve(grid, space, method)?;
+        let mut solved = lock();
+        if solved.len() >= SOLVED_KEPT {
+            solved.remove(0);
+        }
+        solved.push((grid.clone(), *space, method, up.clone()));
+        Ok(up)
+    }
+
+    fn solve(grid: &WavelengthGrid, space: &RgbSpace, method: UpliftMethod) -> Result<Self> {
         let n = grid.len();
         if n < 4 || grid.lambdas().windows(2).any(|p| !(p[1] > p[0])) {
             // E.g. the RGB method's three-lane grid: RGB needs no conversion there.
