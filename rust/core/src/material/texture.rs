@@ -290,6 +290,9 @@ impl Texture {
         filter: Filter,
         texel: impl Fn(usize, usize) -> [f32; N],
     ) -> [f32; N] {
+        if !(uv.x.is_finite() && uv.y.is_finite()) {
+            return [0.0; N]; // a non-finite coordinate reads black
+        }
         match filter {
             Filter::Bilinear => self.bilinear(uv, wrap_u, wrap_v, texel),
             Filter::Cubic => self.bicubic(uv, wrap_u, wrap_v, texel),
@@ -324,8 +327,7 @@ impl Texture {
         (taps, w)
     }
 
-    /// Bicubic filter of `texel` values (0 outside the image under CLIP; 0 for a
-    /// non-finite coordinate).
+    /// Bicubic filter of `texel` values (0 outside the image under CLIP) at a finite `uv`.
     fn bicubic<const N: usize>(
         &self,
         uv: Vec2,
@@ -333,9 +335,6 @@ impl Texture {
         wrap_v: Wrap,
         texel: impl Fn(usize, usize) -> [f32; N],
     ) -> [f32; N] {
-        if !(uv.x.is_finite() && uv.y.is_finite()) {
-            return [0.0; N];
-        }
         let (xs, wx) = Self::cubic_axis(uv.x, self.width, wrap_u);
         let (ys, wy) = Self::cubic_axis(1.0 - uv.y, self.height, wrap_v);
         let mut out = [0.0; N];
@@ -352,8 +351,7 @@ impl Texture {
         out
     }
 
-    /// Bilinear filter of `texel` values (0 outside the image under CLIP; 0 for a
-    /// non-finite coordinate).
+    /// Bilinear filter of `texel` values (0 outside the image under CLIP) at a finite `uv`.
     #[inline]
     fn bilinear<const N: usize>(
         &self,
@@ -362,9 +360,6 @@ impl Texture {
         wrap_v: Wrap,
         texel: impl Fn(usize, usize) -> [f32; N],
     ) -> [f32; N] {
-        if !(uv.x.is_finite() && uv.y.is_finite()) {
-            return [0.0; N];
-        }
         // Texel centres at integers; rows count from the top (v = 1).
         let (x0, x1, fx) = Self::axis(uv.x, self.width, wrap_u);
         let (y0, y1, fy) = Self::axis(1.0 - uv.y, self.height, wrap_v);
