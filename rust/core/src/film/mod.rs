@@ -127,18 +127,13 @@ impl PixelSums {
             self.nonfinite += 1;
             return;
         }
-        // Whole padded chunks (the padding is zero on both sides).
-        for (d, v) in
-            self.radiance.chunks_exact_mut(FOLD_LANES).zip(s.radiance.padded_values().chunks_exact(FOLD_LANES))
-        {
-            for k in 0..FOLD_LANES {
-                d[k] += v[k] as f64;
-            }
+        // Element by element over the padded storage (the padding is zero on both
+        // sides): vectorised as whole f32 → f64 conversions and adds.
+        for (d, &v) in self.radiance.iter_mut().zip(s.radiance.padded_values()) {
+            *d += v as f64;
         }
-        for (d, v) in self.albedo.chunks_exact_mut(FOLD_LANES).zip(s.albedo.padded_values().chunks_exact(FOLD_LANES)) {
-            for k in 0..FOLD_LANES {
-                d[k] += v[k] as f64;
-            }
+        for (d, &v) in self.albedo.iter_mut().zip(s.albedo.padded_values()) {
+            *d += v as f64;
         }
         self.depth += s.depth as f64;
         self.normal[0] += s.normal.x as f64;

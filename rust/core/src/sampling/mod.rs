@@ -54,13 +54,13 @@ impl Rng {
     /// As [`Rng::for_sample`] with the given sampler; INDEPENDENT: a PCG stream per
     /// pixel sample.
     pub fn for_sampler(sampler: Sampler, seed: u64, pixel: u64, sample: u64) -> Self {
-        let mut r = Self::new(mix64(seed ^ mix64(sample.wrapping_add(0x9e3779b97f4a7c15))), pixel);
         if sampler == Sampler::Sobol {
             // The key has no sample in it: a pixel's samples are points of one sequence.
+            // Every draw comes from the Sobol points: the PCG state is never read.
             let key = mix64(seed ^ mix64(pixel ^ SOBOL_SALT));
-            r.sobol = Some(Sobol { key, index: sample as u32, block: 0, call: 0 });
+            return Self { state: 0, inc: 1, sobol: Some(Sobol::new(key, sample as u32)) };
         }
-        r
+        Self::new(mix64(seed ^ mix64(sample.wrapping_add(0x9e3779b97f4a7c15))), pixel)
     }
     /// A path reached a new vertex: its draws start a fresh block of dimensions, so
     /// the draws of vertex k line up across a pixel's samples however many numbers
@@ -126,9 +126,14 @@ pub struct Sobol {
     pub block: u32,
     /// Draws so far at this vertex.
     pub call: u32,
+    /// `index` with its bits reversed, as every draw's index shuffle starts.
+    index_reversed: u32,
 }
 
 impl Sobol {
+    pub fn new(key: u64, index: u32) -> Self {
+        Self { key, index, block: 0, call: 0, index_reversed: index.reverse_bits() }
+    }
     fn seeds(&mut self) -> u64 {
         let h = mix64(self.key ^ mix64(((self.block as u64) << 32) | self.call as u64));
         self.call += 1;
@@ -137,13 +142,13 @@ impl Sobol {
     /// One stratified draw (32 bits of a uniform in [0, 1)).
     pub fn next_1d(&mut self) -> u32 {
         let h = self.seeds();
-        let i = owen(self.index, h as u32);
+        let i = owen_reversed(self.index_reversed, h as u32);
         owen(i.reverse_bits(), (h >> 32) as u32)
     }
     /// One stratified 2D draw: Sobol dimensions 0 and 1 of the shuffled index.
     pub fn next_2d(&mut self) -> [u32; 2] {
         let h = self.seeds();
-        let i = owen(self.index, h as u32);
+        let i = owen_reversed(self.index_reversed, h as u32);
         let h2 = mix64(h);
         [owen(i.reverse_bits(), (h >> 32) as u32), owen(sobol_dim1(i), h2 as u32)]
     }
@@ -192,7 +197,12 @@ const SOBOL_DIM1: [u32; 32] = {
 /// blocks — stratification survives, and each point is uniform.
 #[inline]
 fn owen(x: u32, seed: u32) -> u32 {
-    let mut n = x.reverse_bits();
+    owen_reversed(x.reverse_bits(), seed)
+}
+
+/// [`owen`] of the 32-bit fraction whose bits reversed are `n`.
+#[inline]
+fn owen_reversed(mut n: u32, seed: u32) -> u32 {
     n ^= n.wrapping_mul(0x3d20_adea);
     n = n.wrapping_add(seed);
     n = n.wrapping_mul((seed >> 16) | 1);

@@ -85,8 +85,9 @@ impl Coefficients {
 impl Scene {
     /// Any material has a medium or no surface: paths track media and shadow rays pass
     /// null surfaces.
+    #[inline]
     pub fn has_media(&self) -> bool {
-        !self.media.is_empty() || self.null_surface.iter().any(|&b| b) || self.pass_through.iter().any(Option::is_some)
+        self.has_media
     }
 
     /// The medium of stack entry (instance, material), or (WORLD_INSTANCE, medium).

@@ -233,6 +233,9 @@ pub struct Scene {
     /// Cycles' Film > Transparent: the background seen directly (through transparent
     /// bounces only) makes the film's alpha 0 there and adds no radiance.
     pub film_transparent: bool,
+    /// Any medium, null surface or pass-through material ([`Scene::has_media`]), kept
+    /// from the build: paths ask per vertex, and the materials may be thousands.
+    has_media: bool,
     /// Per mesh: the named vertex data shading graphs read, and its bounds.
     pub mesh_data: Vec<hit::MeshShadingData>,
     /// Per light: the ray visibility of the instance it lies on (`visibility::ALL` for
@@ -964,6 +967,8 @@ impl Scene {
         let nee_distribution = Distribution1D::new(&nee_powers);
         let hit_lights = (0..lights.len()).filter(|&l| lights[l].hittable()).collect();
 
+        let has_media =
+            !media.is_empty() || null_surface.iter().any(|&b| b) || pass_through.iter().any(Option::is_some);
         let mut scene = Self {
             observer: Observer::new(&grid),
             grid,
@@ -990,6 +995,7 @@ impl Scene {
             pass_through,
             holdout,
             film_transparent: desc.film_transparent,
+            has_media,
             mesh_data,
             light_visibility,
             hit_lights,
