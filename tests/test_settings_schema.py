@@ -112,7 +112,8 @@ def test_every_setting_is_a_flag_with_the_schema_help_default_and_choices():
         if s["kind"]["type"] == "bool":
             assert "--no-" + name.replace("_", "-") in a.option_strings
     non_settings = {a.dest for a in render_parser()._actions} - set(BY_NAME)
-    assert non_settings == {"help", "scene", "output", "passes", "quiet", "frames", "frame_step"}
+    # subdivision_level: a USD reader option (docs/usd.md), not a render setting.
+    assert non_settings == {"help", "scene", "output", "passes", "quiet", "frames", "frame_step", "subdivision_level"}
 
 
 @pytest.mark.parametrize("name,value,message", list(bad_values()))

@@ -335,7 +335,9 @@ def test_final_render_shows_intermediate_images_and_ends_with_the_same_pixels(tm
     sc = bpy.context.scene
     sc.render.engine = 'POLYCHROME'
     sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 64, 48, 100
-    sc.polychrome.samples = 64
+    # Long enough (~1 s at 2048 spp) that the engine's 0.05 s poll sees the job running: at 64 spp an idle
+    # machine finished before the first poll, with nothing intermediate to show.
+    sc.polychrome.samples = 2048
     sc.render.image_settings.file_format = 'OPEN_EXR'; sc.render.image_settings.color_depth = '32'
     out = {}
     for mode in (False, True):
@@ -359,6 +361,6 @@ def test_final_render_shows_intermediate_images_and_ends_with_the_same_pixels(tm
     r = check(proc, res)[0]
     assert r["off"]["err"] is None and r["on"]["err"] is None
     assert r["off"]["n"] == 0 and r["on"]["n"] >= 1
-    assert r["off"]["spp"] == r["on"]["spp"] == 64
+    assert r["off"]["spp"] == r["on"]["spp"] == 2048
     assert r["same"], r["keys"]
     assert r["cancelled"] and r["err2"] is None
