@@ -474,3 +474,65 @@ def test_ies_shaping_scales_a_sphere_light_by_the_relative_profile(tmp_path, nor
         v_deg, h_deg = math.degrees(math.acos(-w[2])), math.degrees(math.atan2(w[0], w[1]) + math.pi)
         want = rho / math.pi * intensity * candela(h_deg, v_deg) / scale * (height / dist) / dist**2
         assert y[py, px] == pytest.approx(want, rel=0.04), (px, py, normalize)
+
+
+def ies_theta(theta, s):
+    """UsdLux shaping:ies:angleScale s (OpenUSD's ShapingAPI documentation): the vertical
+    angle (radians) at which the profile is read for a direction θ from the light's axis,
+    clamped to [0, π] as hdEmbree clamps it."""
+    if s > 0:
+        t = theta / s
+    elif s < 0:
+        t = (theta - math.pi) / -s + math.pi
+    else:
+        t = theta
+    return min(max(t, 0.0), math.pi)
+
+
+@pytest.mark.parametrize("angle_scale, normalize", [(0.5, False), (1.6, False), (-0.7, False), (-1.5, True)])
+def test_ies_angle_scale_rescales_the_profiles_vertical_angles(tmp_path, angle_scale, normalize):
+    """shaping:ies:angleScale s: a direction at θ from the light's −Z reads the profile at
+    θ/s (s > 0, scaled about straight down), (θ − π)/−s + π (s < 0, about straight up),
+    clamped to [0, π]; normalize divides by the file's own mean (UsdLux: the profile
+    power of the file). The floor under a tilted point light with tests/ies_files.py's
+    closed-form profile reads ρ/π · I · c(h, θ_ies)/scale · cos θ / d², no warning."""
+    from ies_files import candela, quadrant_file
+
+    (tmp_path / "q.ies").write_text(quadrant_file())
+    rho, intensity, height, n = 0.5, 10.0, 1.5, 16
+    path = tmp_path / "ies.usda"
+    stage = new_stage(path)
+    floor_mesh(stage, "/floor", 5.0, preview_material(stage, "/Looks/grey", (rho, rho, rho)))
+    top_camera(stage, "/cam", 3.0, 3.0)
+    light = UsdLux.SphereLight.Define(stage, "/lamp")
+    light.CreateIntensityAttr(intensity)
+    light.CreateRadiusAttr(0.0)
+    light.AddTranslateOp().Set(Gf.Vec3d(0.2, 0.1, height))
+    light.AddRotateXOp().Set(30.0)
+    shaping = UsdLux.ShapingAPI.Apply(light.GetPrim())
+    shaping.CreateShapingIesFileAttr(Sdf.AssetPath("q.ies"))
+    shaping.CreateShapingIesAngleScaleAttr(angle_scale)
+    shaping.CreateShapingIesNormalizeAttr(normalize)
+    stage.Save()
+    scene, caught = read(path)
+    assert not caught, caught
+    out = pc.render(scene, width=n, height=n, samples=16, max_bounces=1, seed=3)
+    y = luminance(out.rgba[..., :3])
+    cv = np.linspace(1, -1, 801)
+    vv, hh = np.meshgrid(np.degrees(np.arccos(0.5 * (cv[1:] + cv[:-1]))), np.linspace(0.25, 359.75, 720), indexing="ij")
+    scale = candela(hh, vv).mean() if normalize else candela(0.0, 0.0)
+    c30, s30 = math.cos(math.radians(30)), math.sin(math.radians(30))
+    to_local = np.array([[1, 0, 0], [0, c30, s30], [0, -s30, c30]])
+    checked = []
+    for px, py in [(8, 8), (11, 8), (13, 3), (3, 10), (6, 13), (2, 2), (14, 14)]:
+        x, yy = (px + 0.5) / n * 3 - 1.5, 1.5 - (py + 0.5) / n * 3
+        d = np.array([x - 0.2, yy - 0.1, -height])
+        dist = np.linalg.norm(d)
+        w = to_local @ (d / dist)
+        theta = math.acos(-w[2])
+        h_deg = math.degrees(math.atan2(w[0], w[1]) + math.pi)
+        want = rho / math.pi * intensity * candela(h_deg, math.degrees(ies_theta(theta, angle_scale))) / scale * (height / dist) / dist**2
+        unscaled = rho / math.pi * intensity * candela(h_deg, math.degrees(theta)) / scale * (height / dist) / dist**2
+        checked.append(abs(want / unscaled - 1.0))
+        assert y[py, px] == pytest.approx(want, rel=0.04, abs=2e-4), (px, py, angle_scale)
+    assert max(checked) > 0.2  # the scale changes what these pixels see

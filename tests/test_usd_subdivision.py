@@ -230,10 +230,14 @@ def test_level_capped_by_face_count(tmp_path, monkeypatch):
     assert len(said) == 1 and "/m" in said[0] and "level 3" in said[0]
 
 
-BLENDER_BODY = """
-cases = json.loads(open('cases.json').read())
-out = {}
-for name, (pts, counts, idx, creases, corners, boundary) in cases.items():
+# bpy code both Blender tests run first: the cage as a Blender mesh with its creases
+# (Blender's crease c is OpenSubdiv sharpness 10·c²) and a level-2 Subdivision Surface
+# modifier with the limit surface off.
+CAGE_PRELUDE = """
+def sharp(s):
+    return math.sqrt(min(s, 10.0) / 10.0)  # Blender: sharpness = 10 · crease²
+
+def subdivided_cage(name, pts, counts, idx, creases, corners, boundary='PRESERVE_CORNERS', uvs=None, uv_smooth=None):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     faces, k = [], 0
     for c in counts:
@@ -241,7 +245,8 @@ for name, (pts, counts, idx, creases, corners, boundary) in cases.items():
     me = bpy.data.meshes.new(name)
     me.from_pydata(pts, [], faces)
     me.update()
-    sharp = lambda s: math.sqrt(min(s, 10.0) / 10.0)  # Blender: sharpness = 10 · crease²
+    if uvs is not None:
+        me.uv_layers.new(name='st').uv.foreach_set('vector', np.asarray(uvs, np.float32).ravel())  # loops in face order
     if creases:
         attr = me.attributes.new('crease_edge', 'FLOAT', 'EDGE')
         lookup = {tuple(sorted(e.vertices)): e.index for e in me.edges}
@@ -258,12 +263,22 @@ for name, (pts, counts, idx, creases, corners, boundary) in cases.items():
     mod.levels = mod.render_levels = 2
     mod.use_limit_surface = False
     mod.use_creases = True
-    mod.boundary_smooth = 'PRESERVE_CORNERS' if boundary == 'edgeAndCorner' else 'ALL'
-    dg = bpy.context.evaluated_depsgraph_get()
-    ev = ob.evaluated_get(dg).data
+    mod.boundary_smooth = boundary
+    if uv_smooth is not None:
+        mod.uv_smooth = uv_smooth
+    ev = ob.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
     co = np.empty(len(ev.vertices) * 3, np.float32)
     ev.attributes['position'].data.foreach_get('vector', co)
-    out[name] = {'points': co.reshape(-1, 3).tolist(), 'faces': len(ev.polygons)}
+    return ev, co.reshape(-1, 3)
+"""
+
+BLENDER_BODY = """
+cases = json.loads(open('cases.json').read())
+out = {}
+for name, (pts, counts, idx, creases, corners, boundary) in cases.items():
+    smooth = 'PRESERVE_CORNERS' if boundary == 'edgeAndCorner' else 'ALL'
+    ev, co = subdivided_cage(name, pts, counts, idx, creases, corners, boundary=smooth)
+    out[name] = {'points': co.tolist(), 'faces': len(ev.polygons)}
 emit(**out)
 """
 
@@ -276,7 +291,7 @@ def test_against_blender_subdivision_modifier(tmp_path):
     from blender.bhelper import check, run_bpy
 
     (tmp_path / "cases.json").write_text(json.dumps({k: as_lists(v) for k, v in CASES.items()}))
-    proc, results = run_bpy(tmp_path, BLENDER_BODY, timeout=180)
+    proc, results = run_bpy(tmp_path, CAGE_PRELUDE + BLENDER_BODY, timeout=180)
     blender = check(proc, results)[0]
     worst = {}
     for name, case in CASES.items():
@@ -380,32 +395,12 @@ UV_BODY = """
 cases = json.loads(open('uv.json').read())
 modes = cases.pop('_modes')
 out = {}
-sharp = lambda s: math.sqrt(min(s, 10.0) / 10.0)  # Blender: sharpness = 10 · crease²
 for name, (pts, counts, idx, creases, corners, uvs) in cases.items():
     for mode, smooth in modes.items():
-        bpy.ops.wm.read_factory_settings(use_empty=True)
-        faces, k = [], 0
-        for c in counts:
-            faces.append(idx[k:k + c]); k += c
-        me = bpy.data.meshes.new(mode); me.from_pydata(pts, [], faces); me.update()
-        me.uv_layers.new(name='st').uv.foreach_set('vector', np.asarray(uvs, np.float32).ravel())  # loops in face order
-        if creases:
-            attr = me.attributes.new('crease_edge', 'FLOAT', 'EDGE')
-            lookup = {tuple(sorted(e.vertices)): e.index for e in me.edges}
-            for a, b, s in creases:
-                attr.data[lookup[tuple(sorted((a, b)))]].value = sharp(s)
-        if corners:
-            attr = me.attributes.new('crease_vert', 'FLOAT', 'POINT')
-            for v, s in corners:
-                attr.data[v].value = sharp(s)
-        ob = bpy.data.objects.new(mode, me); bpy.context.scene.collection.objects.link(ob)
-        mod = ob.modifiers.new('S', 'SUBSURF'); mod.levels = mod.render_levels = 2; mod.use_limit_surface = False
-        mod.use_creases = True; mod.boundary_smooth = 'PRESERVE_CORNERS'; mod.uv_smooth = smooth
-        ev = ob.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
-        co = np.empty(len(ev.vertices) * 3, np.float32); ev.attributes['position'].data.foreach_get('vector', co)
+        ev, co = subdivided_cage(mode, pts, counts, idx, creases, corners, uvs=uvs, uv_smooth=smooth)
         cv = np.empty(len(ev.loops), np.int32); ev.attributes['.corner_vert'].data.foreach_get('value', cv)
         u = np.empty(len(ev.loops) * 2, np.float32); ev.uv_layers.active.uv.foreach_get('vector', u)
-        rows = np.concatenate([co.reshape(-1, 3)[cv], u.reshape(-1, 2)], 1)
+        rows = np.concatenate([co[cv], u.reshape(-1, 2)], 1)
         out[name + ':' + mode] = np.unique(np.round(rows, 6), axis=0).tolist()
 emit(**out)
 """
@@ -426,7 +421,7 @@ def test_face_varying_against_blender(tmp_path):
     }
     payload["_modes"] = UV_SMOOTH
     (tmp_path / "uv.json").write_text(json.dumps(payload))
-    proc, results = run_bpy(tmp_path, UV_BODY, timeout=300)
+    proc, results = run_bpy(tmp_path, CAGE_PRELUDE + UV_BODY, timeout=300)
     blender = check(proc, results)[0]
     worst, apart = {}, []
     for name, (p, c, x, creases, corners, uv) in cases.items():

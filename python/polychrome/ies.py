@@ -63,6 +63,45 @@ class IESProfile:
         }
 
 
+def angle_scaled(profile: IESProfile, angle_scale: float) -> IESProfile:
+    """The profile with its vertical angles rescaled as UsdLux's ``shaping:ies:angleScale``
+    s defines it (OpenUSD's ShapingAPI documentation, as hdEmbree evaluates it): a direction
+    at vertical angle θ from the light's axis reads the table at θ_ies = θ / s for s > 0
+    (scaled about straight down: s < 1 narrows a downlight's beam, s > 1 widens it),
+    θ_ies = (θ − π) / −s + π for s < 0 (scaled about straight up), θ for s = 0; θ_ies
+    clamped to [0, π]. A table vertical angle a therefore moves to a·s (s > 0) or
+    π + |s|·(a − π) (s < 0), which keeps the interpolation between table entries exact;
+    where the clamp holds the profile at a pole the table reaches, the pole's value is
+    added at 0 or π, and a table stretched past a pole is cut there with the value at the
+    pole interpolated linearly. The values (and any normalisation already applied) stay."""
+    s = float(angle_scale)
+    if not np.isfinite(s):
+        raise ValueError(f"IES profile '{profile.name}': angleScale {s} is not finite")
+    v = np.asarray(profile.v_angles, np.float64)
+    vals = np.asarray(profile.values, np.float64)
+    if s == 0.0:
+        return IESProfile(profile.h_angles.copy(), v.copy(), vals.copy(), profile.name)
+    new = v * s if s > 0 else np.pi + (-s) * (v - np.pi)
+    eps = 1e-6
+
+    def at(theta_ies):  # each row of the table at one vertical angle (linear)
+        return np.array([np.interp(theta_ies, v, row) for row in vals])[:, None]
+
+    if new[-1] > np.pi + eps:  # stretched past straight up: cut at π
+        keep = new < np.pi - eps
+        new, vals = np.append(new[keep], np.pi), np.concatenate([vals[:, keep], at(np.pi / s)], 1)
+    if new[0] < -eps:  # stretched past straight down (s < −1): cut at 0
+        keep = new > eps
+        new, vals = np.insert(new[keep], 0, 0.0), np.concatenate([at(np.pi - np.pi / -s), vals[:, keep]], 1)
+    if v[-1] >= np.pi - eps and new[-1] < np.pi - eps:  # θ_ies clamped to π: the top's value above
+        new, vals = np.append(new, np.pi), np.concatenate([vals, vals[:, -1:]], 1)
+    if v[0] <= eps and new[0] > eps:  # θ_ies clamped to 0: the bottom's value below
+        new, vals = np.insert(new, 0, 0.0), np.concatenate([vals[:, :1], vals], 1)
+    if len(new) < 2 or np.any(np.diff(new) <= 0):
+        raise ValueError(f"IES profile '{profile.name}': angleScale {s} leaves fewer than 2 vertical angles")
+    return IESProfile(profile.h_angles.copy(), new, vals, profile.name)
+
+
 def read(path) -> IESProfile:
     """The profile in the IES file at ``path``; ``ValueError`` naming the file if it cannot be read."""
     try:

@@ -1553,8 +1553,11 @@ class _Reader:
         except ValueError as e:
             self.warn(f"ies:{prim.GetPath()}", f"prim {prim.GetPath()}: {e}; the light has no profile")
             return None
-        if float(self.get(shaping.GetShapingIesAngleScaleAttr(), 0.0)) != 0.0:
-            self.warn(f"iesscale:{prim.GetPath()}", f"prim {prim.GetPath()}: shaping:ies:angleScale is not supported and is ignored")
+        angle_scale = float(self.get(shaping.GetShapingIesAngleScaleAttr(), 0.0))
+        if not math.isfinite(angle_scale):
+            raise self.error(prim, f"shaping:ies:angleScale {angle_scale} is not finite")
+        # The scale is the file's (UsdLux: normalize divides by "iesProfilePower(iesFile)"),
+        # before angleScale remaps its vertical angles.
         if bool(self.get(shaping.GetShapingIesNormalizeAttr(), False)):
             scale = profile.sphere_mean()
         else:
@@ -1565,6 +1568,12 @@ class _Reader:
             )
             return None
         profile.values = profile.values / scale
+        if angle_scale != 0.0:
+            try:
+                profile = ies.angle_scaled(profile, angle_scale)
+            except ValueError as e:
+                self.warn(f"ies:{prim.GetPath()}", f"prim {prim.GetPath()}: {e}; the light has no profile")
+                return None
         return profile
 
     def add_emitter_polygon(self, prim, pts2d: np.ndarray, size: float, normalize: bool, scalar, colour, blackbody) -> None:
