@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 pxr = pytest.importorskip("pxr")
-from pxr import Gf, Sdf, UsdGeom, UsdShade  # noqa: E402
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade  # noqa: E402
 
 import polychrome as pc  # noqa: E402
 from polychrome import usd  # noqa: E402
@@ -413,3 +413,62 @@ def test_instance_and_camera_motion_round_trip_through_write_stage(tmp_path):
     got = np.asarray(desc["instances"][0]["motion"])
     assert got.shape == (3, 4, 4) and np.allclose(got, keys, atol=1e-12)
     assert np.allclose(np.asarray(desc["camera"]["motion"]), cam_keys, atol=1e-12)
+
+
+@pytest.mark.parametrize("with_normals", [False, True])
+def test_deforming_mesh_round_trips_through_write_stage(tmp_path, with_normals):
+    """write_stage writes a deforming mesh's motion_vertices (and motion_normals) as time
+    samples 0 … 1 of its points (normals) with a shutter open from 0 to 1; read_stage reads
+    exactly those arrays back as the mesh's keys (float32), for a placed mesh and one
+    shared by two instances (a prototype), beside a rigidly moving instance."""
+    rng = np.random.default_rng(7)
+    verts = np.array([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0.2)], np.float32)
+    tris = np.array([(0, 1, 2), (0, 2, 3)])
+    keys = np.stack([verts + rng.normal(0, 0.1, verts.shape) for _ in range(4)]).astype(np.float32)
+    normals = np.tile(np.float32([0, 0, 1]), (4, 1))
+    nkeys = None
+    if with_normals:
+        nkeys = rng.normal(0, 0.2, (4, 4, 3)) + [0, 0, 1]
+        nkeys = (nkeys / np.linalg.norm(nkeys, axis=2, keepdims=True)).astype(np.float32)
+    scene = pc.Scene()
+    scene.add_mesh(
+        "cloth",
+        verts,
+        tris,
+        normals=normals if with_normals else None,
+        motion_vertices=keys,
+        motion_normals=nkeys,
+        transform=np.diag([1.0, 1.0, 1.0, 1.0]),
+    )
+    shared = scene.add_mesh("flag", verts, tris, motion_vertices=keys[:3][::-1], place=False)
+    for x in (2.0, 4.0):
+        m = np.eye(4)
+        m[0, 3] = x
+        scene.add_instance(shared, m, f"flag{x:g}")
+    path = tmp_path / "deform.usdc"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        usd.write_stage(scene, path)
+        back = usd.read_stage(path)
+    stage = Usd.Stage.Open(str(path))
+    cam = UsdGeom.Camera(stage.GetPrimAtPath("/World/Camera"))
+    assert (cam.GetShutterOpenAttr().Get(), cam.GetShutterCloseAttr().Get()) == (0.0, 1.0)
+    desc, buffers = back.description()
+    by_name = {m["name"]: m for m in desc["meshes"]}
+
+    def arrays(entry, field):
+        return np.stack([np.asarray(buffers[b], np.float32).reshape(-1, 3) for b in entry[field]])
+
+    cloth = by_name["cloth"]
+    np.testing.assert_array_equal(arrays(cloth, "motion_vertices"), keys)
+    # The frame's arrays are the points' default value, for tools that ignore time;
+    # read_stage reads the earliest time, where USD resolves the first sample.
+    assert np.array_equal(np.asarray(stage.GetPrimAtPath("/World/cloth").GetAttribute("points").Get()), verts)
+    np.testing.assert_array_equal(np.asarray(buffers[cloth["vertices"]], np.float32).reshape(-1, 3), keys[0])
+    if with_normals:
+        np.testing.assert_array_equal(arrays(cloth, "motion_normals"), nkeys)
+    else:
+        assert not cloth.get("motion_normals")
+    flag = by_name["flag"]
+    np.testing.assert_array_equal(arrays(flag, "motion_vertices"), keys[:3][::-1])
+    assert sorted(i["name"] for i in desc["instances"] if i["mesh"] == desc["meshes"].index(flag)) == ["flag2", "flag4"]

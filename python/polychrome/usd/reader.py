@@ -1878,6 +1878,20 @@ class _Reader:
         inside = sum(1 for t in sample_times if t0 < t < t1)
         return min(17, 3 + 2 * inside)
 
+    def key_count_of_samples(self, times, shutter) -> int:
+        """The keys for time samples ``times``: the samples themselves when they are evenly
+        spaced from the shutter's opening to its closing (write_stage's motion), else
+        ``key_count``."""
+        grid = np.array(sorted(times))
+        if (
+            len(grid) >= 2
+            and np.isclose(grid[0], shutter[0])
+            and np.isclose(grid[-1], shutter[1])
+            and np.allclose(np.diff(grid), grid[1] - grid[0])
+        ):
+            return len(grid)
+        return self.key_count(times, *shutter)
+
     def key_matrix(self, prim, t: float) -> np.ndarray:
         m = np.array(self.key_matrix_row(prim, t), dtype=np.float64).T
         if not self.identity_correction:
@@ -1915,16 +1929,7 @@ class _Reader:
             turns = [np.abs(np.subtract(a.Get(tb), a.Get(ta), dtype=np.float64)).max() for a in angles]
             return math.radians(float(max(turns, default=0.0)))
 
-        grid = np.array(sorted(times))
-        if (
-            len(grid) >= 2
-            and np.isclose(grid[0], shutter[0])
-            and np.isclose(grid[-1], shutter[1])
-            and np.allclose(np.diff(grid), grid[1] - grid[0])
-        ):
-            k = len(grid)  # samples evenly spaced over the shutter (write_stage's motion): the keys themselves
-        else:
-            k = self.key_count(times, *shutter)
+        k = self.key_count_of_samples(times, shutter)
         while True:
             ts = np.linspace(shutter[0], shutter[1], k)
             keys = [self.key_matrix(prim, t) for t in ts]
@@ -2018,7 +2023,7 @@ class _Reader:
         frame = self.time
         shapes = []
         try:
-            for t in np.linspace(shutter[0], shutter[1], self.key_count(times, *shutter)):
+            for t in np.linspace(shutter[0], shutter[1], self.key_count_of_samples(times, shutter)):
                 self.time = self.Usd.TimeCode(float(t))
                 shapes.append(self.mesh_arrays(prim))
         finally:
@@ -2035,7 +2040,9 @@ class _Reader:
             return None
         out = {"motion_vertices": verts}
         if base["normals"] is not None and all(a["normals"] is not None and a["normals"].shape == base["normals"].shape for a in shapes):
-            out["motion_normals"] = np.stack([a["normals"] for a in shapes])
+            normals = np.stack([a["normals"] for a in shapes])
+            if not np.array_equal(normals.min(axis=0), normals.max(axis=0)):  # still normals stay the mesh's own
+                out["motion_normals"] = normals
         return out
 
     # -- the whole stage ------------------------------------------------------------------

@@ -199,6 +199,28 @@ def _write_motion(Gf, Usd, op, keys) -> bool:
     return True
 
 
+def _write_deformation(Gf, Usd, Vt, mesh, md, buffers) -> bool:
+    """A deforming mesh's ``motion_vertices`` (and ``motion_normals``) keys, evenly spaced
+    over the shutter, as time samples 0 … 1 of its ``points`` (``normals``) and
+    ``extent``; the frame's arrays stay the default values. Whether there were any."""
+    keys = md.get("motion_vertices") or []
+    if not keys:
+        return False
+    last = len(keys) - 1
+    extent = mesh.GetExtentAttr()
+    for k, key in enumerate(keys):
+        time = Usd.TimeCode(k / last)
+        p = np.ascontiguousarray(np.asarray(buffers[key], dtype=np.float32).reshape(-1, 3))
+        mesh.GetPointsAttr().Set(Vt.Vec3fArray.FromNumpy(p), time)
+        if len(p):
+            lo, hi = p.min(axis=0), p.max(axis=0)
+            extent.Set(Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]), time)
+    for k, key in enumerate(md.get("motion_normals") or []):
+        n = np.ascontiguousarray(np.asarray(buffers[key], dtype=np.float32).reshape(-1, 3))
+        mesh.GetNormalsAttr().Set(Vt.Vec3fArray.FromNumpy(n), Usd.TimeCode(k / last))
+    return True
+
+
 def _matrix_to_usd(Gf, m) -> Any:
     """polychrome's column-vector 4×4 (translation in the last column) → USD's row-vector matrix."""
     return Gf.Matrix4d(np.asarray(m, dtype=np.float64).T.tolist())
@@ -406,12 +428,6 @@ def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path
     for key, value in desc.items():
         if key not in ("camera", "materials", "meshes", "instances", "lights", "world", "textures") and value:
             warnings.warn(f"{path}: the scene's '{key}' cannot be written to USD yet and is left out", stacklevel=2)
-    for what, entries, field in (("mesh", desc["meshes"], "motion_vertices"),):
-        for e in entries:
-            if e.get(field):
-                warnings.warn(
-                    f"{path}: {what} '{e['name']}': motion blur ({field}) is not written to USD; it is placed at the frame", stacklevel=2
-                )
     rgb = _Rgb(PREVIEW_GRID)  # preview colours do not depend on the render's grid
 
     stage = Usd.Stage.CreateInMemory()
@@ -555,6 +571,7 @@ def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path
     # -- meshes and instances ---------------------------------------------------
     proto_names = _Names(Tf)
     proto_paths: dict[int, Any] = {}
+    deforming = [False]  # whether a mesh was written with time-sampled points
 
     def fill_mesh(mp, index: int):
         md = desc["meshes"][index]
@@ -573,6 +590,7 @@ def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path
             n = np.ascontiguousarray(np.asarray(buffers[md["normals"]], dtype=np.float32).reshape(-1, 3))
             mesh.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(n))
             mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
+        deforming[0] |= _write_deformation(Gf, Usd, Vt, mesh, md, buffers)
         if md.get("uvs") is not None:
             uv = np.ascontiguousarray(np.asarray(buffers[md["uvs"]], dtype=np.float32).reshape(-1, 2))
             pv = UsdGeom.PrimvarsAPI(prim).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex)
@@ -605,7 +623,7 @@ def write_stage(scene, path, settings=None, *, area_lights: bool = True) -> Path
             fill_mesh(root.AppendChild("mesh"), index)
             proto_paths[index] = root
 
-    moving = False
+    moving = deforming[0]
     for k, inst in enumerate(instances):
         index = int(inst["mesh"])
         if k in area:
