@@ -67,6 +67,15 @@ _SILENT_TYPES = {
 #: Motion keys over the shutter: at most this many, and enough that neighbours turn by
 #: at most MAX_KEY_TURN (radians).
 MAX_MOTION_KEYS = 33
+
+
+def PROTOTYPE_PREDICATE(Usd):
+    """The prims of a PointInstancer prototype that are drawn, as Hydra chooses them:
+    active, loaded, not abstract, with a defining specifier of their own (an ancestor may
+    be an `over`)."""
+    return Usd.PrimIsActive & Usd.PrimHasDefiningSpecifier & ~Usd.PrimIsAbstract & Usd.PrimIsLoaded
+
+
 MAX_KEY_TURN = math.pi / 4
 #: Prims the reader turns into triangle meshes.
 GEOMETRY_TYPES = ("Mesh", "Sphere", "Cube", "Cylinder", "Cone", "Capsule", "Capsule_1", "Plane", "BasisCurves", "HermiteCurves", "Points")
@@ -351,10 +360,7 @@ class _Reader:
 
     def display_primvar(self, prim, name: str, width: int):
         """(mean, varies) of a displayColor / displayOpacity primvar, or None."""
-        pv = self.UsdGeom.PrimvarsAPI(prim).GetPrimvar(name)
-        if not (pv and pv.HasValue()):
-            return None
-        c = pv.ComputeFlattened(self.time)
+        c = _primvar_values(self.UsdGeom.PrimvarsAPI(prim).GetPrimvar(name), self.time)
         if c is None or not len(c):
             return None
         arr = np.asarray(c, np.float64).reshape(-1, width)
@@ -776,6 +782,8 @@ class _Reader:
         if perm is not None:  # a cyclic permutation keeps the winding: local Z becomes the axis
             verts = verts[:, perm]
             normals = None if normals is None else normals[:, perm]
+        material = self.bound_material(prim)
+        uv_maps, attrs = self.implicit_primvars(prim, len(verts), material)
         return {
             "name": str(prim.GetPath()),
             "order": None,
@@ -783,9 +791,54 @@ class _Reader:
             "triangles": tris.astype(np.int64),
             "normals": None if normals is None else normals.astype(np.float32),
             "uvs": None,
+            "uv_maps": uv_maps,
+            "attributes": attrs,
             "material_ids": None,
-            "material": self.bound_material(prim),
+            "material": material,
         }
+
+    def implicit_primvars(self, prim, n_vertices: int, material):
+        """(uv_maps, attributes) of an intrinsic shape (Sphere, Cube, ...): the primvars its
+        material's network reads, each of one value (constant, or any interpolation with
+        a single value) on every tessellated vertex. A missing one is the primvar reader's
+        fallback, with one warning as on meshes; one of several values (varying over a
+        shape USD does not tessellate for us) is its mean, with one warning."""
+        if material is None:
+            return None, None
+        mat = self.materials[material]
+        reads = getattr(mat, "usd_primvar_reads", ())
+        api = self.UsdGeom.PrimvarsAPI(prim)
+        where = prim.GetPath()
+        out: dict[tuple[str, str], np.ndarray] = {}
+        for kind, name in sorted(reads):
+            pv = api.GetPrimvar(name)
+            value = _primvar_values(pv, self.time)
+            if value is None or len(value) == 0:
+                reader, fb = mat.usd_primvar_fallbacks[(kind, name)]
+                self.warn(
+                    f"noprimvar:{where}:{name}",
+                    f"prim {where}: primvar '{name}' read by {reader} (material '{mat.name}') is missing; "
+                    f"the reader's fallback {fb} is used",
+                )
+                arr = np.asarray(fb, np.float32).reshape(1, -1)
+            else:
+                arr = np.asarray(value, np.float32)
+                arr = arr.reshape(len(arr), -1)
+                if not np.all(np.isfinite(arr)):
+                    raise self.error(prim, f"primvars:{name} is not finite")
+                if len(arr) > 1:
+                    self.warn(
+                        f"implicitpv:{where}:{name}",
+                        f"prim {where}: primvars:{name} has {len(arr)} {pv.GetInterpolation()} values on a {prim.GetTypeName()}, "
+                        "which is tessellated without its parameterisation; their mean is used",
+                    )
+                    arr = arr.mean(axis=0, keepdims=True)
+            if kind == "uv":
+                arr = arr[:, :2]
+            out[(kind, name)] = np.repeat(arr, n_vertices, axis=0)
+        uv_maps = {k[1]: v for k, v in out.items() if k[0] == "uv"} or None
+        attrs = {k[1]: (v if v.shape[1] > 1 else v[:, 0]) for k, v in out.items() if k[0] == "attr"} or None
+        return uv_maps, attrs
 
     def finite_points(self, prim, attr, what: str):
         raw = attr.Get(self.time)
@@ -941,8 +994,7 @@ class _Reader:
         for name, width in (("displayColor", 3), ("displayOpacity", 1)):
             if name not in self.attribute_names:
                 continue
-            pv = self.UsdGeom.PrimvarsAPI(prim).GetPrimvar(name)
-            value = pv.ComputeFlattened(self.time) if pv and pv.HasValue() else None
+            value = _primvar_values(self.UsdGeom.PrimvarsAPI(prim).GetPrimvar(name), self.time)
             if value is None or len(value) == 0:
                 continue
             arr = np.asarray(value, np.float64).reshape(-1, width)
@@ -1064,7 +1116,7 @@ class _Reader:
         wanted = [("uv", n) for n in sorted(self.uv_names)] + [("attr", n) for n in sorted(self.attribute_names)]
         for kind, pv_name in wanted:
             pv = api.GetPrimvar(pv_name)
-            value = pv.ComputeFlattened(self.time) if pv and pv.HasValue() else None
+            value = _primvar_values(pv, self.time)
             if value is None or len(value) == 0:
                 # Read by this mesh's network but missing: the primvar reader's fallback.
                 for m in used:
@@ -1348,16 +1400,41 @@ class _Reader:
         pi = UsdGeom.PointInstancer(prim)
         protos = pi.GetPrototypesRel().GetForwardedTargets()
         proto_indices = pi.GetProtoIndicesAttr().Get(self.time)
-        if proto_indices is None or len(proto_indices) == 0 or not protos:
+        positions = pi.GetPositionsAttr().Get(self.time)
+        # The schema requires prototypes, protoIndices and positions; without one of them
+        # the instancer is skipped with one warning (as Hydra does: OpenUSD's
+        # testUsdImagingGLPointInstancer/pi_bad_schema_input.usda).
+        missing = [
+            name
+            for name, ok in (
+                ("prototypes", bool(protos)),
+                ("protoIndices", proto_indices is not None),
+                ("positions", positions is not None),
+            )
+            if not ok
+        ]
+        if missing and (protos or proto_indices is not None or positions is not None):
+            self.warn(
+                f"pi:{prim.GetPath()}",
+                f"prim {prim.GetPath()}: PointInstancer without {' or '.join(missing)} (the schema requires them); it is skipped",
+            )
             return
+        if missing or len(proto_indices) == 0:
+            return  # nothing authored, or no instances
         pidx = np.asarray(proto_indices, dtype=np.int64)
         if pidx.min() < 0 or pidx.max() >= len(protos):
             bad = int(np.argwhere((pidx < 0) | (pidx >= len(protos)))[0][0])
             raise self.error(prim, f"protoIndices[{bad}] = {int(pidx[bad])} is out of range ({len(protos)} prototypes)")
+        if len(positions) != len(pidx):
+            self.warn(
+                f"pi:{prim.GetPath()}",
+                f"prim {prim.GetPath()}: {len(positions)} positions for {len(pidx)} protoIndices; the PointInstancer is skipped",
+            )
+            return
         PI = UsdGeom.PointInstancer
         xforms = pi.ComputeInstanceTransformsAtTime(self.time, self.time, PI.IncludeProtoXform, PI.IgnoreMask)
         if xforms is None or len(xforms) != len(pidx):
-            raise self.error(prim, "its instance transforms cannot be computed (positions missing or of the wrong length?)")
+            raise self.error(prim, "its instance transforms cannot be computed (orientations or scales of the wrong length?)")
         inst = np.asarray(xforms, dtype=np.float64).reshape(-1, 4, 4)
         keep = np.ones(len(pidx), dtype=bool)
         mask = pi.ComputeMaskAtTime(self.time)
@@ -1378,7 +1455,11 @@ class _Reader:
             which = np.nonzero((pidx == p) & keep)[0]
             if len(which) == 0:
                 continue
-            for sub in Usd.PrimRange(root, Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)):
+            placed = len(self.instances)
+            # Prototypes may sit under an `over` (not "defined" to the default predicate,
+            # which asks it of every ancestor): Hydra's predicate for prototypes asks each
+            # prim's own specifier (UsdImagingDelegate::_GetDisplayPredicateForPrototypes).
+            for sub in Usd.PrimRange(root, Usd.TraverseInstanceProxies(PROTOTYPE_PREDICATE(Usd))):
                 if sub.GetTypeName() not in GEOMETRY_TYPES:
                     if sub.GetTypeName() not in _SILENT_TYPES:
                         self.warn(
@@ -1398,6 +1479,11 @@ class _Reader:
                 self.instancer_runs.append((prim, len(self.instances), which, rel))
                 for j, m in zip(which, mats):
                     self.instances.append((key, m, f"{prim.GetPath()}[{int(j)}]{str(sub.GetPath())[len(str(root.GetPath())) :]}"))
+            if len(self.instances) == placed:
+                self.warn(
+                    f"proto:{target}",
+                    f"prim {prim.GetPath()}: prototype {target} holds no geometry that is read; its {len(which)} instances are empty",
+                )
 
     # -- lights ---------------------------------------------------------------------------
     def authored_by_blender(self, prim, attr) -> bool:
@@ -2166,6 +2252,17 @@ class _Reader:
         elif self.world is not None:
             scene.set_world(self.world)
         return scene
+
+
+def _primvar_values(pv, time):
+    """A primvar's flattened values as a sequence (a scalar primvar, ``float primvars:x =
+    0`` — legal UsdGeom, constant by nature — as one value); None when it has none."""
+    if not pv or not pv.HasValue():
+        return None
+    value = pv.ComputeFlattened(time)
+    if value is not None and not pv.GetTypeName().isArray:
+        return [value]
+    return value
 
 
 def _turn(a: np.ndarray, b: np.ndarray) -> float:
