@@ -360,3 +360,48 @@ def test_vendored_stages_carry_the_openusd_licence():
     assert "TOMORROW OPEN SOURCE TECHNOLOGY LICENSE 1.0" in text
     assert (DATA / "README.md").exists() and (DATA / "NOTICE.txt").exists()
     assert Sdf.Layer.FindOrOpen(str(DATA / "testUsdImagingGLUsdLux/usdLux.usda"))
+
+
+def srgb_decode(c):
+    c = np.asarray(c, float) / 255.0
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+@pytest.mark.parametrize("up", ["Zup", "Yup"])
+@pytest.mark.parametrize("camera", ["Front", "Back"])
+def test_dome_texture_faces_the_camera_as_in_hydra(tmp_path, up, camera):
+    """testUsdImagingGLDomeLight: the same scene on a Z-up stage (its dome turned by
+    rotateX 90) and a Y-up one, seen by a front and a back camera (rotateZ 180). The
+    background is the dome's latlong texel in the view direction by OpenEXR's convention
+    (ImfEnvmap: u = ½ − atan2(x, z)/2π, v = ½ − latitude/π from the top, +Y up, in the
+    dome's frame from pxr's transforms), sRGB-decoded: red, magenta, cyan and blue, the
+    colours Storm's baselines show (testUsdImagingGLDomeLight_{Z,Y}up{Front,Back}.png)."""
+    from PIL import Image
+
+    rel = f"testUsdImagingGLDomeLight/domeLight{up}.usda"
+    src = Usd.Stage.Open(str(DATA / rel))
+    wrap = tmp_path / "wrap.usda"
+    w = Usd.Stage.CreateNew(str(wrap))
+    w.GetRootLayer().subLayerPaths.append(str(DATA / rel))
+    UsdGeom.SetStageUpAxis(w, UsdGeom.GetStageUpAxis(src))
+    if camera == "Back":
+        w.OverridePrim("/Scene/FrontCamera").SetActive(False)
+    w.Save()
+    t = Usd.TimeCode.EarliestTime()
+    cam = np.array(UsdGeom.Xformable(src.GetPrimAtPath(f"/Scene/{camera}Camera")).ComputeLocalToWorldTransform(t))
+    dome = np.array(UsdGeom.Xformable(src.GetPrimAtPath("/Scene/lights/DomeLight")).ComputeLocalToWorldTransform(t))
+    view = np.array([0.0, 0.0, -1.0]) @ cam[:3, :3]  # row vectors
+    x, y, z = view @ np.linalg.inv(dome[:3, :3])
+    u = 0.5 - math.atan2(x, z) / (2 * math.pi)
+    v = 0.5 - math.asin(y / math.sqrt(x * x + y * y + z * z)) / math.pi
+    tex = np.asarray(Image.open(DATA / "testUsdImagingGLDomeLight/testImage.png").convert("RGB"))
+    want = srgb_decode(tex[round(v * (tex.shape[0] - 1)), round(u * (tex.shape[1] - 1)) % tex.shape[1]])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scene = usd.read_stage(wrap, resolution=(32, 24))
+    assert not caught, [str(c.message) for c in caught]
+    rgb = pc.render(scene, width=32, height=24, samples=16, max_bounces=4, seed=1).rgba[..., :3]
+    corners = np.concatenate([rgb[:3, :3], rgb[:3, -3:], rgb[-3:, :3], rgb[-3:, -3:]]).reshape(-1, 3)
+    named = {"Zup": {"Front": (1, 0, 0), "Back": (1, 0, 1)}, "Yup": {"Front": (0, 0.86, 1), "Back": (0, 0, 1)}}[up][camera]
+    assert want == pytest.approx(named, abs=0.01)
+    assert corners.mean(axis=0) == pytest.approx(want, abs=0.02), (corners.mean(axis=0), want)
