@@ -477,9 +477,10 @@ def test_ies_shaping_scales_a_sphere_light_by_the_relative_profile(tmp_path, nor
 
 
 def ies_theta(theta, s):
-    """UsdLux shaping:ies:angleScale s (OpenUSD's ShapingAPI documentation): the vertical
+    """UsdLux shaping:ies:angleScale s (OpenUSD's ShapingAPI user documentation,
+    pxr/usd/usdLux/userDoc/schemaUserDoc.usda): the vertical
     angle (radians) at which the profile is read for a direction θ from the light's axis,
-    clamped to [0, π] as hdEmbree clamps it."""
+    clamped to [0, π] as hdEmbree's pxrIES clamps it."""
     if s > 0:
         t = theta / s
     elif s < 0:

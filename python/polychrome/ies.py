@@ -65,7 +65,7 @@ class IESProfile:
 
 def angle_scaled(profile: IESProfile, angle_scale: float) -> IESProfile:
     """The profile with its vertical angles rescaled as UsdLux's ``shaping:ies:angleScale``
-    s defines it (OpenUSD's ShapingAPI documentation, as hdEmbree evaluates it): a direction
+    s defines it (OpenUSD's ShapingAPI user documentation, usdLux/userDoc): a direction
     at vertical angle θ from the light's axis reads the table at θ_ies = θ / s for s > 0
     (scaled about straight down: s < 1 narrows a downlight's beam, s > 1 widens it),
     θ_ies = (θ − π) / −s + π for s < 0 (scaled about straight up), θ for s = 0; θ_ies
