@@ -101,6 +101,12 @@ def test_unknown_shaders_payloads_and_materialx_warn_once_and_the_rest_renders(t
     rsh = UsdShade.Shader.Define(stage, "/Looks/ri/Surface")
     rsh.CreateIdAttr("PxrSurface")
     ri.CreateSurfaceOutput("ri").ConnectToSource(rsh.ConnectableAPI(), "out")
+    # A shader defined by its source file, no id (OpenUSD's glslfx test materials).
+    fx = UsdShade.Material.Define(stage, "/Looks/fx")
+    fsh = UsdShade.Shader.Define(stage, "/Looks/fx/Surface")
+    fsh.SetSourceAsset(Sdf.AssetPath("surface.glslfx"), "glslfx")
+    fx.CreateSurfaceOutput().ConnectToSource(fsh.ConnectableAPI(), "surface")
+    floor_mesh(stage, "/fx", 1.0, fx).AddTranslateOp().Set(Gf.Vec3d(12, 0, 0))
     floor_mesh(stage, "/odd", 1.0, odd)
     floor_mesh(stage, "/mx", 1.0, mx).AddTranslateOp().Set(Gf.Vec3d(3, 0, 0))
     floor_mesh(stage, "/mx2", 1.0, mx).AddTranslateOp().Set(Gf.Vec3d(6, 0, 0))
@@ -118,6 +124,8 @@ def test_unknown_shaders_payloads_and_materialx_warn_once_and_the_rest_renders(t
     assert len(mx_w) == 1 and "ND_disney_brdf_2012_surfaceshader" in mx_w[0], warns
     assert len(ri_w) == 1 and "outputs:ri:surface" in ri_w[0], warns
     assert len(payload_w) == 1 and "/gone" in payload_w[0], warns
-    assert len(scene.description()[0]["meshes"]) == 4
+    fx_w = [w for w in warns if "/Looks/fx" in w]
+    assert len(fx_w) == 1 and "sourceAsset 'surface.glslfx'" in fx_w[0], warns
+    assert len(scene.description()[0]["meshes"]) == 5
     result = pc.render(scene, width=4, height=4, samples=2, max_bounces=1)
     assert np.all(np.isfinite(result.rgba))

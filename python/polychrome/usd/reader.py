@@ -572,9 +572,15 @@ class _Reader:
                     )
                 return material
             if shader_id not in ("UsdPreviewSurface", "ND_UsdPreviewSurface_surfaceshader"):
+                what = f"'{shader_id}'"
+                if shader_id is None:  # info:implementationSource sourceAsset / sourceCode (glslfx, OSL, ...)
+                    source = shader.GetImplementationSource()
+                    assets = [shader.GetSourceAsset(t) for t in (shader.GetSourceTypes() or [""])] if source == "sourceAsset" else []
+                    named = [a.path for a in assets if a]
+                    what = f"with sourceAsset '{named[0]}'" if named else f"with {source} and no id"
                 self.warn(
                     f"shader:{self.key_of(prim)}",
-                    f"prim {prim.GetPath()}: surface shader '{shader_id}' is not supported; rendered as grey diffuse",
+                    f"prim {prim.GetPath()}: surface shader {what} is not supported; rendered as grey diffuse",
                 )
                 shader = None
         else:
