@@ -1,6 +1,7 @@
 //! Two-level acceleration structure: one compressed-wide BVH (obvhs CwBvh) per mesh in
 //! object space, and one over the instances in world space. Instances of one mesh
-//! share its BVH and triangles.
+//! share its BVH and triangles. Rays walk them with obvhs's traversal loop and our own
+//! node test (`traverse`: obvhs 0.4's culls boxes left before t = 1e-4).
 //!
 //! Motion blur (docs/camera.md): a moving instance's box in the top level bounds it over
 //! the whole shutter and rays are taken into its object space as it is at their time; a
@@ -17,13 +18,15 @@ use obvhs::bvh2::Bvh2;
 use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ploc::PlocBuilder;
-use obvhs::ray::{Ray as BvhRay, RayHit};
 use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 use std::sync::Mutex;
 use std::time::Duration;
 
 mod convert;
+mod traverse;
+
+use traverse::TRay;
 
 /// The closest intersection of a ray.
 #[derive(Clone, Copy, Debug)]
@@ -279,9 +282,7 @@ impl Accel {
     ) -> Option<Hit> {
         let tlas = self.tlas.as_ref()?;
         let mut best: Option<Hit> = None;
-        let mut hit = RayHit::none();
-        let world_ray = bvh_ray(ray.origin, ray.direction, ray.tmin, ray.tmax);
-        tlas.ray_traverse(world_ray, &mut hit, |r, slot| {
+        traverse::closest(tlas, TRay::of(ray), |r, slot| {
             let (inst_id, chunk) = self.tlas_instances[slot];
             let inst = &instances[inst_id as usize];
             match only {
@@ -298,10 +299,8 @@ impl Accel {
             let o = to_object.transform_point3a(r.origin);
             let d = to_object.transform_vector3a(r.direction);
             let wt = WatertightRay::new(o, d);
-            let local = bvh_ray(o, d, r.tmin, r.tmax);
-            let mut local_hit = RayHit::none();
             let mut bary = (0.0, 0.0);
-            mb.bvh.ray_traverse(local, &mut local_hit, |lr, tri| {
+            let local = traverse::closest(&mb.bvh, TRay::new(o, d, r.tmin, r.tmax), |lr, tri| {
                 let id = mb.bvh.primitive_indices[tri];
                 if skip == Some(id) {
                     return f32::INFINITY;
@@ -315,18 +314,19 @@ impl Accel {
                     None => f32::INFINITY,
                 }
             });
-            if local_hit.t < r.tmax {
+            match local {
                 // `bary` belongs to the last accepted hit, which is the closest.
-                best = Some(Hit {
-                    t: local_hit.t,
-                    instance: inst_id,
-                    triangle: mb.bvh.primitive_indices[local_hit.primitive_id as usize],
-                    b1: bary.0,
-                    b2: bary.1,
-                });
-                local_hit.t
-            } else {
-                f32::INFINITY
+                Some((t, tri)) => {
+                    best = Some(Hit {
+                        t,
+                        instance: inst_id,
+                        triangle: mb.bvh.primitive_indices[tri as usize],
+                        b1: bary.0,
+                        b2: bary.1,
+                    });
+                    t
+                }
+                None => f32::INFINITY,
             }
         });
         best
@@ -335,8 +335,7 @@ impl Accel {
     /// Whether anything blocks `ray` within (tmin, tmax): for shadow rays.
     pub fn occluded(&self, meshes: &[Mesh], instances: &[Instance], ray: &Ray) -> bool {
         let Some(tlas) = self.tlas.as_ref() else { return false };
-        let world_ray = bvh_ray(ray.origin, ray.direction, ray.tmin, ray.tmax);
-        !tlas.ray_traverse_miss(world_ray, |r, slot| {
+        traverse::any(tlas, TRay::of(ray), |r, slot| {
             let (inst_id, chunk) = self.tlas_instances[slot];
             let inst = &instances[inst_id as usize];
             if !visibility::sees(inst.visibility, ray.kind) {
@@ -347,24 +346,17 @@ impl Accel {
             let o = to_object.transform_point3a(r.origin);
             let d = to_object.transform_vector3a(r.direction);
             let wt = WatertightRay::new(o, d);
-            let local = bvh_ray(o, d, r.tmin, r.tmax);
-            let miss = mb.bvh.ray_traverse_miss(local, |lr, tri| {
+            let blocked = traverse::any(&mb.bvh, TRay::new(o, d, r.tmin, r.tmax), |lr, tri| {
                 let [a, b, c] = mesh.triangle_at(mb.bvh.primitive_indices[tri] as usize, ray.time);
                 wt.intersect(a, b, c, lr.tmin, lr.tmax).map_or(f32::INFINITY, |h| h.0)
             });
-            if miss {
-                f32::INFINITY
-            } else {
+            if blocked {
                 r.tmin.max(0.0)
+            } else {
+                f32::INFINITY
             }
         })
     }
-}
-
-/// obvhs picks slab ends by `direction < 0` but inverts −0.0 to −1/ε, so a
-/// component of −0.0 makes every box miss. Adding +0.0 turns −0.0 into +0.0.
-fn bvh_ray(origin: Vec3A, direction: Vec3A, tmin: f32, tmax: f32) -> BvhRay {
-    BvhRay::new(origin, direction + Vec3A::ZERO, tmin, tmax)
 }
 
 /// The world box of an instance's object-space box `b`, over the whole shutter when it
@@ -604,6 +596,96 @@ mod tests {
             assert_eq!(accel.occluded(&meshes, &instances, &seg), blocked, "{seg:?}");
         }
         assert!(hits > 1000 && shadowed > 300, "{hits} hits, {shadowed} shadowed");
+    }
+
+    /// Closest hits and shadow rays against geometry closer than 1e-4 along the ray:
+    /// obvhs 0.4's own box test culls every box the ray leaves before t = 1e-4
+    /// (cwbvh/node.rs, `EPSILON`), whatever the ray's tmin, so a scene modelled at
+    /// 1e-5 units (or instanced at that scale) lost most of its hits.
+    #[test]
+    fn tiny_scenes_hit_what_brute_force_hits() {
+        const S: f32 = 1e-5;
+        let big = grid("big", 30, 0.5);
+        let mut tiny = big.clone();
+        tiny.positions.iter_mut().for_each(|p| *p *= S);
+        // The tiny mesh as it is, and the normal-sized one instanced at scale S.
+        let meshes = vec![tiny, big];
+        let scaled = Affine3A::from_scale_rotation_translation(
+            glam::Vec3::splat(S),
+            glam::Quat::from_rotation_y(0.2),
+            glam::Vec3::new(0.0, 0.0, -0.5 * S),
+        );
+        let instances =
+            vec![Instance::new("tiny", 0, Affine3A::IDENTITY).unwrap(), Instance::new("scaled", 1, scaled).unwrap()];
+        let accel = Accel::build(&meshes, &instances);
+        let mut state = 24680u32;
+        let mut rnd = || {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            state as f32 / u32::MAX as f32
+        };
+        let (mut hits, mut shadowed) = (0, 0);
+        for _ in 0..2000 {
+            let o = Vec3A::new(rnd() * 3.0 - 1.5, rnd() * 3.0 - 1.5, 0.5 + rnd()) * S;
+            let d = (Vec3A::new(rnd() * 2.4 - 1.2, rnd() * 2.4 - 1.2, rnd() - 1.0) * S - o).normalize();
+            let ray = Ray::new(o, d);
+            let reference = brute_force(&meshes, &instances, &ray);
+            let got = accel.intersect(&meshes, &instances, &ray);
+            assert_eq!(got.is_some(), reference.is_some(), "{ray:?}");
+            if let (Some(h), Some((t, candidates))) = (got, &reference) {
+                hits += 1;
+                assert_eq!(h.t, *t, "{ray:?}");
+                assert!(candidates.contains(&(h.instance, h.triangle, h.b1, h.b2)), "{h:?} not in {candidates:?}");
+            }
+            let seg = Ray { tmax: 2.0 * S, ..ray };
+            let blocked = reference.is_some_and(|(t, _)| t < seg.tmax);
+            shadowed += blocked as u32;
+            assert_eq!(accel.occluded(&meshes, &instances, &seg), blocked, "{seg:?}");
+        }
+        assert!(hits > 1000 && shadowed > 300, "{hits} hits, {shadowed} shadowed");
+    }
+
+    /// A shadow ray from a point 5e-5 below a unit-sized occluder (thin contact).
+    #[test]
+    fn an_occluder_closer_than_1e_4_blocks_a_shadow_ray() {
+        let meshes = vec![quad("q")];
+        let instances = vec![Instance::new("q", 0, Affine3A::IDENTITY).unwrap()];
+        let accel = Accel::build(&meshes, &instances);
+        for d in [Vec3A::Z, Vec3A::new(0.3, -0.2, 1.0).normalize()] {
+            let seg = Ray::segment(Vec3A::new(0.1, 0.2, -5e-5), d, 1.0);
+            assert!(accel.occluded(&meshes, &instances, &seg), "{d}");
+            let h = accel.intersect(&meshes, &instances, &seg).expect("a hit");
+            assert!((h.t * d.z - 5e-5).abs() < 1e-9, "{}", h.t);
+        }
+    }
+
+    /// Rays along an axis whose origin lies exactly on a box plane, and axis-aligned
+    /// rays (an orthographic camera), hit what brute force hits.
+    #[test]
+    fn axis_aligned_rays_on_box_planes_hit_what_brute_force_hits() {
+        let meshes = vec![grid("g", 20, 0.0)];
+        let instances = vec![Instance::new("g", 0, Affine3A::IDENTITY).unwrap()];
+        let accel = Accel::build(&meshes, &instances);
+        let mut hits = 0;
+        for j in 0..=40 {
+            for i in 0..=40 {
+                // x, y on the grid's vertex lines (and its outer edges) every other step.
+                let (x, y) = (i as f32 / 20.0 - 1.0, j as f32 / 20.0 - 1.0);
+                for d in [Vec3A::NEG_Z, Vec3A::new(-0.0, 0.0, -1.0), Vec3A::new(0.0, -0.0, -1.0)] {
+                    let ray = Ray::new(Vec3A::new(x, y, 1.0), d);
+                    let reference = brute_force(&meshes, &instances, &ray);
+                    let got = accel.intersect(&meshes, &instances, &ray);
+                    assert_eq!(got.is_some(), reference.is_some(), "{ray:?}");
+                    if let (Some(h), Some((t, _))) = (got, &reference) {
+                        hits += 1;
+                        assert_eq!(h.t, *t, "{ray:?}");
+                    }
+                    assert_eq!(accel.occluded(&meshes, &instances, &ray), reference.is_some(), "{ray:?}");
+                }
+            }
+        }
+        assert!(hits > 3000, "{hits}");
     }
 
     #[test]

@@ -517,13 +517,9 @@ struct MeshBoundary<'s> {
 impl Boundary for MeshBoundary<'_> {
     type Hit = (crate::accel::Hit, Ray);
     fn intersect(&mut self, origin: Vec3A, dir: Vec3A, tmax: f32, first: bool) -> Option<(f32, Self::Hit)> {
-        // obvhs 0.4 culls every BVH box the ray leaves before t = 1e-4 (cwbvh/node.rs,
-        // EPSILON): steps shorter than that would never find the surface. The ray starts
-        // BACK behind the point and counts hits from BACK on.
-        const BACK: f32 = 2e-4;
-        let ray = Ray { tmin: BACK, tmax: tmax + BACK, ..Ray::new(origin - dir * BACK, dir).with_time(self.time) };
+        let ray = Ray::segment(origin, dir, tmax).with_time(self.time);
         let h = self.scene.intersect_instance(&ray, self.instance, first.then_some(self.triangle))?;
-        Some(((h.t - BACK).max(0.0), (h, ray)))
+        Some((h.t, (h, ray)))
     }
 }
 
