@@ -96,23 +96,28 @@ impl Oriented {
     }
 }
 
-/// Cycles' `bump_shadowing_term` (intern/cycles/kernel/closure/bsdf.h, from Chiang, Li
-/// and Burley 2019, "Taming the Shadow Terminator"), which `bsdf_eval` and `bsdf_sample`
-/// apply to a diffuse closure whose normal `n` is not the smooth normal `ns`: light
-/// direction `i` is dimmed smoothly as it nears the horizon of the smooth surface.
+/// Cycles' `bump_shadowing_term` (Blender 4.5, intern/cycles/kernel/closure/bsdf.h, from
+/// Conty Estevez, Lecocq and Stein 2019, "A Microfacet-Based Shadowing Function to Solve
+/// the Bump Terminator Problem"), which `bsdf_eval` and `bsdf_sample` apply to a diffuse
+/// closure whose normal `n` is not the smooth normal `ns`: 0 for light `i` on the other
+/// side of the smooth surface than `n` expects, else the GGX shadowing G1(cos θ_i about
+/// `ns`) of a roughness α² = min(tan²θ_d/8, 1) set by the bend θ_d between `n` and `ns`.
+/// (Blender 4.4 and older used Chiang, Li and Burley's 2019 smoothstep instead.)
 pub fn bump_shadowing_term(ns: Vec3A, n: Vec3A, i: Vec3A) -> f32 {
-    let cos_ni = n.dot(i);
-    let ns = if cos_ni < 0.0 { -ns } else { ns };
-    let d = cos_ni * ns.dot(n);
-    let g = if d != 0.0 { ns.dot(i) / d } else { 0.0 };
-    if !(g < 1.0) {
-        return 1.0;
-    }
-    if g < 0.0 {
+    let (cos_nsi, cos_nsn, cos_ni) = (ns.dot(i), ns.dot(n), n.dot(i));
+    if cos_nsi * cos_nsn * cos_ni < 0.0 {
         return 0.0;
     }
-    let g2 = g * g;
-    -g2 * g + g2 + g
+    let (cos_i, cos_d) = (cos_nsi.abs(), cos_nsn.abs());
+    if cos_d >= 1.0 || cos_i >= 1.0 {
+        return 1.0;
+    }
+    if cos_i < 1e-6 {
+        return 0.0;
+    }
+    let alpha2 = (0.125 * (1.0 / (cos_d * cos_d) - 1.0)).clamp(0.0, 1.0);
+    let lambda = 0.5 * ((1.0 + alpha2 * (1.0 / (cos_i * cos_i) - 1.0).max(0.0)).sqrt() - 1.0);
+    1.0 / (1.0 + lambda)
 }
 
 impl Bsdf for Oriented {
@@ -304,19 +309,26 @@ mod tests {
         }
     }
 
-    /// Chiang et al.'s term: 1 about the smooth normal itself and for light the bent
-    /// normal sees no lower than the smooth one does (g ≥ 1), 0 below the smooth horizon,
-    /// and the smoothstep −g³ + g² + g of g = (ns·i)/((n·i)(ns·n)) between.
+    /// Blender 4.5's term: 0 for light behind the smooth surface (seen from the bent
+    /// normal's side), 1 about the smooth normal itself, and between the GGX G1 of
+    /// α² = tan²θ_d/8 at the light's cosine about the smooth normal.
     #[test]
-    fn bump_shadowing_term_is_chiangs() {
+    fn bump_shadowing_term_is_blender_45s() {
         let ns = Vec3A::Z;
         let n = Vec3A::new(0.5, 0.0, 0.75f32.sqrt());
         assert_eq!(bump_shadowing_term(ns, ns, Vec3A::new(0.3, 0.1, 0.9).normalize()), 1.0);
         assert_eq!(bump_shadowing_term(ns, n, Vec3A::new(0.9, 0.0, -0.1).normalize()), 0.0);
-        assert_eq!(bump_shadowing_term(ns, n, Vec3A::new(-0.6, 0.0, 0.8)), 1.0);
+        // cos θ_d = √3/2: tan² = 1/3, α² = 1/24; light at cos θ_i = 0.6 about ns.
         let i = Vec3A::new(0.8, 0.0, 0.6);
-        let g = 0.6 / (n.dot(i) * n.z);
-        let t = bump_shadowing_term(ns, n, i);
-        assert!(g > 0.0 && g < 1.0 && (t - (-g * g * g + g * g + g)).abs() < 1e-6, "{g} {t}");
+        let (a2, t2) = (1.0f64 / 24.0, 1.0f64 / 0.36 - 1.0);
+        let g1 = 1.0 / (1.0 + 0.5 * ((1.0 + a2 * t2).sqrt() - 1.0));
+        let t = bump_shadowing_term(ns, n, i) as f64;
+        assert!((t - g1).abs() < 1e-6 && t < 1.0, "{t} vs {g1}");
+        // Grazing light is dimmed more, and the term is the same for the light on the
+        // other side of the bend.
+        let low = bump_shadowing_term(ns, n, Vec3A::new(0.99, 0.0, 0.141).normalize());
+        assert!(low < t as f32 && low > 0.0, "{low}");
+        let mirrored = bump_shadowing_term(ns, n, Vec3A::new(-0.8, 0.0, 0.6));
+        assert!((mirrored as f64 - g1).abs() < 1e-6, "{mirrored}");
     }
 }

@@ -52,6 +52,7 @@ use super::energy::{glass_e, glass_e_avg, multiscatter_color};
 use super::fresnel::{fresnel_dielectric_f64, reflect};
 use super::microfacet::{Ggx, TangentRotation};
 use super::oren_nayar::OrenNayarLobe;
+use super::oriented::{bump_shadowing_term, same_event, LobeFrame};
 use super::subsurface::SubsurfaceLobe;
 use super::thinfilm::{metal_index_from_reflectance, thin_film_reflectance, ThinFilm};
 use super::{Bsdf, BsdfFlags, BsdfSample, ShadingContext, SpectralParam};
@@ -342,6 +343,37 @@ pub struct Principled {
     ms_inv: f32,
     /// The subsurface lobe (`super::subsurface`), taking its weight of the base.
     sss: Option<SubsurfaceLobe>,
+    /// The lobes' own normals (None: every lobe about the frame's normal).
+    frames: Option<Box<PrincipledFrames>>,
+}
+
+/// The Principled's lobes about their own normals, in the vertex's frame, as Cycles'
+/// `svm_node_closure_bsdf` orients them: the specular, metal, glass and subsurface lobes
+/// about the valid Normal (`maybe_ensure_valid_specular_reflection`), the diffuse about
+/// the Normal as given, dimmed by the bump shadowing term when that is not the smooth
+/// normal. A lobe contributes only to pairs its frame and the vertex's see alike (as
+/// [`super::oriented::Oriented`]); the diffuse's energy compensation still reads the
+/// specular layer's albedo at the cosines about the specular normal.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PrincipledFrames {
+    /// The specular lobes' frame (None: the vertex's).
+    pub spec: Option<LobeFrame>,
+    /// The diffuse lobe's frame (None: the vertex's).
+    pub diffuse: Option<LobeFrame>,
+    /// The smooth normal `sd->N`, when the diffuse normal is not it ([`bump_shadowing_term`]).
+    pub smooth: Option<Vec3A>,
+}
+
+/// A pair of directions as the Principled's lobes see it (see [`PrincipledFrames`]).
+struct Dirs {
+    /// wo and wi in the specular lobes' frame.
+    wo: Vec3A,
+    wi: Vec3A,
+    /// Whether the specular lobes' frame sees the pair as the vertex's does.
+    spec: bool,
+    /// The pair in the diffuse lobe's frame (on one side of it, seen alike by the vertex's
+    /// frame) and the bump shadowing term; None: the diffuse carries nothing.
+    diffuse: Option<(Vec3A, Vec3A, f32)>,
 }
 
 /// Per-hit spectra: base colour, the metal's Fresnel at wo and its multiple-scattering
@@ -460,6 +492,42 @@ impl Principled {
             e_table,
             inv_one_minus_eavg,
             sss: None,
+            frames: None,
+        }
+    }
+
+    /// With lobes about their own normals (see [`PrincipledFrames`]).
+    pub fn with_frames(mut self, f: PrincipledFrames) -> Self {
+        self.frames = (f.spec.is_some() || f.diffuse.is_some() || f.smooth.is_some()).then(|| Box::new(f));
+        self
+    }
+
+    /// The vertex-frame pair `wo`, `wi` as the lobes see it.
+    fn dirs(&self, wo: Vec3A, wi: Vec3A) -> Dirs {
+        let Some(f) = self.frames.as_deref() else {
+            return Dirs { wo, wi, spec: true, diffuse: (wo.z * wi.z > 0.0).then_some((wo, wi, 1.0)) };
+        };
+        let (so, si, spec) = match &f.spec {
+            Some(l) => {
+                let (a, b) = (l.view_to_lobe(wo), l.to_lobe(wi));
+                (a, b, same_event(wo, wi, a, b))
+            }
+            None => (wo, wi, true),
+        };
+        let (a, b) = f.diffuse.map_or((wo, wi), |l| (l.view_to_lobe(wo), l.to_lobe(wi)));
+        let diffuse = (a.z * b.z > 0.0 && same_event(wo, wi, a, b)).then(|| {
+            let n = f.diffuse.map_or(Vec3A::Z, |l| l.normal());
+            (a, b, f.smooth.map_or(1.0, |ns| bump_shadowing_term(ns, n, wi)))
+        });
+        Dirs { wo: so, wi: si, spec, diffuse }
+    }
+
+    /// A specular-frame direction in the vertex's frame.
+    #[inline]
+    fn spec_to_vertex(&self, v: Vec3A) -> Vec3A {
+        match self.frames.as_deref().and_then(|f| f.spec.as_ref()) {
+            Some(l) => l.to_vertex(v),
+            None => v,
         }
     }
 
@@ -595,38 +663,43 @@ impl Principled {
         ctx: &ShadingContext,
         lobes: &Lobes,
         h: &HitSpectra,
-        wo: Vec3A,
-        wi: Vec3A,
+        d: &Dirs,
         out: &mut SampledSpectrum,
     ) -> f32 {
         out.fill(0.0);
         let rho = &h.rho;
         let mut pdf = 0.0f32;
         let n = out.len();
-        let reflect_side = wo.z * wi.z > 0.0;
+        let (wo, wi) = (d.wo, d.wi);
+        // Diffuse base (what the subsurface lobe leaves of it), about its own normal; its
+        // energy compensation reads the specular layer's albedo about the specular normal.
+        let w_diffuse = self.w_base * (1.0 - self.sss_weight(ctx));
+        if let (true, Some((a, b, shadowing))) = (w_diffuse > 0.0, d.diffuse) {
+            // In the upper hemisphere (the base layer is two-sided).
+            let (o, i) = if a.z < 0.0 { (Vec3A::new(a.x, a.y, -a.z), Vec3A::new(b.x, b.y, -b.z)) } else { (a, b) };
+            let (mu_o, mu_i) = (wo.z.abs(), wi.z.abs());
+            // Lambert ρ/π·cos θi, or the Oren–Nayar lobe (ρ·(single + F_ms(ρ)·multi)).
+            let on = self.diffuse_on.map(|l| (l, l.terms(o, i)));
+            let w = w_diffuse * shadowing;
+            for k in 0..n {
+                let r = self.row(k);
+                let t = &self.e_table[r];
+                let rk = rho.get(k);
+                let diffuse = match on {
+                    None => rk * FRAC_1_PI * i.z,
+                    Some((l, (single, multi))) => rk * (single + l.multiscatter(rk) * multi),
+                };
+                let v = diffuse * (1.0 - lookup(t, mu_o)) * (1.0 - lookup(t, mu_i)) * self.inv_one_minus_eavg[r];
+                out.set(k, w * v);
+            }
+            pdf += lobes.diffuse * i.z * FRAC_1_PI;
+        }
+        let reflect_side = d.spec && wo.z * wi.z > 0.0;
         if reflect_side {
             // Work in the upper hemisphere (the base layer is two-sided).
             let (o, i) =
                 if wo.z < 0.0 { (Vec3A::new(wo.x, wo.y, -wo.z), Vec3A::new(wi.x, wi.y, -wi.z)) } else { (wo, wi) };
             let (mu_o, mu_i) = (o.z, i.z);
-            // Diffuse base (what the subsurface lobe leaves of it).
-            let w_diffuse = self.w_base * (1.0 - self.sss_weight(ctx));
-            if w_diffuse > 0.0 {
-                // Lambert ρ/π·cos θi, or the Oren–Nayar lobe (ρ·(single + F_ms(ρ)·multi)).
-                let on = self.diffuse_on.map(|l| (l, l.terms(o, i)));
-                for k in 0..n {
-                    let r = self.row(k);
-                    let t = &self.e_table[r];
-                    let rk = rho.get(k);
-                    let diffuse = match on {
-                        None => rk * FRAC_1_PI * mu_i,
-                        Some((l, (single, multi))) => rk * (single + l.multiscatter(rk) * multi),
-                    };
-                    let v = diffuse * (1.0 - lookup(t, mu_o)) * (1.0 - lookup(t, mu_i)) * self.inv_one_minus_eavg[r];
-                    out.set(k, w_diffuse * v);
-                }
-                pdf += lobes.diffuse * mu_i * FRAC_1_PI;
-            }
             // The rough metal's multiply scattered light (Kulla & Conty 2017):
             // F_ms (1 − E(μo))(1 − E(μi)) / (π (1 − E_avg)), E for F = 1.
             if self.w_metal > 0.0 && self.ms_inv > 0.0 {
@@ -661,7 +734,7 @@ impl Principled {
                 }
             }
         }
-        if let Some(glass) = &self.glass {
+        if let (true, Some(glass)) = (d.spec, &self.glass) {
             if lobes.glass > 0.0 || self.w_glass > 0.0 {
                 let mut f = SampledSpectrum::zeros(n);
                 let pg = glass.eval(ctx, wo, wi, &mut f);
@@ -804,10 +877,11 @@ impl Bsdf for Principled {
 
     fn eval(&self, ctx: &ShadingContext, wo: Vec3A, wi: Vec3A, out: &mut SampledSpectrum) -> f32 {
         let n = out.len();
-        let mu_o = wo.z.abs();
+        let d = self.dirs(wo, wi);
+        let mu_o = d.wo.z.abs();
         let h = self.hit_spectra(ctx, mu_o, n);
         let lobes = self.lobes(ctx, mu_o, &h);
-        let pdf = self.eval_lobes(ctx, &lobes, &h, wo, wi, out);
+        let pdf = self.eval_lobes(ctx, &lobes, &h, &d, out);
         if !(out.is_finite() && pdf.is_finite()) {
             out.fill(0.0);
             return 0.0;
@@ -823,14 +897,25 @@ impl Bsdf for Principled {
     fn sample(
         &self,
         ctx: &ShadingContext,
-        wo: Vec3A,
+        wo_v: Vec3A,
         u: Vec2,
         uc: f32,
         throughput: &mut SampledSpectrum,
     ) -> Option<BsdfSample> {
+        // wo_v, wi_v: the vertex's frame; wo, wi: the specular lobes' (the same without
+        // frames).
+        let frames = self.frames.as_deref();
+        let spec_frame = frames.and_then(|f| f.spec);
+        let wo = spec_frame.map_or(wo_v, |l| l.view_to_lobe(wo_v));
         if wo.z == 0.0 {
             return None;
         }
+        // A delta direction `wi` of a specular-frame lobe, in the vertex's frame when both
+        // frames see it alike.
+        let delta = |wi: Vec3A| -> Option<Vec3A> {
+            let wi_v = self.spec_to_vertex(wi);
+            (spec_frame.is_none() || same_event(wo_v, wi_v, wo, wi)).then_some(wi_v)
+        };
         let n = throughput.len();
         let mu_o = wo.z.abs();
         let h = self.hit_spectra(ctx, mu_o, n);
@@ -844,54 +929,54 @@ impl Bsdf for Principled {
         };
         let o = flip(wo);
         let mut c0 = lobes.spec;
-        let wi = if uc < c0 {
+        let c_diffuse = lobes.spec + lobes.metal + lobes.diffuse;
+        // The sampled direction in the vertex's frame, and whether the diffuse lobe drew it.
+        let (wi_v, diffuse) = if uc < c0 {
             if self.smooth {
                 // Delta specular reflection off the dielectric layer.
+                let wi_v = delta(Vec3A::new(-wo.x, -wo.y, wo.z))?;
                 let mut f = SampledSpectrum::zeros(n);
                 self.spec_fresnel_into(ctx, mu_o, &mut f);
                 f.scale(self.w_base / lobes.spec);
                 throughput.mul_assign(&f);
-                return Some(BsdfSample {
-                    wi: Vec3A::new(-wo.x, -wo.y, wo.z),
-                    pdf: lobes.spec,
-                    specular: true,
-                    collapsed_to: None,
-                });
+                return Some(BsdfSample { wi: wi_v, pdf: lobes.spec, specular: true, collapsed_to: None });
             }
             let wm = self.lobe_to_shading(self.distribution.sample_wm(self.to_lobe(o), u));
             let wi = reflect(o, wm);
             if wi.z <= 0.0 {
                 return None;
             }
-            flip(wi)
+            (self.spec_to_vertex(flip(wi)), false)
         } else if uc < {
             c0 += lobes.metal;
             c0
         } {
             if self.smooth {
+                let wi_v = delta(Vec3A::new(-wo.x, -wo.y, wo.z))?;
                 let mut f = SampledSpectrum::zeros(n);
                 self.metal.eval(ctx, mu_o, &mut f);
                 f.scale(self.w_metal / lobes.metal);
                 throughput.mul_assign(&f);
-                return Some(BsdfSample {
-                    wi: Vec3A::new(-wo.x, -wo.y, wo.z),
-                    pdf: lobes.metal,
-                    specular: true,
-                    collapsed_to: None,
-                });
+                return Some(BsdfSample { wi: wi_v, pdf: lobes.metal, specular: true, collapsed_to: None });
             }
             let wm = self.lobe_to_shading(self.distribution.sample_wm(self.to_lobe(o), u));
             let wi = reflect(o, wm);
             if wi.z <= 0.0 {
                 return None;
             }
-            flip(wi)
+            (self.spec_to_vertex(flip(wi)), false)
         } else if uc < {
             c0 += lobes.diffuse + lobes.metal_ms;
             c0
         } {
-            // The diffuse base and the metal's multiple scattering are both cosine-sampled.
-            flip(cosine_hemisphere(u))
+            // The diffuse base (about its own normal) and the metal's multiple scattering
+            // (about the specular one) are both cosine-sampled.
+            let diffuse = uc < c_diffuse;
+            let c = cosine_hemisphere(u);
+            let frame = if diffuse { frames.and_then(|f| f.diffuse) } else { spec_frame };
+            let a = frame.map_or(wo_v, |l| l.view_to_lobe(wo_v));
+            let c = if a.z < 0.0 { Vec3A::new(c.x, c.y, -c.z) } else { c };
+            (frame.map_or(c, |l| l.to_vertex(c)), diffuse)
         } else if uc < {
             c0 += lobes.sss;
             c0
@@ -903,7 +988,7 @@ impl Bsdf for Principled {
             if !(lobes.sss > 0.0) {
                 return None;
             }
-            let wi = flip(lobe.entry(&self.distribution, o, u)?);
+            let wi_v = delta(flip(lobe.entry(&self.distribution, o, u)?))?;
             let w = self.w_base * lobe.weight / lobes.sss;
             let mut f = SampledSpectrum::zeros(n);
             for k in 0..n {
@@ -913,7 +998,7 @@ impl Bsdf for Principled {
             }
             throughput.mul_assign(&f);
             ctx.subsurface.set(Some(lobe.event(&h.rho)));
-            return Some(BsdfSample { wi, pdf: lobes.sss, specular: true, collapsed_to: None });
+            return Some(BsdfSample { wi: wi_v, pdf: lobes.sss, specular: true, collapsed_to: None });
         } else {
             let glass = self.glass.as_ref()?;
             if !(lobes.glass > 0.0) {
@@ -924,21 +1009,28 @@ impl Bsdf for Principled {
             let bs = glass.sample(ctx, wo, u, u2, &mut tp)?;
             if bs.specular || bs.collapsed_to.is_some() {
                 // A delta (or wavelength-dependent) direction: weight by this lobe alone.
+                let wi_v = delta(bs.wi)?;
                 self.glass_tint(ctx, &h.rho, wo, bs.wi, &mut tp);
                 tp.scale(self.w_glass / lobes.glass);
                 if !tp.is_finite() {
                     return None;
                 }
                 throughput.copy_from(&tp);
-                return Some(BsdfSample { pdf: bs.pdf * lobes.glass, ..bs });
+                return Some(BsdfSample { wi: wi_v, pdf: bs.pdf * lobes.glass, ..bs });
             }
-            bs.wi
+            (self.spec_to_vertex(bs.wi), false)
         };
-        if wi.z * wo.z == 0.0 || !wi.is_finite() {
+        if wi_v.z * wo_v.z == 0.0 || !wi_v.is_finite() {
+            return None;
+        }
+        let d = self.dirs(wo_v, wi_v);
+        // A lobe keeps only the directions its frame and the vertex's see alike (what
+        // eval_lobes counts in the mixture pdf).
+        if d.wi.z * d.wo.z == 0.0 || !(if diffuse { d.diffuse.is_some() } else { d.spec }) {
             return None;
         }
         let mut f = SampledSpectrum::zeros(n);
-        let pdf = self.eval_lobes(ctx, &lobes, &h, wo, wi, &mut f);
+        let pdf = self.eval_lobes(ctx, &lobes, &h, &d, &mut f);
         if !(pdf > 0.0 && pdf.is_finite()) || f.is_black() {
             return None;
         }
@@ -947,7 +1039,7 @@ impl Bsdf for Principled {
             return None;
         }
         throughput.mul_assign(&f);
-        Some(BsdfSample { wi, pdf, specular: false, collapsed_to: None })
+        Some(BsdfSample { wi: wi_v, pdf, specular: false, collapsed_to: None })
     }
 
     fn albedo(&self, ctx: &ShadingContext, out: &mut SampledSpectrum) {
@@ -1246,6 +1338,60 @@ mod tests {
             chi_square(&m, &ctx, dir(0.8, 0.5), 100_000, 12);
         }
         assert_reciprocal(&anisotropic(&grid, 0.6, 0.5, 0.4, 0.8, 0.2), &ctx, 400, 13);
+    }
+
+    /// Lobes about their own normals (Cycles: specular about the valid Normal, diffuse
+    /// about the Normal as given with the bump shadowing term): with no specular layer
+    /// (Specular IOR Level 0) the base is exactly the Diffuse BSDF about the raw normal
+    /// with Blender's bump shadowing; with the layer, sample() agrees with pdf() (χ²),
+    /// the sampled albedo with a quadrature of eval, and a white base reflects at most
+    /// everything.
+    #[test]
+    fn diffuse_about_the_raw_normal_specular_about_the_valid_one() {
+        use crate::material::oriented::{bump_shadowing_term, Oriented};
+        use crate::material::testing::chi_square;
+        use crate::material::Diffuse;
+        let grid = WavelengthGrid::uniform(4, 400.0, 700.0).unwrap();
+        let ctx = ShadingContext::new(&grid);
+        let tilt = |deg: f32, phi: f32| dir(deg.to_radians(), phi.to_radians());
+        let (n_raw, n_valid, smooth) = (tilt(40.0, 10.0), tilt(15.0, 30.0), Vec3A::Z);
+        let frames = PrincipledFrames {
+            spec: Some(LobeFrame::new(n_valid)),
+            diffuse: Some(LobeFrame::new(n_raw)),
+            smooth: Some(smooth),
+        };
+        let mut bare = principled(&grid, 0.6, 0.0, 0.0, 0.5, 1.5, None);
+        bare.ior = specular_index(&IndexOfRefraction::constant(4, 1.5), 0.0);
+        bare.e_table = vec![vec![0.0; ALBEDO_MU]];
+        bare.inv_one_minus_eavg = vec![1.0];
+        let bare = bare.with_frames(frames);
+        let reference = Oriented::diffuse(
+            n_raw,
+            Some(smooth),
+            Box::new(Diffuse { reflectance: SpectralParam::Constant(SampledSpectrum::splat(4, 0.6)) }),
+        );
+        let (mut a, mut b) = (SampledSpectrum::zeros(4), SampledSpectrum::zeros(4));
+        let mut rng = Rng::new(3, 3);
+        let mut dimmed = 0;
+        for _ in 0..400 {
+            let wo = dir(rng.uniform() * 1.4, rng.uniform() * 6.3);
+            let wi = dir(rng.uniform() * 1.57, rng.uniform() * 6.3);
+            let (pa, pb) = (bare.eval(&ctx, wo, wi, &mut a), reference.eval(&ctx, wo, wi, &mut b));
+            assert!((a.get(0) - b.get(0)).abs() < 1e-6 && (pa - pb).abs() < 1e-5, "{wo} {wi}: {a:?} vs {b:?}");
+            dimmed += (bump_shadowing_term(smooth, n_raw, wi) < 0.99 && b.get(0) > 0.0) as usize;
+        }
+        assert!(dimmed > 20, "the bump shadowing term acts on {dimmed} pairs");
+        for (rho, metallic, roughness) in [(0.7f32, 0.0f32, 0.4f32), (1.0, 0.0, 0.3), (0.5, 0.5, 0.6)] {
+            let m = principled(&grid, rho, metallic, 0.0, roughness, 1.5, None).with_frames(frames);
+            for theta in [0.3f32, 1.1] {
+                let wo = dir(theta, 0.4);
+                let (mean, se) = sampled_albedo(&m, &ctx, wo, 40_000, 31);
+                let q = quadrature_albedo(&m, &ctx, wo);
+                assert!((mean - q).abs() < 4.0 * se + 3e-3, "ρ {rho} θ {theta}: sampled {mean} ± {se} vs {q}");
+                assert!(mean <= 1.0 + 4.0 * se + 1e-3, "ρ {rho} θ {theta}: {mean}");
+            }
+            chi_square(&m, &ctx, dir(0.9, 0.4), 100_000, 41);
+        }
     }
 
     /// On a black base the layer reflects ((n − 1)/(n + 1))² at normal incidence.

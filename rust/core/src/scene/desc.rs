@@ -445,10 +445,14 @@ pub struct CoatDesc {
 
 /// The Principled BSDF's lobes' own normals in the vertex's shading frame (a graph's
 /// Normal and Coat Normal at a hit; None: the frame's own normal): specular, metal,
-/// glass and diffuse are oriented about `base`, the coat and the sheen about theirs.
+/// glass and subsurface are oriented about `base` (the valid Normal), the diffuse about
+/// `diffuse` (the Normal as given), the coat and the sheen about theirs.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PrincipledNormals {
     pub base: Option<[f32; 3]>,
+    pub diffuse: Option<[f32; 3]>,
+    /// The smooth normal, when the diffuse's is not it (Cycles' bump shadowing term).
+    pub smooth: Option<[f32; 3]>,
     pub coat: Option<[f32; 3]>,
     pub sheen: Option<[f32; 3]>,
     /// The anisotropic lobes' tangent (a graph's Tangent input, in the vertex's frame).

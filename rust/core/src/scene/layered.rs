@@ -7,7 +7,7 @@ use crate::color::uplift::Uplift;
 use crate::material::microfacet::TangentRotation;
 use crate::material::mix::MixFactor;
 use crate::material::oriented::LobeFrame;
-use crate::material::principled::{Principled, PrincipledParams};
+use crate::material::principled::{Principled, PrincipledFrames, PrincipledParams};
 use crate::material::{
     Black, Bsdf, Diffuse, IndexOfRefraction, Layered, MixBsdf, OrenNayar, Oriented, Sheen, SpectralParam, Texture,
     ThinFilm, Tinted, TopLobe, Translucent,
@@ -290,11 +290,13 @@ fn build_at(b: &BsdfBuild, material: &str, d: &BsdfDesc, depth: usize) -> Result
                     },
                     b.grid,
                 )
-                .with_subsurface(sss),
+                .with_subsurface(sss)
+                .with_frames(PrincipledFrames {
+                    spec: n.base.map(|b| LobeFrame::new(Vec3A::from(b))),
+                    diffuse: n.diffuse.map(|d| LobeFrame::new(Vec3A::from(d))),
+                    smooth: n.smooth.map(Vec3A::from),
+                }),
             );
-            if let Some(b) = n.base {
-                out = Box::new(Oriented::new(Vec3A::from(b), out));
-            }
             // Cycles' svm_node_closure_bsdf (CLOSURE_BSDF_PRINCIPLED_ID) stacks the coat over
             // everything else, then the sheen over the coat.
             if let Some(c) = coat {

@@ -608,15 +608,18 @@ impl Template {
                 let coat_desc = coat.as_ref().and_then(|c| c.at(v));
                 let sheen_desc = sheen.as_ref().and_then(|c| c.at(v));
                 let normals = o.map(|o| {
-                    // Cycles: the specular, metal and glass lobes about the valid Normal,
-                    // the coat about its valid Coat Normal (sd->N when unlinked), the sheen
-                    // about normalize(mix(N, Coat Normal, Coat Weight)) as given. The
-                    // diffuse shares the base's normal here (Cycles: N as given).
+                    // Cycles: the specular, metal, glass and subsurface lobes about the
+                    // valid Normal, the diffuse about the Normal as given (with the bump
+                    // shadowing term when it is not sd->N), the coat about its valid Coat
+                    // Normal (sd->N when unlinked), the sheen about
+                    // normalize(mix(N, Coat Normal, Coat Weight)) as given.
                     let n = o.raw(v, *normal);
                     let c = o.raw(v, coat.as_ref().and_then(|c| c.normal));
                     let w = coat_desc.as_ref().map_or(0.0, |c| c.weight.clamp(0.0, 1.0));
                     Box::new(crate::scene::PrincipledNormals {
                         base: o.local(o.valid(n)),
+                        diffuse: o.local(n),
+                        smooth: (n != o.smooth).then(|| o.frame.to_local(o.smooth.into()).to_array()),
                         coat: coat_desc.as_ref().and_then(|_| o.local(o.valid(c))),
                         sheen: sheen_desc
                             .as_ref()
