@@ -77,7 +77,8 @@ fn a_tilted_normal_scales_the_radiance_by_the_cosine() {
 
 /// Bump of the height h = k·x (Geometry › Position › X × k) at Distance 1 tilts the
 /// normal to (−k, 0, 1)/√(1 + k²) (Cycles svm_node_set_bump in the limit): a sun
-/// straight down gives cos = 1/√(1 + k²), Invert the same, Strength 0 the flat plane.
+/// straight down gives cos = 1/√(1 + k²), Invert the same, Strength 0 the flat plane; a
+/// sun at 0.5 rad gives n·l, dimmed by Blender 4.5's bump shadowing term.
 #[test]
 fn bump_of_a_linear_height_tilts_the_normal_by_its_gradient() {
     let flat = plane_under_sun(diffuse_with_normal(vec![]), [0.0, 0.0, -1.0]);
@@ -104,10 +105,14 @@ fn bump_of_a_linear_height_tilts_the_normal_by_its_gradient() {
     let n = glam::Vec3::new(-k, 0.0, 1.0).normalize();
     let l = glam::Vec3::new(0.5f32.sin(), 0.0, 0.5f32.cos());
     let flat_sun = plane_under_sun(diffuse_with_normal(vec![]), sun);
-    let want = f64::from(n.dot(l) / l.z);
+    // Blender 4.5's bump shadowing term (kernel/closure/bsdf.h): the GGX G1 at the light's
+    // angle 0.5 about the smooth normal of α² = tan²θ_d / 8, tan θ_d = k.
+    let alpha2 = (f64::from(k * k) / 8.0).min(1.0);
+    let g1 = 1.0 / (1.0 + 0.5 * ((1.0 + alpha2 * 0.5f64.tan().powi(2)).sqrt() - 1.0));
+    let want = f64::from(n.dot(l) / l.z) * g1;
     assert!((lean(false) / flat_sun - want).abs() < 3e-3, "{} vs {want}", lean(false) / flat_sun);
     let n_inv = glam::Vec3::new(k, 0.0, 1.0).normalize();
-    let want_inv = f64::from(n_inv.dot(l) / l.z);
+    let want_inv = f64::from(n_inv.dot(l) / l.z) * g1;
     assert!((lean(true) / flat_sun - want_inv).abs() < 3e-3, "{} vs {want_inv}", lean(true) / flat_sun);
     let r0 = plane_under_sun(diffuse_with_normal(bump(0.0, false)), [0.0, 0.0, -1.0]) / flat;
     assert!((r0 - 1.0).abs() < 1e-3, "strength 0: {r0}");
