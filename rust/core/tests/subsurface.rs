@@ -150,12 +150,43 @@ fn tiny_radius_reflects_the_base_colour() {
 
 /// A sphere lit only from behind (a large emitter the sphere hides from the camera):
 /// walked with a long mean free path, light comes through to the side facing the
-/// camera; as a diffuse (FORWARD, which does not walk: warned) that side stays dark.
+/// camera, in BACKWARD and FORWARD (which walks from the lamp's side); as a diffuse
+/// (weight 0) that side stays dark.
 #[test]
 fn light_comes_through_only_when_walked() {
+    let (desc, buffers) = back_lit(principled_sss([0.9; 3], 1.4, [1.0; 3], 20.0, 0.0));
+    let walked = render(&desc, &buffers, &settings(64), &RenderControl::new()).unwrap();
+    let mut diffuse = desc.clone();
+    let mut m = principled_sss([0.9; 3], 1.4, [1.0; 3], 20.0, 0.0);
+    m["subsurface"]["weight"] = serde_json::json!(0.0);
+    diffuse.materials[0] = material("jade", m);
+    let diffuse = render(&diffuse, &buffers, &settings(16), &RenderControl::new()).unwrap();
+    let forward = render(
+        &desc,
+        &buffers,
+        &ResolvedSettings { direction: Direction::Forward, ..settings(256) },
+        &RenderControl::new(),
+    )
+    .unwrap();
+    let lum = |o: &RenderOutput| o.images.rgba.chunks_exact(4).map(luminance).sum::<f64>() / 64.0;
+    let (w, d, f) = (lum(&walked), lum(&diffuse), lum(&forward));
+    assert!(w > 0.05 && w > 10.0 * d, "walked {w}, diffuse {d}");
+    // FORWARD walks from the lit side: the light comes through too, at about a third of
+    // BACKWARD's here (0.246 vs 0.755): Cycles' BSSRDF is not reciprocal, and a mean free
+    // path longer than the sphere makes the walk nearly ballistic, where the side of
+    // the refracting entry (the camera's or the light's) decides where the path exits.
+    assert!(f > 0.1 && f > 10.0 * d && f < w, "FORWARD walks too: {f}, BACKWARD {w}, diffuse {d}");
+    for out in [&walked, &forward] {
+        assert!(out.stats.warnings.is_empty(), "{:?}", out.stats.warnings);
+    }
+}
+
+/// A unit sphere of `jade` lit only from behind by an emitting slab it hides from the
+/// camera (64 pixels, all on the sphere).
+fn back_lit(jade: serde_json::Value) -> (SceneDesc, Vec<Buffer>) {
     let mut desc = SceneDesc::default();
     let mut buffers = Vec::new();
-    desc.materials.push(material("jade", principled_sss([0.9; 3], 1.4, [1.0; 3], 20.0, 0.0)));
+    desc.materials.push(material("jade", jade));
     desc.materials.push(MaterialDesc {
         name: "lamp".into(),
         bsdf: BsdfDesc::None,
@@ -181,23 +212,7 @@ fn light_comes_through_only_when_walked() {
     ];
     add_mesh(&mut desc, &mut buffers, "lamp", vs, ts, 1);
     camera_along_y(&mut desc, 6.0, 300.0);
-    let walked = render(&desc, &buffers, &settings(64), &RenderControl::new()).unwrap();
-    let diffuse = render(
-        &desc,
-        &buffers,
-        &ResolvedSettings { direction: Direction::Forward, ..settings(16) },
-        &RenderControl::new(),
-    )
-    .unwrap();
-    let lum = |o: &RenderOutput| o.images.rgba.chunks_exact(4).map(luminance).sum::<f64>() / 64.0;
-    let (w, d) = (lum(&walked), lum(&diffuse));
-    assert!(w > 0.05 && w > 10.0 * d, "walked {w}, diffuse {d}");
-    assert!(walked.stats.warnings.is_empty(), "{:?}", walked.stats.warnings);
-    assert!(
-        diffuse.stats.warnings.iter().any(|m| m.contains("'jade'") && m.contains("subsurface")),
-        "{:?}",
-        diffuse.stats.warnings
-    );
+    (desc, buffers)
 }
 
 /// NaN or negative radii and scales are rejected with a message naming the material.
@@ -212,5 +227,130 @@ fn bad_radius_is_rejected_naming_the_material() {
         let (desc, buffers) = furnace(m);
         let err = render(&desc, &buffers, &settings(1), &RenderControl::new()).err().expect("an error").to_string();
         assert!(err.contains("marble") && err.contains("subsurface"), "{err}");
+    }
+}
+
+/// A subsurface sphere lit by an emitting box at `angle` (degrees) from the view
+/// direction, 3 units from its centre; the camera at 6 units sees it whole.
+fn lamp_scene(angle: f32, base: [f32; 3], radius: [f32; 3], scale: f32, roughness: f32) -> (SceneDesc, Vec<Buffer>) {
+    let mut desc = SceneDesc::default();
+    let mut buffers = Vec::new();
+    let mut m = principled_sss(base, 1.4, radius, scale, 0.0);
+    m["roughness"] = serde_json::json!(roughness);
+    desc.materials.push(material("jade", m));
+    desc.materials.push(MaterialDesc {
+        name: "lamp".into(),
+        bsdf: BsdfDesc::None,
+        emission: Some(SpectrumDesc::constant(4.0)),
+        volume: None,
+        one_sided: false,
+        see_through: false,
+    });
+    let (v, t) = uv_sphere([0.0; 3], 1.0, 32, 64);
+    add_mesh(&mut desc, &mut buffers, "sphere", v, t, 0);
+    let a = angle.to_radians();
+    let c = [3.0 * a.sin(), -3.0 * a.cos(), 0.0];
+    add_box(&mut desc, &mut buffers, "lamp", [c[0] - 0.5, c[1] - 0.5, -0.5], [c[0] + 0.5, c[1] + 0.5, 0.5], 1);
+    camera_along_y(&mut desc, 6.0, 80.0);
+    (desc, buffers)
+}
+
+/// Per-channel image means over `seeds` renders, and their standard errors.
+fn seeded_means(desc: &SceneDesc, buffers: &[Buffer], s: &ResolvedSettings, seeds: u64) -> [(f64, f64); 3] {
+    let runs: Vec<[f64; 3]> = (0..seeds)
+        .map(|k| {
+            let out =
+                render(desc, buffers, &ResolvedSettings { seed: 17 + k, ..s.clone() }, &RenderControl::new()).unwrap();
+            assert!(out.stats.warnings.is_empty(), "{:?}", out.stats.warnings);
+            assert_eq!(out.stats.nonfinite_samples, 0);
+            [0, 1, 2].map(|c| channel(&out, c).0)
+        })
+        .collect();
+    let n = seeds as f64;
+    [0, 1, 2].map(|c| {
+        let m = runs.iter().map(|r| r[c]).sum::<f64>() / n;
+        let var = runs.iter().map(|r| (r[c] - m).powi(2)).sum::<f64>() / (n - 1.0);
+        (m, (var / n).sqrt())
+    })
+}
+
+/// |a − b| within 4 standard errors of the difference plus `rel` of b, per channel.
+fn agree(what: &str, a: &[(f64, f64); 3], b: &[(f64, f64); 3], rel: f64) {
+    for c in 0..3 {
+        let ((ma, sa), (mb, sb)) = (a[c], b[c]);
+        let tol = 4.0 * (sa * sa + sb * sb).sqrt() + rel * mb;
+        assert!((ma - mb).abs() < tol, "{what}: channel {c} {ma} ± {sa} vs {mb} ± {sb} (tolerance {tol})");
+    }
+}
+
+/// FORWARD (light tracing) and BIDIRECTIONAL walk the subsurface lobe as BACKWARD does:
+/// a chromatic jade sphere lit by an emitting box at 30° and at 90° from the view, each
+/// direction's image mean over 6 seeds within 4 standard errors of BACKWARD's plus 3 %
+/// (Cycles' BSSRDF is not reciprocal, docs/materials.md: light tracing takes the
+/// entry's 1 − E(μ) on the light's side; measured within 2 standard errors, about 3 %
+/// at 128/512 spp × 8 seeds). HERO's BIDIRECTIONAL is the 0/1 partition.
+#[test]
+fn forward_and_bidirectional_walk_as_backward() {
+    for angle in [30.0, 90.0] {
+        let (desc, buffers) = lamp_scene(angle, [0.8, 0.6, 0.4], [1.0, 0.6, 0.3], 0.5, 0.5);
+        let s = |direction, samples, method| ResolvedSettings {
+            direction,
+            method,
+            width: 16,
+            height: 16,
+            ..settings(samples)
+        };
+        let backward = seeded_means(&desc, &buffers, &s(Direction::Backward, 64, Method::Polychromatic), 6);
+        for (direction, spp, method) in [
+            (Direction::Forward, 256, Method::Polychromatic),
+            (Direction::Bidirectional, 32, Method::Polychromatic),
+            (Direction::Bidirectional, 32, Method::Hero),
+        ] {
+            let other = seeded_means(&desc, &buffers, &s(direction, spp, method), 6);
+            agree(&format!("lamp at {angle}°, {direction:?} {method:?}"), &other, &backward, 0.03);
+        }
+    }
+}
+
+/// After a dispersive surface the path carries one wavelength and still walks: the
+/// back-lit thin sphere glows through a dispersive glass slab (POLYCHROMATIC collapses
+/// there, HERO ends its secondary wavelengths) as through a non-dispersive one of the
+/// same index, and a dispersive sphere (HERO scatters it by the hero wavelength alone,
+/// BACKWARD and FORWARD) glows as a non-dispersive one does in the same direction; as a
+/// diffuse these stay dark (`light_comes_through_only_when_walked`).
+#[test]
+fn walks_at_a_single_wavelength_after_a_dispersive_surface() {
+    let cauchy = serde_json::json!({"type": "cauchy", "a": 1.45, "b": 0.004});
+    let constant = serde_json::json!({"type": "constant", "ior": 1.45 + 0.004 / 0.55f64.powi(2)});
+    let (desc, buffers) = back_lit(principled_sss([0.9; 3], 1.4, [1.0; 3], 20.0, 0.0));
+    let slab = |ior: &serde_json::Value| {
+        let (mut d, mut b) = (desc.clone(), buffers.clone());
+        d.materials.push(material("slab", serde_json::json!({"type": "dielectric", "ior": ior})));
+        add_box(&mut d, &mut b, "slab", [-1.5, -3.0, -1.5], [1.5, -2.8, 1.5], 2);
+        (d, b)
+    };
+    let sphere = |ior: &serde_json::Value| {
+        let mut d = desc.clone();
+        let mut m = principled_sss([0.9; 3], 1.4, [1.0; 3], 20.0, 0.0);
+        m["ior"] = ior.clone();
+        d.materials[0] = material("jade", m);
+        d
+    };
+    let s = |direction, method| ResolvedSettings { direction, method, ..settings(64) };
+    let (dispersive, plain) = (slab(&cauchy), slab(&constant));
+    for method in [Method::Polychromatic, Method::Hero] {
+        let a = seeded_means(&dispersive.0, &dispersive.1, &s(Direction::Backward, method), 4);
+        let b = seeded_means(&plain.0, &plain.1, &s(Direction::Backward, method), 4);
+        assert!(b[1].0 > 0.02, "{method:?}: the sphere glows through the slab: {b:?}");
+        agree(&format!("through a dispersive slab, {method:?}"), &a, &b, 0.03);
+    }
+    let (dispersive, plain) = (sphere(&cauchy), sphere(&constant));
+    for direction in [Direction::Backward, Direction::Forward] {
+        let spp = if direction == Direction::Forward { 256 } else { 64 };
+        let s = |method| ResolvedSettings { samples: spp, ..s(direction, method) };
+        let b = seeded_means(&plain, &buffers, &s(Method::Polychromatic), 4);
+        assert!(b[1].0 > 0.05, "{direction:?}: the sphere glows: {b:?}");
+        let a = seeded_means(&dispersive, &buffers, &s(Method::Hero), 4);
+        agree(&format!("a dispersive sphere, {direction:?} HERO"), &a, &b, 0.03);
     }
 }

@@ -21,6 +21,9 @@
 //! BIDIRECTIONAL (camera strategies with their own MIS; light tracing only when neither
 //! camera strategy can produce the path): there the two sides collapse to different
 //! wavelengths with different probabilities (eq. 9), which these weights do not model.
+//! So do paths through a subsurface random walk (either side walks from where it
+//! enters; the walk has no density the other side could evaluate): the walk's entry is
+//! recorded as no vertex, its exit as the diffuse vertex it is.
 
 use super::forward::{
     connect_to_camera, light_context, light_seen_by_camera, pixel_of, start_light_path, walk_light, LightTracing, Splat,
@@ -261,6 +264,9 @@ impl CameraMis for BidirectionalMis {
     fn vertex(&mut self, v: &Vertex) {
         self.legacy |= v.flags.dispersive;
     }
+    fn walked(&mut self) {
+        self.legacy = true;
+    }
     fn direct(&mut self, scene: &Scene, ctx: &mut ShadingContext, v: &Vertex, d: &DirectSample) -> f32 {
         let DirectSample { light, pmf, ls, wi_local, bsdf_pdf } = *d;
         let infinite = ls.distance.is_infinite();
@@ -394,6 +400,9 @@ impl<T: Throughput> PathHooks<T> for MisLightPath<'_> {
         };
         self.path.push(Vtx { p: v.si.p, n: v.si.ng, specular: bs.specular, pdf_cam, pdf_light });
         true
+    }
+    fn walked(&mut self) {
+        self.legacy = true;
     }
 }
 

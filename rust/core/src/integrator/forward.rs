@@ -12,6 +12,13 @@
 //!   the number of light paths per pixel.
 //! - Dispersive surfaces collapse the path to one wavelength (or end its secondary hero
 //!   wavelengths) exactly as camera paths do.
+//! - Subsurface lobes are walked as on camera paths (`walk.rs`): the light enters the
+//!   lobe where it arrives, through the entry interface seen from the light's side, and
+//!   the exit's white Lambertian connects to the camera. Cycles' random-walk BSSRDF is
+//!   not reciprocal (the entry's 1 − E(μ) and its refraction are taken on the side the
+//!   path arrives from, the exit is a plain cosine): light tracing estimates the same
+//!   model with the roles of light and view swapped, equal to BACKWARD where the light
+//!   and the view see the surface at similar angles (docs/materials.md).
 //! - Environment lights and orthographic cameras are not reachable this way (their
 //!   light has no `sample_le`, the camera no pinhole to connect to).
 
@@ -190,7 +197,20 @@ pub fn walk_light<T: Throughput, H: PathHooks<T> + PathHooks<super::throughput::
         End::Terminated { index, vertex: v, state } => {
             let Some(mut b) = beta.collapse(index) else { return };
             ctx.single_wavelength = Some(index);
-            let Some(sc) = b.scatter(&v, ctx, rng, &mut scratch.tp) else { return };
+            let scattered = b.scatter(&v, ctx, rng, &mut scratch.tp);
+            let entered = ctx.subsurface.take();
+            let Some(sc) = scattered else { return };
+            if let Some(ev) = entered {
+                // Into a subsurface lobe at the hero wavelength: walk it, go on from the exit.
+                let Some((exit, exit_state)) =
+                    super::walk::walk_subsurface(scene, ctx, &v, &state, &sc, ev, &mut b, rng)
+                else {
+                    return;
+                };
+                <H as PathHooks<super::throughput::SingleWavelength>>::walked(hooks);
+                walk.resume(scene, ctx, exit, exit_state, &mut b, rng, hooks, scratch);
+                return;
+            }
             if !(b.is_alive() && hooks.scattered(scene, ctx, &v, &state, &sc, &b)) {
                 return;
             }

@@ -290,12 +290,16 @@ fn with_policy<P: WavelengthPolicy>(settings: &ResolvedSettings, policy: P) -> I
         medium_sampling: settings.medium_sampling,
         split_k: split_k.filter(|_| !settings.dispersion_splitting),
         stratified_collapse: collapse == Collapse::Stratified,
-        // Subsurface random walks on BACKWARD camera paths; light paths and bidirectional
-        // MIS see subsurface lobes as a diffuse of their base colour (warned).
-        subsurface: settings.direction == Direction::Backward,
+        // Subsurface random walks on camera and light paths (bidirectional MIS weighs
+        // walked paths by the 0/1 partition: `PathHooks::walked`).
+        subsurface: true,
         ..Walk::camera(settings.max_bounces, split)
     };
-    let light = Walk { stratified_collapse: collapse != Collapse::Energy, ..Walk::light(settings.max_bounces) };
+    let light = Walk {
+        stratified_collapse: collapse != Collapse::Energy,
+        subsurface: true,
+        ..Walk::light(settings.max_bounces)
+    };
     let rounds = policy.rounds();
     let backward = path::PathTracing { wavelengths: policy.clone(), walk: camera };
     let forward = |part| forward::LightTracing { wavelengths: policy.clone(), walk: light, part };

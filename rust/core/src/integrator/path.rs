@@ -55,6 +55,8 @@ pub trait CameraMis {
     fn direct(&mut self, scene: &Scene, ctx: &mut ShadingContext, v: &Vertex, d: &DirectSample) -> f32;
     /// The BSDF at `v` was sampled.
     fn scattered(&mut self, _ctx: &mut ShadingContext, _v: &Vertex, _st: &PathState, _sc: &Scatter) {}
+    /// The path went through a subsurface walk ([`PathHooks::walked`]).
+    fn walked(&mut self) {}
 }
 
 /// Veach's power heuristic between BSDF sampling and light sampling.
@@ -319,6 +321,10 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
         true
     }
 
+    fn walked(&mut self) {
+        self.mis.walked();
+    }
+
     fn passed_emitter(&mut self, scene: &Scene, ctx: &mut ShadingContext, v: &Vertex, st: &PathState, beta: &T) {
         if st.depth == 0 {
             self.mis.first_hit(scene, v, st);
@@ -533,7 +539,8 @@ fn continue_single_wavelength<T: Throughput>(
         // Collapsed (eq. 9): the BSDF chose wavelength `index` and divided by its probability.
         End::Collapsed { index, state } => {
             if let Some(b) = beta.collapse(index) {
-                let l = trace_single(scene, walk, state, b, aux.filter(|a| a.weight.is_some()), rng, scratch);
+                let aux = aux.filter(|a| a.weight.is_some());
+                let l = trace_single(scene, walk, state, None, ctx.subsurface_walk, b, aux, rng, scratch);
                 gathered.add_at(index, l);
             }
         }
@@ -645,13 +652,24 @@ fn scatter_single(
 ) -> f32 {
     ctx.single_wavelength = Some(b.index);
     let arriving = b.value;
-    // The vertex is scattered here, outside the walk: a subsurface lobe acts as a diffuse.
-    let walk_subsurface = std::mem::replace(&mut ctx.subsurface_walk, false);
     let scattered = b.scatter(v, ctx, rng, &mut scratch.tp);
-    ctx.subsurface_walk = walk_subsurface;
+    let entered = ctx.subsurface.take();
     let Some(sc) = scattered else {
         return 0.0;
     };
+    if let Some(ev) = entered {
+        // Into a subsurface lobe, at this wavelength: walk it and go on from the exit as
+        // `Walk::run` does (no roulette at the entry). The next sub-path of a split sees
+        // `ctx` unchanged: the walk state goes to this one's own context.
+        let walking = ctx.subsurface_walk;
+        let exit = super::walk::walk_subsurface(scene, ctx, v, state, &sc, ev, &mut b, rng);
+        ctx.subsurface_walk = walking;
+        let Some((exit, exit_state)) = exit else {
+            return 0.0;
+        };
+        // The aux chain ended at this (non-specular) vertex already.
+        return trace_single(scene, walk, exit_state, Some(exit), false, b, None, rng, scratch);
+    }
     // The aux chain (its grid-wide throughput kept where it reached `v`) takes the
     // event with every wavelength's own factor at this wavelength's probability.
     let aux = aux.and_then(|mut a| {
@@ -668,16 +686,21 @@ fn scatter_single(
         }
         return 0.0;
     }
-    trace_single(scene, walk, st, b, aux, rng, scratch)
+    trace_single(scene, walk, st, None, ctx.subsurface_walk, b, aux, rng, scratch)
 }
 
 /// The radiance a single-wavelength camera path from `st` with throughput `beta`
-/// gathers (already multiplied by `beta`), going on with the aux chain `first_hit`. It has its own shading context: the vertex a
-/// split continues from keeps its own for the next wavelength.
-fn trace_single(
-    scene: &Scene,
+/// gathers (already multiplied by `beta`), going on with the aux chain `first_hit`. It
+/// has its own shading context: the vertex a split continues from keeps its own for the
+/// next wavelength. `exit`: the path goes on from this exit of a subsurface walk (as
+/// [`Walk::resume`]); `walking`: subsurface lobes still walk (the path has left none).
+#[allow(clippy::too_many_arguments)]
+fn trace_single<'s>(
+    scene: &'s Scene,
     walk: &Walk,
     st: PathState,
+    exit: Option<Vertex<'s>>,
+    walking: bool,
     mut beta: SingleWavelength,
     first_hit: Option<FirstHit>,
     rng: &mut Rng,
@@ -688,9 +711,17 @@ fn trace_single(
     }
     let mut ctx = ShadingContext::new(&scene.grid);
     ctx.single_wavelength = Some(beta.index);
+    ctx.subsurface_walk = walking && walk.subsurface;
     let mut gathered = beta.zero_like();
     let mut hooks = CameraPath { mis: PowerHeuristic, gathered: &mut gathered, first_hit, transparent: 0.0 };
-    walk.run(scene, &mut ctx, st, &mut beta, rng, &mut hooks, scratch);
+    match exit {
+        Some(v) => {
+            ctx.uv = v.si.uv;
+            ctx.frame = v.frame;
+            walk.resume(scene, &mut ctx, v, st, &mut beta, rng, &mut hooks, scratch)
+        }
+        None => walk.run(scene, &mut ctx, st, &mut beta, rng, &mut hooks, scratch),
+    };
     gathered.value
 }
 

@@ -154,6 +154,11 @@ pub trait PathHooks<T: Throughput> {
     fn holdout(&mut self, _weight: f32, _beta: &T) -> bool {
         false
     }
+    /// The path entered a subsurface lobe at the vertex it last reached and left the
+    /// mesh at the exit vertex it goes on from (`subsurface_exit`). The walk between has
+    /// no density the other direction could evaluate: bidirectional MIS weighs what
+    /// follows by the 0/1 partition of dispersive paths.
+    fn walked(&mut self) {}
     /// The path passed through see-through emitter `v` (`Material::see_through`, a
     /// light's surface): gather its emission; the ray goes on behind it. Draws no random
     /// numbers.
@@ -231,8 +236,9 @@ pub struct Walk {
     pub stratified_collapse: bool,
     /// How whole-spectrum paths sample distances in scattering media.
     pub medium_sampling: MediumSampling,
-    /// Subsurface lobes are walked (`medium::random_walk`; BACKWARD camera paths), else
-    /// they act as a diffuse of their base colour.
+    /// Subsurface lobes are walked (`medium::random_walk`) by camera and light paths
+    /// alike, until a path has left one walk; else they act as a diffuse of their base
+    /// colour.
     pub subsurface: bool,
 }
 
@@ -273,7 +279,46 @@ impl Walk {
         &self,
         scene: &'s Scene,
         ctx: &mut ShadingContext,
+        st: PathState,
+        beta: &mut T,
+        rng: &mut Rng,
+        hooks: &mut H,
+        scratch: &mut Scratch,
+    ) -> End<'s> {
+        if !self.subsurface {
+            ctx.subsurface_walk = false;
+        } else if st.depth == 0 {
+            ctx.subsurface_walk = true;
+        }
+        self.walk_from(scene, ctx, st, None, beta, rng, hooks, scratch)
+    }
+
+    /// Goes on from the exit vertex `v` of a subsurface walk (reached with `st`, as
+    /// [`subsurface_exit`] returns them) that a single-wavelength continuation entered
+    /// outside [`Self::run`]: `v` connects and scatters as a walk's exit in `run` does.
+    #[allow(clippy::too_many_arguments)]
+    pub fn resume<'s, T: Throughput, H: PathHooks<T>>(
+        &self,
+        scene: &'s Scene,
+        ctx: &mut ShadingContext,
+        v: Vertex<'s>,
+        st: PathState,
+        beta: &mut T,
+        rng: &mut Rng,
+        hooks: &mut H,
+        scratch: &mut Scratch,
+    ) -> End<'s> {
+        ctx.subsurface_walk = false;
+        self.walk_from(scene, ctx, st, Some(v), beta, rng, hooks, scratch)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn walk_from<'s, T: Throughput, H: PathHooks<T>>(
+        &self,
+        scene: &'s Scene,
+        ctx: &mut ShadingContext,
         mut st: PathState,
+        mut start: Option<Vertex<'s>>,
         beta: &mut T,
         rng: &mut Rng,
         hooks: &mut H,
@@ -281,163 +326,178 @@ impl Walk {
     ) -> End<'s> {
         let media = scene.has_media();
         let mut crossings = 0;
-        if !self.subsurface {
-            ctx.subsurface_walk = false;
-        } else if st.depth == 0 {
-            ctx.subsurface_walk = true;
-        }
         loop {
-            let hit = scene.intersect(&st.ray);
-            let d = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-            let in_medium = media && !st.media.is_empty() && scene.coefficients(&st.media, &mut scratch.medium);
-            if in_medium && ctx.single_wavelength.is_none() {
-                let c = &scratch.medium;
-                if let Some(index) = volume::collapse(c, beta, self.medium_sampling, scene.grid.weights(), rng) {
-                    ctx.single_wavelength = Some(index);
-                    return End::Collapsed { index, state: st };
-                }
-            }
-            if !scene.hit_lights.is_empty() {
-                // Before the flight changes beta: what the segment reaches of them is
-                // weighted by the media's transmittance up to them.
-                hooks.segment_lights(scene, &st, d, beta, scratch);
-            }
-            if in_medium {
-                if scratch.medium.emits {
-                    volume::segment_emission(&scratch.medium, d, &mut scratch.em);
-                    hooks.medium_emission(scene, &st, beta, &scratch.em);
-                }
-                match volume::fly(&scratch.medium, d, beta, rng) {
-                    Flight::Absorbed => return End::Done,
-                    Flight::Through => {}
-                    Flight::Scattered { t } => {
-                        let p = st.ray.at(t);
-                        let mv = MediumVertex { p, wo: -st.ray.direction, time: st.ray.time };
-                        if st.depth >= self.max_bounces {
-                            return End::Done;
+            let mut v = match start.take() {
+                Some(v) => v,
+                None => {
+                    let hit = scene.intersect(&st.ray);
+                    let d = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+                    let in_medium = media && !st.media.is_empty() && scene.coefficients(&st.media, &mut scratch.medium);
+                    if in_medium && ctx.single_wavelength.is_none() {
+                        let c = &scratch.medium;
+                        if let Some(index) = volume::collapse(c, beta, self.medium_sampling, scene.grid.weights(), rng)
+                        {
+                            ctx.single_wavelength = Some(index);
+                            return End::Collapsed { index, state: st };
                         }
-                        rng.start_vertex();
-                        hooks.connect_medium(scene, ctx, &mv, &st, beta, rng, scratch);
-                        if st.depth >= self.scatter_below {
-                            return End::Done;
+                    }
+                    if !scene.hit_lights.is_empty() {
+                        // Before the flight changes beta: what the segment reaches of them is
+                        // weighted by the media's transmittance up to them.
+                        hooks.segment_lights(scene, &st, d, beta, scratch);
+                    }
+                    if in_medium {
+                        if scratch.medium.emits {
+                            volume::segment_emission(&scratch.medium, d, &mut scratch.em);
+                            hooks.medium_emission(scene, &st, beta, &scratch.em);
                         }
-                        let (u, uc) = (rng.uniform2(), rng.uniform());
-                        let Some((wi, pdf)) =
-                            scene.sample_phase(&st.media, &scratch.medium, st.ray.direction, u, uc, &mut scratch.phase)
-                        else {
-                            return End::Done;
-                        };
-                        if scratch.medium.scattering_media > 1 {
-                            for j in 0..beta.lanes() {
-                                beta.set_lane(j, beta.lane(j) * scratch.phase.get(beta.lane_index(j)));
+                        match volume::fly(&scratch.medium, d, beta, rng) {
+                            Flight::Absorbed => return End::Done,
+                            Flight::Through => {}
+                            Flight::Scattered { t } => {
+                                let p = st.ray.at(t);
+                                let mv = MediumVertex { p, wo: -st.ray.direction, time: st.ray.time };
+                                if st.depth >= self.max_bounces {
+                                    return End::Done;
+                                }
+                                rng.start_vertex();
+                                hooks.connect_medium(scene, ctx, &mv, &st, beta, rng, scratch);
+                                if st.depth >= self.scatter_below {
+                                    return End::Done;
+                                }
+                                let (u, uc) = (rng.uniform2(), rng.uniform());
+                                let Some((wi, pdf)) = scene.sample_phase(
+                                    &st.media,
+                                    &scratch.medium,
+                                    st.ray.direction,
+                                    u,
+                                    uc,
+                                    &mut scratch.phase,
+                                ) else {
+                                    return End::Done;
+                                };
+                                if scratch.medium.scattering_media > 1 {
+                                    for j in 0..beta.lanes() {
+                                        beta.set_lane(j, beta.lane(j) * scratch.phase.get(beta.lane_index(j)));
+                                    }
+                                }
+                                st = PathState {
+                                    ray: Ray::new(p, wi).with_time(st.ray.time),
+                                    specular: false,
+                                    prev_pdf: pdf,
+                                    prev_p: p,
+                                    depth: st.depth + 1,
+                                    media: st.media,
+                                    traveled: 0.0,
+                                };
+                                if !beta.is_alive() {
+                                    return End::Done;
+                                }
+                                if !russian_roulette(beta, st.depth, self.rr_depth, rng) {
+                                    hooks.rouletted();
+                                    return End::Done;
+                                }
+                                continue;
                             }
                         }
-                        st = PathState {
-                            ray: Ray::new(p, wi).with_time(st.ray.time),
-                            specular: false,
-                            prev_pdf: pdf,
-                            prev_p: p,
-                            depth: st.depth + 1,
-                            media: st.media,
-                            traveled: 0.0,
+                    }
+                    let Some(hit) = hit else {
+                        hooks.escaped(scene, &st, beta, scratch);
+                        return End::Done;
+                    };
+                    let si = scene.interaction(&st.ray, &hit);
+                    if scene.materials[si.material as usize].see_through {
+                        // A light's surface as Cycles has it: its emission is gathered and the ray
+                        // carries on behind it (a transparent bounce, no scattering).
+                        crossings += 1;
+                        if crossings > VOLUME_BOUNDS_MAX {
+                            return End::Done;
+                        }
+                        let Facing { wo, ng, ns, material, frame } = facing(scene, &st.ray, &si, ctx);
+                        let v = Vertex {
+                            si,
+                            wo,
+                            ng,
+                            ns,
+                            material,
+                            frame,
+                            wo_local: frame.to_local(wo),
+                            flags: material.bsdf.flags(),
                         };
-                        if !beta.is_alive() {
-                            return End::Done;
-                        }
-                        if !russian_roulette(beta, st.depth, self.rr_depth, rng) {
-                            hooks.rouletted();
-                            return End::Done;
-                        }
+                        hooks.passed_emitter(scene, ctx, &v, &st, beta);
+                        let front = si.ng.dot(st.ray.direction) < 0.0;
+                        let origin = offset_ray_origin(si.p, if front { -si.ng } else { si.ng });
+                        st.traveled += (origin - st.ray.origin).length();
+                        st.ray = Ray { origin, tmin: 0.0, tmax: f32::INFINITY, ..st.ray };
                         continue;
                     }
+                    if media && scene.null_surface[si.material as usize] {
+                        // A medium's boundary with no surface: pass straight through (no bounce,
+                        // as Cycles' volume-only surfaces), entering or leaving the medium.
+                        crossings += 1;
+                        if crossings > VOLUME_BOUNDS_MAX {
+                            return End::Done;
+                        }
+                        let front = si.ng.dot(st.ray.direction) < 0.0;
+                        if scene.material_medium[si.material as usize].is_some() {
+                            st.media.cross(si.instance, si.material, front);
+                        }
+                        let origin = offset_ray_origin(si.p, if front { -si.ng } else { si.ng });
+                        st.traveled += (origin - st.ray.origin).length();
+                        st.ray = Ray { origin, tmin: 0.0, tmax: f32::INFINITY, ..st.ray };
+                        continue;
+                    }
+                    if let Some(pt) = scene.pass_through[si.material as usize].as_ref().filter(|_| media) {
+                        // Stochastic transparency (Cycles' transparent closure): pass straight on
+                        // with the Transparent BSDF's weight, tinted; else shade the opaque rest,
+                        // whose weight 1 − p this choice cancels.
+                        let p = pt.probability_at(scene, &st.ray, &si);
+                        if p >= 1.0 || (p > 0.0 && rng.uniform() < p) {
+                            crossings += 1;
+                            if crossings > VOLUME_BOUNDS_MAX {
+                                return End::Done;
+                            }
+                            for j in 0..beta.lanes() {
+                                let v = beta.lane(j) * pt.tint.get(beta.lane_index(j));
+                                beta.set_lane(j, v);
+                            }
+                            if !beta.is_alive() {
+                                return End::Done;
+                            }
+                            let front = si.ng.dot(st.ray.direction) < 0.0;
+                            let origin = offset_ray_origin(si.p, if front { -si.ng } else { si.ng });
+                            st.traveled += (origin - st.ray.origin).length();
+                            st.ray = Ray { origin, tmin: 0.0, tmax: f32::INFINITY, ..st.ray };
+                            continue;
+                        }
+                    }
+                    if st.depth == 0 {
+                        if let Some(h) = &scene.holdout[si.material as usize] {
+                            let w = h.weight_at(scene, &st.ray, &si);
+                            if w > 0.0 && hooks.holdout(w, beta) && w >= 1.0 {
+                                return End::Done;
+                            }
+                        }
+                    }
+                    // Surfaces are two-sided: shade on the side the ray arrived from.
+                    let Facing { wo, ng, ns, material, frame } = facing(scene, &st.ray, &si, ctx);
+                    let v = Vertex {
+                        si,
+                        wo,
+                        ng,
+                        ns,
+                        material,
+                        frame,
+                        wo_local: frame.to_local(wo),
+                        flags: material.bsdf.flags(),
+                    };
+                    hooks.reached(scene, ctx, &v, &st, beta, scratch);
+                    if st.depth >= self.max_bounces || v.wo_local.z == 0.0 {
+                        return End::Done;
+                    }
+                    v
                 }
-            }
-            let Some(hit) = hit else {
-                hooks.escaped(scene, &st, beta, scratch);
-                return End::Done;
             };
-            let si = scene.interaction(&st.ray, &hit);
-            if scene.materials[si.material as usize].see_through {
-                // A light's surface as Cycles has it: its emission is gathered and the ray
-                // carries on behind it (a transparent bounce, no scattering).
-                crossings += 1;
-                if crossings > VOLUME_BOUNDS_MAX {
-                    return End::Done;
-                }
-                let Facing { wo, ng, ns, material, frame } = facing(scene, &st.ray, &si, ctx);
-                let v = Vertex {
-                    si,
-                    wo,
-                    ng,
-                    ns,
-                    material,
-                    frame,
-                    wo_local: frame.to_local(wo),
-                    flags: material.bsdf.flags(),
-                };
-                hooks.passed_emitter(scene, ctx, &v, &st, beta);
-                let front = si.ng.dot(st.ray.direction) < 0.0;
-                let origin = offset_ray_origin(si.p, if front { -si.ng } else { si.ng });
-                st.traveled += (origin - st.ray.origin).length();
-                st.ray = Ray { origin, tmin: 0.0, tmax: f32::INFINITY, ..st.ray };
-                continue;
-            }
-            if media && scene.null_surface[si.material as usize] {
-                // A medium's boundary with no surface: pass straight through (no bounce,
-                // as Cycles' volume-only surfaces), entering or leaving the medium.
-                crossings += 1;
-                if crossings > VOLUME_BOUNDS_MAX {
-                    return End::Done;
-                }
-                let front = si.ng.dot(st.ray.direction) < 0.0;
-                if scene.material_medium[si.material as usize].is_some() {
-                    st.media.cross(si.instance, si.material, front);
-                }
-                let origin = offset_ray_origin(si.p, if front { -si.ng } else { si.ng });
-                st.traveled += (origin - st.ray.origin).length();
-                st.ray = Ray { origin, tmin: 0.0, tmax: f32::INFINITY, ..st.ray };
-                continue;
-            }
-            if let Some(pt) = scene.pass_through[si.material as usize].as_ref().filter(|_| media) {
-                // Stochastic transparency (Cycles' transparent closure): pass straight on
-                // with the Transparent BSDF's weight, tinted; else shade the opaque rest,
-                // whose weight 1 − p this choice cancels.
-                let p = pt.probability_at(scene, &st.ray, &si);
-                if p >= 1.0 || (p > 0.0 && rng.uniform() < p) {
-                    crossings += 1;
-                    if crossings > VOLUME_BOUNDS_MAX {
-                        return End::Done;
-                    }
-                    for j in 0..beta.lanes() {
-                        let v = beta.lane(j) * pt.tint.get(beta.lane_index(j));
-                        beta.set_lane(j, v);
-                    }
-                    if !beta.is_alive() {
-                        return End::Done;
-                    }
-                    let front = si.ng.dot(st.ray.direction) < 0.0;
-                    let origin = offset_ray_origin(si.p, if front { -si.ng } else { si.ng });
-                    st.traveled += (origin - st.ray.origin).length();
-                    st.ray = Ray { origin, tmin: 0.0, tmax: f32::INFINITY, ..st.ray };
-                    continue;
-                }
-            }
-            if st.depth == 0 {
-                if let Some(h) = &scene.holdout[si.material as usize] {
-                    let w = h.weight_at(scene, &st.ray, &si);
-                    if w > 0.0 && hooks.holdout(w, beta) && w >= 1.0 {
-                        return End::Done;
-                    }
-                }
-            }
-            // Surfaces are two-sided: shade on the side the ray arrived from.
-            let Facing { wo, ng, ns, material, frame } = facing(scene, &st.ray, &si, ctx);
-            let mut v =
-                Vertex { si, wo, ng, ns, material, frame, wo_local: frame.to_local(wo), flags: material.bsdf.flags() };
-            hooks.reached(scene, ctx, &v, &st, beta, scratch);
-            if st.depth >= self.max_bounces || v.wo_local.z == 0.0 {
-                return End::Done;
-            }
             // The vertex, then the exit of each subsurface walk it (or its exit) enters.
             loop {
                 // Stratified draws line up vertex by vertex across a pixel's samples.
@@ -470,14 +530,12 @@ impl Walk {
                     // Into a subsurface lobe: walk to where the path leaves the mesh and go on
                     // from a white Lambertian there, at the same depth (Cycles counts the
                     // BSSRDF bounce once, at the exit's BSDF sample). Later subsurface lobes
-                    // act as a diffuse (Cycles' PATH_RAY_DIFFUSE_ANCESTOR).
-                    let Some((exit, exit_state)) = subsurface_exit(scene, ctx, &v, &st, &sc, ev, beta, rng) else {
+                    // act as a diffuse (Cycles' PATH_RAY_DIFFUSE_ANCESTOR). Light paths walk
+                    // the same way from the light's side.
+                    let Some((exit, exit_state)) = walk_subsurface(scene, ctx, &v, &st, &sc, ev, beta, rng) else {
                         return End::Done;
                     };
-                    ctx.subsurface_walk = false;
-                    if !beta.is_alive() || exit.wo_local.z == 0.0 {
-                        return End::Done;
-                    }
+                    hooks.walked();
                     v = exit;
                     st = exit_state;
                     continue;
@@ -521,6 +579,25 @@ impl Boundary for MeshBoundary<'_> {
         let h = self.scene.intersect_instance(&ray, self.instance, first.then_some(self.triangle))?;
         Some((h.t, (h, ray)))
     }
+}
+
+/// [`subsurface_exit`] for a path that is to go on from the exit: None also when the
+/// walk left nothing of the path or no side to shade at the exit. Later subsurface lobes on
+/// the path act as a diffuse (`ctx.subsurface_walk` cleared).
+#[allow(clippy::too_many_arguments)]
+pub fn walk_subsurface<'s, T: Throughput>(
+    scene: &'s Scene,
+    ctx: &mut ShadingContext,
+    v: &Vertex<'s>,
+    st: &PathState,
+    sc: &Scatter,
+    ev: SubsurfaceEvent,
+    beta: &mut T,
+    rng: &mut Rng,
+) -> Option<(Vertex<'s>, PathState)> {
+    let exit = subsurface_exit(scene, ctx, v, st, sc, ev, beta, rng);
+    ctx.subsurface_walk = false;
+    exit.filter(|(exit, _)| beta.is_alive() && exit.wo_local.z != 0.0)
 }
 
 /// The random walk of the subsurface lobe `ev` that the BSDF at `v` (reached with `st`)

@@ -323,14 +323,6 @@ impl<'a> Driver<'a> {
                 ));
             }
         }
-        if self.integrator.light_paths {
-            for name in &scene.subsurface_materials {
-                out.push(format!(
-                    "material '{name}': subsurface scattering is a random walk on BACKWARD paths only; \
-                     FORWARD and BIDIRECTIONAL render it as a diffuse of its base colour"
-                ));
-            }
-        }
         if self.integrator.light_paths && scene.camera.has_rolling_shutter() {
             out.push(format!(
                 "camera '{}': light paths ignore the rolling shutter (they take times from the whole shutter)",

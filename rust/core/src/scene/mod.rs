@@ -248,8 +248,6 @@ pub struct Scene {
     /// The white Lambertian a subsurface walk leaves through (Cycles'
     /// `subsurface_shader_data_setup`), shaded at the exit point.
     pub subsurface_exit: Material,
-    /// Materials with a subsurface lobe (messages: methods that do not walk it).
-    pub subsurface_materials: Vec<String>,
 }
 
 /// The RGB → spectrum map while building: where the grid has none, the first RGB
@@ -378,8 +376,6 @@ impl Scene {
         let mut warnings = Vec::new();
         let (mut media, mut material_medium, mut null_surface) = (Vec::new(), Vec::new(), Vec::new());
         let mut pass_through = Vec::new();
-        let subsurface_materials: Vec<String> =
-            desc.materials.iter().filter(|m| m.bsdf.has_subsurface()).map(|m| m.name.clone()).collect();
         let mut holdout = Vec::new();
         for m in &desc.materials {
             let spectrum = |d, role, what| -> Result<SampledSpectrum> {
@@ -1011,7 +1007,6 @@ impl Scene {
                 graph_emission: None,
                 normal: None,
             },
-            subsurface_materials,
         };
         if scene.has_media() {
             scene.camera_media = scene.media_at(scene.camera.position(), 0.5);
