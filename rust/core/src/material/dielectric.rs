@@ -20,7 +20,7 @@
 use super::dispersion::IndexOfRefraction;
 use super::energy::glass_compensation;
 use super::fresnel::{fresnel_dielectric, reflect, refract};
-use super::microfacet::Ggx;
+use super::microfacet::{Distribution, Ggx};
 use super::{Bsdf, BsdfFlags, BsdfSample, ShadingContext, TransportMode};
 use crate::spectrum::SampledSpectrum;
 use glam::{Vec2, Vec3A};
@@ -41,6 +41,47 @@ pub(super) fn radiance_scale(ctx: &ShadingContext, etap: f32) -> f32 {
         TransportMode::Radiance => 1.0 / (etap * etap),
         TransportMode::Importance => 1.0,
     }
+}
+
+/// The transmission term of a rough dielectric (Walter et al. 2007; pbrt-v4
+/// DielectricBxDF::f/PDF) from `wo` to `wi` on opposite sides, `etap` the relative index
+/// crossed from `wo`'s side, over distribution `m`: f·|cos θi| and the pdf of `wi`,
+/// both times `weight(wo·wm)` at the generalised half vector wm (the Fresnel
+/// transmittance 1 − F for glass, 1 for Blender's Refraction BSDF). Zero for back-facing
+/// microfacets and a degenerate half vector; radiance is scaled by 1/η².
+pub(super) fn microfacet_transmission(
+    ctx: &ShadingContext,
+    m: &Distribution,
+    etap: f32,
+    wo: Vec3A,
+    wi: Vec3A,
+    weight: impl FnOnce(f32) -> f32,
+) -> (f32, f32) {
+    let (cos_o, cos_i) = (wo.z, wi.z);
+    if cos_o * cos_i >= 0.0 {
+        return (0.0, 0.0);
+    }
+    let mut wm = wi * etap + wo;
+    if wm.length_squared() == 0.0 {
+        return (0.0, 0.0);
+    }
+    wm = wm.normalize();
+    if wm.z < 0.0 {
+        wm = -wm;
+    }
+    let (co, ci) = (wo.dot(wm), wi.dot(wm));
+    // Discard back-facing microfacets.
+    if ci * cos_i < 0.0 || co * cos_o < 0.0 {
+        return (0.0, 0.0);
+    }
+    let denom = (ci + co / etap).powi(2);
+    if denom == 0.0 {
+        return (0.0, 0.0);
+    }
+    let t = weight(co);
+    let f = m.d(wm) * t * m.g(wo, wi) * (ci * co / (cos_i * cos_o * denom)).abs() * radiance_scale(ctx, etap);
+    let pdf = m.pdf_wm_two_sided(wo, wm) * ci.abs() / denom * t;
+    (f * cos_i.abs(), pdf)
 }
 
 /// The index to use for every lane, or None when the ray must collapse.
@@ -265,46 +306,30 @@ impl RoughDielectric {
         if cos_o == 0.0 || cos_i == 0.0 {
             return (0.0, 0.0);
         }
-        let reflect = cos_o * cos_i > 0.0;
-        let etap = if reflect {
-            1.0
-        } else if cos_o > 0.0 {
-            eta
-        } else {
-            1.0 / eta
-        };
-        let mut wm = wi * etap + wo;
-        if wm.length_squared() == 0.0 {
-            return (0.0, 0.0);
-        }
-        wm = wm.normalize();
-        if wm.z < 0.0 {
-            wm = -wm;
-        }
-        // Discard back-facing microfacets.
-        if wm.dot(wi) * cos_i < 0.0 || wm.dot(wo) * cos_o < 0.0 {
-            return (0.0, 0.0);
-        }
-        let g = &self.distribution;
-        let r = fresnel_dielectric(wo.dot(wm), eta);
-        let t = 1.0 - r;
-        let dvis = g.g1(wo) / cos_o.abs() * g.d(wm) * wo.dot(wm).abs();
-        let (f, pdf) = if reflect {
-            let f = g.d(wm) * g.g(wo, wi) * r / (4.0 * cos_i * cos_o).abs();
-            (f, dvis / (4.0 * wo.dot(wm).abs()) * r)
-        } else {
-            let denom = (wi.dot(wm) + wo.dot(wm) / etap).powi(2);
-            if denom == 0.0 {
+        let (fc, pdf) = if cos_o * cos_i > 0.0 {
+            let mut wm = wi + wo;
+            if wm.length_squared() == 0.0 {
                 return (0.0, 0.0);
             }
-            let f = g.d(wm)
-                * t
-                * g.g(wo, wi)
-                * (wi.dot(wm) * wo.dot(wm) / (cos_i * cos_o * denom)).abs()
-                * radiance_scale(ctx, etap);
-            (f, dvis * wi.dot(wm).abs() / denom * t)
+            wm = wm.normalize();
+            if wm.z < 0.0 {
+                wm = -wm;
+            }
+            // Discard back-facing microfacets.
+            if wm.dot(wi) * cos_i < 0.0 || wm.dot(wo) * cos_o < 0.0 {
+                return (0.0, 0.0);
+            }
+            let g = &self.distribution;
+            let r = fresnel_dielectric(wo.dot(wm), eta);
+            let dvis = g.g1(wo) / cos_o.abs() * g.d(wm) * wo.dot(wm).abs();
+            let f = g.d(wm) * g.g(wo, wi) * r / (4.0 * cos_i * cos_o).abs();
+            (f * cos_i.abs(), dvis / (4.0 * wo.dot(wm).abs()) * r)
+        } else {
+            let etap = if cos_o > 0.0 { eta } else { 1.0 / eta };
+            let m = Distribution::Ggx(self.distribution);
+            microfacet_transmission(ctx, &m, etap, wo, wi, |c| 1.0 - fresnel_dielectric(c, eta))
         };
-        let fc = f * cos_i.abs() * self.energy_scale(ctx, eta, wo, wi);
+        let fc = fc * self.energy_scale(ctx, eta, wo, wi);
         if fc.is_finite() && pdf.is_finite() {
             (fc, pdf)
         } else {

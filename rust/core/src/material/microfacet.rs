@@ -180,6 +180,89 @@ impl TangentRotation {
     }
 }
 
+/// The microfacet distribution of a rough transmission lobe (Blender's Refraction BSDF
+/// offers both; the rough glass is GGX).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Distribution {
+    Ggx(Ggx),
+    /// Beckmann with this alpha (Blender's roughness²), Smith Λ by Walter's rational
+    /// approximation, as Cycles' `bsdf_lambda<BECKMANN>`.
+    Beckmann(f32),
+}
+
+impl Distribution {
+    pub(super) fn d(&self, wm: Vec3A) -> f32 {
+        match self {
+            Distribution::Ggx(g) => g.d(wm),
+            Distribution::Beckmann(a) => {
+                if wm.z <= 0.0 {
+                    return 0.0;
+                }
+                let c2 = wm.z * wm.z;
+                let tan2 = (1.0 - c2).max(0.0) / c2;
+                let d = (-tan2 / (a * a)).exp() / (PI * a * a * c2 * c2);
+                if d.is_finite() {
+                    d
+                } else {
+                    0.0
+                }
+            }
+        }
+    }
+    pub(super) fn lambda(&self, w: Vec3A) -> f32 {
+        match self {
+            Distribution::Ggx(g) => g.lambda(w),
+            Distribution::Beckmann(alpha) => {
+                let c2 = w.z * w.z;
+                if c2 == 0.0 {
+                    return f32::INFINITY;
+                }
+                let tan = ((1.0 - c2).max(0.0) / c2).sqrt();
+                if tan == 0.0 {
+                    return 0.0;
+                }
+                let a = 1.0 / (alpha * tan);
+                if a < 1.6 {
+                    (1.0 - 1.259 * a + 0.396 * a * a) / (3.535 * a + 2.181 * a * a)
+                } else {
+                    0.0
+                }
+            }
+        }
+    }
+    pub(super) fn g(&self, wo: Vec3A, wi: Vec3A) -> f32 {
+        1.0 / (1.0 + self.lambda(wo) + self.lambda(wi))
+    }
+    /// A microfacet normal for `wo` (wo.z > 0) and its density.
+    pub(super) fn sample_wm(&self, wo: Vec3A, u: Vec2) -> Vec3A {
+        match self {
+            Distribution::Ggx(g) => g.sample_wm(wo, u),
+            Distribution::Beckmann(a) => {
+                let tan2 = -a * a * (1.0 - u.x).max(1e-12).ln();
+                let c = 1.0 / (1.0 + tan2).sqrt();
+                let s = (1.0 - c * c).max(0.0).sqrt();
+                let phi = 2.0 * PI * u.y;
+                Vec3A::new(s * phi.cos(), s * phi.sin(), c)
+            }
+        }
+    }
+    /// The density of [`Self::sample_wm`] over microfacet normals.
+    pub(super) fn pdf_wm(&self, wo: Vec3A, wm: Vec3A) -> f32 {
+        match self {
+            Distribution::Ggx(g) => g.d_visible(wo, wm),
+            Distribution::Beckmann(_) => self.d(wm) * wm.z.max(0.0),
+        }
+    }
+    /// [`Self::pdf_wm`] for `wo` on either side of the surface (`wo·wm` and `wo.z` of
+    /// one sign; `wo.z` ≠ 0): GGX's visible normals G1(wo)/|cos θo|·D(wm)·|wo·wm|.
+    pub(super) fn pdf_wm_two_sided(&self, wo: Vec3A, wm: Vec3A) -> f32 {
+        match self {
+            Distribution::Ggx(g) => g.g1(wo) / wo.z.abs() * g.d(wm) * wo.dot(wm).abs(),
+            Distribution::Beckmann(_) => self.d(wm) * wm.z.max(0.0),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

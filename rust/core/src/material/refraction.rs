@@ -15,88 +15,13 @@
 //! polychromatic ray to one wavelength (eq. 9), chosen ∝ β_i·w_i among the wavelengths
 //! that refract at the sampled microfacet.
 
-use super::dielectric::{common_index, pick_lane, radiance_scale, relative};
+use super::dielectric::{common_index, microfacet_transmission, pick_lane, radiance_scale, relative};
 use super::dispersion::IndexOfRefraction;
 use super::fresnel::refract;
-use super::microfacet::Ggx;
+use super::microfacet::{Distribution, Ggx};
 use super::{Bsdf, BsdfFlags, BsdfSample, ShadingContext};
 use crate::spectrum::SampledSpectrum;
 use glam::{Vec2, Vec3A};
-use std::f32::consts::PI;
-
-/// The microfacet distribution of a rough refraction lobe.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Distribution {
-    Ggx(Ggx),
-    /// Beckmann with this alpha (Blender's roughness²), Smith Λ by Walter's rational
-    /// approximation, as Cycles' `bsdf_lambda<BECKMANN>`.
-    Beckmann(f32),
-}
-
-impl Distribution {
-    fn d(&self, wm: Vec3A) -> f32 {
-        match self {
-            Distribution::Ggx(g) => g.d(wm),
-            Distribution::Beckmann(a) => {
-                if wm.z <= 0.0 {
-                    return 0.0;
-                }
-                let c2 = wm.z * wm.z;
-                let tan2 = (1.0 - c2).max(0.0) / c2;
-                let d = (-tan2 / (a * a)).exp() / (PI * a * a * c2 * c2);
-                if d.is_finite() {
-                    d
-                } else {
-                    0.0
-                }
-            }
-        }
-    }
-    fn lambda(&self, w: Vec3A) -> f32 {
-        match self {
-            Distribution::Ggx(g) => g.lambda(w),
-            Distribution::Beckmann(alpha) => {
-                let c2 = w.z * w.z;
-                if c2 == 0.0 {
-                    return f32::INFINITY;
-                }
-                let tan = ((1.0 - c2).max(0.0) / c2).sqrt();
-                if tan == 0.0 {
-                    return 0.0;
-                }
-                let a = 1.0 / (alpha * tan);
-                if a < 1.6 {
-                    (1.0 - 1.259 * a + 0.396 * a * a) / (3.535 * a + 2.181 * a * a)
-                } else {
-                    0.0
-                }
-            }
-        }
-    }
-    fn g(&self, wo: Vec3A, wi: Vec3A) -> f32 {
-        1.0 / (1.0 + self.lambda(wo) + self.lambda(wi))
-    }
-    /// A microfacet normal for `wo` (wo.z > 0) and its density.
-    fn sample_wm(&self, wo: Vec3A, u: Vec2) -> Vec3A {
-        match self {
-            Distribution::Ggx(g) => g.sample_wm(wo, u),
-            Distribution::Beckmann(a) => {
-                let tan2 = -a * a * (1.0 - u.x).max(1e-12).ln();
-                let c = 1.0 / (1.0 + tan2).sqrt();
-                let s = (1.0 - c * c).max(0.0).sqrt();
-                let phi = 2.0 * PI * u.y;
-                Vec3A::new(s * phi.cos(), s * phi.sin(), c)
-            }
-        }
-    }
-    /// The density of [`Self::sample_wm`] over microfacet normals.
-    fn pdf_wm(&self, wo: Vec3A, wm: Vec3A) -> f32 {
-        match self {
-            Distribution::Ggx(g) => g.d_visible(wo, wm),
-            Distribution::Beckmann(_) => self.d(wm) * wm.z.max(0.0),
-        }
-    }
-}
 
 /// Transmission only; `distribution` None: smooth (a delta refraction).
 pub struct Refraction {
@@ -114,31 +39,13 @@ impl Refraction {
         Self { ior, distribution }
     }
 
-    /// f·|cos θi| and the pdf of a transmitted `wi` for relative index `eta` (wo.z > 0).
+    /// f·|cos θi| and the pdf of a transmitted `wi` for relative index `eta` (wo.z > 0):
+    /// the rough glass' transmission with weight 1 in place of Fresnel's.
     fn eval_eta(&self, ctx: &ShadingContext, m: &Distribution, eta: f32, wo: Vec3A, wi: Vec3A) -> (f32, f32) {
-        let (cos_o, cos_i) = (wo.z, wi.z);
-        if cos_o <= 0.0 || cos_i >= 0.0 {
+        if wo.z <= 0.0 {
             return (0.0, 0.0);
         }
-        let mut wm = wi * eta + wo;
-        if wm.length_squared() == 0.0 {
-            return (0.0, 0.0);
-        }
-        wm = wm.normalize();
-        if wm.z < 0.0 {
-            wm = -wm;
-        }
-        let (co, ci) = (wo.dot(wm), wi.dot(wm));
-        if co <= 0.0 || ci >= 0.0 {
-            return (0.0, 0.0);
-        }
-        let denom = (ci + co / eta).powi(2);
-        if denom == 0.0 {
-            return (0.0, 0.0);
-        }
-        let f = m.d(wm) * m.g(wo, wi) * (ci * co / (cos_i * cos_o * denom)).abs() * radiance_scale(ctx, eta);
-        let pdf = m.pdf_wm(wo, wm) * ci.abs() / denom;
-        let fc = f * cos_i.abs();
+        let (fc, pdf) = microfacet_transmission(ctx, m, eta, wo, wi, |_| 1.0);
         if fc.is_finite() && pdf.is_finite() {
             (fc, pdf)
         } else {
