@@ -14,7 +14,7 @@ from meshes import square
 RHO, E = 0.5, 2.0
 
 
-def floor_scene(card_visibility=None, card_material=None, sun=True):
+def floor_scene(card_visibility=None, card_material=None, sun=True, card_holdout=False):
     """A grey floor seen from above (orthographic), a sun straight down, and a card
     between them that covers the whole view."""
     scene = pc.Scene()
@@ -26,7 +26,7 @@ def floor_scene(card_visibility=None, card_material=None, sun=True):
     m = scene.add_mesh("card", v, t, material=card, place=False)
     placed = np.eye(4)
     placed[2, 3] = 1.0
-    scene.add_instance(m, placed, "card", visibility=card_visibility)
+    scene.add_instance(m, placed, "card", visibility=card_visibility, holdout=card_holdout)
     if sun:
         scene.add_light(pc.SunLight((0, 0, -1), strength=E, name="sun"))
     scene.camera = pc.Camera.looking_at((0, 0, 3), (0, 0, 0), projection="ORTHOGRAPHIC", ortho_scale=0.5, name="top")
@@ -189,3 +189,26 @@ def test_card_invisible_to_glossy_rays_is_not_in_the_mirror():
     assert mean_luminance(scene({"camera": False, "glossy": False}), max_bounces=1) == pytest.approx(L, rel=0.01)
     assert mean_luminance(scene({"camera": False}), max_bounces=1) == pytest.approx(0.0, abs=1e-7)
     assert mean_luminance(scene({"camera": False, "diffuse": False}), max_bounces=1) == pytest.approx(0.0, abs=1e-7)
+
+
+def test_holdout_card_is_transparent_to_the_camera_and_still_casts_its_shadow():
+    """Cycles' object holdout: where the camera sees the card, alpha 0 and black (with a
+    white card too, in BACKWARD and FORWARD); shadow rays still see it, so with camera
+    rays passing it the floor shows, shadowed, at alpha 1."""
+    for direction in ("BACKWARD", "FORWARD"):
+        scene = floor_scene(card_material=pc.Diffuse(1.0, name="white card"), card_holdout=True)
+        # Light tracing connects to a pinhole: a perspective view 0.8 above the card, within it.
+        scene.camera = pc.Camera.looking_at((0, 0, 1.8), (0, 0, 0), name="top")
+        img = pc.render(
+            scene,
+            width=6,
+            height=6,
+            samples=16,
+            max_bounces=2,
+            seed=5,
+            direction=direction,
+        ).rgba
+        assert np.all(img == 0.0), direction
+    img = pc.render(floor_scene({"camera": False}, card_holdout=True), width=6, height=6, samples=16, max_bounces=2, seed=5).rgba
+    assert np.all(img[..., 3] == 1.0)
+    assert float(luminance(img[..., :3]).mean()) == pytest.approx(0.0, abs=1e-6)

@@ -1040,7 +1040,15 @@ class Scene:
         return self.add_mesh(name, v, t, normals=n, uvs=uv, material=material, material_ids=ids, transform=transform, place=place)
 
     def add_instance(
-        self, mesh: int, transform: Any, name: str = "", *, motion: Any = None, visibility: Any = None, random: float | None = None
+        self,
+        mesh: int,
+        transform: Any,
+        name: str = "",
+        *,
+        motion: Any = None,
+        visibility: Any = None,
+        random: float | None = None,
+        holdout: bool = False,
     ) -> None:
         """Places mesh ``mesh`` again with ``transform``; instances share the mesh's data.
         ``motion``: object → world transforms (K ≥ 2, 4×4 each) evenly spaced from
@@ -1049,7 +1057,9 @@ class Scene:
         of ``camera``, ``shadow``, ``diffuse``, ``glossy``, ``transmission`` booleans
         (missing ones True), as Cycles' ray visibility (docs/blender.md). ``random``: what
         Object Info › Random reads on it, 0..1 (default: Cycles' hash of the name, as for a
-        Blender object that is no instance)."""
+        Blender object that is no instance). ``holdout``: Cycles' object holdout (Object ›
+        Visibility › Holdout): the camera sees a hole of alpha 0 there, every other ray
+        the mesh's materials (docs/materials.md#holdout)."""
         if not 0 <= mesh < len(self._meshes):
             raise ValueError(f"instance '{name}': mesh {mesh} does not exist")
         label = name or self._meshes[mesh]["name"]
@@ -1061,6 +1071,8 @@ class Scene:
             if not (math.isfinite(r) and 0.0 <= r <= 1.0):
                 raise ValueError(f"instance '{label}': random {random} must be in 0..1")
             entry["random"] = r
+        if holdout:
+            entry["holdout"] = True
         if visibility is not None:
             vis = dict(visibility)
             unknown = sorted(set(vis) - set(RAY_KINDS))

@@ -249,7 +249,8 @@ class Exporter:
             # Object Info › Random: a Blender instance's random_id, as Cycles (an object's own
             # is the core's hash of its name, Cycles' for non-instances).
             rnd = (inst.random_id & 0xFFFFFFFF) / 0xFFFFFFFF if inst.is_instance else None
-            scene.add_instance(mesh, m, name, motion=moves, visibility=object_visibility(ob, name, warnings), random=rnd)
+            vis = object_visibility(ob, name, warnings)
+            scene.add_instance(mesh, m, name, motion=moves, visibility=vis, random=rnd, holdout=is_holdout(inst, depsgraph))
         # what no object shows any more (deleted, hidden, re-evaluated) is dropped
         self._meshes = {k: v for k, v in self._meshes.items() if k in used}
         self._materials = {k: v for k, v in self._materials.items() if k in materials}
@@ -278,7 +279,19 @@ class Exporter:
                     )
             if placed[key] is not None:
                 vis = object_visibility(ob, name, warnings)
-                scene.add_instance(placed[key], np.array(inst.matrix_world, dtype=np.float64), f"{name}/{ps.name}", visibility=vis)
+                m = np.array(inst.matrix_world, dtype=np.float64)
+                scene.add_instance(placed[key], m, f"{name}/{ps.name}", visibility=vis, holdout=is_holdout(inst, depsgraph))
+
+
+def is_holdout(inst, depsgraph):
+    """Cycles' object holdout (intern/cycles/blender/object.cpp: ``b_parent.holdout_get``
+    in the view layer, the instancer for an instance): Object › Visibility › Holdout or a
+    holdout collection of the view layer."""
+    parent = inst.parent if inst.is_instance and inst.parent is not None else inst.object
+    try:
+        return bool(parent.original.holdout_get(view_layer=depsgraph.view_layer))
+    except (AttributeError, TypeError, RuntimeError):
+        return bool(getattr(parent.original, "is_holdout", False))
 
 
 def graph_mesh_data(data):

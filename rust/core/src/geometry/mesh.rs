@@ -183,6 +183,9 @@ pub struct Instance {
     /// (scene/object.cpp `random_number`), unless the scene gives one (Blender's
     /// instances: their `random_id`).
     pub random: f32,
+    /// Cycles' object holdout (`SD_OBJECT_HOLDOUT_MASK`): camera paths with only
+    /// transparent bounces hold out where they reach it.
+    pub holdout: bool,
 }
 
 /// Cycles' `hash_string` (util/hash.h): i = 37·i + byte.
@@ -215,6 +218,7 @@ impl Instance {
             motion: None,
             visibility: super::visibility::ALL,
             random: object_random(name),
+            holdout: false,
         })
     }
 

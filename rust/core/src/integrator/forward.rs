@@ -72,8 +72,10 @@ pub fn connect_to_camera(
     f: &mut SampledSpectrum,
     rng: &mut Rng,
 ) -> Option<CameraConnection> {
-    // What camera rays pass through, the camera does not see (nor is seen past).
-    if !visibility::sees(scene.instances[v.si.instance as usize].visibility, visibility::CAMERA) {
+    // What camera rays pass through, the camera does not see (nor is seen past); a
+    // holdout object it sees holds out (black at alpha 0: `AlphaPath`).
+    let inst = &scene.instances[v.si.instance as usize];
+    if inst.holdout || !visibility::sees(inst.visibility, visibility::CAMERA) {
         return None;
     }
     let c = scene.camera.connect(v.si.p, v.si.time, rng)?;
@@ -265,7 +267,41 @@ impl<T: Throughput> PathHooks<T> for LightPath<'_> {
     }
 }
 
-/// FORWARD (and the light side of the BIDIRECTIONAL partition): light paths only.
+/// FORWARD's pixel samples when the scene has holdouts or a transparent film: the camera
+/// ray alone, through see-through lights, up to the first surface, taking the alpha as
+/// camera paths do (Holdout closures and holdout objects at depth 0, the background
+/// with Film > Transparent; `CameraPath::holdout`, `escaped`). It adds no radiance: the
+/// light paths' splats are the image, black on a full holdout since its closure
+/// reflects nothing and a holdout object is connected to no camera.
+struct AlphaPath {
+    transparent: f32,
+}
+
+impl<T: Throughput> PathHooks<T> for AlphaPath {
+    fn escaped(&mut self, scene: &Scene, st: &PathState, beta: &T, _scratch: &mut Scratch) {
+        if scene.film_transparent && st.depth == 0 {
+            self.transparent += super::path::mean_throughput(beta);
+        }
+    }
+    fn holdout(&mut self, weight: f32, beta: &T) -> bool {
+        self.transparent += weight * super::path::mean_throughput(beta);
+        true
+    }
+    fn connect(
+        &mut self,
+        _scene: &Scene,
+        _ctx: &mut ShadingContext,
+        _v: &Vertex,
+        _st: &PathState,
+        _beta: &T,
+        _rng: &mut Rng,
+        _scratch: &mut Scratch,
+    ) {
+    }
+}
+
+/// FORWARD (and the light side of the BIDIRECTIONAL partition): light paths, and for the
+/// alpha of holdouts camera rays ([`AlphaPath`]).
 pub struct LightTracing<P> {
     pub wavelengths: P,
     pub walk: Walk,
@@ -273,6 +309,22 @@ pub struct LightTracing<P> {
 }
 
 impl<P: WavelengthPolicy> Technique for LightTracing<P> {
+    fn camera_sample(
+        &self,
+        scene: &Scene,
+        cs: super::CameraSample,
+        rng: &mut Rng,
+        out: &mut crate::film::PixelSample,
+        scratch: &mut Scratch,
+    ) {
+        let Some(ray) = scene.camera.generate_ray(cs.film.x, cs.film.y, rng) else { return };
+        let mut ctx = ShadingContext::new(&scene.grid);
+        let mut beta = super::throughput::SingleWavelength { index: 0, value: 1.0 };
+        let mut hooks = AlphaPath { transparent: 0.0 };
+        let walk = Walk::camera(0, false);
+        walk.run(scene, &mut ctx, PathState::start_in(ray, scene.camera_media), &mut beta, rng, &mut hooks, scratch);
+        out.transparent = hooks.transparent;
+    }
     fn light_path(&self, scene: &Scene, pass: u32, rng: &mut Rng, splats: &mut Vec<Splat>, scratch: &mut Scratch) {
         let wl = self.wavelengths.light(pass, rng);
         let Some(start) = start_light_path(scene, &wl, rng) else { return };

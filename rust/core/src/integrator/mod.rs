@@ -215,7 +215,8 @@ impl Scratch {
 /// `Create`), so the driver never looks at the settings per sample.
 pub struct Integrator {
     pub technique: Box<dyn Technique>,
-    /// Pixel samples trace camera paths (BACKWARD, BIDIRECTIONAL).
+    /// Pixel samples trace camera paths (BACKWARD, BIDIRECTIONAL; FORWARD: camera rays
+    /// for the alpha of holdouts and a transparent film, when the scene has them).
     pub camera_paths: bool,
     /// Every sample pass also traces one light path per pixel, splatted onto the film
     /// (FORWARD, BIDIRECTIONAL).
@@ -266,12 +267,18 @@ pub fn from_settings(scene: &Scene, settings: &ResolvedSettings) -> crate::Resul
             ),
         ));
     }
-    Ok(match settings.method {
+    let mut integrator = match settings.method {
         Method::Polychromatic | Method::Rgb => with_policy(settings, AllWavelengths),
         Method::MonochromaticRays => with_policy(settings, OnePerRay::new(scene, settings.seed, settings.samples)),
         Method::MonochromaticScenes => with_policy(settings, OnePerPass::new(scene.grid.len(), settings.samples)),
         Method::Hero => with_policy(settings, hero::HeroWavelengths::new(&scene.grid, settings.seed)),
-    })
+    };
+    if settings.direction == Direction::Forward && scene.has_holdouts() {
+        // Light tracing has no camera paths to take the alpha from: each pixel sample
+        // traces its camera ray up to the first surface for it (forward::AlphaPath).
+        integrator.camera_paths = true;
+    }
+    Ok(integrator)
 }
 
 /// The direction's technique on wavelengths `policy`.

@@ -184,7 +184,7 @@ pub struct CameraPath<'a, 'b, T, M> {
 
 /// The mean throughput over the wavelengths a path carries (Cycles' `average` of the
 /// RGB throughput, for the alpha of holdouts and a transparent film's background).
-fn mean_throughput<T: Throughput>(beta: &T) -> f32 {
+pub(super) fn mean_throughput<T: Throughput>(beta: &T) -> f32 {
     let n = beta.lanes();
     let sum: f32 = (0..n).map(|j| beta.lane(j)).sum();
     if n > 0 && sum.is_finite() {

@@ -472,11 +472,17 @@ impl Walk {
                         }
                     }
                     if st.depth == 0 {
-                        if let Some(h) = &scene.holdout[si.material as usize] {
-                            let w = h.weight_at(scene, &st.ray, &si);
-                            if w > 0.0 && hooks.holdout(w, beta) && w >= 1.0 {
-                                return End::Done;
-                            }
+                        // A holdout object holds out wholly (Cycles' `surface_shader_apply_holdout`
+                        // on SD_OBJECT_HOLDOUT_MASK: weight 1, its transparency passed above kept).
+                        let w = if scene.instances[si.instance as usize].holdout {
+                            1.0
+                        } else {
+                            scene.holdout[si.material as usize]
+                                .as_ref()
+                                .map_or(0.0, |h| h.weight_at(scene, &st.ray, &si))
+                        };
+                        if w > 0.0 && hooks.holdout(w, beta) && w >= 1.0 {
+                            return End::Done;
                         }
                     }
                     // Surfaces are two-sided: shade on the side the ray arrived from.

@@ -315,7 +315,7 @@ impl<'a> Driver<'a> {
     fn warnings(&self) -> Vec<String> {
         let scene = self.scene;
         let mut out = scene.warnings.clone();
-        if self.integrator.light_paths && !self.integrator.camera_paths {
+        if self.settings.direction == super::Direction::Forward {
             for name in &scene.moving_emitters {
                 out.push(format!(
                     "instance '{name}': a moving emitter is not a light that light paths start from, so FORWARD \

@@ -627,6 +627,12 @@ pub struct InstanceDesc {
     /// Object Info › Random in 0..1 (default: Cycles' hash of `name`).
     #[serde(default)]
     pub random: Option<f32>,
+    /// Cycles' object holdout (Object › Visibility › Holdout, a view layer's holdout
+    /// collections): camera paths that reach it with only transparent bounces make the
+    /// pixel transparent there, as a Holdout closure of weight 1 would; every other ray
+    /// sees its material (docs/materials.md#holdout).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub holdout: bool,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]

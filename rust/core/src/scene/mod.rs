@@ -148,6 +148,25 @@ impl PassThrough {
     }
 }
 
+impl Scene {
+    /// A camera path can make a pixel transparent: a Holdout closure, a holdout object
+    /// or Film > Transparent (FORWARD then traces camera rays for the alpha alone).
+    pub fn has_holdouts(&self) -> bool {
+        self.film_transparent || self.holdout.iter().any(Option::is_some) || self.instances.iter().any(|i| i.holdout)
+    }
+}
+
+/// The ray visibility of an emitter on `inst`: a held-out object's light is never seen by
+/// the camera (light paths connect nothing of it there; camera paths hold out where they
+/// reach it).
+fn seen_unless_held_out(inst: &crate::geometry::mesh::Instance) -> u8 {
+    if inst.holdout {
+        inst.visibility & !crate::geometry::visibility::CAMERA
+    } else {
+        inst.visibility
+    }
+}
+
 /// Cycles' Holdout (`integrate_surface_holdout`, kernel/integrator/shade_surface.h):
 /// where a camera path that has made only transparent bounces reaches a surface with
 /// Holdout closures, the pixel's alpha loses the path's mean throughput × `weight` (the
@@ -677,6 +696,7 @@ impl Scene {
                         Instance::with_motion(&i.name, i.mesh, to_world, &keys)?
                     };
                     inst.visibility = i.visibility.mask();
+                    inst.holdout = i.holdout;
                     if let Some(r) = i.random {
                         if !(r.is_finite() && (0.0..=1.0).contains(&r)) {
                             return Err(Error::object("instance", &i.name, format!("random {r} must be in 0..1")));
@@ -779,7 +799,7 @@ impl Scene {
                             }
                             map[t] = lights.len() as u32;
                             lights.push(Box::new(tri));
-                            light_visibility.push(inst.visibility);
+                            light_visibility.push(seen_unless_held_out(inst));
                         }
                     }
                     (None, Some(_)) => match varying.iter_mut().find(|(vm, _)| *vm == m) {
@@ -808,7 +828,7 @@ impl Scene {
                         map[t as usize] = lights.len() as u32;
                     }
                     lights.push(Box::new(light));
-                    light_visibility.push(inst.visibility);
+                    light_visibility.push(seen_unless_held_out(inst));
                 }
             }
             triangle_lights[k] = Some(map);
