@@ -9,6 +9,7 @@ colour of a measured reflectance) and against USD's own GfCamera (field of view)
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 import textwrap
@@ -382,7 +383,10 @@ def test_polygons_face_varying_data_and_instancing(tmp_path):
 
 
 def bad_mesh_stage(path, points=None, indices=None, counts=None):
+    """/World/broken (a triangle, or the malformed data given) beside /World/good, a
+    0.5-wide quad at the origin."""
     stage = new_stage(path)
+    floor_mesh(stage, "/World/good", 0.25).CreateSubdivisionSchemeAttr("none")
     mesh = UsdGeom.Mesh.Define(stage, "/World/broken")
     mesh.CreatePointsAttr(points if points is not None else [(0, 0, 0), (1, 0, 0), (0, 1, 0)])
     mesh.CreateFaceVertexCountsAttr(counts if counts is not None else [3])
@@ -415,13 +419,32 @@ def test_missing_and_malformed_files_raise_value_error_naming_the_file(tmp_path)
         (dict(counts=[4]), "faceVertexCounts add up to 4"),
     ],
 )
-def test_bad_mesh_data_raises_value_error_naming_file_and_prim(tmp_path, kwargs, problem):
+def test_bad_mesh_data_skips_the_prim_with_one_warning_naming_it(tmp_path, kwargs, problem):
     path = bad_mesh_stage(tmp_path / "bad.usda", **kwargs)
-    with pytest.raises(ValueError, match=rf"bad\.usda: prim /World/broken: {problem}"):
-        usd.read_stage(path)
+    scene, warns = read_warned(path)
+    assert_only_good_left(scene, warns, rf"bad\.usda: prim /World/broken: {problem}.*; it is skipped")
 
 
-def test_bad_subset_and_instancer_indices_raise_value_error(tmp_path):
+def read_warned(path):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scene = usd.read_stage(path)
+    return scene, [str(w.message) for w in caught]
+
+
+def assert_only_good_left(scene, warns, pattern, good=1):
+    """One warning matches ``pattern``; the scene holds only /World/good's quad, with its
+    authored corners (±0.25, ±0.25, 0)."""
+    import re
+
+    assert len([w for w in warns if re.search(pattern, w)]) == 1, warns
+    desc, buffers = scene.description()
+    assert [i["name"] for i in desc["instances"]] == ["/World/good"] * good
+    v = np.asarray(buffers[desc["meshes"][desc["instances"][0]["mesh"]]["vertices"]]).reshape(-1, 3)
+    assert sorted(map(tuple, v.tolist())) == [(-0.25, -0.25, 0), (-0.25, 0.25, 0), (0.25, -0.25, 0), (0.25, 0.25, 0)]
+
+
+def test_bad_subset_and_instancer_indices_skip_the_prim_with_one_warning(tmp_path):
     path = bad_mesh_stage(tmp_path / "subset.usda")
     stage = Usd.Stage.Open(str(path))
     mesh = stage.GetPrimAtPath("/World/broken")
@@ -429,19 +452,20 @@ def test_bad_subset_and_instancer_indices_raise_value_error(tmp_path):
     sub = api.CreateMaterialBindSubset("s", Vt.IntArray([0, 3]), UsdGeom.Tokens.face)
     UsdShade.MaterialBindingAPI.Apply(sub.GetPrim()).Bind(preview_material(stage, "/Looks/m", (1, 1, 1)))
     stage.Save()
-    with pytest.raises(ValueError, match=r"subset\.usda: prim /World/broken/s: face index 3 is out of range"):
-        usd.read_stage(path)
+    scene, warns = read_warned(path)
+    assert_only_good_left(scene, warns, r"subset\.usda: prim /World/broken: /World/broken/s: face index 3 is out of range")
 
-    path = tmp_path / "instancer.usda"
-    stage = new_stage(path)
-    UsdGeom.Xform.Define(stage, "/I/proto")
+    path = bad_mesh_stage(tmp_path / "instancer.usda")
+    stage = Usd.Stage.Open(str(path))
+    stage.RemovePrim("/World/broken")
+    UsdGeom.Cube.Define(stage, "/I/proto/box")
     inst = UsdGeom.PointInstancer.Define(stage, "/I")
     inst.CreatePrototypesRel().SetTargets([Sdf.Path("/I/proto")])
     inst.CreateProtoIndicesAttr([0, 2])
     inst.CreatePositionsAttr([(0, 0, 0), (1, 0, 0)])
     stage.Save()
-    with pytest.raises(ValueError, match=r"instancer\.usda: prim /I: protoIndices\[1\] = 2 is out of range"):
-        usd.read_stage(path)
+    scene, warns = read_warned(path)
+    assert_only_good_left(scene, warns, r"instancer\.usda: prim /I: protoIndices\[1\] = 2 is out of range")
 
 
 def test_unsupported_prim_warns_once_and_the_render_still_works(tmp_path):
@@ -484,10 +508,18 @@ def test_cli_renders_usda_to_exr_and_png_with_stage_settings_and_flag_overrides(
 
 
 def test_cli_reports_bad_input_with_exit_2_and_one_line(tmp_path, capsys):
-    path = bad_mesh_stage(tmp_path / "bad.usda", points=[(0, 0, 0), (1, float("nan"), 0), (0, 1, 0)])
-    assert cli.main(["render", str(path), "-o", str(tmp_path / "x.png"), "--quiet"]) == 2
+    junk = tmp_path / "junk.usda"
+    junk.write_text('#usda 1.0\ndef Xform "World" {\n  float3 x = (1, 2\n')
+    assert cli.main(["render", str(junk), "-o", str(tmp_path / "x.png"), "--quiet"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "bad.usda" in err[0] and "/World/broken" in err[0], err
+    assert len(err) == 1 and "junk.usda" in err[0], err
+    # A malformed prim is skipped with a warning naming it; the rest renders.
+    path = bad_mesh_stage(tmp_path / "bad.usda", points=[(0, 0, 0), (1, float("nan"), 0), (0, 1, 0)])
+    assert (
+        cli.main(["render", str(path), "-o", str(tmp_path / "ok.png"), "--quiet", "--samples", "1", "--width", "8", "--height", "8"]) == 0
+    )
+    err = capsys.readouterr().err
+    assert "bad.usda: prim /World/broken: point 1 is not finite; it is skipped" in err, err
     assert cli.main(["render", str(tmp_path / "missing.usdc"), "-o", str(tmp_path / "x.png")]) == 2
     assert "missing.usdc" in capsys.readouterr().err
     assert cli.main(["render", str(path), "-o", str(tmp_path / "x.jpg")]) == 2
@@ -755,13 +787,20 @@ def test_preview_surface_glass_metal_and_emission_map_to_polychrome_materials(tm
         ),
     ],
 )
-def test_non_finite_values_and_bad_json_raise_value_error_naming_the_prim(tmp_path, edit, prim, problem):
+def test_non_finite_values_and_bad_json_skip_the_prim_with_one_warning(tmp_path, edit, prim, problem):
+    """The prim is skipped (a camera: the default camera is used), the rest is read."""
     path = bad_mesh_stage(tmp_path / "odd.usda")
     stage = Usd.Stage.Open(str(path))
     edit(stage)
     stage.Save()
-    with pytest.raises(ValueError, match=rf"odd\.usda: prim {prim}: .*{problem}"):
-        usd.read_stage(path)
+    scene, warns = read_warned(path)
+    assert len([w for w in warns if "prim /World/" in w]) == 1, warns
+    assert len([w for w in warns if re.search(rf"odd\.usda: prim {prim}: .*{problem}.*; it is skipped", w)]) == 1, warns
+    names = [i["name"] for i in scene.description()[0]["instances"]]
+    assert names == (["/World/good"] if prim == "/World/broken" else ["/World/good", "/World/broken"])
+    assert not scene.lights
+    if prim == "/World/cam":  # the default camera
+        assert scene.camera.to_dict() == pc.Camera().to_dict()
 
 
 def test_stage_without_camera_warns_and_uses_the_default_camera(tmp_path):
@@ -949,7 +988,7 @@ def test_unresolved_reference_is_one_warning_and_the_rest_renders(tmp_path, capf
     messages = [str(w.message) for w in caught]
     assert len(messages) == 1 and "missing_asset.usd" in messages[0] and "/World/asset" in messages[0], messages
     assert "missing_asset" not in capfd.readouterr().err  # not printed by USD itself
-    assert len(scene.description()[0]["meshes"]) == 1
+    assert len(scene.description()[0]["meshes"]) == 2  # /World/good and /World/broken
 
 
 def test_cli_prints_each_stage_warning_on_one_line(tmp_path, capsys):

@@ -5,6 +5,7 @@ capsule seen side-on), measured against an emissive reference square of known ar
 the same image; a square moving D over the shutter smears into the box ⊛ box profile."""
 
 import math
+import re
 import warnings
 
 import numpy as np
@@ -160,7 +161,7 @@ def test_capsule_silhouette_is_two_r_h_plus_pi_r_squared(tmp_path):
     assert extent.max() - extent.min() + VIEW / N == pytest.approx(h + 2 * r, abs=1.5 * VIEW / N)
 
 
-def test_bad_curve_data_raises_value_error_naming_the_prim(tmp_path):
+def test_bad_curve_data_skips_the_prim_with_one_warning_naming_it(tmp_path):
     path = tmp_path / "bad_curves.usda"
     stage, _, _ = stage_with_reference(path)
     c = UsdGeom.BasisCurves.Define(stage, "/hair")
@@ -169,12 +170,15 @@ def test_bad_curve_data_raises_value_error_naming_the_prim(tmp_path):
     c.CreateCurveVertexCountsAttr([3])
     c.CreateWidthsAttr([0.1, 0.2])
     stage.Save()
-    with pytest.raises(ValueError, match=r"bad_curves\.usda: prim /hair: widths has 2 values for vertex interpolation; expected 3"):
-        usd.read_stage(path)
-    c.CreateCurveVertexCountsAttr([4])
-    stage.Save()
-    with pytest.raises(ValueError, match=r"prim /hair: curveVertexCounts add up to 4 but there are 3 points"):
-        usd.read_stage(path)
+    for problem in (r"widths has 2 values for vertex interpolation; expected 3", r"curveVertexCounts add up to 4 but there are 3 points"):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            scene = usd.read_stage(path)
+        hits = [str(w.message) for w in caught if re.search(rf"bad_curves\.usda: prim /hair: {problem}.*; it is skipped", str(w.message))]
+        assert len(hits) == 1, [str(w.message) for w in caught]
+        assert [i["name"] for i in scene.description()[0]["instances"]] == ["/ref"]  # the rest is read
+        c.CreateCurveVertexCountsAttr([4])
+        stage.Save()
 
 
 W, D, X0, Y = 0.2, 0.8, -0.5, -0.5  # a square of side W at (X0, Y) travels D along +x over the shutter

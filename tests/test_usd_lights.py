@@ -537,3 +537,103 @@ def test_ies_angle_scale_rescales_the_profiles_vertical_angles(tmp_path, angle_s
         checked.append(abs(want / unscaled - 1.0))
         assert y[py, px] == pytest.approx(want, rel=0.04, abs=2e-4), (px, py, angle_scale)
     assert max(checked) > 0.2  # the scale changes what these pixels see
+
+
+@pytest.mark.parametrize(
+    "domes",
+    [
+        # (texture size or None for a uniform dome, linear colour, intensity, turn about Z in degrees)
+        [(None, (0.2, 0.3, 0.1), 1.0, 0.0), (None, (0.1, 0.05, 0.4), 2.0, 0.0)],
+        [((8, 4), (0.25, 0.25, 0.25), 2.0, 0.0), (None, (0.1, 0.05, 0.4), 1.0, 0.0)],
+        [((8, 4), (0.1, 0.2, 0.3), 1.0, 0.0), ((16, 8), (0.3, 0.1, 0.05), 0.5, 30.0), (None, (0.05, 0.1, 0.2), 1.0, 0.0)],
+    ],
+    ids=["uniform+uniform", "texture+uniform", "texture+texture+uniform"],
+)
+def test_several_dome_lights_add_up(tmp_path, domes):
+    """Lights add: several DomeLights are one world whose radiance is their sum (UsdLux:
+    L = intensity × colour, or the texture × intensity). The background is the sum, and a
+    convex grey diffuse (albedo ρ = 0.8) under it is a white furnace: radiance ρ × the sum."""
+    from polychrome import imageio
+
+    path = tmp_path / "domes.usda"
+    stage = new_stage(path)
+    want = np.zeros(3)
+    for k, (size, colour, intensity, turn) in enumerate(domes):
+        dome = UsdLux.DomeLight.Define(stage, f"/dome{k}")
+        dome.CreateIntensityAttr(intensity)
+        if size is None:
+            dome.CreateColorAttr(Gf.Vec3f(*colour))
+        else:
+            imageio.write_exr(tmp_path / f"sky{k}.exr", np.tile(np.array(colour, np.float32), (size[1], size[0], 1)))
+            dome.CreateTextureFileAttr(f"./sky{k}.exr")
+            dome.AddRotateZOp().Set(turn)
+            dome.AddRotateXOp().Set(90.0)
+        want += intensity * np.array(colour)
+    ball = UsdGeom.Sphere.Define(stage, "/ball")
+    ball.CreateDisplayColorAttr([Gf.Vec3f(0.8, 0.8, 0.8)])
+    top_camera(stage, "/cam", 3.0, 4.0)
+    stage.Save()
+    scene, warns = read(path)
+    if all(size is None for size, *_ in domes):
+        assert not warns, warns  # a uniform sum is exact
+    else:  # a texture bake: one warning naming every dome
+        assert len(warns) == 1 and all(f"/dome{k}" in warns[0] for k in range(len(domes))), warns
+    rgb = pc.render(scene, width=8, height=8, samples=32, max_bounces=4, seed=1).rgba[..., :3]
+    corners = np.stack([rgb[0, 0], rgb[0, -1], rgb[-1, 0], rgb[-1, -1]])
+    assert corners.mean(axis=0) == pytest.approx(want, rel=1e-3), (corners, want)
+    assert rgb[3:5, 3:5].reshape(-1, 3).mean(axis=0) == pytest.approx(0.8 * want, rel=0.02)
+
+
+def test_summed_dome_textures_keep_each_ones_orientation(tmp_path):
+    """Two latlong domes turned differently (0° and 90° about Z), baked into one: in every
+    direction d the world's radiance (Polychrome's mapping, docs/usd.md: lookup Rz(rotation)·d,
+    u = ½ − atan2(y, x)/2π, v = ½ + elevation/π) is the first texture's plus the second's,
+    each looked up with its own rotation. Directions at the base's texel centres; a 90° turn
+    moves the second by a quarter of its width, so both are read at texel centres."""
+    from polychrome import imageio
+
+    rng = np.random.default_rng(5)
+    texs = [rng.uniform(0.0, 1.0, (8, 16, 3)).astype(np.float32) for _ in range(2)]
+    path = tmp_path / "turned.usda"
+    stage = new_stage(path)
+    for k, (tex, turn, intensity) in enumerate(zip(texs, (0.0, 90.0), (1.0, 0.5))):
+        imageio.write_exr(tmp_path / f"sky{k}.exr", tex)
+        dome = UsdLux.DomeLight.Define(stage, f"/dome{k}")
+        dome.CreateTextureFileAttr(f"./sky{k}.exr")
+        dome.CreateIntensityAttr(intensity)
+        dome.AddRotateZOp().Set(turn)
+        dome.AddRotateXOp().Set(90.0)
+    stage.Save()
+    scene, _ = read(path)
+    world = scene.world_texture
+    baked = np.asarray(world["texture"].pixels, np.float64) * world["strength"]
+    # each dome alone, as read_stage places it
+    alone = []
+    for k in range(2):
+        solo = tmp_path / f"solo{k}.usda"
+        st = new_stage(solo)
+        st.GetRootLayer().subLayerPaths.append(str(path))
+        for j in range(2):
+            if j != k:
+                st.OverridePrim(f"/dome{j}").SetActive(False)
+        st.Save()
+        alone.append(read(solo)[0].world_texture)
+
+    def lookup(w, d):
+        r = w["rotation"]
+        x, y = math.cos(r) * d[0] - math.sin(r) * d[1], math.sin(r) * d[0] + math.cos(r) * d[1]
+        u = (0.5 - math.atan2(y, x) / (2 * math.pi)) % 1.0
+        v = 0.5 + math.atan2(d[2], math.hypot(x, y)) / math.pi
+        px = np.asarray(w["texture"].pixels, np.float64)
+        h, wd = px.shape[:2]
+        i, j = (1.0 - v) * h - 0.5, u * wd - 0.5
+        assert abs(i - round(i)) < 1e-6 and abs(j - round(j)) < 1e-6  # a texel centre
+        return px[round(i), round(j) % wd] * w["strength"]
+
+    for row in range(8):
+        for col in range(16):
+            u, v = (col + 0.5) / 16, 1.0 - (row + 0.5) / 8
+            phi, elev = (0.5 - u) * 2 * math.pi - world["rotation"], (v - 0.5) * math.pi
+            d = (math.cos(elev) * math.cos(phi), math.cos(elev) * math.sin(phi), math.sin(elev))
+            assert lookup(world, d) == pytest.approx(lookup(alone[0], d) + lookup(alone[1], d), abs=1e-5)
+            assert baked[row, col] == pytest.approx(lookup(world, d), abs=1e-5)

@@ -405,3 +405,132 @@ def test_dome_texture_faces_the_camera_as_in_hydra(tmp_path, up, camera):
     named = {"Zup": {"Front": (1, 0, 0), "Back": (1, 0, 1)}, "Yup": {"Front": (0, 0.86, 1), "Back": (0, 0, 1)}}[up][camera]
     assert want == pytest.approx(named, abs=0.01)
     assert corners.mean(axis=0) == pytest.approx(want, abs=0.02), (corners.mean(axis=0), want)
+
+
+def pxr_nested_instances(stage):
+    """[(gprim path, 4 × 4 row-vector world matrix in the stage's frame)] of every gprim
+    that PointInstancers (nested in prototypes or not) place, composed by hand from pxr:
+    per level, ComputeInstanceTransformsAtTime (prototype root transform included) times
+    the gprim's (or inner instancer's) transform relative to its prototype root times the
+    instancer's own placement (XformCache for the outermost)."""
+    time = Usd.TimeCode.EarliestTime()
+    cache = UsdGeom.XformCache(time)
+    out = []
+
+    def place(prim, parents):
+        pi = UsdGeom.PointInstancer(prim)
+        protos = pi.GetPrototypesRel().GetTargets()
+        for m, p in zip(pi.ComputeInstanceTransformsAtTime(time, time), pi.GetProtoIndicesAttr().Get(time)):
+            root = stage.GetPrimAtPath(protos[p])
+            root_inv = cache.GetLocalToWorldTransform(root).GetInverse()
+            it = iter(Usd.PrimRange(root))
+            for sub in it:
+                rel = cache.GetLocalToWorldTransform(sub) * root_inv
+                worlds = [rel * m * parent for parent in parents]
+                if sub.IsA(UsdGeom.PointInstancer):
+                    place(sub, worlds)
+                    it.PruneChildren()
+                elif sub.IsA(UsdGeom.Gprim):
+                    out.extend((str(sub.GetPath()), np.array(w)) for w in worlds)
+
+    it = iter(Usd.PrimRange.Stage(stage))
+    for prim in it:
+        if prim.IsA(UsdGeom.PointInstancer):
+            place(prim, [cache.GetLocalToWorldTransform(prim)])
+            it.PruneChildren()
+    return out
+
+
+def test_nested_point_instancers_compose_every_level_as_pxr_does():
+    """pi_pi.usda: PointInstancers whose prototypes hold PointInstancers (a prototype that
+    references /Cube, which instances 3 cubes), under rotated instances, translated Xforms
+    and beside plain ones. Every cube of read_stage's scene is one instance whose transform
+    is pxr's per-level ComputeInstanceTransformsAtTime composed by hand, and the cubes of each
+    outermost instancer fill its authored extent (written by OpenUSD, in its own frame)."""
+    rel = "testUsdImagingGLPointInstancer/pi_pi.usda"
+    stage = Usd.Stage.Open(str(DATA / rel))
+    c = to_ours(stage)
+    want = pxr_nested_instances(stage)
+    scene, caught = read(rel)
+    assert [w for w in caught if NO_CAMERA not in w] == []
+    desc, buffers = scene.description()
+    got = [(i["name"], np.asarray(i["transform"], float)) for i in desc["instances"]]
+    assert len(got) == len(want) == 24  # 5 outer instancers × 3 nested cubes + 3 plain × 3
+    key = lambda m: tuple(np.round(m, 6).ravel())  # noqa: E731
+    ours = sorted((key(m) for _, m in got))
+    theirs = sorted(key(c @ m.T) for _, m in want)  # row vectors → ours (columns, metres)
+    assert np.allclose(np.array(ours), np.array(theirs), atol=1e-9)
+    # Authored extents: the union of each outermost instancer's cubes in its own frame.
+    cube = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+    time = Usd.TimeCode.EarliestTime()
+    for prim in stage.Traverse():
+        outer = prim.GetPath().GetPrefixes()[:-1]
+        if not prim.IsA(UsdGeom.PointInstancer) or any(stage.GetPrimAtPath(q).IsA(UsdGeom.PointInstancer) for q in outer):
+            continue
+        to_local = np.linalg.inv(c @ np.array(UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(time)).T)
+        pts = np.concatenate([apply(to_local @ m, cube) for n, m in got if n.startswith(f"{prim.GetPath()}[")])
+        lo, hi = np.array(UsdGeom.Boundable(prim).GetExtentAttr().Get(time), float)
+        assert np.allclose(pts.min(axis=0), lo, atol=2e-3) and np.allclose(pts.max(axis=0), hi, atol=2e-3), prim.GetPath()
+
+
+def test_nested_point_instancer_under_prototype_xforms_lands_at_its_closed_form():
+    """pi_pi_xform.usda: an instancer inside an Xform inside the outer instancer's
+    prototype root, each translated: Yellow sits at (−1, −1, 0) + its points, Blue at
+    (−10, −10, 0) +, Green (inner prototype (10, 0, 0) + middle (−9, −9, 0) + outer root
+    (−1, −1, 0)) at (0, −10, 0) +, Red as authored (Y up, centimetres)."""
+    rel = "testUsdImagingGLPointInstancer/pi_pi_xform.usda"
+    stage = Usd.Stage.Open(str(DATA / rel))
+    c = to_ours(stage)
+    scene, caught = read(rel)
+    assert [w for w in caught if NO_CAMERA not in w] == []
+    by_leaf = {name.rsplit("/", 1)[1]: name for name in (i["name"] for i in scene.description()[0]["instances"])}
+    assert sorted(by_leaf) == ["Blue", "Green", "Red", "Yellow"]
+    want = {
+        "Yellow": ([-1, -1, 1], [1, 1, 1]),
+        "Blue": ([-10, -10, 0], [0, 10, 0]),
+        "Green": ([0, -10, 0], [10, 10, 0]),
+        "Red": ([-10, 0, 0], [10, 10, 0]),
+    }
+    desc, buffers = scene.description()
+    for inst in desc["instances"]:
+        leaf = inst["name"].rsplit("/", 1)[1]
+        v = np.asarray(buffers[desc["meshes"][inst["mesh"]]["vertices"]], np.float64).reshape(-1, 3)
+        w = apply(np.linalg.inv(c) @ np.asarray(inst["transform"], float), v)  # back to the stage's frame
+        assert np.allclose(w.min(axis=0), want[leaf][0], atol=1e-5) and np.allclose(w.max(axis=0), want[leaf][1], atol=1e-5), leaf
+
+
+def test_points_and_curves_with_a_malformed_prim_skip_only_it():
+    """testUsdGeomBBoxCache/pointsAndCurves.usda: its ErrorPrims/invalidNumWidthsAndPoints
+    (2 widths for 3 points) is skipped with one warning naming it and its widths (it raised
+    for the whole stage before); every other drawn Points and BasisCurves prim is read, and
+    those with authored widths lie inside pxr's extent (ComputeExtentFromPlugins, widths
+    included) spanning more than half of it."""
+    rel = "testUsdGeomBBoxCache/pointsAndCurves.usda"
+    stage = Usd.Stage.Open(str(DATA / rel))
+    c = to_ours(stage)
+    scene, caught = read(rel)
+    said = [w for w in caught if NO_CAMERA not in w]
+    assert len(said) == 1 and "prim /ErrorPrims/invalidNumWidthsAndPoints: widths has 2 values" in said[0], caught
+    got = our_bounds(scene)
+    time = Usd.TimeCode.EarliestTime()
+    drawn = set()
+    for prim in stage.Traverse():
+        if not prim.IsA(UsdGeom.Gprim) or prim.GetName() == "invalidNumWidthsAndPoints":
+            continue
+        pts = prim.GetAttribute("points").Get(time) if prim.HasAttribute("points") else None
+        if prim.IsA(UsdGeom.PointBased) and not pts:
+            continue  # nothing to draw
+        drawn.add(str(prim.GetPath()))
+        widths = prim.GetAttribute("widths")
+        if not (widths and widths.HasAuthoredValue()):
+            continue
+        world = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(time)
+        lo, hi = UsdGeom.Boundable.ComputeExtentFromPlugins(UsdGeom.Boundable(prim), time, world)
+        box = apply(c, np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]))
+        plo, phi = box.min(axis=0), box.max(axis=0)
+        olo, ohi = got[str(prim.GetPath())]
+        # tubes and spheres are polygons of the circle's area: their corners reach a few % past it
+        tol = 0.05 * max(widths.Get(time)) * UsdGeom.GetStageMetersPerUnit(stage)
+        assert np.all(olo >= plo - tol) and np.all(ohi <= phi + tol), prim.GetPath()
+        assert np.all(ohi - olo >= 0.5 * (phi - plo)), prim.GetPath()
+    assert sorted(got) == sorted(drawn)

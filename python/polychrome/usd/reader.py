@@ -11,8 +11,10 @@ networks (``materialx.py``; referenced ``.mtlx`` documents through ``mtlxdoc.py`
 ``polychrome:`` attributes (which win). Units are
 converted to metres (``metersPerUnit``) and Y-up stages rotated to Z-up.
 
-Unsupported prims are skipped with one ``warnings.warn`` each naming the prim; malformed
-data raises ``ValueError`` naming the file and the prim.
+Unsupported prims are skipped with one ``warnings.warn`` each naming the prim. A prim
+whose data is malformed (array lengths, indices, non-finite values, bad JSON) is skipped
+with one warning naming it and the problem, and the rest of the stage is read
+(``_Reader.guarded``); only a stage that cannot be opened raises ``ValueError``.
 """
 
 from __future__ import annotations
@@ -77,9 +79,32 @@ def PROTOTYPE_PREDICATE(Usd):
 
 
 MAX_KEY_TURN = math.pi / 4
+#: PointInstancers inside prototypes of PointInstancers: at most this many levels.
+MAX_INSTANCER_DEPTH = 8
 #: Prims the reader turns into triangle meshes.
 GEOMETRY_TYPES = ("Mesh", "Sphere", "Cube", "Cylinder", "Cone", "Capsule", "Capsule_1", "Plane", "BasisCurves", "HermiteCurves", "Points")
 _LIGHTS_SKIPPED = {"GeometryLight", "PortalLight", "PluginLight", "MeshLight", "VolumeLight"}
+
+
+class PrimError(ValueError):
+    """Malformed data of one prim: ``read_stage`` skips the prim with a warning."""
+
+    def __init__(self, message: str, where: str, problem: str):
+        super().__init__(message)
+        self.where, self.problem = where, problem
+
+
+def _pxr_error_detail(e) -> str:
+    """The first message of a pxr Tf.ErrorException, without pxr's namespace noise."""
+    import re
+
+    messages = [" ".join(m.split()) for m in re.findall(r" : '(.*?)'\s*(?=\n\s*Error in|$)", str(e), re.S)]
+    detail = messages[0] if messages else (str(e).strip().splitlines() or ["USD error"])[0]
+    return re.sub(r"pxrInternal_\w+?__pxrReserved__::", "", detail)
+
+
+def _is_pxr_error(e) -> bool:
+    return type(e).__name__ == "ErrorException"
 
 
 class DescribedLight:
@@ -241,9 +266,11 @@ class _Reader:
         # An animation's frame is a time code (Blender writes frame n at time code n).
         self.time = Usd.TimeCode.EarliestTime() if time is None else Usd.TimeCode(float(time))
         self.cache = UsdGeom.XformCache(self.time)
+        self.warned: set[str] = set()
         self.mpu = float(UsdGeom.GetStageMetersPerUnit(self.stage))
         if not (math.isfinite(self.mpu) and self.mpu > 0):
-            raise ValueError(f"{path}: metersPerUnit {self.mpu} must be positive")
+            self.warn("mpu", f"metersPerUnit {self.mpu} must be positive; UsdGeom's fallback 0.01 is used")
+            self.mpu = 0.01
         up = UsdGeom.GetStageUpAxis(self.stage)
         c = np.eye(4) * self.mpu
         c[3, 3] = 1.0
@@ -254,7 +281,6 @@ class _Reader:
         self.identity_correction = bool(np.array_equal(c, np.eye(4)))
         self.resolution = resolution
         self.subdivision_level = _check_level(DEFAULT_SUBDIVISION_LEVEL if subdivision_level is None else subdivision_level)
-        self.warned: set[str] = set()
         # Collected, then turned into a Scene at the end.
         self.materials: list[Any] = []
         self.material_index: dict[str, int] = {}
@@ -266,8 +292,8 @@ class _Reader:
         # PointInstancer placements: (instancer, first instance, instance ids, prototype-relative matrix).
         self.instancer_runs: list[tuple] = []
         self.lights: list[Any] = []
-        self.world = None
-        self.world_texture: dict[str, Any] | None = None
+        # DomeLights read: (prim path, ("uniform", spectrum) or ("texture", set_world kwargs)).
+        self.domes: list[tuple[str, tuple[str, Any]]] = []
         self.cameras: list[Any] = []
         self.textures: dict[str, Any] = {}
         # Files read out of .usdz packages: resolved path → temporary copy (None: absent).
@@ -278,9 +304,49 @@ class _Reader:
         self.attribute_names: set[str] = set()
 
     # -- helpers ------------------------------------------------------------------
-    def error(self, prim_or_path, problem: str) -> ValueError:
+    def error(self, prim_or_path, problem: str) -> PrimError:
         where = prim_or_path if isinstance(prim_or_path, str) else str(prim_or_path.GetPath())
-        return ValueError(f"{self.path}: prim {where}: {problem}")
+        return PrimError(f"{self.path}: prim {where}: {problem}", where, problem)
+
+    def skip_message(self, prim, e: Exception, what: str = "it is skipped") -> str:
+        """'prim P: problem; it is skipped' for a PrimError (naming the prim that has the
+        problem when it is another, e.g. a GeomSubset), a pxr error or a ValueError."""
+        path = str(prim.GetPath()) if not isinstance(prim, str) else prim
+        if isinstance(e, PrimError):
+            at = "" if e.where == path else f"{e.where}: "
+            problem = at + e.problem
+        elif _is_pxr_error(e):
+            problem = _pxr_error_detail(e).replace(str(self.path) + ":", "line ")
+        else:
+            problem = str(e).replace(f"{self.path}: ", "")
+        return f"prim {path}: {problem}; {what}"
+
+    def guarded(self, prim, read, what: str = "it is skipped") -> bool:
+        """Runs ``read()`` for one prim; malformed data (a PrimError, ValueError or pxr
+        error) skips the prim with one warning naming it and the problem: whatever it had
+        added (instances, meshes, lights, the world) is taken back. True when it read."""
+        state = (
+            len(self.instances),
+            len(self.lights),
+            len(self.instancer_runs),
+            set(self.meshes),
+            len(self.domes),
+        )
+        try:
+            read()
+            return True
+        except Exception as e:  # noqa: BLE001 - pxr's Tf.ErrorException is not importable by name
+            if not (isinstance(e, ValueError) or _is_pxr_error(e)):
+                raise
+            n_inst, n_lights, n_runs, keys, n_domes = state
+            del self.instances[n_inst:], self.lights[n_lights:], self.instancer_runs[n_runs:], self.domes[n_domes:]
+            for key in set(self.meshes) - keys:
+                if self.meshes[key] is not None:  # a mesh that failed stays None: not retried
+                    del self.meshes[key]
+                    self.mesh_prims.pop(key, None)
+            path = str(prim.GetPath())
+            self.warn(f"bad:{path}", self.skip_message(prim, e, what))
+            return False
 
     def warn(self, key: str, message: str) -> None:
         if key in self.warned:
@@ -355,7 +421,16 @@ class _Reader:
     def material_for(self, mat_prim) -> int:
         key = self.key_of(mat_prim)
         if key not in self.material_index:
-            self.material_index[key] = self.add_material(self.read_material(mat_prim))
+            try:
+                material = self.read_material(mat_prim)
+            except Exception as e:  # noqa: BLE001 - as guarded: malformed data, one warning
+                if not (isinstance(e, ValueError) or _is_pxr_error(e)):
+                    raise
+                self.warn(f"bad:{mat_prim.GetPath()}", self.skip_message(mat_prim, e, "UsdPreviewSurface's fallback 0.18 grey is used"))
+                from ..spectra import rgb
+
+                material = Diffuse(rgb(*FALLBACK_GREY), name=str(mat_prim.GetPath()))
+            self.material_index[key] = self.add_material(material)
         return self.material_index[key]
 
     def display_primvar(self, prim, name: str, width: int):
@@ -1379,7 +1454,11 @@ class _Reader:
     def mesh_key(self, prim) -> str | None:
         key = self.key_of(prim)
         if key not in self.meshes:
-            arrays = self.mesh_arrays(prim)
+            try:
+                arrays = self.mesh_arrays(prim)
+            except Exception:
+                self.meshes[key] = None  # type: ignore[assignment]  # warned once by guarded
+                raise
             self.meshes[key] = arrays  # type: ignore[assignment]
             self.mesh_prims[key] = prim
         return key if self.meshes[key] is not None else None
@@ -1401,7 +1480,14 @@ class _Reader:
             return
         self.instances.append((key, self.world_matrix(prim), self.instance_name(prim), None, prim))
 
-    def read_point_instancer(self, prim) -> None:
+    def read_point_instancer(self, prim, parents=None, names=None, depth: int = 0) -> None:
+        """A PointInstancer's instances: each prototype's gprims placed by
+        ``ComputeInstanceTransformsAtTime`` (prototype root transform included) times the
+        instancer's own transform. ``parents`` (row-vector 4 × 4s, stage frame) are the
+        instancer's local-to-world transforms when it sits inside another instancer's
+        prototype (one per outer instance, ``names`` theirs); PointInstancers inside a
+        prototype are read the same way, level by level (UsdGeomPointInstancer composes
+        one level per ComputeInstanceTransformsAtTime)."""
         UsdGeom, Usd = self.UsdGeom, self.Usd
         pi = UsdGeom.PointInstancer(prim)
         protos = pi.GetPrototypesRel().GetForwardedTargets()
@@ -1453,7 +1539,10 @@ class _Reader:
             keep &= ~np.isin(ids, np.asarray(invisible, dtype=np.int64))
         if not np.all(np.isfinite(inst[keep])):
             raise self.error(prim, "its instance positions, orientations or scales are not finite")
-        w = np.array(self.cache.GetLocalToWorldTransform(prim), dtype=np.float64)
+        nested = parents is not None
+        if not nested:
+            parents = np.array(self.cache.GetLocalToWorldTransform(prim), dtype=np.float64)[None]
+            names = [str(prim.GetPath())]
         for p, target in enumerate(protos):
             root = self.stage.GetPrimAtPath(target)
             if not root:
@@ -1465,26 +1554,42 @@ class _Reader:
             # Prototypes may sit under an `over` (not "defined" to the default predicate,
             # which asks it of every ancestor): Hydra's predicate for prototypes asks each
             # prim's own specifier (UsdImagingDelegate::_GetDisplayPredicateForPrototypes).
-            for sub in Usd.PrimRange(root, Usd.TraverseInstanceProxies(PROTOTYPE_PREDICATE(Usd))):
-                if sub.GetTypeName() not in GEOMETRY_TYPES:
-                    if sub.GetTypeName() not in _SILENT_TYPES:
+            it = iter(Usd.PrimRange(root, Usd.TraverseInstanceProxies(PROTOTYPE_PREDICATE(Usd))))
+            for sub in it:
+                t = sub.GetTypeName()
+                if t not in GEOMETRY_TYPES and t != "PointInstancer":
+                    if t not in _SILENT_TYPES:
                         self.warn(
                             f"proto:{sub.GetPath()}",
-                            f"prim {sub.GetPath()}: {sub.GetTypeName()} inside a PointInstancer prototype is not supported and is skipped",
+                            f"prim {sub.GetPath()}: {t} inside a PointInstancer prototype is not supported and is skipped",
                         )
+                    continue
+                rel, _ = self.cache.ComputeRelativeTransform(sub, root) if sub != root else (self.Gf.Matrix4d(1.0), False)
+                rel = np.array(rel, dtype=np.float64)
+                # row vectors: local → prototype → instancer → world, for every outer placement
+                mats = (rel[None, None] @ inst[which][None] @ parents[:, None]).reshape(-1, 4, 4)
+                tail = str(sub.GetPath())[len(str(root.GetPath())) :]
+                sub_names = [f"{n}[{int(j)}]{tail}" for n in names for j in which]
+                if t == "PointInstancer":
+                    it.PruneChildren()  # its prototypes are drawn through it
+                    if depth + 1 > MAX_INSTANCER_DEPTH:
+                        self.warn(
+                            f"pidepth:{sub.GetPath()}",
+                            f"prim {sub.GetPath()}: PointInstancers nested deeper than {MAX_INSTANCER_DEPTH} levels are skipped",
+                        )
+                        continue
+                    self.guarded(sub, lambda: self.read_point_instancer(sub, mats, sub_names, depth + 1))
                     continue
                 key = self.mesh_key(sub)
                 if key is None:
                     continue
-                rel, _ = self.cache.ComputeRelativeTransform(sub, root) if sub != root else (self.Gf.Matrix4d(1.0), False)
-                rel = np.array(rel, dtype=np.float64)
-                mats = rel[None] @ inst[which] @ w[None]  # row vectors: local → prototype → instancer → world
-                mats = np.transpose(mats, (0, 2, 1))
+                world = np.transpose(mats, (0, 2, 1))
                 if not self.identity_correction:
-                    mats = self.correction[None] @ mats
-                self.instancer_runs.append((prim, len(self.instances), which, rel))
-                for j, m in zip(which, mats):
-                    self.instances.append((key, m, f"{prim.GetPath()}[{int(j)}]{str(sub.GetPath())[len(str(root.GetPath())) :]}"))
+                    world = self.correction[None] @ world
+                if not nested:  # motion keys over the shutter (instancer_motion): one level
+                    self.instancer_runs.append((prim, len(self.instances), which, rel))
+                for m, name in zip(world, sub_names):
+                    self.instances.append((key, m, name))
             if len(self.instances) == placed:
                 self.warn(
                     f"proto:{target}",
@@ -1802,21 +1907,21 @@ class _Reader:
         )
 
     def read_dome_light(self, prim) -> None:
+        """One DomeLight: its uniform radiance or its latlong texture; several domes are
+        summed at the end (``combined_world``)."""
+        self.domes.append((str(prim.GetPath()), self.dome_contribution(prim)))
+
+    def dome_contribution(self, prim) -> tuple[str, Any]:
         from ..texture import Texture
 
-        if self.world is not None or self.world_texture is not None:
-            self.warn(f"dome:{prim.GetPath()}", f"prim {prim.GetPath()}: only one DomeLight is used; this one is skipped")
-            return
         radiance = self.spectrum_attr(prim, A.RADIANCE)
         if radiance is not None:
-            self.world = radiance
-            return
+            return ("uniform", radiance)
         light = self.UsdLux.DomeLight(prim) if prim.GetTypeName() == "DomeLight" else self.UsdLux.DomeLight_1(prim)
         scalar, colour, blackbody = self.light_rgb(prim, light)
         tex = self.get(light.GetTextureFileAttr())
         if tex is None or not (getattr(tex, "path", "") or ""):
-            self.world = self.emitted(scalar, colour, blackbody)
-            return
+            return ("uniform", self.emitted(scalar, colour, blackbody))
         fmt = str(self.get(light.GetTextureFormatAttr(), "automatic"))
         if fmt not in ("automatic", "latlong"):
             self.warn(f"domefmt:{prim.GetPath()}", f"prim {prim.GetPath()}: dome texture format '{fmt}' is not supported; read as latlong")
@@ -1831,8 +1936,7 @@ class _Reader:
             self.warn(f"unreadable:{prim.GetPath()}", f"prim {prim.GetPath()}: cannot read dome texture {path} ({e}); its fallback is used")
             texture = None
         if texture is None:  # the dome's fallback: its uniform colour
-            self.world = self.emitted(scalar, colour, blackbody)
-            return
+            return ("uniform", self.emitted(scalar, colour, blackbody))
         # The latlong image has +Y up in the dome's frame (OpenEXR latlong, centre towards
         # +Z). In Polychrome's Z-up world that frame is W = Rz(φ)·Rx(90°) for a dome turned
         # by φ about the up axis, which Polychrome's rotation π/2 − φ reproduces. A
@@ -1855,13 +1959,67 @@ class _Reader:
         phi = math.atan2(wz[1, 0], wz[0, 0])
         extra = self.json_attr(prim, A.LIGHT) or {}
         rotation = extra.get("rotation") if "rotation" in extra else math.remainder(math.pi / 2 - phi, 2 * math.pi)
-        self.world = None
-        self.world_texture = {
-            "texture": texture,
-            "strength": float(extra.get("strength", scalar)),
-            "rotation": float(rotation),
-            "importance_sampling": bool(extra.get("importance_sampling", True)),
-        }
+        return (
+            "texture",
+            {
+                "texture": texture,
+                "strength": float(extra.get("strength", scalar)),
+                "rotation": float(rotation),
+                "importance_sampling": bool(extra.get("importance_sampling", True)),
+            },
+        )
+
+    def combined_world(self) -> dict[str, Any] | None:
+        """``Scene.set_world`` arguments for the DomeLights read: one as it is; several
+        summed (lights add). Uniform radiances: their sum (RGB colours added, the
+        same spectrum kind by scale, other mixes tabulated on a 1 nm grid). With
+        textures: one latlong of the largest texture's size and rotation, every other
+        texture resampled into it (bilinear, as the core looks textures up) and the
+        uniform radiances' RGB colours (a spectrum's linear Rec.709 colour) added to each
+        texel."""
+        if not self.domes:
+            return None
+        if len(self.domes) == 1:
+            kind, value = self.domes[0][1]
+            return dict(value) if kind == "texture" else {"radiance": value}
+        names = ", ".join(path for path, _ in self.domes)
+        uniforms = [v for _, (k, v) in self.domes if k == "uniform"]
+        textures = [v for _, (k, v) in self.domes if k == "texture"]
+        if not textures:  # exact: no warning
+            return {"radiance": _sum_spectra(uniforms)}
+        from ..spectra import rec709
+        from ..texture import Texture
+
+        base = max(textures, key=lambda d: d["texture"].width * d["texture"].height)
+        tex = base["texture"]
+        h, w = tex.height, tex.width
+        s0 = base["strength"]
+        total = np.zeros((h, w, 3), np.float64)
+        # Texel centres of the base image → world azimuth offsets of each other texture.
+        u = (np.arange(w) + 0.5) / w
+        v = 1.0 - (np.arange(h) + 0.5) / h
+        for d in textures:
+            lin = _linear_texels(d["texture"])
+            if d is base:
+                total += lin * d["strength"]
+                continue
+            # Base lookup: u = 0.5 − (φ + r0)/2π; this one: u' = 0.5 − (φ + r)/2π = u − (r − r0)/2π.
+            du = (d["rotation"] - base["rotation"]) / (2 * math.pi)
+            total += _bilinear(lin, (u - du)[None, :], v[:, None]) * d["strength"]
+        for spectrum in uniforms:  # an RGB colour as it is (the texels are RGB too), else its colour
+            own = [spectrum.scale * c for c in spectrum.params["rgb"]] if spectrum.kind == "rgb" else rec709(spectrum)
+            total += np.asarray(own, np.float64)[None, None, :]
+        if s0 > 0:
+            total /= s0
+        self.warn(
+            "domes",
+            f"{len(self.domes)} DomeLights ({names}) are summed into one latlong texture of {w} × {h} (the largest's size and turn)",
+        )
+        world = dict(base)
+        world["texture"] = Texture.from_array(total.astype(np.float32), "linear", name=f"{tex.name} + {len(self.domes) - 1} domes")
+        world["strength"] = s0 if s0 > 0 else 1.0
+        world["importance_sampling"] = any(d["importance_sampling"] for d in textures)
+        return world
 
     # -- camera --------------------------------------------------------------------------
     def read_camera(self, prim, resolution, pixel_aspect=1.0):
@@ -2080,12 +2238,26 @@ class _Reader:
             if not self.identity_correction:
                 keys = self.correction[None, None] @ keys
             if not np.all(np.isfinite(keys)):
-                raise self.error(prim, "its instance positions, orientations, scales or velocities over the shutter are not finite")
+                self.warn(
+                    f"bad:pimotion:{path}",
+                    f"prim {path}: its instance positions, orientations, scales or velocities over the shutter are not finite; "
+                    "its instances are placed at the frame without motion blur",
+                )
+                continue
             for j in range(len(which)):
                 ks = keys[:, j]
                 if not np.allclose(ks[0], ks[1:], rtol=0, atol=1e-9):
                     out[start + j] = list(ks)
         return out
+
+    def guarded_motion(self, prim, shutter):
+        """transform_motion, or (one warning naming the prim) None when its transform over
+        the shutter is not finite: the prim is then placed at the frame, unblurred."""
+        try:
+            return self.transform_motion(prim, shutter)
+        except PrimError as e:
+            self.warn(f"bad:motion:{prim.GetPath()}", self.skip_message(prim, e, "it is placed at the frame without motion blur"))
+            return None
 
     def key_matrix_row(self, prim, t: float):
         if t not in self.key_caches:
@@ -2160,25 +2332,22 @@ class _Reader:
             ):
                 it.PruneChildren()
                 continue
-            if t in GEOMETRY_TYPES:
-                self.read_mesh(prim)
-            elif t == "PointInstancer":
-                self.read_point_instancer(prim)
-                it.PruneChildren()
+            reader = {
+                "PointInstancer": self.read_point_instancer,
+                "SphereLight": self.read_sphere_light,
+                "RectLight": self.read_rect_light,
+                "DiskLight": self.read_disk_light,
+                "CylinderLight": self.read_cylinder_light,
+                "DistantLight": self.read_distant_light,
+                "DomeLight": self.read_dome_light,
+                "DomeLight_1": self.read_dome_light,
+            }.get(t, self.read_mesh if t in GEOMETRY_TYPES else None)
+            if reader is not None:
+                self.guarded(prim, lambda: reader(prim))
+                if t == "PointInstancer":
+                    it.PruneChildren()
             elif t == "Camera":
                 self.cameras.append(prim)
-            elif t == "SphereLight":
-                self.read_sphere_light(prim)
-            elif t == "RectLight":
-                self.read_rect_light(prim)
-            elif t == "DiskLight":
-                self.read_disk_light(prim)
-            elif t == "CylinderLight":
-                self.read_cylinder_light(prim)
-            elif t == "DistantLight":
-                self.read_distant_light(prim)
-            elif t in ("DomeLight", "DomeLight_1"):
-                self.read_dome_light(prim)
             elif t in ("Material", "RenderSettings", "RenderProduct", "RenderVar", "RenderPass"):
                 it.PruneChildren()
             elif t in _SILENT_TYPES:
@@ -2190,25 +2359,43 @@ class _Reader:
 
         scene = Scene()
         scene.materials = list(self.materials)
-        settings = read_settings_from_stage(self.stage, self.path)
+        settings = read_settings_from_stage(self.stage, self.path, warn=self.warn)
         resolution = self.resolution or ((settings["width"], settings["height"]) if "width" in settings else None)
-        cam_prim = None
+        candidates = list(self.cameras)
         cam_path = settings.get("_camera")
         if cam_path:
             cam_prim = self.stage.GetPrimAtPath(cam_path)
             if not cam_prim or cam_prim.GetTypeName() != "Camera":
-                raise ValueError(f"{self.path}: prim {settings['_settings_prim']}: camera {cam_path} is not a UsdGeom.Camera")
-        elif self.cameras:
-            cam_prim = self.cameras[0]
-        if cam_prim is not None:
-            scene.camera = self.read_camera(cam_prim, resolution, settings.get("_pixel_aspect", 1.0))
-        else:
-            self.warn("camera", "the stage has no UsdGeom.Camera; the default camera at the origin looking down −Z is used")
+                self.warn(
+                    "rendercamera",
+                    f"prim {settings['_settings_prim']}: camera {cam_path} is not a UsdGeom.Camera; "
+                    + ("the stage's first camera is used" if candidates else "the default camera is used"),
+                )
+            else:
+                candidates.insert(0, cam_prim)
+        # The render camera, else the first camera that reads (a malformed one is warned).
+        cam_prim = None
+        for candidate in candidates:
+            got: list[Any] = []
+            if self.guarded(
+                candidate,
+                lambda c=candidate: got.append(self.read_camera(c, resolution, settings.get("_pixel_aspect", 1.0))),
+                "it is skipped (the next camera, else the default camera, is used)",
+            ):
+                cam_prim, scene.camera = candidate, got[0]
+                break
+        if cam_prim is None:
+            if not candidates:
+                self.warn("camera", "the stage has no UsdGeom.Camera; the default camera at the origin looking down −Z is used")
             scene.camera = Camera()
         # Motion blur over the camera's shutter (docs/usd.md, "Motion").
-        shutter = self.shutter_times(cam_prim, settings)
+        shutter = None
+        try:
+            shutter = self.shutter_times(cam_prim, settings)
+        except PrimError as e:
+            self.warn(f"bad:shutter:{cam_prim.GetPath()}", self.skip_message(cam_prim, e, "no motion blur"))
         if shutter is not None:
-            cam_keys = self.transform_motion(cam_prim, shutter)
+            cam_keys = self.guarded_motion(cam_prim, shutter)
             if cam_keys is not None:
                 for m in cam_keys:  # camera scale does not change the view (read_camera)
                     m[:3, :3] /= np.linalg.norm(m[:3, :3], axis=0)
@@ -2229,6 +2416,12 @@ class _Reader:
             m = self.meshes[key]
             if m is None:
                 continue
+            motion = {}
+            if shutter:
+                try:
+                    motion = self.deformation(key, shutter) or {}
+                except PrimError as e:
+                    self.warn(f"bad:deform:{key}", self.skip_message(self.mesh_prims[key], e, "its deformation is not blurred"))
             index[key] = scene.add_mesh(
                 m["name"],
                 m["vertices"],
@@ -2241,22 +2434,21 @@ class _Reader:
                 uv_maps=m.get("uv_maps"),
                 attributes=m.get("attributes"),
                 tangents=m.get("tangents"),
-                **((shutter and self.deformation(key, shutter)) or {}),
+                **motion,
             )
         instanced = self.instancer_motion(shutter) if shutter is not None and self.instancer_runs else {}
         for i, (key, matrix, name, *rest) in enumerate(self.instances):
             visibility = rest[0] if rest else None
             moving = rest[1] if len(rest) > 1 else None
-            motion = self.transform_motion(moving, shutter) if moving is not None and shutter is not None else instanced.get(i)
+            motion = self.guarded_motion(moving, shutter) if moving is not None and shutter is not None else instanced.get(i)
             if motion is not None and len(motion) == 1:  # animated, but still while the shutter is open
                 matrix, motion = motion[0], None
             scene.add_instance(index[key], matrix, name, visibility=visibility, motion=motion)
         for light in self.lights:
             scene.add_light(light)
-        if self.world_texture is not None:
-            scene.set_world(**self.world_texture)
-        elif self.world is not None:
-            scene.set_world(self.world)
+        world = self.combined_world()
+        if world is not None:
+            scene.set_world(**world)
         return scene
 
 
@@ -2269,6 +2461,48 @@ def _primvar_values(pv, time):
     if value is not None and not pv.GetTypeName().isArray:
         return [value]
     return value
+
+
+def _sum_spectra(spectra):
+    """The sum of emitted spectra: RGB colours added (exact under the linear uplift), one
+    kind with the same parameters by its scales, else tabulated on a 1 nm grid."""
+    from .. import _core
+    from ..spectra import Spectrum, rgb, tabulated
+
+    if all(s.kind == "rgb" for s in spectra):
+        return rgb(*(float(sum(s.scale * s.params["rgb"][i] for s in spectra)) for i in range(3)))
+    if all(s.kind == spectra[0].kind and s.params == spectra[0].params for s in spectra):
+        return Spectrum(spectra[0].kind, spectra[0].params, float(sum(s.scale for s in spectra)))
+    wl = np.arange(360.0, 831.0)
+    settings = json.dumps({"wavelengths": wl.tolist()})
+    values = sum(np.asarray(_core.spectrum_values(json.dumps(s.to_dict()), settings), np.float64) for s in spectra)
+    return tabulated(wl, values)
+
+
+def _linear_texels(texture) -> np.ndarray:
+    """A texture's texels as linear float RGB (sRGB bytes decoded, IEC 61966-2-1)."""
+    px = np.asarray(texture.pixels)[..., :3]
+    if texture.encoding == "linear":
+        return px.astype(np.float64)
+    c = px.astype(np.float64) / 255.0
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def _bilinear(img: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Bilinear lookup of an (H, W, 3) latlong at (u, v) (broadcast), as the core's
+    environment does: texel centres at (i + ½)/W, rows from the top (v = 1), u repeated,
+    v extended."""
+    h, w = img.shape[:2]
+    u, v = np.broadcast_arrays(u, v)
+    x = u * w - 0.5
+    y = (1.0 - v) * h - 0.5
+    x0, y0 = np.floor(x), np.floor(y)
+    fx, fy = (x - x0)[..., None], (y - y0)[..., None]
+    xi0, xi1 = x0.astype(np.int64) % w, (x0.astype(np.int64) + 1) % w
+    yi0, yi1 = np.clip(y0.astype(np.int64), 0, h - 1), np.clip(y0.astype(np.int64) + 1, 0, h - 1)
+    top = img[yi0, xi0] * (1 - fx) + img[yi0, xi1] * fx
+    bottom = img[yi1, xi0] * (1 - fx) + img[yi1, xi1] * fx
+    return top * (1 - fy) + bottom * fy
 
 
 def _turn(a: np.ndarray, b: np.ndarray) -> float:
@@ -2337,11 +2571,17 @@ def open_stage(path, *, report: bool = True):
     return stage
 
 
-def read_settings_from_stage(stage, path) -> dict[str, Any]:
+def read_settings_from_stage(stage, path, warn=None) -> dict[str, Any]:
     """RenderSettings fields stored in the stage: the prim named by the stage's
     ``renderSettingsPrimPath``, else /Render/PolychromeSettings, else the first
-    UsdRender.Settings. Keys ``_camera`` / ``_settings_prim`` give its camera."""
+    UsdRender.Settings. Keys ``_camera`` / ``_settings_prim`` give its camera. A malformed
+    value (a resolution that is not positive, a non-finite number) is left out, with
+    ``warn(key, message)`` when given."""
     from pxr import UsdRender
+
+    def bad(prim, what: str) -> None:
+        if warn is not None:
+            warn(f"bad:{prim.GetPath()}:{what}", f"prim {prim.GetPath()}: {what}; it is ignored")
 
     prim = None
     meta = stage.GetMetadata("renderSettingsPrimPath") if stage.HasAuthoredMetadata("renderSettingsPrimPath") else None
@@ -2365,14 +2605,16 @@ def read_settings_from_stage(stage, path) -> dict[str, Any]:
     if res_attr and res_attr.HasAuthoredValue():
         res = res_attr.Get()
         if res is None or res[0] <= 0 or res[1] <= 0:
-            raise ValueError(f"{path}: prim {prim.GetPath()}: resolution {res} must be positive")
-        out["width"], out["height"] = int(res[0]), int(res[1])
+            bad(prim, f"resolution {res} must be positive")
+        else:
+            out["width"], out["height"] = int(res[0]), int(res[1])
     aspect_attr = rs.GetPixelAspectRatioAttr()
     if aspect_attr and aspect_attr.HasAuthoredValue():
         aspect = float(aspect_attr.Get())
         if not (math.isfinite(aspect) and aspect > 0):
-            raise ValueError(f"{path}: prim {prim.GetPath()}: pixelAspectRatio {aspect} must be positive")
-        out["_pixel_aspect"] = aspect
+            bad(prim, f"pixelAspectRatio {aspect} must be positive")
+        else:
+            out["_pixel_aspect"] = aspect
     targets = rs.GetCameraRel().GetForwardedTargets()
     if targets:
         out["_camera"] = str(targets[0])
@@ -2392,9 +2634,11 @@ def read_settings_from_stage(stage, path) -> dict[str, Any]:
         if hasattr(v, "__len__") and not isinstance(v, str):
             v = [float(x) for x in v]
             if not all(math.isfinite(x) for x in v):
-                raise ValueError(f"{path}: prim {prim.GetPath()}: {name} is not finite")
+                bad(prim, f"{name} is not finite")
+                continue
         elif isinstance(v, float) and not math.isfinite(v):
-            raise ValueError(f"{path}: prim {prim.GetPath()}: {name} is not finite")
+            bad(prim, f"{name} is not finite")
+            continue
         elif not isinstance(v, (bool, int, float)):
             v = str(v)
         out[field] = v
