@@ -1,5 +1,5 @@
-"""Malformed prims (bad array lengths, NaN points, out-of-range indices, non-finite light
-values, bad JSON, malformed materials) are skipped with one warning each naming the prim
+"""Malformed prims (bad array lengths, NaN points, out-of-range indices, topology without
+points or points without topology, non-finite light values, bad JSON, malformed materials) are skipped with one warning each naming the prim
 and the problem; the rest of the stage renders as its closed form says."""
 
 import math
@@ -59,6 +59,8 @@ BAD = {
     "/bad/nanPoint": r"point 1 is not finite",
     "/bad/indexOut": r"faceVertexIndices\[2\] = 9 is out of range",
     "/bad/countsShort": r"faceVertexCounts add up to 4 but there are 3 faceVertexIndices",
+    "/bad/noIndices": r"it has points, faceVertexCounts but no faceVertexIndices",
+    "/bad/curveNoCounts": r"it has points but no curveVertexCounts",
     "/bad/normals": r"normals has 2 values for vertex interpolation; expected 3",
     "/bad/st": r"primvars:st has 1 values for faceVarying interpolation; expected 3",
     "/bad/subset": r"/bad/subset/s: face index 5 is out of range",
@@ -86,6 +88,11 @@ def bad_stage(path):
     bad_mesh(stage, "/bad/nanPoint", points=[(0, 0, 0.5), (float("nan"), 0, 0.5), (0, 0.1, 0.5)])
     bad_mesh(stage, "/bad/indexOut", indices=(0, 1, 9))
     bad_mesh(stage, "/bad/countsShort", counts=(4,))
+    bad_mesh(stage, "/bad/noIndices").GetFaceVertexIndicesAttr().Clear()
+    c = UsdGeom.BasisCurves.Define(stage, "/bad/curveNoCounts")
+    c.CreatePointsAttr([(0, 0, 0.5), (0.1, 0, 0.5)])
+    UsdGeom.Mesh.Define(stage, "/quiet/empty")  # nothing authored: nothing to draw, no warning
+    UsdGeom.BasisCurves.Define(stage, "/quiet/emptyCurves")
     bad_mesh(stage, "/bad/normals").CreateNormalsAttr([(0, 0, 1), (0, 0, 1)])
     m = bad_mesh(stage, "/bad/st")
     UsdGeom.PrimvarsAPI(m).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.faceVarying).Set([(0, 0)])

@@ -961,6 +961,9 @@ class _Reader:
         pts = self.finite_points(prim, c.GetPointsAttr(), "point")
         counts_raw = c.GetCurveVertexCountsAttr().Get(self.time)
         if pts is None or counts_raw is None or len(counts_raw) == 0:
+            if (pts is None) != (counts_raw is None or len(counts_raw) == 0):  # one without the other: malformed
+                have, lack = ("points", "curveVertexCounts") if pts is not None else ("curveVertexCounts", "points")
+                raise self.error(prim, f"it has {have} but no {lack}")
             return None
         counts = np.asarray(counts_raw, dtype=np.int64)
         if counts.min() < 0 or int(counts.sum()) != len(pts):
@@ -1125,7 +1128,11 @@ class _Reader:
         points = mesh.GetPointsAttr().Get(self.time)
         counts = mesh.GetFaceVertexCountsAttr().Get(self.time)
         indices = mesh.GetFaceVertexIndicesAttr().Get(self.time)
-        if points is None or counts is None or indices is None or len(points) == 0 or len(counts) == 0:
+        have = {"points": points, "faceVertexCounts": counts, "faceVertexIndices": indices}
+        missing = [name for name, v in have.items() if v is None or len(v) == 0]
+        if missing:
+            if len(missing) < len(have):  # some topology without the rest: malformed (all absent: nothing to draw)
+                raise self.error(where.pathString, f"it has {', '.join(k for k in have if k not in missing)} but no {' or '.join(missing)}")
             return None
         pts = np.asarray(points, dtype=np.float32).reshape(-1, 3)
         if not np.all(np.isfinite(pts)):
@@ -2422,28 +2429,37 @@ class _Reader:
                     motion = self.deformation(key, shutter) or {}
                 except PrimError as e:
                     self.warn(f"bad:deform:{key}", self.skip_message(self.mesh_prims[key], e, "its deformation is not blurred"))
-            index[key] = scene.add_mesh(
-                m["name"],
-                m["vertices"],
-                m["triangles"],
-                normals=m["normals"],
-                uvs=m["uvs"],
-                material=m["material"],
-                material_ids=m["material_ids"],
-                place=False,
-                uv_maps=m.get("uv_maps"),
-                attributes=m.get("attributes"),
-                tangents=m.get("tangents"),
-                **motion,
-            )
+            try:
+                index[key] = scene.add_mesh(
+                    m["name"],
+                    m["vertices"],
+                    m["triangles"],
+                    normals=m["normals"],
+                    uvs=m["uvs"],
+                    material=m["material"],
+                    material_ids=m["material_ids"],
+                    place=False,
+                    uv_maps=m.get("uv_maps"),
+                    attributes=m.get("attributes"),
+                    tangents=m.get("tangents"),
+                    **motion,
+                )
+            except ValueError as e:  # the scene's own checks (a last line: the reader checks first)
+                prim = self.mesh_prims.get(key)
+                self.warn(f"bad:{key}", self.skip_message(prim if prim is not None else key, e))
         instanced = self.instancer_motion(shutter) if shutter is not None and self.instancer_runs else {}
         for i, (key, matrix, name, *rest) in enumerate(self.instances):
+            if key not in index:  # its mesh was refused (warned)
+                continue
             visibility = rest[0] if rest else None
             moving = rest[1] if len(rest) > 1 else None
             motion = self.guarded_motion(moving, shutter) if moving is not None and shutter is not None else instanced.get(i)
             if motion is not None and len(motion) == 1:  # animated, but still while the shutter is open
                 matrix, motion = motion[0], None
-            scene.add_instance(index[key], matrix, name, visibility=visibility, motion=motion)
+            try:
+                scene.add_instance(index[key], matrix, name, visibility=visibility, motion=motion)
+            except ValueError as e:  # the scene's own checks (a last line, as for meshes)
+                self.warn(f"bad:instance:{name}", self.skip_message(name, e))
         for light in self.lights:
             scene.add_light(light)
         world = self.combined_world()
