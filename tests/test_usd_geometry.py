@@ -188,6 +188,26 @@ def moving_square_stage(path, how, shutter=(0.0, 1.0)):
     stage, mat, cam = stage_with_reference(path)
     cam.CreateShutterOpenAttr(shutter[0])
     cam.CreateShutterCloseAttr(shutter[1])
+    if how in ("nested", "nested_outer"):
+        # A PointInstancer inside another's prototype: the inner one's positions move (nested),
+        # or the outer one's (nested_outer); the other level stays, a quarter turn about Z
+        # undone by its prototype root's turn the other way.
+        outer = UsdGeom.PointInstancer.Define(stage, "/outer")
+        proto = UsdGeom.Xform.Define(stage, "/outer/proto")
+        proto.AddRotateZOp().Set(-90.0)
+        inner = UsdGeom.PointInstancer.Define(stage, "/outer/proto/swarm")
+        floor_mesh(stage, "/outer/proto/swarm/square", W / 2, mat)
+        inner.CreatePrototypesRel().AddTarget("/outer/proto/swarm/square")
+        inner.CreateProtoIndicesAttr([0])
+        outer.CreatePrototypesRel().AddTarget("/outer/proto")
+        outer.CreateProtoIndicesAttr([0])
+        outer.CreateOrientationsAttr([Gf.Quath(math.cos(math.pi / 4), 0, 0, math.sin(math.pi / 4))])
+        moving, still = (inner, outer) if how == "nested" else (outer, inner)
+        moving.CreatePositionsAttr().Set([(X0, Y, 0)], 0.0)
+        moving.GetPositionsAttr().Set([(X0 + D, Y, 0)], 1.0)
+        still.CreatePositionsAttr([(0, 0, 0)])
+        stage.Save()
+        return path
     if how in ("instancer", "velocities"):  # a PointInstancer's time-sampled positions, or its velocities
         pi = UsdGeom.PointInstancer.Define(stage, "/swarm")
         floor_mesh(stage, "/swarm/proto", W / 2, mat)
@@ -225,7 +245,7 @@ def smear(x):
     return np.clip(hi - lo, 0.0, None) / D
 
 
-@pytest.mark.parametrize("how", ["xform", "points", "camera", "instancer", "velocities"])
+@pytest.mark.parametrize("how", ["xform", "points", "camera", "instancer", "velocities", "nested", "nested_outer"])
 def test_moving_square_smears_into_its_analytic_streak(tmp_path, how):
     path = moving_square_stage(tmp_path / f"moving_{how}.usda", how)
     # (The reference square smears too when the camera moves: its whole streak is the unit.)

@@ -291,6 +291,11 @@ class _Reader:
         self.key_caches: dict[float, Any] = {}
         # PointInstancer placements: (instancer, first instance, instance ids, prototype-relative matrix).
         self.instancer_runs: list[tuple] = []
+        # PointInstancers holding PointInstancers: (instancer, first instance, end), moved
+        # over the shutter by re-reading them at each key (nested_motion).
+        self.nested_runs: list[tuple] = []
+        # The time PointInstancer positions are sampled at (velocities extrapolate from it).
+        self.base_time = self.time
         self.lights: list[Any] = []
         # DomeLights read: (prim path, ("uniform", spectrum) or ("texture", set_world kwargs)).
         self.domes: list[tuple[str, tuple[str, Any]]] = []
@@ -1531,7 +1536,7 @@ class _Reader:
             )
             return
         PI = UsdGeom.PointInstancer
-        xforms = pi.ComputeInstanceTransformsAtTime(self.time, self.time, PI.IncludeProtoXform, PI.IgnoreMask)
+        xforms = pi.ComputeInstanceTransformsAtTime(self.time, self.base_time, PI.IncludeProtoXform, PI.IgnoreMask)
         if xforms is None or len(xforms) != len(pidx):
             raise self.error(prim, "its instance transforms cannot be computed (orientations or scales of the wrong length?)")
         inst = np.asarray(xforms, dtype=np.float64).reshape(-1, 4, 4)
@@ -1547,6 +1552,8 @@ class _Reader:
         if not np.all(np.isfinite(inst[keep])):
             raise self.error(prim, "its instance positions, orientations or scales are not finite")
         nested = parents is not None
+        first, runs = len(self.instances), len(self.instancer_runs)
+        holds_instancers = False
         if not nested:
             parents = np.array(self.cache.GetLocalToWorldTransform(prim), dtype=np.float64)[None]
             names = [str(prim.GetPath())]
@@ -1578,6 +1585,7 @@ class _Reader:
                 tail = str(sub.GetPath())[len(str(root.GetPath())) :]
                 sub_names = [f"{n}[{int(j)}]{tail}" for n in names for j in which]
                 if t == "PointInstancer":
+                    holds_instancers = True
                     it.PruneChildren()  # its prototypes are drawn through it
                     if depth + 1 > MAX_INSTANCER_DEPTH:
                         self.warn(
@@ -1602,6 +1610,9 @@ class _Reader:
                     f"proto:{target}",
                     f"prim {prim.GetPath()}: prototype {target} holds no geometry that is read; its {len(which)} instances are empty",
                 )
+        if holds_instancers and not nested:  # all its instances move by re-reading it (nested_motion)
+            del self.instancer_runs[runs:]
+            self.nested_runs.append((prim, first, len(self.instances)))
 
     # -- lights ---------------------------------------------------------------------------
     def authored_by_blender(self, prim, attr) -> bool:
@@ -2257,6 +2268,90 @@ class _Reader:
                     out[start + j] = list(ks)
         return out
 
+    def placements_at(self, prim, t: float) -> np.ndarray | None:
+        """The world transforms (column vectors, metres, Z up) of every instance a
+        PointInstancer places at time code ``t``, in the order read_point_instancer places
+        them at the frame: it read again at ``t`` (time-sampled positions interpolated,
+        velocities extrapolated from the frame), quietly; None when it cannot be read at ``t``."""
+        saved = (self.time, self.cache, self.instances, self.instancer_runs, self.nested_runs, self.base_time, self.warned)
+        keys = set(self.meshes)
+        if t not in self.key_caches:
+            self.key_caches[t] = self.UsdGeom.XformCache(self.Usd.TimeCode(t))
+        self.time, self.cache, self.base_time = self.Usd.TimeCode(t), self.key_caches[t], self.Usd.TimeCode(self.frame)
+        self.instances, self.instancer_runs, self.nested_runs, self.warned = [], [], [], set(self.warned)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                self.read_point_instancer(prim)
+            return np.stack([m for _, m, *_ in self.instances]) if self.instances else None
+        except Exception as e:  # noqa: BLE001 - as guarded
+            if not (isinstance(e, ValueError) or _is_pxr_error(e)):
+                raise
+            return None
+        finally:
+            self.time, self.cache, self.instances, self.instancer_runs, self.nested_runs, self.base_time, self.warned = saved
+            for key in set(self.meshes) - keys:  # a prototype seen only at t is not drawn
+                del self.meshes[key]
+                self.mesh_prims.pop(key, None)
+
+    def nested_motion(self, shutter) -> dict[int, list[np.ndarray]]:
+        """Instance index → keys of the instances of PointInstancers that hold
+        PointInstancers, each instancer re-read at K times evenly spaced over the shutter
+        (K as for transforms: 3 plus 2 per authored sample inside the shutter, of any
+        attribute in its subtree or prototypes, doubled until no instance turns by more
+        than 45° between neighbours); one warning when its instances change in number."""
+        out: dict[int, list[np.ndarray]] = {}
+        interval = self.Gf.Interval(shutter[0], shutter[1])
+        Usd = self.Usd
+        for prim, start, end in self.nested_runs:
+            times: set[float] = set()
+            seen: set[str] = set()
+            pending = [prim]
+            while pending:  # the instancer, its prototypes and theirs (prototypes may live anywhere)
+                top = pending.pop()
+                for sub in Usd.PrimRange(top, Usd.TraverseInstanceProxies(PROTOTYPE_PREDICATE(Usd))):
+                    if str(sub.GetPath()) in seen:
+                        continue
+                    seen.add(str(sub.GetPath()))
+                    for attr in sub.GetAttributes():
+                        if attr.ValueMightBeTimeVarying():
+                            times.update(attr.GetTimeSamplesInInterval(interval))
+                    if sub.GetTypeName() == "PointInstancer":
+                        pending.extend(
+                            self.stage.GetPrimAtPath(t) for t in self.UsdGeom.PointInstancer(sub).GetPrototypesRel().GetForwardedTargets()
+                        )
+                pending = [p for p in pending if p and str(p.GetPath()) not in seen]
+            k = self.key_count(times, *shutter)
+            path = str(prim.GetPath())
+            while True:
+                ts = [float(t) for t in np.linspace(shutter[0], shutter[1], k)]
+                keys = [self.placements_at(prim, t) for t in ts]
+                if any(m is None or len(m) != end - start for m in keys):
+                    self.warn(
+                        f"pimotion:{path}",
+                        f"prim {path}: its nested instances change in number over the shutter; they are placed at the frame",
+                    )
+                    keys = None
+                    break
+                stack = np.stack(keys)  # (K, n, 4, 4), column vectors
+                r = stack[:, :, :3, :3] / np.maximum(np.linalg.norm(stack[:, :, :3, :3], axis=2, keepdims=True), 1e-300)
+                cos = (np.einsum("knij,knij->kn", r[:-1], r[1:]) - 1.0) / 2.0
+                if k >= MAX_MOTION_KEYS or float(np.arccos(np.clip(cos, -1, 1)).max(initial=0.0)) <= MAX_KEY_TURN * (1 + 1e-9):
+                    break
+                k = min(2 * k - 1, MAX_MOTION_KEYS)
+            if keys is None:
+                continue
+            if not np.all(np.isfinite(stack)):
+                self.warn(
+                    f"bad:pimotion:{path}", f"prim {path}: its instances over the shutter are not finite; they are placed at the frame"
+                )
+                continue
+            for j in range(end - start):
+                ks = stack[:, j]
+                if not np.allclose(ks[0], ks[1:], rtol=0, atol=1e-9):
+                    out[start + j] = list(ks)
+        return out
+
     def guarded_motion(self, prim, shutter):
         """transform_motion, or (one warning naming the prim) None when its transform over
         the shutter is not finite: the prim is then placed at the frame, unblurred."""
@@ -2448,6 +2543,8 @@ class _Reader:
                 prim = self.mesh_prims.get(key)
                 self.warn(f"bad:{key}", self.skip_message(prim if prim is not None else key, e))
         instanced = self.instancer_motion(shutter) if shutter is not None and self.instancer_runs else {}
+        if shutter is not None and self.nested_runs:
+            instanced.update(self.nested_motion(shutter))
         for i, (key, matrix, name, *rest) in enumerate(self.instances):
             if key not in index:  # its mesh was refused (warned)
                 continue
