@@ -239,7 +239,10 @@ impl SubsurfaceMedium {
                 let guided = rng.uniform() < guided_fraction;
                 let mut guide_backward = false;
                 if let Some(dist) = opposite {
-                    let x = (pos - p).dot(-n).clamp(0.0, dist);
+                    // Cycles' clamp, min(max(x, 0), dist): the first ray can find the
+                    // opposite side a hair behind the entry plane (dist < 0, a grazing
+                    // entry about a shading normal), where f32::clamp panics.
+                    let x = (pos - p).dot(-n).max(0.0).min(dist);
                     backward_fraction = 1.0 / (1.0 + ((dist - 2.0 * x) / v).exp());
                     guide_backward = rng.uniform() < backward_fraction;
                 }
