@@ -473,6 +473,36 @@ mod tests {
         }
     }
 
+    /// The first ray (along a grazing entry about a shading normal, a hair outwards of
+    /// the entry plane) finds the far side slightly behind that plane: the guiding's
+    /// opposite distance is then negative, which must not panic (Cycles clamps with
+    /// min(max(x, 0), d)).
+    #[test]
+    fn an_opposite_side_behind_the_entry_plane_walks_on() {
+        struct Grazing(Slab);
+        impl Boundary for Grazing {
+            type Hit = bool;
+            fn intersect(&mut self, o: Vec3A, d: Vec3A, tmax: f32, first: bool) -> Option<(f32, bool)> {
+                if first {
+                    (0.5 <= tmax).then_some((0.5, false))
+                } else {
+                    self.0.intersect(o, d, tmax, first)
+                }
+            }
+        }
+        let a = SampledSpectrum::splat(3, 0.8);
+        let mfp = SampledSpectrum::splat(3, 0.1);
+        let d = Vec3A::new(1.0, 0.0, 1e-4).normalize();
+        for seed in 0..64 {
+            let mut tp = SampledSpectrum::splat(3, 1.0);
+            let m = SubsurfaceMedium::from_albedo(&a, &mfp, 0.0, &mut tp);
+            let mut rng = Rng::new(seed, 3);
+            if m.walk(&mut Grazing(Slab { thickness: 1.0 }), Vec3A::ZERO, Vec3A::Z, d, &mut rng, &mut tp).is_some() {
+                assert!(tp.is_finite());
+            }
+        }
+    }
+
     #[test]
     fn bad_inputs_give_finite_results() {
         let a = SampledSpectrum::from_slice(&[f32::NAN, -1.0, 2.0, 0.0]);
