@@ -69,6 +69,12 @@ BAD = {
     "/bad/hermite": r"tangents has 1 values; expected 2",
     "/bad/pointsWidths": r"widths has 2 values for vertex interpolation; expected 3",
     "/bad/nanXform": r"its transform is not finite",
+    "/bad/farMesh": r"vertex 1 has a coordinate 1e\+13 beyond ±1e\+12",
+    "/bad/farXform": r"its transform places vertices beyond ±1e\+12",
+    "/bad/flat": r"its transform is singular \(zero scale\?\)",
+    r"/bad/instancerFlat\[0\]": r"its transform is singular \(zero scale\?\)(?=; it is skipped \(and 1 more of its instances\))",
+    "/bad/unknownType": r"a value of an unusable type",
+    "/bad/negativeBulb": r"its intensity × 2\^exposure -2 is negative",
     "/bad/instancer": r"protoIndices\[1\] = 3 is out of range",
     "/bad/instancerNaN": r"its instance positions, orientations or scales are not finite",
     "/bad/instancerProto": r"prototype /bad/nothere does not exist",
@@ -116,17 +122,26 @@ def bad_stage(path):
     p.CreatePointsAttr([(0, 0, 0.5), (0.1, 0, 0.5), (0.2, 0, 0.5)])
     p.CreateWidthsAttr([0.1, 0.2])  # OpenUSD's pointsAndCurves.usda invalidNumWidthsAndPoints
     UsdGeom.Cube.Define(stage, "/bad/nanXform").AddTranslateOp().Set(Gf.Vec3d(0, float("nan"), 0))
+    bad_mesh(stage, "/bad/farMesh", points=[(0, 0, 0.5), (1e13, 0, 0.5), (0, 0.1, 0.5)])  # the core's limit: ±1e12
+    UsdGeom.Cube.Define(stage, "/bad/farXform").AddTranslateOp().Set(Gf.Vec3d(0, 0, 2e12))
+    UsdGeom.Cube.Define(stage, "/bad/flat").AddScaleOp().Set(Gf.Vec3f(1, 0, 1))
+    light = UsdLux.SphereLight.Define(stage, "/bad/negativeBulb")
+    light.CreateIntensityAttr(-1.0)
+    light.CreateExposureAttr(1.0)
     UsdGeom.Cube.Define(stage, "/protos/box").CreateSizeAttr(0.1)
     for name, indices, positions, protos in (
         ("instancer", [0, 3], [(0, 0, 0.5), (0.2, 0, 0.5)], ["/protos/box"]),
         ("instancerNaN", [0, 0], [(0, 0, 0.5), (float("inf"), 0, 0.5)], ["/protos/box"]),
         ("instancerProto", [0], [(0, 0, 0.5)], ["/bad/nothere"]),
+        ("instancerFlat", [0, 0], [(0, 0, 0.5), (0.2, 0, 0.5)], ["/protos/box"]),
     ):
         pi = UsdGeom.PointInstancer.Define(stage, f"/bad/{name}")
         pi.CreatePrototypesRel().SetTargets([Sdf.Path(t) for t in protos])
         pi.CreateProtoIndicesAttr(indices)
         pi.CreatePositionsAttr(positions)
-    stage.OverridePrim("/protos").SetSpecifier(Sdf.SpecifierClass)  # drawn only through instancers
+        if name == "instancerFlat":  # both instances squashed flat: one warning for the two
+            pi.CreateScalesAttr([(1, 1, 0), (0, 1, 1)])
+    stage.OverridePrim("/protos").SetSpecifier(Sdf.SpecifierOver)  # drawn only through instancers
     UsdLux.SphereLight.Define(stage, "/bad/bulb").CreateIntensityAttr(float("inf"))
     UsdLux.RectLight.Define(stage, "/bad/rect").CreateWidthAttr(float("nan"))
     UsdLux.DistantLight.Define(stage, "/bad/sun").CreateAngleAttr(float("nan"))
@@ -135,6 +150,13 @@ def bad_stage(path):
     dome = UsdLux.DomeLight.Define(stage, "/bad/dome").GetPrim()
     dome.CreateAttribute("polychrome:radiance:wavelengths", Sdf.ValueTypeNames.DoubleArray).Set([500.0, 400.0])
     dome.CreateAttribute("polychrome:radiance:values", Sdf.ValueTypeNames.DoubleArray).Set([1.0, 1.0])
+    # A value of a type USD does not know (pxr reads it as an UnregisteredValue, as a typo in
+    # a hand-edited .usda gives), from a sublayer: the API cannot author it.
+    (path.parent / "unknown.usda").write_text(
+        '#usda 1.0\nover "bad"\n{\n    def Mesh "unknownType"\n    {\n        int[] faceVertexCounts = [3]\n'
+        "        int[] faceVertexIndices = [0, 1, 2]\n        poynt3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]\n    }\n}\n"
+    )
+    stage.GetRootLayer().subLayerPaths.append("./unknown.usda")
     stage.Save()
     return stage
 
@@ -151,7 +173,7 @@ def test_each_bad_prim_is_skipped_with_one_warning_and_the_good_floor_renders_it
     desc, buffers = scene.description()
     # only the good floor is left, with its authored corners; only the good sun lights it
     assert [i["name"] for i in desc["instances"]] == ["/good"]
-    v = np.asarray(buffers[desc["meshes"][0]["vertices"]], np.float64).reshape(-1, 3)
+    v = np.asarray(buffers[desc["meshes"][desc["instances"][0]["mesh"]]["vertices"]], np.float64).reshape(-1, 3)
     assert v.min(axis=0).tolist() == [-0.5, -0.5, 0.0] and v.max(axis=0).tolist() == [0.5, 0.5, 0.0]
     assert [light.to_dict()["type"] for light in scene.lights] == ["distant"]
     assert scene.world is None and scene.world_texture is None

@@ -107,6 +107,19 @@ def _is_pxr_error(e) -> bool:
     return type(e).__name__ == "ErrorException"
 
 
+def _is_bad_data(e) -> bool:
+    """Exceptions that malformed data of one prim raises: PrimError and other ValueErrors,
+    pxr's errors, and TypeErrors (an attribute of an unknown type reads as pxr's
+    UnregisteredValue, which is no number and no array)."""
+    return isinstance(e, (ValueError, TypeError)) or _is_pxr_error(e)
+
+
+#: The core's largest vertex coordinate (rust/core geometry::mesh::MAX_COORDINATE).
+MAX_COORDINATE = 1e12
+#: float32's largest finite value: the core holds transforms and spectra in float32.
+F32_MAX = float(np.finfo(np.float32).max)
+
+
 class DescribedLight:
     """A light kept as the core's description (a type without a Python class here)."""
 
@@ -322,6 +335,8 @@ class _Reader:
             problem = at + e.problem
         elif _is_pxr_error(e):
             problem = _pxr_error_detail(e).replace(str(self.path) + ":", "line ")
+        elif isinstance(e, TypeError):
+            problem = f"a value of an unusable type ({e})"
         else:
             problem = str(e).replace(f"{self.path}: ", "")
         return f"prim {path}: {problem}; {what}"
@@ -341,7 +356,7 @@ class _Reader:
             read()
             return True
         except Exception as e:  # noqa: BLE001 - pxr's Tf.ErrorException is not importable by name
-            if not (isinstance(e, ValueError) or _is_pxr_error(e)):
+            if not _is_bad_data(e):
                 raise
             n_inst, n_lights, n_runs, keys, n_domes = state
             del self.instances[n_inst:], self.lights[n_lights:], self.instancer_runs[n_runs:], self.domes[n_domes:]
@@ -429,7 +444,7 @@ class _Reader:
             try:
                 material = self.read_material(mat_prim)
             except Exception as e:  # noqa: BLE001 - as guarded: malformed data, one warning
-                if not (isinstance(e, ValueError) or _is_pxr_error(e)):
+                if not _is_bad_data(e):
                     raise
                 self.warn(f"bad:{mat_prim.GetPath()}", self.skip_message(mat_prim, e, "UsdPreviewSurface's fallback 0.18 grey is used"))
                 from ..spectra import rgb
@@ -1471,6 +1486,12 @@ class _Reader:
             except Exception:
                 self.meshes[key] = None  # type: ignore[assignment]  # warned once by guarded
                 raise
+            if arrays is not None and len(arrays["vertices"]):
+                far = np.abs(np.asarray(arrays["vertices"], np.float64)).max(axis=1)
+                if not far.max() <= MAX_COORDINATE:
+                    self.meshes[key] = None  # type: ignore[assignment]
+                    i = int(np.argmax(~(far <= MAX_COORDINATE)))
+                    raise self.error(prim, f"vertex {i} has a coordinate {far[i]:g} beyond ±{MAX_COORDINATE:g}")
             self.meshes[key] = arrays  # type: ignore[assignment]
             self.mesh_prims[key] = prim
         return key if self.meshes[key] is not None else None
@@ -1631,6 +1652,10 @@ class _Reader:
         scalar = intensity * 2.0**exposure
         if not (math.isfinite(scalar) and all(math.isfinite(c) and c >= 0.0 for c in colour)):
             raise self.error(prim, "its intensity, exposure or colour is not finite (or the colour is negative)")
+        if scalar < 0:
+            raise self.error(prim, f"its intensity × 2^exposure {scalar:g} is negative (no negative light)")
+        if scalar * max(colour, default=0.0) > F32_MAX:
+            raise self.error(prim, f"its intensity × 2^exposure {scalar:g} is too large")
         blackbody = None
         enabled = bool(self.get(light.GetEnableColorTemperatureAttr(), False))
         if enabled and self.authored_by_blender(prim, light.GetIntensityAttr()):
@@ -2050,6 +2075,8 @@ class _Reader:
                 raise self.error(prim, "its transform is singular")
             if abs(n - 1.0) > 1e-9:  # camera scale does not change the view (as in Blender)
                 m[:3, k] /= n
+        if abs(np.linalg.det(m[:3, :3])) < 1e-6 or not np.all(np.abs(m) <= F32_MAX):  # axes in a plane (the core: |det| ≥ 1e-12)
+            raise self.error(prim, "its transform is singular")
         fields = self.json_attr(prim, A.CAMERA)
         if fields is not None:
             if not isinstance(fields, dict):
@@ -2076,6 +2103,9 @@ class _Reader:
             raise self.error(prim, f"focal length {focal} and apertures {ax} × {ay} must be positive")
         if fstop < 0 or focus < 0:
             raise self.error(prim, f"fStop {fstop} and focusDistance {focus} must not be negative")
+        mm = 100.0 * self.mpu  # tenths of a scene unit → mm
+        if not all(abs(v) * max(mm, 1.0) <= F32_MAX for v in values):
+            raise self.error(prim, "its lens, aperture, clipping range or focusDistance is too large")
         w, h = resolution if resolution else (ax, ay)
         w = w * pixel_aspect
         # UsdRender's default conform policy, expandAperture: the whole aperture stays visible.
@@ -2083,7 +2113,6 @@ class _Reader:
         film_w, film_h = (ax, ax * h / w) if horizontal else (ay * w / h, ay)
         # The core's shift counts in units of the fitted side.
         fitted = film_w if horizontal else film_h
-        mm = 100.0 * self.mpu  # tenths of a scene unit → mm
         dof = {}
         if fstop > 0 and not ortho:
             # UsdGeomCamera: the aperture's diameter is focalLength / fStop (both in
@@ -2285,7 +2314,7 @@ class _Reader:
                 self.read_point_instancer(prim)
             return np.stack([m for _, m, *_ in self.instances]) if self.instances else None
         except Exception as e:  # noqa: BLE001 - as guarded
-            if not (isinstance(e, ValueError) or _is_pxr_error(e)):
+            if not _is_bad_data(e):
                 raise
             return None
         finally:
@@ -2351,6 +2380,28 @@ class _Reader:
                 if not np.allclose(ks[0], ks[1:], rtol=0, atol=1e-9):
                     out[start + j] = list(ks)
         return out
+
+    def placement_problem(self, key: str, matrices) -> str | None:
+        """Why the core would refuse an instance of mesh ``key`` placed by ``matrices``
+        (its transform, or its motion keys), or None: a singular transform (float32
+        determinant 0, as the core computes it) or a vertex placed beyond ±1e12 (checked
+        on the mesh's bounding box, whose corners bound every vertex an affine map moves)."""
+        m = self.meshes[key]
+        if "_box" not in m:
+            v = np.asarray(m["vertices"], np.float64).reshape(-1, 3)
+            lo, hi = (v.min(axis=0), v.max(axis=0)) if len(v) else (np.zeros(3), np.zeros(3))
+            m["_box"] = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+        for mat in matrices:
+            mat = np.asarray(mat, np.float64)
+            c = mat[:3, :3].astype(np.float32)
+            with np.errstate(all="ignore"):
+                det = np.dot(c[:, 2], np.cross(c[:, 0], c[:, 1]))  # glam's Mat3::determinant, in float32
+            if not (np.isfinite(det) and det != 0):
+                return "its transform is singular (zero scale?)"
+            corners = m["_box"] @ mat[:3, :3].T + mat[:3, 3]
+            if not np.abs(corners).max() <= MAX_COORDINATE:
+                return f"its transform places vertices beyond ±{MAX_COORDINATE:g}"
+        return None
 
     def guarded_motion(self, prim, shutter):
         """transform_motion, or (one warning naming the prim) None when its transform over
@@ -2542,6 +2593,7 @@ class _Reader:
             except ValueError as e:  # the scene's own checks (a last line: the reader checks first)
                 prim = self.mesh_prims.get(key)
                 self.warn(f"bad:{key}", self.skip_message(prim if prim is not None else key, e))
+        refused: dict[str, tuple[str, str, int]] = {}  # prim → (first instance, problem, how many)
         instanced = self.instancer_motion(shutter) if shutter is not None and self.instancer_runs else {}
         if shutter is not None and self.nested_runs:
             instanced.update(self.nested_motion(shutter))
@@ -2553,11 +2605,24 @@ class _Reader:
             motion = self.guarded_motion(moving, shutter) if moving is not None and shutter is not None else instanced.get(i)
             if motion is not None and len(motion) == 1:  # animated, but still while the shutter is open
                 matrix, motion = motion[0], None
+            problem = self.placement_problem(key, [matrix] if motion is None else motion)
+            if problem is not None:  # one warning per prim (a PointInstancer's: with their number)
+                owner = name.split("[")[0]
+                first, first_problem, count = refused.get(owner, (name, problem, 0))
+                refused[owner] = (first, first_problem, count + 1)
+                continue
             try:
                 scene.add_instance(index[key], matrix, name, visibility=visibility, motion=motion)
             except ValueError as e:  # the scene's own checks (a last line, as for meshes)
                 self.warn(f"bad:instance:{name}", self.skip_message(name, e))
+        for first, problem, count in refused.values():
+            more = f" (and {count - 1} more of its instances)" if count > 1 else ""
+            self.warn(f"bad:instance:{first}", f"prim {first}: {problem}; it is skipped{more}")
         for light in self.lights:
+            d = light.to_dict()
+            if not _f32_finite(d):  # e.g. a normalized light of a tiny area: the core's float32 overflows
+                self.warn(f"bad:light:{d.get('name')}", f"prim {d.get('name')}: its emission is too large for the renderer; it is skipped")
+                continue
             scene.add_light(light)
         world = self.combined_world()
         if world is not None:
@@ -2574,6 +2639,17 @@ def _primvar_values(pv, time):
     if value is not None and not pv.GetTypeName().isArray:
         return [value]
     return value
+
+
+def _f32_finite(d) -> bool:
+    """Whether every number in a (JSON-like) description is finite in float32."""
+    if isinstance(d, dict):
+        return all(_f32_finite(v) for v in d.values())
+    if isinstance(d, (list, tuple)):
+        return all(_f32_finite(v) for v in d)
+    if isinstance(d, (float, int)) and not isinstance(d, bool):
+        return math.isfinite(d) and abs(d) <= F32_MAX
+    return True
 
 
 def _sum_spectra(spectra):
