@@ -125,7 +125,7 @@ pub struct Accel {
     meshes: Vec<Vec<MeshBvh>>,
     /// Over (instance, chunk) pairs whose mesh has triangles; leaf ids index `tlas_instances`.
     tlas: Option<CwBvh>,
-    tlas_instances: Vec<(u32, u32)>,
+    tlas_instances: Vec<Leaf>,
 }
 
 /// Large meshes use obvhs's fast preset: on 1M triangles it builds about twice as fast
@@ -227,7 +227,8 @@ impl Accel {
         let mut boxes = Vec::new();
         for (k, inst) in instances.iter().enumerate() {
             for (c, mb) in mesh_bvhs[inst.mesh as usize].iter().enumerate() {
-                tlas_instances.push((k as u32, c as u32));
+                let identity = inst.motion.is_none() && inst.to_object == glam::Affine3A::IDENTITY;
+                tlas_instances.push(Leaf { instance: k as u32, chunk: c as u32, identity });
                 boxes.push(transform_aabb(&mb.bvh.total_aabb, inst));
             }
         }
@@ -249,7 +250,7 @@ impl Accel {
             b.nodes.len() * std::mem::size_of::<obvhs::cwbvh::node::CwBvhNode>() + b.primitive_indices.len() * 4
         };
         let meshes: usize = self.meshes.iter().flatten().map(|m| bvh(&m.bvh)).sum();
-        meshes + self.tlas.as_ref().map_or(0, bvh) + self.tlas_instances.len() * 8
+        meshes + self.tlas.as_ref().map_or(0, bvh) + self.tlas_instances.len() * std::mem::size_of::<Leaf>()
     }
 
     /// Closest hit along `ray` within (tmin, tmax), among `instances` of `meshes` (those
@@ -282,25 +283,24 @@ impl Accel {
     ) -> Option<Hit> {
         let tlas = self.tlas.as_ref()?;
         let mut best: Option<Hit> = None;
-        traverse::closest(tlas, TRay::of(ray), |r, slot| {
-            let (inst_id, chunk) = self.tlas_instances[slot];
-            let inst = &instances[inst_id as usize];
+        let world = TRay::of(ray);
+        // The world ray's triangle test, for instances placed by the identity.
+        let world_wt = WatertightRay::new(world.origin, world.direction);
+        traverse::closest(tlas, world, |r, slot| {
+            let leaf = self.tlas_instances[slot];
+            let inst = &instances[leaf.instance as usize];
             match only {
-                Some(o) if o != inst_id => return f32::INFINITY,
+                Some(o) if o != leaf.instance => return f32::INFINITY,
                 Some(_) => {}
                 None if !visibility::sees(inst.visibility, ray.kind) => {
                     return f32::INFINITY; // the ray goes on through instances its kind does not see
                 }
                 None => {}
             }
-            let (mesh, mb) = (&meshes[inst.mesh as usize], &self.meshes[inst.mesh as usize][chunk as usize]);
-            // Object space: the direction is not renormalised, so t is the same in both spaces.
-            let to_object = inst.to_object_at(ray.time);
-            let o = to_object.transform_point3a(r.origin);
-            let d = to_object.transform_vector3a(r.direction);
-            let wt = WatertightRay::new(o, d);
+            let (mesh, mb) = (&meshes[inst.mesh as usize], &self.meshes[inst.mesh as usize][leaf.chunk as usize]);
+            let (local, wt) = object_ray(inst, leaf.identity, r, &world_wt, ray.time);
             let mut bary = (0.0, 0.0);
-            let local = traverse::closest(&mb.bvh, TRay::new(o, d, r.tmin, r.tmax), |lr, tri| {
+            let local = traverse::closest(&mb.bvh, local, |lr, tri| {
                 let id = mb.bvh.primitive_indices[tri];
                 if skip == Some(id) {
                     return f32::INFINITY;
@@ -319,7 +319,7 @@ impl Accel {
                 Some((t, tri)) => {
                     best = Some(Hit {
                         t,
-                        instance: inst_id,
+                        instance: leaf.instance,
                         triangle: mb.bvh.primitive_indices[tri as usize],
                         b1: bary.0,
                         b2: bary.1,
@@ -335,18 +335,17 @@ impl Accel {
     /// Whether anything blocks `ray` within (tmin, tmax): for shadow rays.
     pub fn occluded(&self, meshes: &[Mesh], instances: &[Instance], ray: &Ray) -> bool {
         let Some(tlas) = self.tlas.as_ref() else { return false };
-        traverse::any(tlas, TRay::of(ray), |r, slot| {
-            let (inst_id, chunk) = self.tlas_instances[slot];
-            let inst = &instances[inst_id as usize];
+        let world = TRay::of(ray);
+        let world_wt = WatertightRay::new(world.origin, world.direction);
+        traverse::any(tlas, world, |r, slot| {
+            let leaf = self.tlas_instances[slot];
+            let inst = &instances[leaf.instance as usize];
             if !visibility::sees(inst.visibility, ray.kind) {
                 return f32::INFINITY;
             }
-            let (mesh, mb) = (&meshes[inst.mesh as usize], &self.meshes[inst.mesh as usize][chunk as usize]);
-            let to_object = inst.to_object_at(ray.time);
-            let o = to_object.transform_point3a(r.origin);
-            let d = to_object.transform_vector3a(r.direction);
-            let wt = WatertightRay::new(o, d);
-            let blocked = traverse::any(&mb.bvh, TRay::new(o, d, r.tmin, r.tmax), |lr, tri| {
+            let (mesh, mb) = (&meshes[inst.mesh as usize], &self.meshes[inst.mesh as usize][leaf.chunk as usize]);
+            let (local, wt) = object_ray(inst, leaf.identity, r, &world_wt, ray.time);
+            let blocked = traverse::any(&mb.bvh, local, |lr, tri| {
                 let [a, b, c] = mesh.triangle_at(mb.bvh.primitive_indices[tri] as usize, ray.time);
                 wt.intersect(a, b, c, lr.tmin, lr.tmax).map_or(f32::INFINITY, |h| h.0)
             });
@@ -357,6 +356,32 @@ impl Accel {
             }
         })
     }
+}
+
+/// One leaf of the top-level BVH: a chunk of an instance's mesh.
+#[derive(Clone, Copy, Debug)]
+struct Leaf {
+    instance: u32,
+    chunk: u32,
+    /// The instance is placed by the identity and does not move: its object space is
+    /// world space.
+    identity: bool,
+}
+
+/// The world ray `r` (its current interval) in the object space of `inst` at `time`,
+/// and its triangle test; the direction is not renormalised, so t is the same in both
+/// spaces. For an identity instance that is the world ray itself (an identity
+/// transform returns the same numbers, −0.0 as +0.0, which `TRay` already makes of
+/// them): the world ray's test `world_wt` is reused.
+#[inline(always)]
+fn object_ray(inst: &Instance, identity: bool, r: &TRay, world_wt: &WatertightRay, time: f32) -> (TRay, WatertightRay) {
+    if identity {
+        return (*r, *world_wt);
+    }
+    let to_object = inst.to_object_at(time);
+    let o = to_object.transform_point3a(r.origin);
+    let d = to_object.transform_vector3a(r.direction);
+    (TRay::new(o, d, r.tmin, r.tmax), WatertightRay::new(o, d))
 }
 
 /// The world box of an instance's object-space box `b`, over the whole shutter when it

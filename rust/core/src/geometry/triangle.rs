@@ -2,18 +2,17 @@
 //! Ray/Triangle Intersection", JCGT 2(1), 2013. Rays through a shared edge or vertex
 //! hit exactly one of the triangles that share it, so light never leaks through seams.
 
-use glam::Vec3A;
+use glam::{Mat3A, Vec3A};
 
 /// Per-ray constants of the watertight test (computed once per ray and space).
 #[derive(Clone, Copy, Debug)]
 pub struct WatertightRay {
     origin: Vec3A,
-    kx: usize,
-    ky: usize,
-    kz: usize,
-    sx: f32,
-    sy: f32,
-    sz: f32,
+    /// The paper's permutation and shear as one matrix: for a vertex p, M (p − origin)
+    /// = (p[kx] − sx p[kz], p[ky] − sy p[kz], sz p[kz]). Its columns are unit vectors
+    /// and (−sx, −sy, sz), so each component is the paper's expression with zeros added
+    /// (the same numbers), in three vector products instead of nine lane picks by index.
+    shear: Mat3A,
 }
 
 impl WatertightRay {
@@ -36,23 +35,21 @@ impl WatertightRay {
             std::mem::swap(&mut kx, &mut ky);
         }
         let dz = dir[kz];
-        Self { origin, kx, ky, kz, sx: dir[kx] / dz, sy: dir[ky] / dz, sz: 1.0 / dz }
+        let mut cols = [Vec3A::ZERO; 3];
+        cols[kx] = Vec3A::X;
+        cols[ky] = Vec3A::Y;
+        cols[kz] = Vec3A::new(-(dir[kx] / dz), -(dir[ky] / dz), 1.0 / dz);
+        Self { origin, shear: Mat3A::from_cols(cols[0], cols[1], cols[2]) }
     }
 
     /// Distance along the ray and barycentrics (b1, b2) of the hit, or None.
     /// Hits outside (tmin, tmax) are rejected.
     #[inline]
     pub fn intersect(&self, p0: Vec3A, p1: Vec3A, p2: Vec3A, tmin: f32, tmax: f32) -> Option<(f32, f32, f32)> {
-        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
-        let a = p0 - self.origin;
-        let b = p1 - self.origin;
-        let c = p2 - self.origin;
-        let ax = a[kx] - self.sx * a[kz];
-        let ay = a[ky] - self.sy * a[kz];
-        let bx = b[kx] - self.sx * b[kz];
-        let by = b[ky] - self.sy * b[kz];
-        let cx = c[kx] - self.sx * c[kz];
-        let cy = c[ky] - self.sy * c[kz];
+        let a = self.shear * (p0 - self.origin);
+        let b = self.shear * (p1 - self.origin);
+        let c = self.shear * (p2 - self.origin);
+        let (ax, ay, bx, by, cx, cy) = (a.x, a.y, b.x, b.y, c.x, c.y);
         let mut u = cx * by - cy * bx;
         let mut v = ax * cy - ay * cx;
         let mut w = bx * ay - by * ax;
@@ -69,10 +66,7 @@ impl WatertightRay {
         if det == 0.0 || !det.is_finite() {
             return None;
         }
-        let az = self.sz * a[kz];
-        let bz = self.sz * b[kz];
-        let cz = self.sz * c[kz];
-        let t_scaled = u * az + v * bz + w * cz;
+        let t_scaled = u * a.z + v * b.z + w * c.z;
         let inv = 1.0 / det;
         let t = t_scaled * inv;
         if !(t > tmin && t < tmax) {
