@@ -150,6 +150,8 @@ pub trait Bsdf: Send + Sync {
     fn pdf(&self, ctx: &ShadingContext, wo: Vec3A, wi: Vec3A) -> f32;
     /// Samples `wi`; multiplies `throughput` by f·|cos θi|/pdf. `beta` is the path's
     /// current throughput before this bounce (dispersive BSDFs choose a wavelength ∝ it).
+    /// On None (the path is absorbed) `throughput` may hold anything: callers end the
+    /// path (`integrator::scatter` does too) or pass a copy they drop.
     fn sample(
         &self,
         ctx: &ShadingContext,

@@ -155,8 +155,9 @@ impl Bsdf for Oriented {
         throughput: &mut SampledSpectrum,
     ) -> Option<BsdfSample> {
         let a = self.frame.view_to_lobe(wo);
-        let mut tp = throughput.clone();
-        let s = self.inner.sample(ctx, a, u, uc, &mut tp)?;
+        // In place: on None the throughput is the caller's to drop (`Bsdf::sample`), so
+        // no copy of it (a heap spectrum) per sample.
+        let s = self.inner.sample(ctx, a, u, uc, throughput)?;
         let wi = self.frame.to_vertex(s.wi);
         if !same_event(wo, wi, a, s.wi) {
             return None;
@@ -166,9 +167,8 @@ impl Bsdf for Oriented {
             if k <= 0.0 {
                 return None;
             }
-            tp.scale(k);
+            throughput.scale(k);
         }
-        throughput.copy_from(&tp);
         Some(BsdfSample { wi, ..s })
     }
     fn albedo(&self, ctx: &ShadingContext, out: &mut SampledSpectrum) {
