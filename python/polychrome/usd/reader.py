@@ -2849,7 +2849,11 @@ def read_stage(path, *, resolution=None, time=None, subdivision_level=None):
     (an animation's frame number); by default the earliest. ``subdivision_level``: how
     many times subdivision surfaces (``subdivisionScheme`` catmullClark, USD's default,
     or bilinear) are refined, 0 to 6 (default 2; 0 renders the control cage); a prim's
-    own ``polychrome:subdivisionLevel`` wins."""
+    own ``polychrome:subdivisionLevel`` wins.
+
+    A prim whose data is malformed is skipped with one ``warnings.warn`` naming it and
+    the problem (docs/usd.md, "Malformed prims are skipped"); a stage that cannot be opened
+    raises ``ValueError`` naming the file."""
     reader = _Reader(Path(path), resolution, time, subdivision_level)
     try:
         return reader.read()
