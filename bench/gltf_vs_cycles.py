@@ -49,6 +49,7 @@ MODELS = {
     "AlphaBlendModeTest": "glTF-Binary",
     "MetalRoughSpheresNoTextures": "glTF-Binary",
     "NormalTangentTest": "glTF-Binary",
+    "NormalTangentMirrorTest": "glTF-Binary",  # mirrored UVs: the tangent's sign
     "EmissiveStrengthTest": "glTF-Binary",
     "DamagedHelmet": "glTF-Binary",
     "ClearCoatTest": "glTF-Binary",

@@ -9,7 +9,7 @@
 //! never collapse a polychromatic ray.
 
 use super::fresnel::{fresnel_conductor, reflect, schlick};
-use super::microfacet::{Ggx, TangentRotation};
+use super::microfacet::{AnisotropicGgx, Ggx, TangentRotation};
 use super::{Bsdf, BsdfFlags, BsdfSample, ShadingContext, SpectralParam};
 use crate::spectrum::SampledSpectrum;
 use glam::{Vec2, Vec3A};
@@ -53,9 +53,7 @@ impl MetalFresnel for SchlickFresnel {
 /// `bsdf_microfacet_eval`).
 pub struct MicrofacetReflection<F: MetalFresnel> {
     pub fresnel: F,
-    pub distribution: Ggx,
-    /// Shading frame → the distribution's frame (used only when anisotropic).
-    pub tangent: TangentRotation,
+    pub ggx: AnisotropicGgx,
 }
 
 pub type Conductor = MicrofacetReflection<ComplexFresnel>;
@@ -63,32 +61,14 @@ pub type Glossy = MicrofacetReflection<SchlickFresnel>;
 
 impl<F: MetalFresnel> MicrofacetReflection<F> {
     pub fn new(fresnel: F, roughness: f32) -> Self {
-        Self { fresnel, distribution: Ggx::from_roughness(roughness), tangent: TangentRotation::default() }
+        Self { fresnel, ggx: AnisotropicGgx::new(Ggx::from_roughness(roughness), TangentRotation::default()) }
     }
     /// With an anisotropic distribution whose tangent is `tangent`.
     pub fn with_distribution(self, distribution: Ggx, tangent: TangentRotation) -> Self {
-        Self { distribution, tangent, ..self }
-    }
-    /// A shading-frame direction in the distribution's frame (itself when isotropic, so
-    /// the isotropic lobe is unchanged).
-    #[inline]
-    fn to_lobe(&self, v: Vec3A) -> Vec3A {
-        if self.distribution.is_isotropic() {
-            v
-        } else {
-            self.tangent.to_lobe(v)
-        }
-    }
-    #[inline]
-    fn lobe_to_shading(&self, v: Vec3A) -> Vec3A {
-        if self.distribution.is_isotropic() {
-            v
-        } else {
-            self.tangent.from_lobe(v)
-        }
+        Self { ggx: AnisotropicGgx::new(distribution, tangent), ..self }
     }
     fn smooth(&self) -> bool {
-        self.distribution.effectively_smooth()
+        self.ggx.distribution.effectively_smooth()
     }
     /// The pdf of `wi` for directions already in the distribution's frame.
     fn pdf_lobe(&self, wo: Vec3A, wi: Vec3A) -> f32 {
@@ -97,7 +77,7 @@ impl<F: MetalFresnel> MicrofacetReflection<F> {
         if wm == Vec3A::ZERO || c <= 0.0 {
             return 0.0;
         }
-        let p = self.distribution.d_visible(wo, wm) / (4.0 * c);
+        let p = self.ggx.distribution.d_visible(wo, wm) / (4.0 * c);
         if p.is_finite() {
             p
         } else {
@@ -118,13 +98,13 @@ impl<F: MetalFresnel> Bsdf for MicrofacetReflection<F> {
             out.fill(0.0);
             return 0.0;
         }
-        let (wo, wi) = (self.to_lobe(wo), self.to_lobe(wi));
+        let (wo, wi) = (self.ggx.to_lobe(wo), self.ggx.to_lobe(wi));
         let wm = (wo + wi).normalize_or_zero();
         if wm == Vec3A::ZERO {
             out.fill(0.0);
             return 0.0;
         }
-        let g = &self.distribution;
+        let g = &self.ggx.distribution;
         // f·cos θi = D G F / (4 cos θo).
         self.fresnel.eval(ctx, wo.dot(wm), out);
         let s = g.d(wm) * g.g(wo, wi) / (4.0 * wo.z);
@@ -135,7 +115,7 @@ impl<F: MetalFresnel> Bsdf for MicrofacetReflection<F> {
         if self.smooth() || wo.z <= 0.0 || wi.z <= 0.0 {
             return 0.0;
         }
-        self.pdf_lobe(self.to_lobe(wo), self.to_lobe(wi))
+        self.pdf_lobe(self.ggx.to_lobe(wo), self.ggx.to_lobe(wi))
     }
     fn sample(
         &self,
@@ -155,8 +135,8 @@ impl<F: MetalFresnel> Bsdf for MicrofacetReflection<F> {
             throughput.mul_assign(&f);
             return Some(BsdfSample { wi, pdf: 1.0, specular: true, collapsed_to: None });
         }
-        let g = &self.distribution;
-        let wo = self.to_lobe(wo);
+        let g = &self.ggx.distribution;
+        let wo = self.ggx.to_lobe(wo);
         let wm = g.sample_wm(wo, u);
         let wi = reflect(wo, wm);
         if wi.z <= 0.0 {
@@ -171,7 +151,7 @@ impl<F: MetalFresnel> Bsdf for MicrofacetReflection<F> {
         self.fresnel.eval(ctx, c, &mut f);
         f.scale(g.g(wo, wi) / g.g1(wo));
         throughput.mul_assign(&f);
-        Some(BsdfSample { wi: self.lobe_to_shading(wi), pdf, specular: false, collapsed_to: None })
+        Some(BsdfSample { wi: self.ggx.lobe_to_shading(wi), pdf, specular: false, collapsed_to: None })
     }
     /// A smooth metal reflects every wavelength the same way: F_λ (chosen with probability 1).
     fn specular_weights(

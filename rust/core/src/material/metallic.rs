@@ -44,7 +44,7 @@ impl MultiscatterConductor {
 
     /// Multiplies `out` by the compensation seen from the view side of (wo, wi).
     fn compensate(&self, ctx: &ShadingContext, wo: Vec3A, wi: Vec3A, out: &mut SampledSpectrum) {
-        let g = &self.inner.distribution;
+        let g = &self.inner.ggx.distribution;
         if g.effectively_smooth() {
             return;
         }

@@ -263,6 +263,43 @@ impl Distribution {
     }
 }
 
+/// A GGX distribution with the rotation into its frame: what an anisotropic reflection
+/// lobe carries (the Glossy/Conductor's and the Principled's specular and metal lobes).
+/// An isotropic distribution ignores the tangent, so its lobe is evaluated in the
+/// shading frame itself, bit for bit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AnisotropicGgx {
+    pub distribution: Ggx,
+    /// Shading frame → the distribution's frame (used only when anisotropic).
+    pub tangent: TangentRotation,
+}
+
+impl AnisotropicGgx {
+    pub fn new(distribution: Ggx, tangent: TangentRotation) -> Self {
+        Self { distribution, tangent }
+    }
+
+    /// A shading-frame direction in the distribution's frame (itself when isotropic).
+    #[inline]
+    pub fn to_lobe(&self, v: Vec3A) -> Vec3A {
+        if self.distribution.is_isotropic() {
+            v
+        } else {
+            self.tangent.to_lobe(v)
+        }
+    }
+
+    /// A direction in the distribution's frame back in the shading frame.
+    #[inline]
+    pub fn lobe_to_shading(&self, v: Vec3A) -> Vec3A {
+        if self.distribution.is_isotropic() {
+            v
+        } else {
+            self.tangent.from_lobe(v)
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -50,7 +50,7 @@ use super::dielectric::{relative, view_side};
 use super::dispersion::IndexOfRefraction;
 use super::energy::{glass_e, glass_e_avg, multiscatter_color};
 use super::fresnel::{fresnel_dielectric_f64, reflect};
-use super::microfacet::{Ggx, TangentRotation};
+use super::microfacet::{AnisotropicGgx, Ggx, TangentRotation};
 use super::oren_nayar::OrenNayarLobe;
 use super::oriented::{bump_shadowing_term, same_event, LobeFrame};
 use super::subsurface::SubsurfaceLobe;
@@ -316,9 +316,8 @@ pub struct Principled {
     w_base: f32,
     w_metal: f32,
     w_glass: f32,
-    distribution: Ggx,
-    /// Shading frame → the distribution's frame (used only when anisotropic).
-    tangent: TangentRotation,
+    /// The specular and metal lobes' distribution and tangent.
+    ggx: AnisotropicGgx,
     smooth: bool,
     ior: IndexOfRefraction,
     film: Option<ThinFilm>,
@@ -478,8 +477,7 @@ impl Principled {
             w_base: (1.0 - metallic) * (1.0 - transmission),
             w_metal: metallic,
             w_glass: (1.0 - metallic) * transmission,
-            distribution,
-            tangent: p.tangent,
+            ggx: AnisotropicGgx::new(distribution, p.tangent),
             smooth,
             ior,
             film,
@@ -545,25 +543,6 @@ impl Principled {
         match &self.sss {
             Some(l) if ctx.subsurface_walk => l.weight,
             _ => 0.0,
-        }
-    }
-
-    /// A shading-frame direction in the distribution's frame (itself when isotropic).
-    #[inline]
-    fn to_lobe(&self, v: Vec3A) -> Vec3A {
-        if self.distribution.is_isotropic() {
-            v
-        } else {
-            self.tangent.to_lobe(v)
-        }
-    }
-
-    #[inline]
-    fn lobe_to_shading(&self, v: Vec3A) -> Vec3A {
-        if self.distribution.is_isotropic() {
-            v
-        } else {
-            self.tangent.from_lobe(v)
         }
     }
 
@@ -715,8 +694,8 @@ impl Principled {
                 let wm = (o + i).normalize_or_zero();
                 let c = o.dot(wm);
                 if wm != Vec3A::ZERO && c > 0.0 {
-                    let g = &self.distribution;
-                    let (ol, il, ml) = (self.to_lobe(o), self.to_lobe(i), self.to_lobe(wm));
+                    let g = &self.ggx.distribution;
+                    let (ol, il, ml) = (self.ggx.to_lobe(o), self.ggx.to_lobe(i), self.ggx.to_lobe(wm));
                     let s = g.d(ml) * g.g(ol, il) / (4.0 * mu_o);
                     let p = g.d_visible(ol, ml) / (4.0 * c);
                     if s.is_finite() && p.is_finite() {
@@ -941,7 +920,7 @@ impl Bsdf for Principled {
                 throughput.mul_assign(&f);
                 return Some(BsdfSample { wi: wi_v, pdf: lobes.spec, specular: true, collapsed_to: None });
             }
-            let wm = self.lobe_to_shading(self.distribution.sample_wm(self.to_lobe(o), u));
+            let wm = self.ggx.lobe_to_shading(self.ggx.distribution.sample_wm(self.ggx.to_lobe(o), u));
             let wi = reflect(o, wm);
             if wi.z <= 0.0 {
                 return None;
@@ -959,7 +938,7 @@ impl Bsdf for Principled {
                 throughput.mul_assign(&f);
                 return Some(BsdfSample { wi: wi_v, pdf: lobes.metal, specular: true, collapsed_to: None });
             }
-            let wm = self.lobe_to_shading(self.distribution.sample_wm(self.to_lobe(o), u));
+            let wm = self.ggx.lobe_to_shading(self.ggx.distribution.sample_wm(self.ggx.to_lobe(o), u));
             let wi = reflect(o, wm);
             if wi.z <= 0.0 {
                 return None;
@@ -988,7 +967,7 @@ impl Bsdf for Principled {
             if !(lobes.sss > 0.0) {
                 return None;
             }
-            let wi_v = delta(flip(lobe.entry(&self.distribution, o, u)?))?;
+            let wi_v = delta(flip(lobe.entry(&self.ggx.distribution, o, u)?))?;
             let w = self.w_base * lobe.weight / lobes.sss;
             let mut f = SampledSpectrum::zeros(n);
             for k in 0..n {
@@ -1316,8 +1295,8 @@ mod tests {
         };
         for &(metallic, roughness, aniso) in &[(1.0f32, 0.5f32, 1.0f32), (1.0, 0.3, 0.6), (0.0, 0.5, 1.0)] {
             let m = anisotropic(&grid, 1.0, metallic, roughness, aniso, 0.1);
-            let g = m.distribution;
-            let lobe = white(roughness).with_distribution(g, m.tangent);
+            let g = m.ggx.distribution;
+            let lobe = white(roughness).with_distribution(g, m.ggx.tangent);
             let iso = white(g.roughness());
             for &(theta, phi) in &[(0.0f32, 0.0f32), (0.9, 0.3), (1.3, 1.9)] {
                 let wo = dir(theta, phi);
@@ -1458,7 +1437,8 @@ mod tests {
         for &level in &[0.0f32, 0.25, 0.5, 1.0] {
             let mut m = principled(&grid, 0.0, 0.0, 0.0, 0.0, 1.5, None);
             m.ior = specular_index(&IndexOfRefraction::constant(4, 1.5), level);
-            m.e_table = vec![albedo_table(&m.distribution, true, &|c| fresnel_dielectric_f64(c, m.ior.at(0) as f64))];
+            m.e_table =
+                vec![albedo_table(&m.ggx.distribution, true, &|c| fresnel_dielectric_f64(c, m.ior.at(0) as f64))];
             let mut tp = SampledSpectrum::splat(4, 1.0);
             let expected = 0.04 * 2.0 * level;
             match m.sample(&ctx, Vec3A::Z, Vec2::new(0.5, 0.5), 0.5, &mut tp) {
