@@ -220,3 +220,44 @@ def test_transparent_and_alpha_pass_the_world_through_stochastically():
         settings = dict(HALVES, samples=256)
         img = pc.render(halves_scene(pc.NodeMaterial(name, nodes, {"surface": out_id})), **settings).rgba[..., :3]
         assert np.allclose(img.mean(axis=(0, 1)), passed * world, atol=0.01), (name, img.mean(axis=(0, 1)), world)
+
+
+def tangent_strength_graph(uv_map: str | None) -> list[dict]:
+    """White emission whose Strength is the y of a Tangent node reading `uv_map`'s
+    tangents (None: a constant Strength of 1)."""
+    if uv_map is None:
+        return [{"type": "ShaderNodeEmission", "name": "Glow", "inputs": {"Color": [1.0, 1.0, 1.0, 1.0], "Strength": 1.0}}]
+    return [
+        {"type": "ShaderNodeTangent", "name": "T", "props": {"direction_type": "UV_MAP", "uv_map": uv_map}},
+        {"type": "ShaderNodeSeparateXYZ", "name": "Split", "inputs": {"Vector": {"link": [0, "Tangent"]}}},
+        {
+            "type": "ShaderNodeEmission",
+            "name": "Glow",
+            "inputs": {"Color": [1.0, 1.0, 1.0, 1.0], "Strength": {"link": [1, "Y"]}},
+        },
+    ]
+
+
+def test_each_uv_map_has_its_own_tangents():
+    """``tangent_maps``: a Tangent node naming a UV map reads that map's tangent set (here
+    along y: the emission of Strength = tangent y is the constant Strength 1 one), one
+    naming none or a map without a set reads the default ``tangents`` (along x: black)."""
+    ones = np.ones((4, 1), np.float32)
+    mesh = dict(
+        tangents=np.hstack([np.tile([1.0, 0.0, 0.0], (4, 1)), ones]),
+        tangent_maps={"B": np.hstack([np.tile([0.0, 1.0, 0.0], (4, 1)), ones])},
+        uv_maps={"B": [[0, 0], [0, 1], [1, 1], [1, 0]]},
+    )
+
+    def shot(uv_map):
+        nodes = tangent_strength_graph(uv_map)
+        mat = pc.NodeMaterial(f"T {uv_map}", nodes, {"surface": [len(nodes) - 1, "Emission"]})
+        return pc.render(halves_scene(mat, **mesh), **HALVES).rgba[..., :3]
+
+    lit = shot(None)
+    assert lit.mean() > 0.5
+    np.testing.assert_allclose(shot("B"), lit, rtol=1e-5, atol=1e-6)
+    for other in ("", "A"):
+        assert np.abs(shot(other)).max() < 1e-6, other
+    with pytest.raises(ValueError, match="tangent_maps 'B'"):
+        pc.Scene().add_mesh("bad", np.zeros((3, 3)), [[0, 1, 2]], tangent_maps={"B": np.zeros((2, 4))})

@@ -897,6 +897,7 @@ class Scene:
         colors: dict[str, Any] | None = None,
         attributes: dict[str, Any] | None = None,
         tangents: Any = None,
+        tangent_maps: dict[str, Any] | None = None,
     ) -> int:
         """Adds a triangle mesh from arrays: vertices (V, 3), triangles (T, 3) vertex
         indices, optional per-vertex normals (V, 3) and uvs (V, 2), one material or
@@ -911,8 +912,10 @@ class Scene:
 
         Shading graphs (:class:`NodeMaterial`, docs/shading.md) read named per-vertex
         data: ``uv_maps`` {name: (V, 2)}, ``colors`` {name: (V, 4) or (V, 3) linear
-        RGBA}, ``attributes`` {name: (V,), (V, 3) or (V, 4)} and ``tangents`` (V, 4):
-        tangent xyz and bitangent sign."""
+        RGBA}, ``attributes`` {name: (V,), (V, 3) or (V, 4)}, ``tangents`` (V, 4):
+        tangent xyz and bitangent sign of the default UV map, and ``tangent_maps``
+        {UV map name: (V, 4)}: the tangents a Normal Map or Tangent node naming that UV
+        map reads (a map without its own set reads ``tangents``)."""
         v = np.ascontiguousarray(vertices, dtype=np.float32)
         if v.ndim != 2 or v.shape[1] != 3:
             raise ValueError(f"mesh '{name}': vertices must have shape (V, 3), got {v.shape}")
@@ -954,6 +957,13 @@ class Scene:
             if tg.shape != (v.shape[0], 4):
                 raise ValueError(f"mesh '{name}': tangents must have shape ({v.shape[0]}, 4), got {tg.shape}")
             entry["tangents"] = self._buffer(tg.ravel())
+        if tangent_maps:
+            entry["tangent_maps"] = {}
+            for uv_name, values in tangent_maps.items():
+                tg = np.ascontiguousarray(values, dtype=np.float32)
+                if tg.shape != (v.shape[0], 4) or not np.all(np.isfinite(tg)):
+                    raise ValueError(f"mesh '{name}': tangent_maps '{uv_name}' must be finite with shape ({v.shape[0]}, 4), got {tg.shape}")
+                entry["tangent_maps"][str(uv_name)] = self._buffer(tg.ravel())
         if material_ids is not None:
             ids = np.asarray(material_ids)
             if ids.shape != (t.shape[0],):

@@ -434,6 +434,40 @@ def normal_cases():
     return cases
 
 
+def tangent_cases():
+    """The Tangent node's UV map tangent (the default map, "UVMap" and "Second", whose
+    tangent is along y and mirrored) and tangent-space Normal Maps, with materials that
+    read the tangents of both UV maps at once (each node must get its own map's tangent
+    set, not the mesh's one), compared per pixel. (Radial tangents are left out: on a
+    flat tile they point every way, and the oracle's v / −v tiles show only colours whose
+    components share a sign, as an emitter's spectrum clamps the rest together.)"""
+    cases = []
+
+    def tangent(nt, props):
+        return out(node(nt, "ShaderNodeTangent", props), "Tangent")
+
+    for uv in ("", "UVMap", "Second"):
+        cases.append(("Tangent", f"UV map '{uv}'", lambda nt, u=uv: tangent(nt, {"direction_type": "UV_MAP", "uv_map": u}), TOL))
+
+    def both_tangents(nt):
+        a = tangent(nt, {"direction_type": "UV_MAP", "uv_map": "UVMap"})
+        b = tangent(nt, {"direction_type": "UV_MAP", "uv_map": "Second"})
+        half_b = out(node(nt, "ShaderNodeVectorMath", {"operation": "SCALE"}, Vector=b, Scale=0.5), "Vector")
+        return out(node(nt, "ShaderNodeVectorMath", {"operation": "ADD"}, Vector=a, Vector_001=half_b), "Vector")
+
+    cases.append(("Tangent", "UVMap's + ½ Second's in one material", both_tangents, TOL))
+    colour = (0.7, 0.4, 0.9)
+
+    def both_maps(nt):
+        a = out(node(nt, "ShaderNodeNormalMap", {"space": "TANGENT", "uv_map": "UVMap"}, Strength=1.0, Color=colour))
+        b = out(node(nt, "ShaderNodeNormalMap", {"space": "TANGENT", "uv_map": "Second"}, Strength=1.0, Color=colour))
+        half_b = out(node(nt, "ShaderNodeVectorMath", {"operation": "SCALE"}, Vector=b, Scale=0.5), "Vector")
+        return out(node(nt, "ShaderNodeVectorMath", {"operation": "ADD"}, Vector=a, Vector_001=half_b), "Vector")
+
+    cases.append(("Normal Map", "TANGENT on UVMap + ½ on Second in one material", both_maps, TOL))
+    return cases
+
+
 def procedural_cases():
     cases = []
     textures = [
@@ -602,6 +636,8 @@ def environment_cases():
 IMAGE_CASES, ENVIRONMENT_CASES = image_cases()
 #: Normal Map and Bump through the emission oracle itself (per pixel, 1 sample).
 NORMAL_CASES = normal_cases()
+#: The Tangent node and Normal Maps of two UV maps in one material (per pixel, 1 sample).
+TANGENT_CASES = tangent_cases()
 ALPHA_CASES = [c for c in IMAGE_CASES if c[0] == "Image Texture Alpha"]
 HIT_CASES = coordinate_cases() + procedural_cases() + [c for c in IMAGE_CASES if c[0] != "Image Texture Alpha"]
 #: Per-hit emission, compared per pixel (test_textured_emission_matches_cycles_per_pixel):

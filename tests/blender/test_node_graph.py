@@ -408,7 +408,7 @@ def test_mesh_carries_what_graphs_read(tmp_path):
     for i, d in enumerate(face.data): d.vector = (i, -i, 2 * i)
     needs = {('uv', 'Second'): "material 'M' node 'UV Map'", ('color', 'Col'): 'c', ('attribute', 'wetness'): 'a',
              ('attribute', 'facevec'): 'f', ('attribute', 'Second'): 'uv by name', ('tangent', 'Second'): 't',
-             ('uv', 'Nope'): "material 'M' node 'Lost'", ('color', ''): 'default colour'}
+             ('tangent', ''): 'default tangents', ('uv', 'Nope'): "material 'M' node 'Lost'", ('color', ''): 'default colour'}
     dg = bpy.context.evaluated_depsgraph_get(); ev = ob.evaluated_get(dg)
     w = Warnings()
     a = mesh_arrays(ev, ob.name, needs, w)
@@ -421,11 +421,13 @@ def test_mesh_carries_what_graphs_read(tmp_path):
         face=[[list(em.attributes['facevec'].data[lt.polygon_index].vector) for l in lt.loops] for lt in em.loop_triangles],
         tangent=[[list(em.loops[l].tangent) + [em.loops[l].bitangent_sign] for l in t] for t in tl],
     )
+    em.calc_tangents(uvmap='UVMap')
+    blender['default_tangent'] = [[list(em.loops[l].tangent) + [em.loops[l].bitangent_sign] for l in t] for t in tl]
     ev.to_mesh_clear()
     d = a.data; tri = a.triangles
     emit(tri=tri.tolist(), second=d['uv_maps']['Second'].tolist(), col=d['colors']['Col'].tolist(), default=d['colors'][''].tolist(),
          wet=d['attributes']['wetness'].tolist(), face=d['attributes']['facevec'].tolist(), uvname=d['attributes']['Second'].tolist(),
-         tangent=d['tangents'].tolist(), nv=len(a.vertices), uv_maps=sorted(d['uv_maps']), warnings=w.messages, blender=blender)
+         tangent=d['tangent_maps']['Second'].tolist(), default_tangent=d['tangents'].tolist(), nv=len(a.vertices), uv_maps=sorted(d['uv_maps']), warnings=w.messages, blender=blender)
     """,
     )
     r = check(proc, res)[0]
@@ -438,6 +440,9 @@ def test_mesh_carries_what_graphs_read(tmp_path):
     assert np.array(r["face"])[tri] == pytest.approx(np.array(b["face"]), abs=1e-6)
     assert np.array(r["uvname"])[tri][..., :2] == pytest.approx(np.array(b["second"]), abs=1e-6)
     assert np.array(r["tangent"])[tri] == pytest.approx(np.array(b["tangent"]), abs=1e-6)
+    # One tangent set per UV map a node names: the default map's beside Second's.
+    assert np.array(r["default_tangent"])[tri] == pytest.approx(np.array(b["default_tangent"]), abs=1e-6)
+    assert not np.allclose(np.array(b["default_tangent"]), np.array(b["tangent"]), atol=1e-3)
     assert r["uv_maps"] == ["Second"]
     lost = [w for w in r["warnings"] if "'Nope'" in w]
     assert len(lost) == 1 and "material 'M' node 'Lost'" in lost[0] and "object 'Grid'" in lost[0]

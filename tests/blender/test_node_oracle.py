@@ -207,3 +207,19 @@ def test_normal_map_and_bump_match_cycles_per_pixel(tmp_path):
         print(f"{f} {label}: error {e:.3g} (Cycles {c}, Polychrome {p})")
     bad = [f"{f} {label}: error {e:.3g} > {tol:g} (Cycles {c}, Polychrome {p})" for f, label, e, tol, c, p in rows if not e <= tol]
     assert not bad, "\n".join(bad)
+
+
+def test_tangents_of_each_uv_map_match_cycles_per_pixel(tmp_path):
+    """The Tangent node (radial, and the UV map's for the default map and two named ones)
+    and tangent-space Normal Maps into an Emission colour, with materials reading both UV
+    maps' tangents at once (each node its own map's set: TANGENT_CASES), compared with
+    Cycles per pixel to TOL, with no warning about tangents."""
+    r = run_oracle(tmp_path, "TANGENT_CASES")
+    assert r["error"] is None, r["error"]
+    bad_warnings = [w for w in r["warnings"] if "not supported" in w or "tangent" in w.lower()]
+    assert not bad_warnings, bad_warnings
+    rows = errors(r)
+    for f, label, e, _tol, c, p in rows:
+        print(f"{f} {label}: error {e:.3g} (Cycles {c}, Polychrome {p})")
+    bad = [f"{f} {label}: error {e:.3g} > {tol:g} (Cycles {c}, Polychrome {p})" for f, label, e, tol, c, p in rows if not e <= tol]
+    assert not bad, "\n".join(bad)

@@ -301,6 +301,8 @@ def graph_mesh_data(data):
     kw = {k: data[k] for k in ("uv_maps", "colors", "attributes") if data[k]}
     if data.get("tangents") is not None:
         kw["tangents"] = data["tangents"]
+    if data.get("tangent_maps"):
+        kw["tangent_maps"] = data["tangent_maps"]
     return kw
 
 

@@ -25,7 +25,7 @@ class MeshArrays(NamedTuple):
     tri_slot: np.ndarray  # (T,) material slot of each triangle
     source: np.ndarray | None = None  # (V,) the Blender vertex of each vertex (motion blur)
     data: dict | None = (
-        None  # graph data: {"uv_maps": {name: (V,2)}, "colors": {name: (V,4)}, "attributes": {name: (V,k)}, "tangents": (V,4)}
+        None  # graph data: {"uv_maps": {name: (V,2)}, "colors": {name: (V,4)}, "attributes": {name: (V,k)}, "tangents": (V,4), "tangent_maps": {name: (V,4)}}
     )
 
 
@@ -152,10 +152,11 @@ def _attribute_corners(me, attr, cv, corner_face):
 
 def graph_corners(me, cv, needs, name, warnings):
     """The corner arrays of what ``needs`` asks for: {"uv_maps": {name: (L,2)}, "colors":
-    {name: (L,4)}, "attributes": {name: (L,k)}, "tangents": (L,4) or None}. ``needs`` maps
+    {name: (L,4)}, "attributes": {name: (L,k)}, "tangents": (L,4) or None (the default UV
+    map's), "tangent_maps": {UV map name: (L,4)}}. ``needs`` maps
     (kind, name) to who asks ("material 'M' node 'N'"); a missing name reads zero in
     Blender and gets one warning here."""
-    out = {"uv_maps": {}, "colors": {}, "attributes": {}, "tangents": None}
+    out = {"uv_maps": {}, "colors": {}, "attributes": {}, "tangents": None, "tangent_maps": {}}
     nl = len(cv)
     corner_face = None
     if any(kind == "attribute" for kind, _ in needs):
@@ -203,37 +204,39 @@ def graph_corners(me, cv, needs, name, warnings):
                 out["attributes"][key] = (
                     got if got.shape[1] in (1, 3, 4) else np.concatenate([got, np.zeros((nl, 3 - got.shape[1]), np.float32)], axis=1)
                 )
-    tangent_maps = sorted(key for kind, key in needs if kind == "tangent")
-    if tangent_maps:
-        uvname = tangent_maps[0]
-        if len(tangent_maps) > 1:
-            warnings.add(
-                ("tangents", name),
-                f"object '{name}': tangents of one UV map are exported ('{uvname or 'default'}'); other maps' normal maps use them",
-            )
+    # One tangent set per UV map a Normal Map or Tangent node names ("" = the default map).
+    for uvname in sorted(key for kind, key in needs if kind == "tangent"):
         layer = me.uv_layers.get(uvname) if uvname else default_uv_layer(me)
         if layer is None:
             if uvname:
                 missing("tangent", "UV map", uvname)
+            continue
+        try:
+            me.calc_tangents(uvmap=layer.name)
+        except RuntimeError as e:  # e.g. n-gons: MikkTSpace needs triangles and quads
+            warnings.add(("tangents", name), f"object '{name}': no tangents for normal mapping ({e})")
+            break
+        t = np.empty(nl * 3, np.float32)
+        me.loops.foreach_get("tangent", t)
+        sign = np.empty(nl, np.float32)
+        me.loops.foreach_get("bitangent_sign", sign)
+        tan = np.concatenate([t.reshape(-1, 3), sign[:, None]], axis=1)
+        tan[~np.isfinite(tan)] = 0.0
+        if uvname:
+            out["tangent_maps"][uvname] = tan
         else:
-            try:
-                me.calc_tangents(uvmap=layer.name)
-            except RuntimeError as e:  # e.g. n-gons: MikkTSpace needs triangles and quads
-                warnings.add(("tangents", name), f"object '{name}': no tangents for normal mapping ({e})")
-            else:
-                t = np.empty(nl * 3, np.float32)
-                me.loops.foreach_get("tangent", t)
-                sign = np.empty(nl, np.float32)
-                me.loops.foreach_get("bitangent_sign", sign)
-                tan = np.concatenate([t.reshape(-1, 3), sign[:, None]], axis=1)
-                tan[~np.isfinite(tan)] = 0.0
-                out["tangents"] = tan
+            out["tangents"] = tan
     return out
 
 
 def _corner_arrays(corners):
     """The corner arrays of :func:`graph_corners` in a fixed order (for the split)."""
-    arrays = [*corners["uv_maps"].values(), *corners["colors"].values(), *corners["attributes"].values()]
+    arrays = [
+        *corners["uv_maps"].values(),
+        *corners["colors"].values(),
+        *corners["attributes"].values(),
+        *corners["tangent_maps"].values(),
+    ]
     if corners["tangents"] is not None:
         arrays.append(corners["tangents"])
     return arrays
@@ -282,7 +285,10 @@ def mesh_arrays(ob, name, needs=None, warnings=None):
         triangles = inverse[tl].reshape(-1, 3)
         data = None
         if corners is not None:
-            data = {k: {n: np.take(a, first, axis=0) for n, a in corners[k].items()} for k in ("uv_maps", "colors", "attributes")}
+            data = {
+                k: {n: np.take(a, first, axis=0) for n, a in corners[k].items()}
+                for k in ("uv_maps", "colors", "attributes", "tangent_maps")
+            }
             data["tangents"] = None if corners["tangents"] is None else np.take(corners["tangents"], first, axis=0)
         return MeshArrays(vertices, triangles, normals, uvs, tri_slot, source, data)
     finally:

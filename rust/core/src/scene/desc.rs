@@ -604,9 +604,13 @@ pub struct MeshDesc {
     /// Generic attributes (V×1, V×3 or V×4 f32).
     #[serde(default)]
     pub attributes: std::collections::BTreeMap<String, usize>,
-    /// V×4 f32: tangent xyz and bitangent sign (MikkTSpace).
+    /// V×4 f32: tangent xyz and bitangent sign (MikkTSpace) of the default UV map.
     #[serde(default)]
     pub tangents: Option<usize>,
+    /// V×4 f32 tangent sets of named UV maps (what a Normal Map's or Tangent node's UV
+    /// map reads; a map without one reads the default `tangents`).
+    #[serde(default)]
+    pub tangent_maps: std::collections::BTreeMap<String, usize>,
 }
 
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]

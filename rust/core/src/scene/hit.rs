@@ -22,6 +22,8 @@ pub struct MeshShadingData {
     /// Tangent xyz and bitangent sign per vertex (MikkTSpace from the front end, else
     /// [`smooth_tangents`] when a material perturbs the normal).
     pub tangents: Option<Vec<[f32; 4]>>,
+    /// Tangent sets of named UV maps (the maps a Normal Map or Tangent node names).
+    pub tangent_maps: Vec<(String, Vec<[f32; 4]>)>,
 }
 
 fn per_vertex(
@@ -78,6 +80,10 @@ impl MeshShadingData {
             d.attributes.push((k.clone(), per_vertex(buffers, i, name, &format!("attribute '{k}'"), &[1, 3, 4], v)?));
         }
         d.tangents = md.tangents.map(|i| per_vertex(buffers, i, name, "tangents", &[4], v)).transpose()?;
+        for (k, &i) in &md.tangent_maps {
+            d.tangent_maps
+                .push((k.clone(), per_vertex(buffers, i, name, &format!("tangents of uv map '{k}'"), &[4], v)?));
+        }
         Ok(d)
     }
 
@@ -94,6 +100,7 @@ impl MeshShadingData {
             AttributeRequest::Generic(n) => Self::find(&self.attributes, n)
                 .or_else(|| Self::find(&self.colors, n))
                 .or_else(|| Self::find(&self.uv_maps, n)),
+            AttributeRequest::Tangent(n) => Self::find(&self.tangent_maps, n),
             AttributeRequest::Differentials => None,
         }
     }

@@ -368,7 +368,13 @@ impl<'a> Compiler<'a> {
                 // tangent (the mesh's tangents, as the Normal Map node reads them).
                 let uv = p.enumeration("direction_type", &[("RADIAL", false), ("UV_MAP", true)], false)?;
                 let axis = p.enumeration("axis", &[("X", 0u8), ("Y", 1), ("Z", 2)], 2)?;
-                Kernel::Input(Input::TangentNode { uv_map: uv, axis })
+                let slot = match p.string("uv_map")? {
+                    Some(name) if uv && !name.is_empty() => {
+                        Some(self.attribute(node, AttributeRequest::Tangent(name.to_string()))?)
+                    }
+                    _ => None,
+                };
+                Kernel::Input(Input::TangentNode { uv_map: uv, axis, slot })
             }
             "ShaderNodeObjectInfo" => Kernel::Input(Input::ObjectInfo),
             "ShaderNodeFresnel" => Kernel::Input(Input::Fresnel),
@@ -395,7 +401,15 @@ impl<'a> Compiler<'a> {
                     ],
                     Tangent,
                 )?;
-                Kernel::Vector(VectorOp::NormalMap(s))
+                // Tangent space reads the tangents of its UV map (the mesh's default ones
+                // when it names none).
+                let slot = match p.string("uv_map")? {
+                    Some(name) if s == Tangent && !name.is_empty() => {
+                        Some(self.attribute(node, AttributeRequest::Tangent(name.to_string()))?)
+                    }
+                    _ => None,
+                };
+                Kernel::Vector(VectorOp::NormalMap(s, slot))
             }
             "ShaderNodeBump" => {
                 // The height's derivative from the height program at offset points

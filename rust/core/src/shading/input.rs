@@ -25,6 +25,8 @@ pub enum Input {
     TangentNode {
         uv_map: bool,
         axis: u8,
+        /// The attribute slot of the UV map's tangents (None: the mesh's default ones).
+        slot: Option<usize>,
     },
     /// IOR, Normal → Fac.
     Fresnel,
@@ -60,7 +62,7 @@ pub fn fresnel_dielectric_cos(cosi: f32, eta: f32) -> f32 {
 /// (`object_normal_transform`) and projected onto the shading normal's plane,
 /// cross(N, normalize(cross(t, N))). Zero on the Z axis itself.
 pub fn radial_tangent(sp: &ShadingPoint) -> Vec3 {
-    tangent_node(sp, false, 2)
+    tangent_node(sp, false, 2, None)
 }
 
 /// Cycles' `svm_node_tangent` (kernel/svm/tex_coord.h): the object-space tangent, radial
@@ -69,11 +71,11 @@ pub fn radial_tangent(sp: &ShadingPoint) -> Vec3 {
 /// mesh's, `ShadingPoint::tangent` taken back to object space), then taken to world
 /// space as a normal (`object_normal_transform`) and projected on the shading normal's
 /// plane, cross(N, normalize(cross(t, N))).
-pub fn tangent_node(sp: &ShadingPoint, uv_map: bool, axis: u8) -> Vec3 {
+pub fn tangent_node(sp: &ShadingPoint, uv_map: bool, axis: u8, slot: Option<usize>) -> Vec3 {
     let g = sp.generated - Vec3::splat(0.5);
     let t = if uv_map {
         // World → object for a direction is mᵀ (m = L⁻ᵀ, the normal matrix).
-        sp.normal_to_world.transpose() * sp.tangent
+        sp.normal_to_world.transpose() * sp.tangent_of(slot).0
     } else {
         match axis {
             0 => Vec3::new(0.0, -g.z, g.y),
@@ -170,7 +172,7 @@ impl Input {
             Input::Uv => o[0] = sp.uv.extend(0.0),
             Input::Normal => o[0] = sp.normal,
             Input::Tangent => o[0] = radial_tangent(sp),
-            Input::TangentNode { uv_map, axis } => o[0] = tangent_node(sp, uv_map, axis),
+            Input::TangentNode { uv_map, axis, slot } => o[0] = tangent_node(sp, uv_map, axis, slot),
             Input::Incoming => o[0] = -sp.incoming,
         }
     }
@@ -223,9 +225,25 @@ mod tests {
         assert_eq!(radial_tangent(&sp), Vec3::ZERO);
         // The Tangent node: radial about X, and the UV map's (mesh) tangent projected.
         let sp = ShadingPoint { generated: Vec3::new(0.5, 1.0, 0.5), normal: Vec3::Y, ..Default::default() };
-        assert!((tangent_node(&sp, false, 0) - Vec3::Z).length() < 1e-6, "{}", tangent_node(&sp, false, 0));
+        assert!((tangent_node(&sp, false, 0, None) - Vec3::Z).length() < 1e-6, "{}", tangent_node(&sp, false, 0, None));
         let sp = ShadingPoint { normal: Vec3::Z, tangent: Vec3::new(1.0, 1.0, 0.5), ..Default::default() };
-        assert!((tangent_node(&sp, true, 2) - Vec3::new(1.0, 1.0, 0.0).normalize()).length() < 1e-6);
+        assert!((tangent_node(&sp, true, 2, None) - Vec3::new(1.0, 1.0, 0.0).normalize()).length() < 1e-6);
+        // A named UV map's own tangent set (attribute slot 1), taken to world space by the
+        // object's transform and projected; its bitangent sign goes with it. An empty slot
+        // (the mesh lacks that map's set) reads the default tangents.
+        let mut sp = ShadingPoint {
+            normal: Vec3::Z,
+            tangent: Vec3::X,
+            tangent_sign: 1.0,
+            normal_to_world: glam::Mat3::from_rotation_z(std::f32::consts::FRAC_PI_2),
+            ..Default::default()
+        };
+        sp.attributes[1] = [1.0, 0.0, 0.3, -1.0];
+        let (t, sign) = sp.tangent_of(Some(1));
+        assert!((t - Vec3::Y).length() < 1e-6 && sign == -1.0, "{t} {sign}");
+        assert!((tangent_node(&sp, true, 2, Some(1)) - Vec3::Y).length() < 1e-6);
+        assert!((tangent_node(&sp, true, 2, Some(2)) - Vec3::X).length() < 1e-6);
+        assert_eq!(sp.tangent_of(None), (Vec3::X, 1.0));
         let mut o = [Vec3::ZERO];
         Input::Tangent.eval(
             &[],

@@ -63,6 +63,23 @@ pub struct Delta {
 }
 
 impl ShadingPoint {
+    /// The tangent (world space, orthogonal to the shading normal) and bitangent sign a
+    /// Normal Map or Tangent node reads: its UV map's tangent set in attribute slot
+    /// `slot`, else (no slot, or the mesh lacks that set) the mesh's default tangents.
+    pub fn tangent_of(&self, slot: Option<usize>) -> (Vec3, f32) {
+        let Some(a) = slot.and_then(|k| self.attributes.get(k)) else { return (self.tangent, self.tangent_sign) };
+        let t = Vec3::new(a[0], a[1], a[2]);
+        if !(t.length_squared() > 1e-12) {
+            return (self.tangent, self.tangent_sign);
+        }
+        // Object → world for a direction is L = m⁻ᵀ (m = normal_to_world = L⁻ᵀ).
+        let w = self.normal_to_world.inverse().transpose() * t;
+        match (w - self.normal * self.normal.dot(w)).try_normalize() {
+            Some(w) => (w, if a[3] < 0.0 { -1.0 } else { 1.0 }),
+            None => (self.tangent, self.tangent_sign),
+        }
+    }
+
     /// The shading point `s` steps `diff[k]` away (the Bump node's offset evaluations,
     /// in the spirit of Cycles' `svm_node_tex_coord_bump_dx`/`_dy`, which offset the
     /// point by its ray differential).
@@ -122,6 +139,10 @@ pub enum AttributeRequest {
     Color(String),
     /// A generic attribute (Attribute node).
     Generic(String),
+    /// The tangents of a named UV map (Normal Map and Tangent node): object-space xyz and
+    /// the bitangent sign; a mesh without them reads 0, and the op uses the mesh's
+    /// default tangents instead ([`ShadingPoint::tangent_of`]).
+    Tangent(String),
     /// Not mesh data: asks the walk to fill `ShadingPoint::diff` (Bump). Its slot reads 0.
     Differentials,
 }

@@ -30,8 +30,9 @@ pub enum NormalMapSpace {
 pub enum VectorOp {
     /// Vector, Location, Rotation, Scale → Vector.
     Mapping(MappingType),
-    /// Strength, Color → Normal.
-    NormalMap(NormalMapSpace),
+    /// Strength, Color → Normal; tangent space reads the tangents of the UV map in
+    /// attribute slot `.1` (None: the mesh's default tangents).
+    NormalMap(NormalMapSpace, Option<usize>),
 }
 
 /// Cycles `euler_to_transform`: rotation Z·Y·X of XYZ Euler angles, as rows.
@@ -65,13 +66,13 @@ pub fn mapping(ty: MappingType, v: Vec3, location: Vec3, rotation: Vec3, scale: 
 
 impl VectorOp {
     pub fn varying(&self) -> bool {
-        matches!(self, VectorOp::NormalMap(_))
+        matches!(self, VectorOp::NormalMap(..))
     }
 
     pub fn eval(&self, i: &[Vec3], o: &mut [Vec3], sp: &ShadingPoint) {
         match *self {
             VectorOp::Mapping(ty) => o[0] = mapping(ty, i[0], i[1], i[2], i[3]),
-            VectorOp::NormalMap(space) => o[0] = normal_map(space, i[0].x, i[1], sp),
+            VectorOp::NormalMap(space, slot) => o[0] = normal_map(space, i[0].x, i[1], sp, slot),
         }
     }
 }
@@ -84,7 +85,7 @@ impl VectorOp {
 /// are unit length and the tangent is orthogonalised against the normal at the hit
 /// (Cycles uses the unnormalised interpolated ones); without mesh tangents the tangent
 /// is ∂p/∂u of the default UVs (Cycles falls back to the unperturbed normal).
-pub fn normal_map(space: NormalMapSpace, strength: f32, color: Vec3, sp: &ShadingPoint) -> Vec3 {
+pub fn normal_map(space: NormalMapSpace, strength: f32, color: Vec3, sp: &ShadingPoint, slot: Option<usize>) -> Vec3 {
     let mut c = 2.0 * (color - Vec3::splat(0.5));
     let n0 = sp.normal;
     let m = sp.normal_to_world;
@@ -93,12 +94,14 @@ pub fn normal_map(space: NormalMapSpace, strength: f32, color: Vec3, sp: &Shadin
             // The un-flipped normal: Cycles inverts for backfacing after the map.
             let nw = if sp.backfacing { -n0 } else { n0 };
             let no = m.inverse() * nw;
-            // Object-space tangent: world vectors map back by Lᵀ⁻¹ᵀ = mᵀ (m = L⁻ᵀ).
-            let to = m.transpose() * sp.tangent;
+            // Object-space tangent of the node's UV map: world vectors map back by
+            // Lᵀ⁻¹ᵀ = mᵀ (m = L⁻ᵀ).
+            let (tangent, sign) = sp.tangent_of(slot);
+            let to = m.transpose() * tangent;
             c.x *= strength;
             c.y *= strength;
             c.z = 1.0 + (c.z - 1.0) * strength.clamp(0.0, 1.0);
-            let b = sp.tangent_sign * no.cross(to);
+            let b = sign * no.cross(to);
             let n = safe_normalize(m * safe_normalize(c.x * to + c.y * b + c.z * no));
             if sp.backfacing {
                 -n
@@ -231,11 +234,11 @@ mod tests {
     fn normal_map_flat_colour_keeps_the_normal_and_tilts_along_the_tangent() {
         let sp = ShadingPoint::default();
         let mut o = [Vec3::ZERO];
-        VectorOp::NormalMap(NormalMapSpace::Tangent).eval(&[Vec3::ONE, Vec3::new(0.5, 0.5, 1.0)], &mut o, &sp);
+        VectorOp::NormalMap(NormalMapSpace::Tangent, None).eval(&[Vec3::ONE, Vec3::new(0.5, 0.5, 1.0)], &mut o, &sp);
         assert!((o[0] - Vec3::Z).length() < 1e-6);
-        VectorOp::NormalMap(NormalMapSpace::Tangent).eval(&[Vec3::ONE, Vec3::new(1.0, 0.5, 0.5)], &mut o, &sp);
+        VectorOp::NormalMap(NormalMapSpace::Tangent, None).eval(&[Vec3::ONE, Vec3::new(1.0, 0.5, 0.5)], &mut o, &sp);
         assert!((o[0] - Vec3::X).length() < 1e-6);
-        VectorOp::NormalMap(NormalMapSpace::Tangent).eval(&[Vec3::ZERO, Vec3::new(1.0, 0.5, 0.5)], &mut o, &sp);
+        VectorOp::NormalMap(NormalMapSpace::Tangent, None).eval(&[Vec3::ZERO, Vec3::new(1.0, 0.5, 0.5)], &mut o, &sp);
         assert!((o[0] - Vec3::Z).length() < 1e-6);
     }
 
@@ -306,14 +309,14 @@ mod tests {
         // Cycles 4.5 CPU, a plane seen from above, Color (0.7, 0.4, 0.9), Strength 0.5:
         // (0.21566555, -0.10783277, 0.97049499).
         let sp = ShadingPoint::default();
-        let n = normal_map(NormalMapSpace::Tangent, 0.5, Vec3::new(0.7, 0.4, 0.9), &sp);
+        let n = normal_map(NormalMapSpace::Tangent, 0.5, Vec3::new(0.7, 0.4, 0.9), &sp, None);
         assert!((n - Vec3::new(0.21566555, -0.10783277, 0.970495)).length() < 1e-6, "{n}");
         // From behind: the same map mirrored through the surface.
         let back = ShadingPoint { normal: -Vec3::Z, backfacing: true, ..sp };
-        let b = normal_map(NormalMapSpace::Tangent, 1.0, Vec3::new(0.7, 0.4, 0.9), &back);
-        let f = normal_map(NormalMapSpace::Tangent, 1.0, Vec3::new(0.7, 0.4, 0.9), &sp);
+        let b = normal_map(NormalMapSpace::Tangent, 1.0, Vec3::new(0.7, 0.4, 0.9), &back, None);
+        let f = normal_map(NormalMapSpace::Tangent, 1.0, Vec3::new(0.7, 0.4, 0.9), &sp, None);
         assert!((b + f).length() < 1e-6, "{b} vs {f}");
-        let w = normal_map(NormalMapSpace::BlenderWorld, 1.0, Vec3::new(0.5, 0.0, 0.0), &sp);
+        let w = normal_map(NormalMapSpace::BlenderWorld, 1.0, Vec3::new(0.5, 0.0, 0.0), &sp, None);
         assert!((w - Vec3::new(0.0, 1.0, 1.0).normalize()).length() < 1e-6, "{w}");
     }
 }
