@@ -61,8 +61,6 @@ BAD = {
     "/bad/countsShort": r"faceVertexCounts add up to 4 but there are 3 faceVertexIndices",
     "/bad/noIndices": r"it has points, faceVertexCounts but no faceVertexIndices",
     "/bad/curveNoCounts": r"it has points but no curveVertexCounts",
-    "/bad/normals": r"normals has 2 values for vertex interpolation; expected 3",
-    "/bad/st": r"primvars:st has 1 values for faceVarying interpolation; expected 3",
     "/bad/subset": r"/bad/subset/s: face index 5 is out of range",
     "/bad/curveWidths": r"widths has 2 values for vertex interpolation; expected 4",
     "/bad/curveCounts": r"curveVertexCounts add up to 5 but there are 4 points",
@@ -99,9 +97,6 @@ def bad_stage(path):
     c.CreatePointsAttr([(0, 0, 0.5), (0.1, 0, 0.5)])
     UsdGeom.Mesh.Define(stage, "/quiet/empty")  # nothing authored: nothing to draw, no warning
     UsdGeom.BasisCurves.Define(stage, "/quiet/emptyCurves")
-    bad_mesh(stage, "/bad/normals").CreateNormalsAttr([(0, 0, 1), (0, 0, 1)])
-    m = bad_mesh(stage, "/bad/st")
-    UsdGeom.PrimvarsAPI(m).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.faceVarying).Set([(0, 0)])
     m = bad_mesh(stage, "/bad/subset")
     mat = UsdShade.Material.Define(stage, "/Looks/m")
     sub = UsdShade.MaterialBindingAPI.Apply(m.GetPrim()).CreateMaterialBindSubset("s", Vt.IntArray([0, 5]), UsdGeom.Tokens.face)
@@ -220,3 +215,51 @@ def test_bad_render_settings_values_are_ignored_with_a_warning(tmp_path):
     assert len([w for w in warns if "camera /nocam is not a UsdGeom.Camera; the stage's first camera is used" in w]) == 1, warns
     assert scene.camera.to_dict()["projection"] == "ORTHOGRAPHIC"  # /cam
     assert "time_limit" not in usd.read_settings(path) and "width" not in usd.read_settings(path)
+
+
+def test_malformed_normals_and_uvs_are_dropped_and_the_mesh_renders(tmp_path):
+    """Optional data that is malformed — normals of the wrong count or of a non-array
+    type (usd-wg's normalsTypes.usda authors `point3f normals = (0, 0, 1)` and
+    `int normals = 7`; Storm draws those meshes), uvs of the wrong count, a displayColor
+    that is no array of colours — is dropped with one warning per prim naming it; the mesh
+    renders (flat shaded) its closed form."""
+    path = tmp_path / "optional.usda"
+    stage = new_stage(path)
+    quads = {}
+    for k, name in enumerate(("count", "scalar", "int", "st")):
+        quads[name] = quad(stage, f"/{name}", 0.25)
+        quads[name].AddTranslateOp().Set(Gf.Vec3d(-0.25 + 0.5 * (k % 2), -0.25 + 0.5 * (k // 2), 0))  # 2 × 2: the whole view
+    quads["count"].CreateNormalsAttr([(0, 0, 1), (0, 0, 1)])
+    quads["st"].GetPrim().RemoveProperty("primvars:displayColor")  # authored below as 2 floats
+
+    quads["st"].GetPrim().CreateAttribute("primvars:st", Sdf.ValueTypeNames.TexCoord2fArray).Set([(0, 0)])
+    UsdGeom.Primvar(quads["st"].GetPrim().GetAttribute("primvars:st")).SetInterpolation(UsdGeom.Tokens.faceVarying)
+    top_camera(stage, "/cam", 2.0, 1.0)
+    sun(stage)
+    stage.Save()
+    text = path.read_text()
+    for name, line in (
+        ("scalar", "point3f normals = (0, 0, 1)"),
+        ("int", "int normals = 7"),
+        ("st", "float[] primvars:displayColor = [0.5, 0.5]"),
+    ):
+        text = text.replace(f'def Mesh "{name}"\n{{\n', f'def Mesh "{name}"\n{{\n    {line}\n', 1)
+    edited = tmp_path / "edited.usda"  # a new layer: the saved one stays open, unedited, in USD's registry
+    edited.write_text(text)
+    scene, warns = read(edited)
+    want = {
+        "/count": r"normals has 2 values for vertex interpolation; expected 4; its normals are ignored",
+        "/scalar": r"normals has 1 values for vertex interpolation; expected 4; its normals are ignored",
+        "/int": r"a value of an unusable type .*; its normals are ignored",
+        "/st": r"primvars:st has 1 values for faceVarying interpolation; expected 4; its primvars:st are ignored",
+        "/st: displayColor": r"is not an array of 3-value items; it is ignored",
+    }
+    for prim, problem in want.items():
+        assert len([w for w in warns if re.search(rf"prim {prim}:? {problem}", w)]) == 1, (prim, warns)
+    assert len(warns) == len(want), warns
+    desc, _ = scene.description()
+    assert sorted(i["name"] for i in desc["instances"]) == ["/count", "/int", "/scalar", "/st"]
+    assert all(m.get("normals") is None and m.get("uvs") is None for m in desc["meshes"])
+    rgb = pc.render(scene, width=8, height=8, samples=16, max_bounces=1, seed=1).rgba[..., :3]
+    # three quads of albedo RHO, /st's of UsdPreviewSurface's fallback 0.18 (its displayColor dropped)
+    assert rgb.mean(axis=(0, 1)) == pytest.approx([(3 * RHO + 0.18) / 4 * E / math.pi] * 3, rel=0.01)

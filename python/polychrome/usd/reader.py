@@ -341,6 +341,18 @@ class _Reader:
             problem = str(e).replace(f"{self.path}: ", "")
         return f"prim {path}: {problem}; {what}"
 
+    def optional(self, prim, what: str, read):
+        """``read()`` of optional data (normals, uvs); malformed (a PrimError, ValueError,
+        TypeError or pxr error): None, with one warning naming the prim and that the data is
+        ignored."""
+        try:
+            return read()
+        except Exception as e:  # noqa: BLE001 - as guarded
+            if not _is_bad_data(e):
+                raise
+            self.warn(f"bad:{prim.GetPath()}:{what}", self.skip_message(prim, e, f"its {what} are ignored"))
+            return None
+
     def guarded(self, prim, read, what: str = "it is skipped") -> bool:
         """Runs ``read()`` for one prim; malformed data (a PrimError, ValueError or pxr
         error) skips the prim with one warning naming it and the problem: whatever it had
@@ -455,10 +467,16 @@ class _Reader:
 
     def display_primvar(self, prim, name: str, width: int):
         """(mean, varies) of a displayColor / displayOpacity primvar, or None."""
-        c = _primvar_values(self.UsdGeom.PrimvarsAPI(prim).GetPrimvar(name), self.time)
-        if c is None or not len(c):
+        try:
+            c = _primvar_values(self.UsdGeom.PrimvarsAPI(prim).GetPrimvar(name), self.time)
+            if c is None or not len(c):
+                return None
+            arr = np.asarray(c, np.float64).reshape(-1, width)
+        except (TypeError, ValueError):  # malformed optional data: dropped, one warning
+            self.warn(
+                f"bad:{prim.GetPath()}:{name}", f"prim {prim.GetPath()}: {name} is not an array of {width}-value items; it is ignored"
+            )
             return None
-        arr = np.asarray(c, np.float64).reshape(-1, width)
         if not np.all(np.isfinite(arr)):
             return None
         varies = len(arr) > 1 and float(np.ptp(arr, axis=0).max()) > 0 and prim.GetTypeName() in ("Mesh", "BasisCurves", "Points")
@@ -1180,20 +1198,31 @@ class _Reader:
         left_handed = self.get(mesh.GetOrientationAttr(), "rightHanded") == "leftHanded"
 
         # Normals (primvars:normals wins over normals) and texture coordinates.
-        normals = self.primvar(prim, "normals", "primvars:normals", len(pts), n_corners, n_faces, 3)
+        # Malformed normals or uvs (optional data) are dropped with one warning, as Hydra
+        # draws such a mesh (usd-wg's normalsTypes.usda): computed normals, no uvs.
+        normals = self.optional(
+            prim, "primvars:normals", lambda: self.primvar(prim, "normals", "primvars:normals", len(pts), n_corners, n_faces, 3)
+        )
         if normals is None:
             attr = mesh.GetNormalsAttr()
             raw = attr.Get(self.time) if attr and attr.HasAuthoredValue() else None
-            if raw is not None and len(raw):
+
+            def legacy():
+                if raw is None or not len(raw):
+                    return None
                 arr = np.asarray(raw, np.float32).reshape(-1, 3)
-                normals = self.check_interp(prim, arr, mesh.GetNormalsInterpolation(), "normals", len(pts), n_corners, n_faces)
+                return self.check_interp(prim, arr, mesh.GetNormalsInterpolation(), "normals", len(pts), n_corners, n_faces)
+
+            normals = self.optional(prim, "normals", legacy)
         uv_name = "st"
         if not self.UsdGeom.PrimvarsAPI(prim).HasPrimvar("st"):
             for pv in self.UsdGeom.PrimvarsAPI(prim).GetPrimvars():
                 if pv.GetTypeName() in (self.Sdf.ValueTypeNames.TexCoord2fArray, self.Sdf.ValueTypeNames.Float2Array):
                     uv_name = pv.GetPrimvarName()
                     break
-        uvs = self.primvar(prim, uv_name, f"primvars:{uv_name}", len(pts), n_corners, n_faces, 2)
+        uvs = self.optional(
+            prim, f"primvars:{uv_name}", lambda: self.primvar(prim, uv_name, f"primvars:{uv_name}", len(pts), n_corners, n_faces, 2)
+        )
 
         # Materials: GeomSubsets of the materialBind family, else the prim's binding.
         binding = self.UsdShade.MaterialBindingAPI(prim)
@@ -1217,14 +1246,40 @@ class _Reader:
         else:
             material = self.bound_material(prim)
         # Named UV sets and primvars that some material's network reads.
-        face_of_corner = None
         extras: dict[tuple[str, str], tuple[np.ndarray, str]] = {}
         api = self.UsdGeom.PrimvarsAPI(prim)
         used = [material] if material is not None else sorted({int(m) for m in np.unique(material_ids)})
         wanted = [("uv", n) for n in sorted(self.uv_names)] + [("attr", n) for n in sorted(self.attribute_names)]
+
+        def extra_entry(pv, value, kind, pv_name):
+            arr = np.asarray(value, dtype=np.float32)
+            arr = arr.reshape(len(arr), -1)
+            if kind == "uv":
+                arr = arr[:, :2]
+            interp = str(pv.GetInterpolation())
+            if interp in ("uniform", "constant"):
+                expected = n_faces if interp == "uniform" else 1
+                if len(arr) != expected or not np.all(np.isfinite(arr)):
+                    raise self.error(
+                        prim, f"primvars:{pv_name} has {len(arr)} values for {interp} interpolation; expected {expected} finite ones"
+                    )
+                if interp == "constant":
+                    return np.repeat(arr, len(pts), axis=0), "vertex"
+                return arr[np.repeat(np.arange(n_faces), counts)], "corner"
+            return self.check_interp(prim, arr, interp, f"primvars:{pv_name}", len(pts), n_corners, n_faces)
+
         for kind, pv_name in wanted:
             pv = api.GetPrimvar(pv_name)
-            value = _primvar_values(pv, self.time)
+            value, entry = None, None
+            try:
+                value = _primvar_values(pv, self.time)
+                if value is not None and len(value):
+                    entry = extra_entry(pv, value, kind, pv_name)
+            except Exception as e:  # noqa: BLE001 - malformed optional data: read as missing
+                if not _is_bad_data(e):
+                    raise
+                self.warn(f"bad:{where}:{pv_name}", self.skip_message(prim, e, f"primvars:{pv_name} is read as missing"))
+                value = None
             if value is None or len(value) == 0:
                 # Read by this mesh's network but missing: the primvar reader's fallback.
                 for m in used:
@@ -1239,27 +1294,8 @@ class _Reader:
                         extras[(kind, pv_name)] = (np.tile(np.asarray(fb, np.float32), (len(pts), 1)), "vertex")
                         break
                 continue
-            arr = np.asarray(value, dtype=np.float32)
-            arr = arr.reshape(len(arr), -1)
-            if kind == "uv":
-                arr = arr[:, :2]
-            interp = str(pv.GetInterpolation())
-            if interp in ("uniform", "constant"):
-                expected = n_faces if interp == "uniform" else 1
-                if len(arr) != expected or not np.all(np.isfinite(arr)):
-                    raise self.error(
-                        prim, f"primvars:{pv_name} has {len(arr)} values for {interp} interpolation; expected {expected} finite ones"
-                    )
-                if interp == "constant":
-                    extras[(kind, pv_name)] = (np.repeat(arr, len(pts), axis=0), "vertex")
-                    continue
-                if face_of_corner is None:
-                    face_of_corner = np.repeat(np.arange(n_faces), counts)
-                extras[(kind, pv_name)] = (arr[face_of_corner], "corner")
-                continue
-            checked = self.check_interp(prim, arr, interp, f"primvars:{pv_name}", len(pts), n_corners, n_faces)
-            if checked is not None:
-                extras[(kind, pv_name)] = checked
+            if entry is not None:
+                extras[(kind, pv_name)] = entry
 
         # Subdivision surfaces refined (subdivision.py); face_src: the control face of each face.
         per_vertex = [("normals", normals), ("uvs", uvs)] + list(extras.items())
