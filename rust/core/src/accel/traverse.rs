@@ -133,8 +133,8 @@ fn intersect_node(node: &CwBvhNode, ray: &TRay, oct_inv4: u32) -> u32 {
 /// `Traversal` but with a stack that is not zeroed: a fresh `Traversal` clears its
 /// 32-entry stack (256 bytes) on every call, which was a tenth of a closest-hit query on
 /// small scenes (two traversals per instance visited).
-struct Walk {
-    stack: Stack,
+struct Walk<'s> {
+    stack: Stack<'s>,
     current_group: UVec2,
     primitive_group: UVec2,
     oct_inv4: u32,
@@ -142,15 +142,18 @@ struct Walk {
     hitmask: u32,
 }
 
-impl Walk {
+impl<'s> Walk<'s> {
+    /// The state at the root for a ray along `direction`, its stack in `slots` (a local
+    /// of the caller's: moving a 256-byte array into the state cost more than the walk
+    /// of a small BVH).
     #[inline(always)]
-    fn new(direction: Vec3A) -> Self {
+    fn new(direction: Vec3A, slots: &'s mut Slots) -> Self {
         // obvhs's `ray_get_octant_inv4`: the child order for the ray's octant.
         let oct_inv4 = (if direction.x < 0.0 { 0 } else { 0x0404_0404 })
             | (if direction.y < 0.0 { 0 } else { 0x0202_0202 })
             | (if direction.z < 0.0 { 0 } else { 0x0101_0101 });
         Self {
-            stack: Stack { data: [const { MaybeUninit::uninit() }; STACK], len: 0 },
+            stack: Stack { data: slots, len: 0 },
             current_group: UVec2::new(0, 0x8000_0000),
             primitive_group: UVec2::ZERO,
             oct_inv4,
@@ -164,15 +167,24 @@ impl Walk {
 /// the tree is shallower).
 const STACK: usize = 32;
 
+/// Stack storage, left uninitialised.
+type Slots = [MaybeUninit<UVec2>; STACK];
+
+/// Fresh stack storage (no code: nothing is written).
+#[inline(always)]
+fn slots() -> Slots {
+    [const { MaybeUninit::uninit() }; STACK]
+}
+
 /// A stack of node groups whose free slots are left uninitialised. Like obvhs's
 /// `StackStack`, a push onto a full stack overwrites the top slot.
-struct Stack {
-    data: [MaybeUninit<UVec2>; STACK],
+struct Stack<'s> {
+    data: &'s mut Slots,
     /// Slots `..len` (and slot `len` itself when the stack is full) hold pushed values.
     len: usize,
 }
 
-impl FastStack<UVec2> for Stack {
+impl FastStack<UVec2> for Stack<'_> {
     #[inline(always)]
     fn push(&mut self, v: UVec2) {
         self.data[self.len].write(v);
@@ -216,7 +228,8 @@ pub(super) fn closest<F: FnMut(&TRay, usize) -> f32>(bvh: &CwBvh, ray: TRay, mut
     }
     let mut r = ray;
     let mut best = None;
-    let mut state = Walk::new(ray.direction);
+    let mut slots = slots();
+    let mut state = Walk::new(ray.direction, &mut slots);
     let mut node;
     obvhs::traverse!(bvh, node, state, intersect_node(node, &r, state.oct_inv4), {
         let t = hit(&r, state.primitive_id as usize);
@@ -235,7 +248,8 @@ pub(super) fn any<F: FnMut(&TRay, usize) -> f32>(bvh: &CwBvh, ray: TRay, mut hit
     if bvh.nodes.is_empty() {
         return false;
     }
-    let mut state = Walk::new(ray.direction);
+    let mut slots = slots();
+    let mut state = Walk::new(ray.direction, &mut slots);
     let mut node;
     let mut found = false;
     'outer: {
