@@ -168,13 +168,8 @@ proptest! {
 }
 
 proptest! {
-    // 64 cases: each draws 3000 BSDF samples. A fixed seed: the random one could land in
-    // the known gap of `rough_glass_from_inside_near_index_one_keeps_energy` (about 3 % of runs).
-    #![proptest_config(ProptestConfig {
-        cases: cases(64),
-        rng_seed: proptest::test_runner::RngSeed::Fixed(20261204),
-        ..ProptestConfig::default()
-    })]
+    // 64 cases: each draws 3000 BSDF samples; a random seed per run.
+    #![proptest_config(ProptestConfig { cases: cases(64), ..ProptestConfig::default() })]
 
     /// Energy conservation: the mean sampling weight f·cos/pdf (the directional albedo)
     /// is ≤ 1 per wavelength, and every weight is finite and ≥ 0, for the rough and
@@ -187,7 +182,7 @@ proptest! {
         kind in 0usize..4,
         roughness in prop_oneof![1 => Just(0.0f32), 4 => 0.05f32..1.0],
         cos_o in prop_oneof![1 => Just(1e-4f32), 6 => 0.01f32..1.0],
-        eta in 1.0001f64..4.0,
+        eta in prop_oneof![3 => 1.0001f64..4.0, 1 => 1.0001f64..1.05],
         metal in 0usize..4,
         back in any::<bool>(),
     ) {
@@ -391,41 +386,58 @@ fn rough_dielectric_sampling_matches_pdf_chi_square() {
     }
 }
 
-/// Known gap (issue 14): a rough dielectric seen from inside at a relative index near 1
-/// gains energy at grazing angles — its multiple-scattering compensation overshoots
-/// (measured by this scan on 2026-12-04: η 1.0001, roughness 0.05, cos θo 0.01: albedo
-/// 1.44; η 1.01, roughness 0.95, cos θo 0.01: 2.58; η ≥ 1.05 within the bound). Ignored
-/// until fixed; `bsdf_albedo_is_at_most_one` draws η over 1.0001..4 with a fixed seed so
-/// that CI does not fail on this region by chance.
+/// Rough glass near a relative index of 1, from both sides, down to grazing view: the
+/// multiple-scattering compensation 1/E never returns more energy than arrives, and
+/// restores most of what single scattering loses. Here the interface's albedo E changes
+/// within a fraction of one of Cycles' 16³ table cells (from inside, the critical angle
+/// sweeps μ = 0..0.13 between its first two index slabs): on Cycles' axes the lookup read
+/// E 0.099 where the lobe's is 0.254 at η 1.01 from inside, roughness 0.95, cos θo 0.01,
+/// and the albedo came out 2.58 (η 1.0001, roughness 0.05, cos 0.01: 1.44). The tables
+/// are finer and conservative now (tools/gen_energy_tables.py, docs/materials.md); in
+/// the corner μ ≲ 0.03, η ≲ 1.003 the raised nodes lose up to ~10 % instead.
 #[test]
-#[ignore = "rough glass from inside near η = 1 gains energy at grazing (issue 14)"]
-fn rough_glass_from_inside_near_index_one_keeps_energy() {
+fn rough_glass_near_index_one_keeps_energy() {
     let g = grid();
-    for &eta in &[1.0001f64, 1.001, 1.01] {
+    let (mut worst, mut lowest) = ((0.0f64, String::new()), (2.0f64, String::new()));
+    for &eta in &[1.0001f64, 1.001, 1.01, 1.03] {
         for ri in 1..20 {
             let roughness = ri as f32 * 0.05;
-            for &cos_o in &[0.01f32, 0.05, 0.1, 0.2, 0.4] {
-                let bsdf = make_bsdf(2, roughness, eta, 0, &g);
-                let mut ctx = ShadingContext::new(&g);
-                ctx.mode = TransportMode::Radiance;
-                ctx.front_face = false;
-                let wo = Vec3A::new((1.0 - cos_o * cos_o).sqrt(), 0.0, cos_o);
-                let mut rng = Rng::new(3, (cos_o * 1e6) as u64);
-                let (m, mut sum, mut sum2) = (20_000, 0.0f64, 0.0f64);
-                for _ in 0..m {
-                    let mut t = SampledSpectrum::splat(g.len(), 1.0);
-                    let (u, uc) = (rng.uniform2(), rng.uniform());
-                    if let Some(s) = bsdf.sample(&ctx, wo, u, uc, &mut t) {
-                        // Radiance transport: undo the refraction's 1/η² (η = 1/eta inside).
-                        let v = t.get(0) as f64 * if s.wi.z < 0.0 { 1.0 / (eta * eta) } else { 1.0 };
-                        sum += v;
-                        sum2 += v * v;
+            for &cos_o in &[1e-4f32, 0.003, 0.01, 0.05, 0.1, 0.2, 0.4] {
+                for back in [true, false] {
+                    let bsdf = make_bsdf(2, roughness, eta, 0, &g);
+                    let mut ctx = ShadingContext::new(&g);
+                    ctx.mode = TransportMode::Radiance;
+                    ctx.front_face = !back;
+                    let wo = Vec3A::new((1.0 - cos_o * cos_o).sqrt(), 0.0, cos_o);
+                    let mut rng = Rng::new(3, (cos_o * 1e6) as u64 + ri);
+                    let (m, mut sum, mut sum2) = (20_000, 0.0f64, 0.0f64);
+                    // Radiance transport: undo the refraction's 1/η² (η the relative index crossed).
+                    let crossed = if back { 1.0 / eta } else { eta };
+                    for _ in 0..m {
+                        let mut t = SampledSpectrum::splat(g.len(), 1.0);
+                        let (u, uc) = (rng.uniform2(), rng.uniform());
+                        if let Some(s) = bsdf.sample(&ctx, wo, u, uc, &mut t) {
+                            let v = t.get(0) as f64 * if s.wi.z < 0.0 { crossed * crossed } else { 1.0 };
+                            sum += v;
+                            sum2 += v * v;
+                        }
+                    }
+                    let mean = sum / m as f64;
+                    let se = ((sum2 / m as f64 - mean * mean).max(0.0) / m as f64).sqrt();
+                    let label = format!("η {eta} inside {back} r {roughness} cos {cos_o}: albedo {mean:.4} (se {se:.4})");
+                    assert!(mean <= 1.0 + 5.0 * se + 0.005, "{label}");
+                    if mean - 1.0 > worst.0 {
+                        worst = (mean - 1.0, label.clone());
+                    }
+                    if cos_o >= 0.05 && mean < lowest.0 {
+                        lowest = (mean, label);
                     }
                 }
-                let mean = sum / m as f64;
-                let se = ((sum2 / m as f64 - mean * mean).max(0.0) / m as f64).sqrt();
-                assert!(mean <= 1.0 + 5.0 * se + 0.005, "η {eta} r {roughness} cos {cos_o}: albedo {mean} (se {se})");
             }
         }
     }
+    eprintln!("largest excess {worst:?}; lowest albedo at cos ≥ 0.05 {lowest:?}");
+    // Most of the compensation remains where the view is not grazing (single scattering
+    // alone is as low as 0.45 here; the lowest, 0.94, is at η 1.001 from inside, r 0.15).
+    assert!(lowest.0 > 0.9, "{lowest:?}");
 }

@@ -68,13 +68,37 @@ pub fn ggx_e_avg(roughness: f32) -> f32 {
     lookup_1d(&t::GGX_E_AVG, roughness)
 }
 
+/// The glass E tables' axes: [`GLASS_NZ`] index slabs of [`GLASS_NMU`] rows of
+/// [`GLASS_NR`] roughness, the rows at √μ = j/(n − 1) (tools/gen_energy_tables.py).
+pub const GLASS_NR: usize = 16;
+pub const GLASS_NMU: usize = 32;
+pub const GLASS_NZ: usize = 32;
+
+/// Trilinear lookup of a glass E table at (roughness, √μ, z).
+#[inline]
+fn lookup_glass(table: &[f32], roughness: f32, mu: f32, z: f32) -> f32 {
+    let y = if mu.is_finite() { mu.clamp(0.0, 1.0).sqrt() } else { 0.0 };
+    let slab = GLASS_NR * GLASS_NMU;
+    let (z0, z1, tz) = cell(z, GLASS_NZ);
+    let a = lookup_2d(&table[z0 * slab..(z0 + 1) * slab], GLASS_NR, GLASS_NMU, roughness, y);
+    let b = lookup_2d(&table[z1 * slab..(z1 + 1) * slab], GLASS_NR, GLASS_NMU, roughness, y);
+    a * (1.0 - tz) + b * tz
+}
+
 /// E(μ) of a rough dielectric interface (reflection + refraction, energy) seen from the
 /// side of relative index `eta` (far side over near side; below 1 from inside).
+///
+/// Unlike Cycles' 16³ `ggx_glass_E`, the tables have 32 index slabs and 32 rows in √μ,
+/// and never read below the lobe's true albedo by more than 0.2 % at the generator's
+/// check points (it raises the nodes where they would): near grazing view and η ≈ 1 the
+/// albedo changes within a fraction of one of Cycles' cells, and a lookup below it makes
+/// the compensated lobe gain energy (η 1.01 from inside, roughness 0.95, μ 0.01: Cycles'
+/// axes read E 0.099 where the lobe's is 0.254, albedo 2.58).
 pub fn glass_e(roughness: f32, mu: f32, eta: f32) -> f32 {
     if eta < 1.0 {
-        lookup_3d(&t::GLASS_INV_E, 16, roughness, mu, ior_coordinate(1.0 / eta))
+        lookup_glass(&t::GLASS_INV_E, roughness, mu, ior_coordinate(1.0 / eta))
     } else {
-        lookup_3d(&t::GLASS_E, 16, roughness, mu, ior_coordinate(eta))
+        lookup_glass(&t::GLASS_E, roughness, mu, ior_coordinate(eta))
     }
 }
 
