@@ -424,7 +424,8 @@ fn rough_glass_near_index_one_keeps_energy() {
                     }
                     let mean = sum / m as f64;
                     let se = ((sum2 / m as f64 - mean * mean).max(0.0) / m as f64).sqrt();
-                    let label = format!("η {eta} inside {back} r {roughness} cos {cos_o}: albedo {mean:.4} (se {se:.4})");
+                    let label =
+                        format!("η {eta} inside {back} r {roughness} cos {cos_o}: albedo {mean:.4} (se {se:.4})");
                     assert!(mean <= 1.0 + 5.0 * se + 0.005, "{label}");
                     if mean - 1.0 > worst.0 {
                         worst = (mean - 1.0, label.clone());
