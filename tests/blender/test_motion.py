@@ -119,9 +119,8 @@ def test_motion_blur_matches_cycles(tmp_path):
     for name, v in r.items():
         assert v["err"] is None and v["warn"] == [], (name, v)
         assert v["blocks"] >= 12, (name, v)
-        # The rolling shutter is close but not yet within 1.5 (measured 1.8 against 9.9 for
-        # no rolling shutter; docs/camera.md): bounded here so a regression shows.
-        assert v["de"] <= (2.5 if name == "rolling shutter" else 1.5), (name, v)
+        # The rolling shutter included (0.73 against 10.2 for none; docs/camera.md).
+        assert v["de"] <= 1.5, (name, v)
 
 
 def test_render_border_matches_cycles(tmp_path):

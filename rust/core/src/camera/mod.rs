@@ -397,13 +397,18 @@ impl Camera {
         self.shutter.is_some()
     }
 
-    /// A shutter time for a ray through film row `y` (pixels from the top), or 0.5
-    /// (nothing drawn) when nothing moves. Cycles' `camera_sample`: the time from the
-    /// shutter curve's inverse CDF, then the rolling shutter's row offset.
-    pub fn sample_time(&self, y: f32, rng: &mut Rng) -> f32 {
+    /// A shutter time for a ray of the pixel in full-frame row `row` (0 at the top), or
+    /// 0.5 (nothing drawn) when nothing moves. Cycles' `camera_sample`: the time from the
+    /// shutter curve's inverse CDF, then the rolling shutter's row offset. The row's time
+    /// is the pixel's, not its jittered film position's: Cycles takes `1 − y / height`
+    /// of the integer bottom-up row y, which is (row + 1) / height counted from the top,
+    /// the same for every sample of the pixel.
+    pub fn sample_time(&self, row: u32, rng: &mut Rng) -> f32 {
         match &self.shutter {
             None => 0.5,
-            Some(s) => s.sample(rng.uniform(), y / self.height as f32),
+            Some(s) => {
+                s.sample(rng.uniform(), (row.min(self.height.saturating_sub(1)) + 1) as f32 / self.height as f32)
+            }
         }
     }
 
@@ -447,8 +452,14 @@ impl Camera {
     /// axis for perspective and orthographic cameras, along the ray for panoramas. A
     /// camera with an aperture draws one lens sample from `rng`; a pinhole draws none.
     pub fn generate_ray(&self, x: f32, y: f32, rng: &mut Rng) -> Option<Ray> {
+        self.generate_pixel_ray(x, y, y.max(0.0) as u32, rng)
+    }
+
+    /// [`Camera::generate_ray`] for a sample of the pixel in full-frame row `row` (its
+    /// rolling-shutter time is the row's, wherever in or around the pixel `y` falls).
+    pub fn generate_pixel_ray(&self, x: f32, y: f32, row: u32, rng: &mut Rng) -> Option<Ray> {
         let lens = self.aperture.map(|a| a.sample(rng.uniform2()));
-        let time = self.sample_time(y, rng);
+        let time = self.sample_time(row, rng);
         let to_world = self.to_world_at(time);
         let f = self.focus_distance;
         // Origin, direction and the direction's component along the view axis (planar
@@ -652,12 +663,14 @@ impl Shutter {
         }
     }
 
-    /// The time for uniform `u` at film height `row` (0 top … 1 bottom).
+    /// The time for uniform `u` at the row's time `row` (0 top … 1 bottom). A duration of
+    /// 0 gives the row's time exactly (Cycles' special case; the blend gives it too).
     fn sample(&self, u: f32, row: f32) -> f32 {
         let t = self.sample_curve(u);
         match self.rolling {
             None => t,
             // The row's own time plus its share of the exposure (Cycles' blend).
+            Some(0.0) => row.clamp(0.0, 1.0),
             Some(d) => (t - 0.5) * d + (row.clamp(0.0, 1.0) - 0.5) * (1.0 - d) + 0.5,
         }
     }
@@ -827,5 +840,33 @@ mod tests {
         // Outside the fisheye circle: no ray. Light tracing cannot connect to a panorama.
         assert!(cam.generate_ray(0.5, 0.5, &mut rng).is_none());
         assert!(!cam.is_perspective() && cam.connect(Vec3A::new(1.0, 2.0, 0.0), 0.5, &mut rng).is_none());
+    }
+
+    #[test]
+    fn rolling_shutter_time_is_the_pixel_rows_as_in_cycles() {
+        // Cycles: time = 1 − y / height with y the integer bottom-up pixel row, i.e.
+        // (r + 1) / height for top-down row r, whatever the sample's jitter.
+        let (w, h) = (8, 4);
+        let mut rng = Rng::new(3, 0);
+        let desc = CameraDesc { rolling_shutter: true, rolling_shutter_duration: 0.0, ..CameraDesc::default() };
+        let mut cam = Camera::new(&desc, w, h).unwrap();
+        cam.enable_motion_blur();
+        for r in 0..h {
+            for jitter in [0.0, 0.3, 0.999] {
+                let ray = cam.generate_pixel_ray(2.5, r as f32 + jitter, r, &mut rng).unwrap();
+                assert_eq!(ray.time, (r + 1) as f32 / h as f32, "row {r} jitter {jitter}");
+            }
+        }
+        // A duration d blends: (t − ½) d + ((r + 1)/H − ½)(1 − d) + ½ over the shutter
+        // sample t, so a row's times span d around its own, with their mean there.
+        let desc = CameraDesc { rolling_shutter: true, rolling_shutter_duration: 0.2, ..CameraDesc::default() };
+        let mut cam = Camera::new(&desc, w, h).unwrap();
+        cam.enable_motion_blur();
+        let times: Vec<f32> = (0..4000).map(|_| cam.sample_time(0, &mut rng)).collect();
+        let centre = (0.25 - 0.5) * 0.8 + 0.5; // row 0 of 4: (0 + 1)/4
+        let (lo, hi) = times.iter().fold((1.0f32, 0.0f32), |(a, b), t| (a.min(*t), b.max(*t)));
+        assert!(lo >= centre - 0.1 - 1e-6 && hi <= centre + 0.1 + 1e-6 && hi - lo > 0.19, "{lo} {hi}");
+        let mean = times.iter().sum::<f32>() / times.len() as f32;
+        assert!((mean - centre).abs() < 0.005, "{mean}");
     }
 }

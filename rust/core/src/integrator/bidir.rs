@@ -425,7 +425,7 @@ impl<P: WavelengthPolicy> Technique for Bidirectional<P> {
     ) {
         let wl = self.wavelengths.camera(cs.pixel, cs.pass);
         let mis = BidirectionalMis::new(self.camera.max_bounces);
-        trace_camera(scene, &self.camera, cs.film, wl, mis, rng, out, scratch);
+        trace_camera(scene, &self.camera, cs.film, cs.row, wl, mis, rng, out, scratch);
     }
     fn light_path(&self, scene: &Scene, pass: u32, rng: &mut Rng, splats: &mut Vec<Splat>, scratch: &mut Scratch) {
         let wl = self.wavelengths.light(pass, rng);

@@ -317,7 +317,7 @@ impl<P: WavelengthPolicy> Technique for LightTracing<P> {
         out: &mut crate::film::PixelSample,
         scratch: &mut Scratch,
     ) {
-        let Some(ray) = scene.camera.generate_ray(cs.film.x, cs.film.y, rng) else { return };
+        let Some(ray) = scene.camera.generate_pixel_ray(cs.film.x, cs.film.y, cs.row, rng) else { return };
         let mut ctx = ShadingContext::new(&scene.grid);
         let mut beta = super::throughput::SingleWavelength { index: 0, value: 1.0 };
         let mut hooks = AlphaPath { transparent: 0.0 };

@@ -165,6 +165,8 @@ pub struct CameraSample {
     pub film: glam::Vec2,
     /// Row-major pixel index.
     pub pixel: u64,
+    /// The pixel's full-frame row from the top (its rolling-shutter time).
+    pub row: u32,
     /// Sample pass (see [`Integrator::rounds`]).
     pub pass: u32,
 }

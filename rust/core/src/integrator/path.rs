@@ -484,6 +484,7 @@ pub fn trace_camera<W: Wavelengths, M: CameraMis>(
     scene: &Scene,
     walk: &Walk,
     film: Vec2,
+    row: u32,
     wl: W,
     mis: M,
     rng: &mut Rng,
@@ -493,7 +494,7 @@ pub fn trace_camera<W: Wavelengths, M: CameraMis>(
     let PixelSample { radiance, depth, normal, albedo, transparent } = out;
     let mut ctx = ShadingContext::new(&scene.grid);
     ctx.single_wavelength = wl.single();
-    let Some(ray) = scene.camera.generate_ray(film.x, film.y, rng) else {
+    let Some(ray) = scene.camera.generate_pixel_ray(film.x, film.y, row, rng) else {
         return; // outside the lens (fisheye, mirror ball): black
     };
     // Throughput and gathered radiance live in the worker's spare spectra: no heap
@@ -741,6 +742,6 @@ impl<P: WavelengthPolicy> Technique for PathTracing<P> {
         scratch: &mut Scratch,
     ) {
         let wl = self.wavelengths.camera(cs.pixel, cs.pass);
-        trace_camera(scene, &self.walk, cs.film, wl, PowerHeuristic, rng, out, scratch);
+        trace_camera(scene, &self.walk, cs.film, cs.row, wl, PowerHeuristic, rng, out, scratch);
     }
 }

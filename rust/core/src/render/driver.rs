@@ -428,7 +428,7 @@ impl<'a> Driver<'a> {
                     scratch.strata = Some(Strata::new(mix64(self.settings.seed ^ mix64(pixel ^ PIXEL_STRATA)), g));
                     let jitter = rng.uniform2();
                     let film = glam::Vec2::new(x as f32 + jitter.x, y as f32 + jitter.y);
-                    let cs = CameraSample { film, pixel, pass: g };
+                    let cs = CameraSample { film, pixel, row: y, pass: g };
                     self.integrator.technique.camera_sample(scene, cs, &mut rng, &mut ps, &mut scratch);
                     sums.add(&ps);
                 }
