@@ -369,6 +369,9 @@ class PointLight:
     profile: Any = None
     #: the light's axes (3 × 3, columns: its local X, Y, Z in world space; it shines down −Z): turns the profile
     orientation: Any = None
+    #: motion blur: K ≥ 2 light → world 4×4 keys evenly spaced over the shutter; the light as given is where it
+    #: is at the frame (``orientation`` its axes there) and moves rigidly with the keys (their scale is dropped)
+    motion: Any = None
 
     def to_dict(self) -> dict[str, Any]:
         pos = _finite_floats(self.position, f"light '{self.name}': position")
@@ -378,7 +381,15 @@ class PointLight:
         intensity = as_spectrum(self.color) * (float(self.power) / (4.0 * math.pi))
         d = {"type": "point", "name": self.name, "position": pos, "intensity": intensity.to_dict()}
         _with_profile(d, self.profile, self.orientation)
+        _with_light_motion(d, self.motion, self.name)
         return _with_light_visibility(_with_radius(d, self.radius, self.name), self.visibility, self.name)
+
+
+def _with_light_motion(d: dict[str, Any], motion: Any, name: str) -> dict[str, Any]:
+    """``d`` with the light's motion keys (none: it stands still)."""
+    if motion is not None and np.size(motion) > 0:
+        d["motion"] = _motion_matrices(motion, f"light '{name}'")
+    return d
 
 
 def _with_profile(d: dict[str, Any], profile: Any, orientation: Any) -> dict[str, Any]:
@@ -511,6 +522,8 @@ class SpotLight:
     profile: Any = None
     #: the light's axes (3 × 3, columns: local X, Y, Z in world space): turns the profile
     orientation: Any = None
+    #: motion blur: light → world 4×4 keys over the shutter, as :class:`PointLight`'s
+    motion: Any = None
 
     def to_dict(self) -> dict[str, Any]:
         pos = _finite_floats(self.position, f"light '{self.name}': position")
@@ -529,6 +542,7 @@ class SpotLight:
             "spot_blend": float(self.spot_blend),
         }
         _with_profile(out, self.profile, self.orientation)
+        _with_light_motion(out, self.motion, self.name)
         return _with_light_visibility(_with_radius(out, self.radius, self.name), self.visibility, self.name)
 
 

@@ -122,7 +122,7 @@ class Exporter:
         if self._motion is not None and camera is None:
             self._camera_motion(depsgraph, scene.camera)
         self._export_meshes(depsgraph, scene, warnings)
-        export_lights(depsgraph, scene, warnings)
+        export_lights(depsgraph, scene, warnings, self._motion)
         export_world(depsgraph, scene, warnings, self.textures)
         # Film > Transparent: the background leaves Combined's alpha 0 (holdouts always do).
         scene.film_transparent = bool(depsgraph.scene.render.film_transparent)

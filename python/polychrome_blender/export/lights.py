@@ -200,7 +200,7 @@ def _power(ld, name):
     return p
 
 
-def export_area(scene, ld, name, matrix, warnings, visibility=None):
+def export_area(scene, ld, name, matrix, warnings, visibility=None, motion=None):
     power = _power(ld, name)
     pts, tris, area, exact, size = _area_polygon(ld)
     # Cycles scales the size by the lengths of the object's X and Y axes (scene/light.cpp).
@@ -220,7 +220,7 @@ def export_area(scene, ld, name, matrix, warnings, visibility=None):
     verts = np.concatenate([pts, np.zeros((len(pts), 1))], axis=1).astype(np.float32)
     # Wound clockwise seen from +Z: the front (emitting) face looks along local −Z.
     m = scene.add_mesh(f"{name}", verts, tris[:, ::-1].copy(), material=emitter, place=False)
-    scene.add_instance(m, matrix, name, visibility=visibility)
+    scene.add_instance(m, matrix, name, visibility=visibility, motion=motion)
 
 
 def _axis(m, name):
@@ -265,8 +265,9 @@ def _sun_strength(ld, name):
     return s * math.pi * math.sin(half) ** 2
 
 
-def export_lights(depsgraph, scene, warnings):
-    """Adds every visible light to ``scene``; returns how many."""
+def export_lights(depsgraph, scene, warnings, motion=None):
+    """Adds every visible light to ``scene``; returns how many. ``motion`` (export/motion.py's
+    Motion, with motion blur on): point, spot and area lights move over the shutter."""
     count = 0
     for inst in depsgraph.object_instances:
         ob = inst.object
@@ -278,6 +279,7 @@ def export_lights(depsgraph, scene, warnings):
         if not np.all(np.isfinite(m)):
             raise ValueError(f"light '{name}': its transform is not finite")
         pos = m[:3, 3]
+        keys = None if motion is None else motion.instance_motion(inst)
         if ld.type in ("POINT", "SPOT"):
             colour, node_strength, profile = light_nodes(ld, name, warnings)
         elif getattr(ld, "use_nodes", False):
@@ -298,10 +300,11 @@ def export_lights(depsgraph, scene, warnings):
                     visibility=point_light_visibility(ob, name, warnings),
                     profile=profile,
                     orientation=_orientation(m),
+                    motion=keys,
                 )
             )
         elif ld.type == "AREA":
-            export_area(scene, ld, name, m, warnings, light_visibility(ob, name, warnings))
+            export_area(scene, ld, name, m, warnings, light_visibility(ob, name, warnings), keys)
         elif ld.type == "SPOT":
             spec = _with_node_colour(light_colour(ld, name, warnings), colour, ld, name, warnings)
             scene.add_light(
@@ -317,9 +320,15 @@ def export_lights(depsgraph, scene, warnings):
                     name=name,
                     radius=_radius(ld, name, warnings),
                     visibility=point_light_visibility(ob, name, warnings),
+                    motion=keys,
                 )
             )
         elif ld.type == "SUN":
+            if keys is not None:
+                warnings.add(
+                    ("moving sun", name),
+                    f"light '{name}': a sun does not move over the shutter; rendered at the current frame",
+                )
             spec = light_colour(ld, name, warnings)
             angle = min(max(float(ld.angle), 0.0), math.pi)
             scene.add_light(

@@ -276,6 +276,7 @@ fn spot_light_on_a_plane_is_inverse_square_inside_and_black_outside() {
         radius: 0.0,
         visibility: Default::default(),
         profile: None,
+        motion: Vec::new(),
     });
     desc.camera = ortho_down(4.0);
     let (w, hh) = (41u32, 41u32);

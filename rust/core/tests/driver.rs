@@ -61,6 +61,7 @@ fn scene_desc() -> (SceneDesc, Vec<Buffer>) {
         radius: 0.0,
         visibility: Default::default(),
         profile: None,
+        motion: Vec::new(),
     });
     desc.camera.to_world = [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, -1.0, -0.95], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
     desc.camera.focal_length = 18.0;

@@ -198,6 +198,7 @@ fn a_diffuse_plane_under_a_sphere_light_has_the_irradiance() {
             radius: r,
             visibility: Default::default(),
             profile: None,
+            motion: Vec::new(),
         });
         let (w, scale) = (8u32, 1.0f32);
         desc.camera = ortho_down(scale);

@@ -31,6 +31,7 @@ fn plane_under(profile: ProfileDesc, position: [f32; 3]) -> Vec<f32> {
         radius: 0.0,
         visibility: Default::default(),
         profile: Some(profile),
+        motion: Vec::new(),
     });
     desc.camera = ortho_down(4.0);
     let settings = ResolvedSettings { width: 21, height: 21, samples: 16, max_bounces: 1, ..Default::default() };
@@ -90,6 +91,7 @@ fn a_bad_profile_is_an_error_naming_the_light() {
         radius: 0.0,
         visibility: Default::default(),
         profile: Some(bad),
+        motion: Vec::new(),
     });
     let e =
         render(&desc, &[] as &[polychrome_core::scene::Buffer], &ResolvedSettings::default(), &RenderControl::new())

@@ -263,6 +263,7 @@ fn every_method_and_direction_agrees_under_a_sphere_light_over_glass() {
         radius: 0.2,
         visibility: Default::default(),
         profile: None,
+        motion: Vec::new(),
     });
     desc.materials.push(MaterialDesc {
         name: "glass".into(),

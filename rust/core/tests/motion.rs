@@ -207,6 +207,7 @@ fn light_tracing_through_a_moving_camera_agrees_with_camera_paths() {
         radius: 0.0,
         visibility: Default::default(),
         profile: None,
+        motion: Vec::new(),
     });
     desc.camera.focal_length = 35.0;
     desc.camera.motion = vec![translation(1.0, 0.0), translation(-1.0, 0.0)];

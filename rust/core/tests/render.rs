@@ -65,6 +65,7 @@ fn point_light_on_diffuse_plane_matches_inverse_square_cosine_law() {
         radius: 0.0,
         visibility: Default::default(),
         profile: None,
+        motion: Vec::new(),
     });
     // Orthographic camera 5 units above looking down −Z, 4 units wide.
     desc.camera = ortho_down(4.0);

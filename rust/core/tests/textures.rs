@@ -291,6 +291,7 @@ fn constant_colour_and_one_texel_texture_render_identically() {
             radius: 0.0,
             visibility: Default::default(),
             profile: None,
+            motion: Vec::new(),
         });
         (desc, buffers)
     };
@@ -367,6 +368,7 @@ fn texture_errors_name_the_texture_or_material() {
         radius: 0.0,
         visibility: Default::default(),
         profile: None,
+        motion: Vec::new(),
     });
     let err =
         render(&desc, &[] as &[Buffer], &ResolvedSettings::default(), &RenderControl::new()).err().unwrap().to_string();

@@ -219,10 +219,16 @@ impl CameraMis for BidirectionalMis {
         let light = LightEnd {
             p: v.si.p,
             pmf: scene.light_distribution.pmf(l),
-            le: scene.lights[l].pdf_le_part(v.si.triangle, v.si.p, v.wo),
+            le: scene.lights[l].pdf_le_part_at(v.si.triangle, v.si.p, v.wo, v.si.time),
             delta: false,
             infinite: false,
-            pdf_li: scene.lights[l].pdf_li_part(v.si.triangle, st.prev_p, st.ray.direction, st.traveled + v.si.t),
+            pdf_li: scene.lights[l].pdf_li_part_at(
+                v.si.triangle,
+                st.prev_p,
+                st.ray.direction,
+                st.traveled + v.si.t,
+                st.ray.time,
+            ),
             cos: v.si.ng.dot(v.wo).abs(),
         };
         weights(&self.cam, &self.verts, &light, self.legacy)[0] as f32
@@ -256,7 +262,7 @@ impl CameraMis for BidirectionalMis {
             le: None,
             delta: false,
             infinite,
-            pdf_li: scene.lights[light].pdf_li(st.prev_p, st.ray.direction, distance),
+            pdf_li: scene.lights[light].pdf_li_at(st.prev_p, st.ray.direction, distance, st.ray.time),
             cos: 1.0,
         };
         weights(&self.cam, &self.verts, &end, self.legacy)[0] as f32
@@ -271,7 +277,7 @@ impl CameraMis for BidirectionalMis {
         let DirectSample { light, pmf, ls, wi_local, bsdf_pdf } = *d;
         let infinite = ls.distance.is_infinite();
         let lp = if infinite { v.si.p + ls.wi } else { v.si.p + ls.wi * ls.distance };
-        let dens = scene.lights[light].pdf_le_part(ls.part, lp, -ls.wi);
+        let dens = scene.lights[light].pdf_le_part_at(ls.part, lp, -ls.wi, v.si.time);
         let pdf_light = reverse_pdf(ctx, v, wi_local, v.wo_local, TransportMode::Importance);
         self.verts.push(Vtx { p: v.si.p, n: v.si.ng, specular: false, pdf_cam: bsdf_pdf, pdf_light });
         let end = LightEnd {
@@ -329,6 +335,8 @@ struct MisLightPath<'a> {
     part: u32,
     /// `sample_le` densities of the path's first ray.
     dens: Option<LeDensity>,
+    /// The light path's shutter time (where a moving light was).
+    time: f32,
     /// Light-path vertices so far (light order).
     path: Vec<Vtx>,
     /// Scratch: a connection's vertices in camera order.
@@ -371,7 +379,7 @@ impl<T: Throughput> PathHooks<T> for MisLightPath<'_> {
             pdf_li: if self.delta_position {
                 1.0
             } else {
-                self.light.pdf_li_part(self.part, first, to_light / dist, dist)
+                self.light.pdf_li_part_at(self.part, first, to_light / dist, dist, self.time)
             },
             cos: self.dens.map_or(1.0, |d| d.cos),
         };
@@ -437,7 +445,7 @@ impl<P: WavelengthPolicy> Technique for Bidirectional<P> {
             let end = LightEnd {
                 p: es.origin,
                 pmf,
-                le: light.pdf_le_part(es.part, es.origin, c.wi),
+                le: light.pdf_le_part_at(es.part, es.origin, c.wi, start.state.ray.time),
                 delta: false,
                 infinite: false,
                 pdf_li: 0.0,
@@ -457,7 +465,8 @@ impl<P: WavelengthPolicy> Technique for Bidirectional<P> {
             origin: es.origin,
             delta_position: es.delta_position,
             part: es.part,
-            dens: light.pdf_le_part(es.part, es.origin, es.direction),
+            dens: light.pdf_le_part_at(es.part, es.origin, es.direction, start.state.ray.time),
+            time: start.state.ray.time,
             path: Vec::with_capacity(capacity),
             cam_verts: Vec::with_capacity(capacity),
             legacy: false,

@@ -113,7 +113,10 @@ pub fn start_light_path<W: Wavelengths>(scene: &Scene, wl: &W, rng: &mut Rng) ->
     let pmf = scene.light_distribution.pmf(light);
     let (u_pos, u_dir) = (rng.uniform2(), rng.uniform2());
     let mut le = SampledSpectrum::zeros(scene.grid.len());
-    let es = scene.lights[light].sample_le(u_pos, u_dir, &mut le)?;
+    // One shutter time for the whole light path (motion blur; none drawn when nothing
+    // moves); a moving light starts it where it is then.
+    let time = scene.camera.sample_light_path_time(rng);
+    let es = scene.lights[light].sample_le_at(time, u_pos, u_dir, &mut le)?;
     if !(pmf > 0.0 && es.pdf_pos > 0.0 && es.pdf_dir > 0.0) {
         return None;
     }
@@ -125,8 +128,6 @@ pub fn start_light_path<W: Wavelengths>(scene: &Scene, wl: &W, rng: &mut Rng) ->
         Some(nl) => offset_ray_origin(es.origin, if nl.dot(es.direction) > 0.0 { nl } else { -nl }),
         None => es.origin,
     };
-    // One shutter time for the whole light path (motion blur; none drawn when nothing moves).
-    let time = scene.camera.sample_light_path_time(rng);
     Some(LightStart {
         light,
         pmf,
@@ -154,7 +155,7 @@ pub fn light_seen_by_camera(
     let c = scene.camera.connect(es.origin, time, rng);
     let (nl, c) = (es.normal?, c?);
     // A one-sided emitter is dark behind: it starts no ray towards the camera there.
-    scene.lights[light].pdf_le(es.origin, c.wi)?;
+    scene.lights[light].pdf_le_at(es.origin, c.wi, time)?;
     let cos = nl.dot(c.wi).abs();
     let origin = offset_ray_origin(es.origin, if nl.dot(c.wi) > 0.0 { nl } else { -nl });
     // Aimed from the offset origin at the camera: along c.wi from the unshifted point it

@@ -71,7 +71,13 @@ impl CameraMis for PowerHeuristic {
         match scene.triangle_light(v.si.instance, v.si.triangle) {
             Some(l) => {
                 let pl = scene.nee_distribution.pmf(l)
-                    * scene.lights[l].pdf_li_part(v.si.triangle, st.prev_p, st.ray.direction, st.traveled + v.si.t);
+                    * scene.lights[l].pdf_li_part_at(
+                        v.si.triangle,
+                        st.prev_p,
+                        st.ray.direction,
+                        st.traveled + v.si.t,
+                        st.ray.time,
+                    );
                 power_heuristic(st.prev_pdf, pl)
             }
             None => 1.0,
@@ -88,7 +94,8 @@ impl CameraMis for PowerHeuristic {
         if st.specular {
             return 1.0;
         }
-        let pl = scene.nee_distribution.pmf(light) * scene.lights[light].pdf_li(st.prev_p, st.ray.direction, distance);
+        let pl = scene.nee_distribution.pmf(light)
+            * scene.lights[light].pdf_li_at(st.prev_p, st.ray.direction, distance, st.ray.time);
         power_heuristic(st.prev_pdf, pl)
     }
     fn nee_lights<'s>(&self, scene: &'s Scene) -> &'s Distribution1D {
@@ -222,7 +229,7 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
             if !visibility::sees(scene.light_visibility[l], st.ray.kind) {
                 continue;
             }
-            let Some(t) = scene.lights[l].hit(st.ray.origin, st.ray.direction, &mut scratch.le) else {
+            let Some(t) = scene.lights[l].hit_at(st.ray.origin, st.ray.direction, st.ray.time, &mut scratch.le) else {
                 continue;
             };
             // A sphere before the next surface; a sun only when the path leaves the scene.
@@ -356,7 +363,7 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
         };
         let pmf = lights.pmf(l);
         let u = rng.uniform2();
-        let Some(ls) = scene.lights[l].sample_li(v.si.p, u, &mut scratch.le) else {
+        let Some(ls) = scene.lights[l].sample_li_at(v.si.p, v.si.time, u, &mut scratch.le) else {
             return;
         };
         if !beta.carries(&scratch.le) {
@@ -456,7 +463,7 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
         };
         let pmf = lights.pmf(l);
         let u = rng.uniform2();
-        let Some(ls) = scene.lights[l].sample_li(mv.p, u, &mut scratch.le) else {
+        let Some(ls) = scene.lights[l].sample_li_at(mv.p, mv.time, u, &mut scratch.le) else {
             return;
         };
         if !beta.carries(&scratch.le) {

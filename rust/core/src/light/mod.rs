@@ -5,6 +5,7 @@ pub mod area;
 pub mod distant;
 pub mod environment;
 pub mod mesh;
+pub mod moving;
 pub mod point;
 pub mod profile;
 pub mod spot;
@@ -16,6 +17,7 @@ pub use area::AreaTriangle;
 pub use distant::DistantLight;
 pub use environment::{ImageEnvironment, UniformEnvironment};
 pub use mesh::{MeshLight, SurfaceEmission};
+pub use moving::MovingLight;
 pub use point::PointLight;
 pub use profile::Profile;
 pub use spot::SpotLight;
@@ -116,6 +118,30 @@ pub trait Light: Send + Sync {
     /// shape blocks nothing: the ray goes on to the surface behind it.
     fn hit(&self, _p: Vec3A, _wi: Vec3A, _le: &mut SampledSpectrum) -> Option<f32> {
         None
+    }
+
+    // The same at shutter time `time` (motion blur): where a [`MovingLight`] is then.
+    // Lights that stand still answer as above; integrators call these forms.
+    fn sample_li_at(&self, p: Vec3A, _time: f32, u: Vec2, le: &mut SampledSpectrum) -> Option<LightSample> {
+        self.sample_li(p, u, le)
+    }
+    fn pdf_li_at(&self, p: Vec3A, wi: Vec3A, distance: f32, _time: f32) -> f32 {
+        self.pdf_li(p, wi, distance)
+    }
+    fn pdf_li_part_at(&self, part: u32, p: Vec3A, wi: Vec3A, distance: f32, _time: f32) -> f32 {
+        self.pdf_li_part(part, p, wi, distance)
+    }
+    fn hit_at(&self, p: Vec3A, wi: Vec3A, _time: f32, le: &mut SampledSpectrum) -> Option<f32> {
+        self.hit(p, wi, le)
+    }
+    fn sample_le_at(&self, _time: f32, u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
+        self.sample_le(u_pos, u_dir, le)
+    }
+    fn pdf_le_at(&self, origin: Vec3A, dir: Vec3A, _time: f32) -> Option<LeDensity> {
+        self.pdf_le(origin, dir)
+    }
+    fn pdf_le_part_at(&self, part: u32, origin: Vec3A, dir: Vec3A, _time: f32) -> Option<LeDensity> {
+        self.pdf_le_part(part, origin, dir)
     }
 }
 

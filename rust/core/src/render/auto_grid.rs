@@ -256,6 +256,7 @@ mod tests {
             radius: 0.0,
             visibility: Default::default(),
             profile: None,
+            motion: Vec::new(),
         }
     }
 

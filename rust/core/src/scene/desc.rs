@@ -660,6 +660,12 @@ pub enum LightDesc {
         /// Scales the intensity per direction (an IES profile).
         #[serde(default)]
         profile: Option<ProfileDesc>,
+        /// Light → world keys evenly spaced over the shutter (motion blur, as an
+        /// instance's `motion`; empty: it stands still). The light as described is where
+        /// it is at the current frame; it moves rigidly with the keys' rotation and
+        /// translation (their scale is dropped).
+        #[serde(default)]
+        motion: Vec<[[f32; 4]; 4]>,
     },
     /// Blender's spot light: radiant intensity on the axis, cone of full angle
     /// `spot_size` (radians, default 45°), edge softened over `spot_blend` (default 0.15).
@@ -685,6 +691,12 @@ pub enum LightDesc {
         /// Scales the intensity per direction (an IES profile).
         #[serde(default)]
         profile: Option<ProfileDesc>,
+        /// Light → world keys evenly spaced over the shutter (motion blur, as an
+        /// instance's `motion`; empty: it stands still). The light as described is where
+        /// it is at the current frame; it moves rigidly with the keys' rotation and
+        /// translation (their scale is dropped).
+        #[serde(default)]
+        motion: Vec<[[f32; 4]; 4]>,
     },
     /// A sun: light travelling along `direction` with spectral irradiance on a surface
     /// facing it, from a disk of directions of angular diameter `angle` (radians, 0:
@@ -746,6 +758,38 @@ impl LightDesc {
             LightDesc::Spot { name, .. } => name,
             LightDesc::Distant { name, .. } => name,
         }
+    }
+
+    /// The light's motion keys over the shutter (none for a sun).
+    pub fn motion(&self) -> &[[[f32; 4]; 4]] {
+        match self {
+            LightDesc::Point { motion, .. } | LightDesc::Spot { motion, .. } => motion,
+            LightDesc::Distant { .. } => &[],
+        }
+    }
+
+    /// The light → world transform the description stands for (at the frame): its
+    /// position, turned as its profile is (a spot without one: −Z along its direction;
+    /// its turn about that axis changes nothing then).
+    pub fn frame(&self) -> glam::Affine3A {
+        use glam::{Affine3A, Mat3A, Vec3A};
+        let (position, direction, profile) = match self {
+            LightDesc::Point { position, profile, .. } => (*position, None, profile),
+            LightDesc::Spot { position, direction, profile, .. } => (*position, Some(*direction), profile),
+            LightDesc::Distant { .. } => ([0.0; 3], None, &None),
+        };
+        // `to_local`'s rows are the light's axes in world space.
+        let rotation = match (profile, direction) {
+            (Some(p), _) => Mat3A::from_cols_array_2d(&p.to_local),
+            (None, Some(d)) => {
+                let z = -Vec3A::from(d).normalize_or(Vec3A::NEG_Z);
+                let (x, y) = z.any_orthonormal_pair();
+                let x = if x.cross(y).dot(z) < 0.0 { -x } else { x };
+                Mat3A::from_cols(x, y, z)
+            }
+            (None, None) => Mat3A::IDENTITY,
+        };
+        Affine3A { matrix3: rotation, translation: Vec3A::from(position) }
     }
 }
 

@@ -738,7 +738,11 @@ impl Scene {
 
         // Motion blur: rays get shutter times when anything moves.
         let mut camera = camera;
-        if camera.moves() || meshes.iter().any(|m| m.motion.is_some()) || instances.iter().any(|i| i.motion.is_some()) {
+        if camera.moves()
+            || meshes.iter().any(|m| m.motion.is_some())
+            || instances.iter().any(|i| i.motion.is_some())
+            || desc.lights.iter().any(|l| !l.motion().is_empty())
+        {
             camera.enable_motion_blur();
         }
 
@@ -893,6 +897,13 @@ impl Scene {
                         *angle,
                     )?);
                 }
+            }
+            // A moving point or spot light: the light as built (at the frame) carried
+            // over the shutter by its keys (light/moving.rs).
+            if !l.motion().is_empty() {
+                let inner = lights.pop().expect("the light just built");
+                let keys: Vec<glam::Affine3A> = l.motion().iter().map(affine_from_rows).collect();
+                lights.push(Box::new(crate::light::MovingLight::new(l.name(), inner, l.frame(), &keys)?));
             }
         }
         let environment = match &desc.world {
