@@ -224,7 +224,15 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
     /// A sun's disk or a sphere light on the segment, when the ray's kind sees it
     /// (camera rays only with the light's camera visibility), attenuated by the media
     /// the segment crosses up to it.
-    fn segment_lights(&mut self, scene: &Scene, st: &PathState, end: f32, beta: &T, scratch: &mut Scratch) {
+    fn segment_lights(
+        &mut self,
+        scene: &Scene,
+        st: &PathState,
+        end: f32,
+        beta: &T,
+        rng: &mut Rng,
+        scratch: &mut Scratch,
+    ) {
         for &l in &scene.hit_lights {
             if !visibility::sees(scene.light_visibility[l], st.ray.kind) {
                 continue;
@@ -238,10 +246,7 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
                 continue;
             }
             if !st.media.is_empty() && scene.coefficients(&st.media, &mut scratch.shadow) {
-                for i in 0..scratch.le.len() {
-                    let tr = crate::medium::homogeneous::transmittance(scratch.shadow.sigma_t.get(i), t);
-                    scratch.le.set(i, scratch.le.get(i) * tr);
-                }
+                scene.segment_transmittance(&st.ray, &scratch.shadow, t, &mut scratch.le, rng);
             }
             let w = self.mis.reached_light(scene, st, l, st.traveled + t);
             self.gathered.add_emitted(beta, &scratch.le, w);
@@ -395,7 +400,7 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
             if side.dot(v.ng) < 0.0 && scene.material_medium[v.si.material as usize].is_some() {
                 media.cross(v.si.instance, v.si.material, ctx.front_face);
             }
-            if !scene.shadow_transmittance(&ray, media, &mut scratch.shadow, &mut scratch.tr) {
+            if !scene.shadow_transmittance(&ray, media, &mut scratch.shadow, &mut scratch.tr, rng) {
                 return;
             }
             scratch.f.mul_assign(&scratch.tr);
@@ -475,7 +480,7 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
             return;
         }
         let ray = shadow_ray(mv.p, mv.p, ls.wi, ls.distance, mv.time);
-        if !scene.shadow_transmittance(&ray, st.media, &mut scratch.shadow, &mut scratch.tr) {
+        if !scene.shadow_transmittance(&ray, st.media, &mut scratch.shadow, &mut scratch.tr, rng) {
             return;
         }
         scratch.f.mul_assign(&scratch.tr);

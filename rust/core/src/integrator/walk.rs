@@ -192,8 +192,18 @@ pub trait PathHooks<T: Throughput> {
     /// The segment `st.ray` travels, up to distance `end` (the next surface; infinite
     /// when it leaves the scene), may reach lights that are no geometry
     /// ([`Scene::hit_lights`]: sphere lights on the way, a sun's disk when it escapes).
-    /// Called once per segment, before its free flight in media. Draws no random numbers.
-    fn segment_lights(&mut self, _scene: &Scene, _st: &PathState, _end: f32, _beta: &T, _scratch: &mut Scratch) {}
+    /// Called once per segment, before its free flight in media. Draws random numbers
+    /// only in grid media (their ratio-tracking transmittance).
+    fn segment_lights(
+        &mut self,
+        _scene: &Scene,
+        _st: &PathState,
+        _end: f32,
+        _beta: &T,
+        _rng: &mut Rng,
+        _scratch: &mut Scratch,
+    ) {
+    }
     /// The segment `st.ray` travels emits `e` (per grid lane, already integrated over
     /// the segment's transmittance) towards its start.
     fn medium_emission(&mut self, _scene: &Scene, _st: &PathState, _beta: &T, _e: &SampledSpectrum) {}
@@ -333,7 +343,9 @@ impl Walk {
                     let hit = scene.intersect(&st.ray);
                     let d = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
                     let in_medium = media && !st.media.is_empty() && scene.coefficients(&st.media, &mut scratch.medium);
-                    if in_medium && ctx.single_wavelength.is_none() {
+                    // Grid media: spectral tracking over every carried lane, never a collapse.
+                    let grids = in_medium && scratch.medium.grid_count > 0;
+                    if in_medium && !grids && ctx.single_wavelength.is_none() {
                         let c = &scratch.medium;
                         if let Some(index) = volume::collapse(c, beta, self.medium_sampling, scene.grid.weights(), rng)
                         {
@@ -344,18 +356,28 @@ impl Walk {
                     if !scene.hit_lights.is_empty() {
                         // Before the flight changes beta: what the segment reaches of them is
                         // weighted by the media's transmittance up to them.
-                        hooks.segment_lights(scene, &st, d, beta, scratch);
+                        hooks.segment_lights(scene, &st, d, beta, rng, scratch);
                     }
                     if in_medium {
                         if scratch.medium.emits {
                             volume::segment_emission(&scratch.medium, d, &mut scratch.em);
                             hooks.medium_emission(scene, &st, beta, &scratch.em);
                         }
-                        match volume::fly(&scratch.medium, d, beta, rng) {
+                        let flight = if grids {
+                            scene.fly_grids(&st.ray, &scratch.medium, d, beta, rng, &mut scratch.tr)
+                        } else {
+                            volume::fly(&scratch.medium, d, beta, rng)
+                        };
+                        match flight {
                             Flight::Absorbed => return End::Done,
                             Flight::Through => {}
                             Flight::Scattered { t } => {
                                 let p = st.ray.at(t);
+                                if grids {
+                                    // The coefficients there: the phase functions and the
+                                    // connection see the grids' density at p.
+                                    scene.coefficients_at(&st.media, p, st.ray.time, &mut scratch.medium);
+                                }
                                 let mv = MediumVertex { p, wo: -st.ray.direction, time: st.ray.time };
                                 if st.depth >= self.max_bounces {
                                     return End::Done;

@@ -211,8 +211,7 @@ impl GridMedium {
 
     /// Ratio tracking: an unbiased estimate of the transmittance per grid lane along
     /// `o + t·dir` (object space) for 0 ≤ t < `d`, multiplied into `tr`, with the
-    /// constant media `base` on the same segment (their σt only). Lanes whose `tr` is 0
-    /// are ignored in the majorant.
+    /// constant media `base` on the same segment (their σt only). See [`transmittance`].
     pub fn transmittance(
         &self,
         o: Vec3A,
@@ -222,59 +221,10 @@ impl GridMedium {
         tr: &mut SampledSpectrum,
         rng: &mut Rng,
     ) {
-        if d.is_infinite() {
-            // A constant medium that never ends transmits nothing.
-            for i in 0..tr.len() {
-                if base.is_some_and(|b| b.get(i) > 0.0) {
-                    tr.set(i, 0.0);
-                }
-            }
-        }
-        let lanes = || (0..tr.len()).filter(|&i| tr.get(i) != 0.0);
-        let grid_max = lanes().map(|i| self.sigma_t.get(i)).fold(0.0, f32::max);
-        let base_max = base.map_or(0.0, |b| lanes().map(|i| b.get(i)).fold(0.0, f32::max));
-        let mut steps = 0;
-        for (t0, t1, dmax) in self.segments(o, dir, d) {
-            let mu = base_max + dmax * grid_max;
-            if !(mu > 0.0) {
-                continue;
-            }
-            let mut t = t0;
-            loop {
-                t += -(1.0 - rng.uniform()).ln() / mu;
-                if !(t < t1) {
-                    break;
-                }
-                steps += 1;
-                if steps > MAX_STEPS {
-                    return;
-                }
-                let rho = self.density(o + dir * t);
-                let mut alive = false;
-                for i in 0..tr.len() {
-                    let v = tr.get(i);
-                    if v == 0.0 {
-                        continue;
-                    }
-                    let st = base.map_or(0.0, |b| b.get(i)) + rho * self.sigma_t.get(i);
-                    let v = v * ((mu - st) / mu).max(0.0);
-                    alive |= v != 0.0;
-                    tr.set(i, v);
-                }
-                if !alive {
-                    return;
-                }
-            }
-        }
+        transmittance(&[Placed { grid: self, o, dir }], d, base, tr, rng)
     }
 
-    /// A free flight by delta tracking over 0 ≤ t < `d` along `o + t·dir` (object space;
-    /// t also measures the caller's ray), with the constant media `base` on the same
-    /// segment, multiplying `beta` by its weight (see the module's notes): Scattered at
-    /// the first real collision (weight σs over the lanes' average real-collision
-    /// probability), Through past `d`. A grid that scatters at no wavelength (nor the
-    /// base) gets the ratio-tracking transmittance per lane instead, as a homogeneous
-    /// absorbing medium gets Beer–Lambert: the path stays polychromatic.
+    /// A free flight by delta tracking through this grid alone (and `base`); see [`fly`].
     #[allow(clippy::too_many_arguments)]
     pub fn fly<T: Throughput>(
         &self,
@@ -286,98 +236,216 @@ impl GridMedium {
         rng: &mut Rng,
         scratch: &mut SampledSpectrum,
     ) -> Flight {
-        let n = beta.lanes();
-        let base_scatters = base.is_some_and(|b| !b.sigma_s.is_black());
-        if !(self.scatters() || base_scatters) {
-            scratch.fill(0.0);
-            for j in 0..n {
-                if beta.lane(j) != 0.0 {
-                    scratch.set(beta.lane_index(j), 1.0);
-                }
+        fly(&[Placed { grid: self, o, dir }], d, base, beta, rng, scratch)
+    }
+}
+
+/// A grid on a ray: `o + t·dir` is the ray's point at t in the grid's object space.
+#[derive(Clone, Copy, Debug)]
+pub struct Placed<'a> {
+    pub grid: &'a GridMedium,
+    pub o: Vec3A,
+    pub dir: Vec3A,
+}
+
+impl Placed<'_> {
+    fn density(&self, t: f32) -> f32 {
+        self.grid.density(self.o + self.dir * t)
+    }
+}
+
+/// Media on a stack at once: at most the stack's size.
+const MAX_GRIDS: usize = super::homogeneous::STACK_SIZE;
+
+/// The majorant of `grids` (not empty) with `base` over the lanes `carried`: the first
+/// grid's segments give its part per segment, the others add their largest density
+/// (overlapping grids are rare; their bound stays correct, only looser).
+fn others_majorant(grids: &[Placed], sigma_max: impl Fn(&GridMedium) -> f32) -> f32 {
+    grids[1..].iter().map(|g| g.grid.max_density * sigma_max(g.grid)).sum()
+}
+
+/// Ratio tracking (Novák et al. 2014) through `grids` (not empty) and the constant σt
+/// `base`, for 0 ≤ t < `d`: multiplies `tr` per grid lane by the product of
+/// σn(λ)/σ_maj over tentative collisions, an unbiased estimate of exp(−∫σt(λ)). Lanes
+/// whose `tr` is 0 are left out of the majorant.
+pub fn transmittance(
+    grids: &[Placed],
+    d: f32,
+    base: Option<&SampledSpectrum>,
+    tr: &mut SampledSpectrum,
+    rng: &mut Rng,
+) {
+    if grids.is_empty() || grids.len() > MAX_GRIDS {
+        return;
+    }
+    if d.is_infinite() {
+        // A constant medium that never ends transmits nothing.
+        for i in 0..tr.len() {
+            if base.is_some_and(|b| b.get(i) > 0.0) {
+                tr.set(i, 0.0);
             }
-            self.transmittance(o, dir, d, base.map(|b| b.sigma_t), scratch, rng);
+        }
+    }
+    let carried = |s: &SampledSpectrum, tr: &SampledSpectrum| {
+        (0..tr.len()).filter(|&i| tr.get(i) != 0.0).map(|i| s.get(i)).fold(0.0, f32::max)
+    };
+    let first_max = carried(&grids[0].grid.sigma_t, tr);
+    let others = others_majorant(grids, |g| carried(&g.sigma_t, tr));
+    let base_max = base.map_or(0.0, |b| carried(b, tr));
+    let mut rho = [0.0f32; MAX_GRIDS];
+    let mut steps = 0;
+    for (t0, t1, dmax) in grids[0].grid.segments(grids[0].o, grids[0].dir, d) {
+        let mu = base_max + others + dmax * first_max;
+        if !(mu > 0.0) {
+            continue;
+        }
+        let mut t = t0;
+        loop {
+            t += -(1.0 - rng.uniform()).ln() / mu;
+            if !(t < t1) {
+                break;
+            }
+            steps += 1;
+            if steps > MAX_STEPS {
+                return;
+            }
+            for (r, g) in rho.iter_mut().zip(grids) {
+                *r = g.density(t);
+            }
             let mut alive = false;
-            for j in 0..n {
-                let v = beta.lane(j) * scratch.get(beta.lane_index(j));
+            for i in 0..tr.len() {
+                let v = tr.get(i);
+                if v == 0.0 {
+                    continue;
+                }
+                let st = base.map_or(0.0, |b| b.get(i))
+                    + grids.iter().zip(&rho).map(|(g, r)| r * g.grid.sigma_t.get(i)).sum::<f32>();
+                let v = v * ((mu - st) / mu).max(0.0);
                 alive |= v != 0.0;
-                beta.set_lane(j, v);
+                tr.set(i, v);
             }
-            return if alive { Flight::Through } else { Flight::Absorbed };
+            if !alive {
+                return;
+            }
         }
-        let total: f32 = (0..n).map(|j| beta.lane(j).abs()).sum();
-        if !(total > 0.0 && total.is_finite()) {
-            return Flight::Absorbed;
+    }
+}
+
+/// A free flight by delta tracking over 0 ≤ t < `d` through `grids` (not empty) and the
+/// constant media `base` on the same segment, multiplying `beta` by its weight (see the
+/// module's notes): Scattered at the first real collision (weight σs over the lanes'
+/// average real-collision probability), Through past `d`. Media that scatter at no
+/// wavelength get the ratio-tracking transmittance per lane instead, as a homogeneous
+/// absorbing medium gets Beer–Lambert: the path stays polychromatic. `scratch`: a
+/// grid-wide spectrum.
+pub fn fly<T: Throughput>(
+    grids: &[Placed],
+    d: f32,
+    base: Option<Base>,
+    beta: &mut T,
+    rng: &mut Rng,
+    scratch: &mut SampledSpectrum,
+) -> Flight {
+    if grids.is_empty() || grids.len() > MAX_GRIDS {
+        return Flight::Absorbed;
+    }
+    let n = beta.lanes();
+    let base_scatters = base.is_some_and(|b| !b.sigma_s.is_black());
+    if !(grids.iter().any(|g| g.grid.scatters()) || base_scatters) {
+        scratch.fill(0.0);
+        for j in 0..n {
+            if beta.lane(j) != 0.0 {
+                scratch.set(beta.lane_index(j), 1.0);
+            }
         }
-        let carried = |s: &SampledSpectrum, b: &T| {
-            (0..n).filter(|&j| b.lane(j) != 0.0).map(|j| s.get(b.lane_index(j))).fold(0.0, f32::max)
-        };
-        let mut grid_max = carried(&self.sigma_t, beta);
-        let mut base_max = base.map_or(0.0, |b| carried(b.sigma_t, beta));
-        let bt = |i: usize| base.map_or(0.0, |b| b.sigma_t.get(i));
-        let bs = |i: usize| base.map_or(0.0, |b| b.sigma_s.get(i));
-        let mut total = total;
-        let mut steps = 0;
-        for (t0, t1, dmax) in self.segments(o, dir, d) {
-            let mut t = t0;
-            loop {
-                let mu = base_max + dmax * grid_max;
-                if !(mu > 0.0) {
-                    break;
-                }
-                t += -(1.0 - rng.uniform()).ln() / mu;
-                if !(t < t1) {
-                    break;
-                }
-                steps += 1;
-                if steps > MAX_STEPS {
-                    return Flight::Absorbed;
-                }
-                let rho = self.density(o + dir * t);
-                // Lane j: real with σt_j/μ, null with σn_j/μ = 1 − σt_j/μ; the event is
-                // chosen with the throughput-weighted averages of those.
-                let mut p_real = 0.0f32;
+        transmittance(grids, d, base.map(|b| b.sigma_t), scratch, rng);
+        let mut alive = false;
+        for j in 0..n {
+            let v = beta.lane(j) * scratch.get(beta.lane_index(j));
+            alive |= v != 0.0;
+            beta.set_lane(j, v);
+        }
+        return if alive { Flight::Through } else { Flight::Absorbed };
+    }
+    let mut total: f32 = (0..n).map(|j| beta.lane(j).abs()).sum();
+    if !(total > 0.0 && total.is_finite()) {
+        return Flight::Absorbed;
+    }
+    let carried = |s: &SampledSpectrum, b: &T| {
+        (0..n).filter(|&j| b.lane(j) != 0.0).map(|j| s.get(b.lane_index(j))).fold(0.0, f32::max)
+    };
+    let majorants = |b: &T| {
+        (
+            carried(&grids[0].grid.sigma_t, b),
+            others_majorant(grids, |g| carried(&g.sigma_t, b)) + base.map_or(0.0, |bs| carried(bs.sigma_t, b)),
+        )
+    };
+    let (mut first_max, mut rest_max) = majorants(beta);
+    let sigma_t = |i: usize, rho: &[f32]| {
+        base.map_or(0.0, |b| b.sigma_t.get(i))
+            + grids.iter().zip(rho).map(|(g, r)| r * g.grid.sigma_t.get(i)).sum::<f32>()
+    };
+    let sigma_s = |i: usize, rho: &[f32]| {
+        base.map_or(0.0, |b| b.sigma_s.get(i))
+            + grids.iter().zip(rho).map(|(g, r)| r * g.grid.sigma_s.get(i)).sum::<f32>()
+    };
+    let mut rho = [0.0f32; MAX_GRIDS];
+    let mut steps = 0;
+    for (t0, t1, dmax) in grids[0].grid.segments(grids[0].o, grids[0].dir, d) {
+        let mut t = t0;
+        loop {
+            let mu = rest_max + dmax * first_max;
+            if !(mu > 0.0) {
+                break;
+            }
+            t += -(1.0 - rng.uniform()).ln() / mu;
+            if !(t < t1) {
+                break;
+            }
+            steps += 1;
+            if steps > MAX_STEPS {
+                return Flight::Absorbed;
+            }
+            for (r, g) in rho.iter_mut().zip(grids) {
+                *r = g.density(t);
+            }
+            let rho = &rho[..grids.len()];
+            // Lane j: real with σt_j/μ, null with σn_j/μ = 1 − σt_j/μ; the event is
+            // chosen with the throughput-weighted averages of those.
+            let p_real: f32 =
+                (0..n).map(|j| beta.lane(j).abs() / total * (sigma_t(beta.lane_index(j), rho) / mu).min(1.0)).sum();
+            let p_null = (1.0 - p_real).max(0.0);
+            if rng.uniform() < p_real {
+                let mut alive = false;
                 for j in 0..n {
-                    let st = bt(beta.lane_index(j)) + rho * self.sigma_t.get(beta.lane_index(j));
-                    p_real += beta.lane(j).abs() / total * (st / mu).min(1.0);
-                }
-                let p_null = (1.0 - p_real).max(0.0);
-                if rng.uniform() < p_real {
-                    let mut alive = false;
-                    for j in 0..n {
-                        let i = beta.lane_index(j);
-                        let ss = bs(i) + rho * self.sigma_s.get(i);
-                        let v = beta.lane(j) * ss / mu / p_real;
-                        alive |= v != 0.0;
-                        beta.set_lane(j, v);
-                    }
-                    return if alive { Flight::Scattered { t } } else { Flight::Absorbed };
-                }
-                let mut new_total = 0.0;
-                let mut died = false;
-                for j in 0..n {
-                    let i = beta.lane_index(j);
-                    let st = bt(i) + rho * self.sigma_t.get(i);
-                    let before = beta.lane(j);
-                    let v = before * ((mu - st) / mu).max(0.0) / p_null;
-                    died |= v == 0.0 && before != 0.0;
-                    new_total += v.abs();
+                    let v = beta.lane(j) * sigma_s(beta.lane_index(j), rho) / mu / p_real;
+                    alive |= v != 0.0;
                     beta.set_lane(j, v);
                 }
-                if !(new_total > 0.0 && new_total.is_finite()) {
-                    return Flight::Absorbed;
-                }
-                // The next event's lane weights follow the new throughput (as the
-                // homogeneous flight chooses its lane ∝ throughput), and the majorant the
-                // lanes still carried.
-                total = new_total;
-                if died {
-                    grid_max = carried(&self.sigma_t, beta);
-                    base_max = base.map_or(0.0, |b| carried(b.sigma_t, beta));
-                }
+                return if alive { Flight::Scattered { t } } else { Flight::Absorbed };
+            }
+            let mut new_total = 0.0;
+            let mut died = false;
+            for j in 0..n {
+                let before = beta.lane(j);
+                let v = before * ((mu - sigma_t(beta.lane_index(j), rho)) / mu).max(0.0) / p_null;
+                died |= v == 0.0 && before != 0.0;
+                new_total += v.abs();
+                beta.set_lane(j, v);
+            }
+            if !(new_total > 0.0 && new_total.is_finite()) {
+                return Flight::Absorbed;
+            }
+            // The next event's lane weights follow the new throughput (as the
+            // homogeneous flight chooses its lane ∝ throughput), and the majorant the
+            // lanes still carried.
+            total = new_total;
+            if died {
+                (first_max, rest_max) = majorants(beta);
             }
         }
-        Flight::Through
     }
+    Flight::Through
 }
 
 /// The majorant segments of a ray through a [`GridMedium`]: (t0, t1, max density).

@@ -298,6 +298,7 @@ mod tests {
             scattering: Some(SpectrumDesc::constant(0.5)),
             anisotropy: 0.0,
             emission: None,
+            density_grid: None,
         });
         let graph = crate::shading::GraphDesc {
             nodes: vec![crate::shading::NodeDesc {

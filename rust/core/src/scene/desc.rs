@@ -144,6 +144,23 @@ pub struct VolumeDesc {
     /// Emitted radiance per unit length (an RGB colour is uplifted as an illuminant).
     #[serde(default)]
     pub emission: Option<SpectrumDesc>,
+    /// A heterogeneous medium: σa and σs times the density of this voxel grid, which
+    /// fills a box in the object space of each mesh with the material (docs/media.md,
+    /// "Grid media"). Not with `emission`, nor on the world.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub density_grid: Option<DensityGridDesc>,
+}
+
+/// A dense voxel grid of densities (`medium::grid`): `dims` voxels along x, y, z,
+/// `values` x fastest, then y, then z (dims[0]·dims[1]·dims[2] of them, finite and
+/// non-negative), filling the object-space box `bounds` = [min, max]; the density is
+/// trilinear between voxel centres and 0 outside the box.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DensityGridDesc {
+    pub dims: [u32; 3],
+    pub values: Vec<f32>,
+    pub bounds: [[f32; 3]; 2],
 }
 
 /// A material as written, before checking that it is either fixed or a graph.
@@ -894,7 +911,7 @@ impl MaterialDesc {
 
 impl VolumeDesc {
     pub fn for_each_spectrum(&self, f: &mut dyn FnMut(SpectralItem)) {
-        let VolumeDesc { absorption, scattering, anisotropy: _, emission } = self;
+        let VolumeDesc { absorption, scattering, anisotropy: _, emission, density_grid: _ } = self;
         for s in [absorption, scattering].into_iter().flatten() {
             f(SpectralItem::Spectrum(SpectrumUse::Coefficient, s));
         }

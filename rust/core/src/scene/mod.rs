@@ -237,6 +237,9 @@ pub struct Scene {
     /// Homogeneous media (docs/media.md), and per material the medium inside closed
     /// meshes that use it.
     pub media: Vec<crate::medium::HomogeneousMedium>,
+    /// Per entry of `media`, its density grid when it is a grid medium (its entry in
+    /// `media` holds the coefficients at density 1 and the phase function).
+    pub medium_grid: Vec<Option<crate::medium::GridMedium>>,
     pub material_medium: Vec<Option<u32>>,
     /// The world's medium (index into `media`): fills all space, outside and inside meshes.
     pub world_medium: Option<u32>,
@@ -394,6 +397,7 @@ impl Scene {
         let mut materials = Vec::with_capacity(desc.materials.len().max(1));
         let mut warnings = Vec::new();
         let (mut media, mut material_medium, mut null_surface) = (Vec::new(), Vec::new(), Vec::new());
+        let mut medium_grid = Vec::new();
         let mut pass_through = Vec::new();
         let mut holdout = Vec::new();
         for m in &desc.materials {
@@ -596,8 +600,9 @@ impl Scene {
                 Some(v) => media::build_medium("material", &m.name, v, |d, role, what| {
                     Ok(SampledSpectrum::from_slice(&rgb.evaluate(d, &grid, role, "material", &m.name, what)?))
                 })?
-                .map(|medium| {
+                .map(|(medium, grid)| {
                     media.push(medium);
+                    medium_grid.push(grid);
                     media.len() as u32 - 1
                 }),
                 None => None,
@@ -977,8 +982,9 @@ impl Scene {
             Some(v) => media::build_medium("world", "World", v, |d, role, what| {
                 Ok(SampledSpectrum::from_slice(&rgb.evaluate(d, &grid, role, "world", "World", what)?))
             })?
-            .map(|medium| {
+            .map(|(medium, grid)| {
                 media.push(medium);
+                medium_grid.push(grid);
                 media.len() as u32 - 1
             }),
             None => None,
@@ -1017,6 +1023,7 @@ impl Scene {
             moving_emitters,
             warnings,
             media,
+            medium_grid,
             material_medium,
             null_surface,
             pass_through,
