@@ -229,7 +229,13 @@ class Medium:
     a spectrum, a number or an RGB triple in [0, 1] (uplifted as a reflectance) — each
     times ``density``; ``anisotropy`` is Henyey–Greenstein's g; ``emission`` is radiance
     per unit length. Put it on a material (``volume=``, or ``material.volume = ...``);
-    :class:`Volume` is a material that is only a medium (no surface)."""
+    :class:`Volume` is a material that is only a medium (no surface).
+
+    ``density_grid`` makes it heterogeneous (docs/media.md, "Grid media"): a 3-D array
+    of finite, non-negative densities indexed ``[z, y, x]`` (shape (nz, ny, nx)) that
+    further scales σa and σs, trilinear between voxel centres, filling the box
+    ``grid_bounds = ((x0, y0, z0), (x1, y1, z1))`` in the object space of each mesh with
+    the material (0 outside it). Not with ``emission``."""
 
     def __init__(
         self,
@@ -239,6 +245,8 @@ class Medium:
         density: float = 1.0,
         anisotropy: float = 0.0,
         emission: Any = None,
+        density_grid: Any = None,
+        grid_bounds: Any = None,
     ):
         self.density = _finite_floats([density], "medium: density")[0]
         if self.density < 0.0:
@@ -249,9 +257,33 @@ class Medium:
         self.absorption = None if absorption is None else as_spectrum(absorption)
         self.scattering = None if scattering is None else as_spectrum(scattering)
         self.emission = None if emission is None else as_spectrum(emission)
+        self.density_grid: np.ndarray | None = None
+        self.grid_bounds: list[list[float]] | None = None
+        if density_grid is not None:
+            g = np.asarray(density_grid, dtype=np.float32)
+            if g.ndim != 3 or 0 in g.shape:
+                raise ValueError(f"medium: density_grid must be a non-empty 3-D array [z, y, x], not shape {g.shape}")
+            if not (np.isfinite(g).all() and (g >= 0).all()):
+                raise ValueError("medium: density_grid values must be finite and non-negative")
+            if grid_bounds is None:
+                raise ValueError("medium: a density_grid needs grid_bounds ((x0, y0, z0), (x1, y1, z1))")
+            b = np.asarray(grid_bounds, dtype=np.float64)
+            if b.shape != (2, 3) or not np.isfinite(b).all() or not (b[0] < b[1]).all():
+                raise ValueError(f"medium: grid_bounds {grid_bounds} must be (min, max) corners with min < max")
+            if self.emission is not None:
+                raise ValueError("medium: emission with a density_grid is not supported")
+            self.density_grid = g
+            self.grid_bounds = b.tolist()
 
     def to_dict(self) -> dict[str, Any]:
         d: dict[str, Any] = {"anisotropy": self.anisotropy}
+        if self.density_grid is not None:
+            nz, ny, nx = self.density_grid.shape
+            d["density_grid"] = {
+                "dims": [nx, ny, nz],
+                "values": self.density_grid.ravel().tolist(),
+                "bounds": self.grid_bounds,
+            }
         if self.absorption is not None:
             d["absorption"] = (self.absorption * self.density).to_dict()
         if self.scattering is not None:
