@@ -77,7 +77,7 @@ fn main() {
     let small =
         Arc::new(Texture::from_linear("small", 64, 64, 3, &pixels[..64 * 64 * 3], Wrap::Repeat).expect("texture"));
     run("texture_linear_f32_64x64", &SpectralParam::Texture { texture: small, uplift: up.clone(), scale: 1.0 });
-    let env = ImageEnvironment::new(linear, up, 1.0, 0.3, 1.0, true);
+    let env = ImageEnvironment::new(linear, up, 1.0, 0.3, true);
     let ns = best_ns(lookups, |i| {
         env.radiance_into(dirs[i & mask], &mut out);
         black_box(&out);

@@ -159,7 +159,11 @@ pub fn weights(cam: &CamEnd, verts: &[Vtx], light: &LightEnd, legacy: bool) -> [
             let mut p = light.pmf as f64 * le.pos as f64;
             if k >= 2 {
                 p *= if le.directional {
-                    cos_at(k - 1, k).max(0.0) // per unit perpendicular area of the disk
+                    // A light at infinity: the direction's density (1 for a parallel
+                    // sun) times the start disk's, per unit area perpendicular to it,
+                    // projected onto x(k−1) (pbrt-v4: pdfPos·|cos| for the first vertex
+                    // of an infinite light's path).
+                    le.dir as f64 * cos_at(k - 1, k).max(0.0)
                 } else {
                     le.dir as f64 * cos_at(k - 1, k) / d2(pos(k), pos(k - 1)).max(1e-30)
                 };
@@ -240,7 +244,8 @@ impl CameraMis for BidirectionalMis {
         let light = LightEnd {
             p: st.prev_p + st.ray.direction,
             pmf: scene.light_distribution.pmf(env),
-            le: None,
+            // The environment's light path along the reversed ray (strategy C).
+            le: scene.lights[env].pdf_le_at(st.prev_p + st.ray.direction, -st.ray.direction, st.ray.time),
             delta: false,
             infinite: true,
             pdf_li: scene.lights[env].pdf_li(st.prev_p, st.ray.direction, f32::INFINITY),
@@ -248,18 +253,20 @@ impl CameraMis for BidirectionalMis {
         };
         weights(&self.cam, &self.verts, &light, self.legacy)[0] as f32
     }
-    /// A sun's disk (at infinity, as the environment) or a sphere light: strategy A
-    /// against B (their light paths are no strategy C: no `pdf_le`). |cos| at the light
-    /// is 1 on both sides (`direct` uses the same), so it cancels.
+    /// A sun's disk (at infinity, as the environment: strategy A against B and its
+    /// light paths, C) or a sphere light (A against B: its light paths are no strategy
+    /// C, no `pdf_le`). |cos| at the light is 1 on both sides (`direct` uses the same),
+    /// so it cancels.
     fn reached_light(&mut self, scene: &Scene, st: &PathState, light: usize, distance: f32) -> f32 {
         if st.depth == 0 {
             return 1.0;
         }
         let infinite = distance.is_infinite();
+        let end_p = st.prev_p + st.ray.direction * if infinite { 1.0 } else { distance };
         let end = LightEnd {
-            p: st.prev_p + st.ray.direction * if infinite { 1.0 } else { distance },
+            p: end_p,
             pmf: scene.light_distribution.pmf(light),
-            le: None,
+            le: if infinite { scene.lights[light].pdf_le_at(end_p, -st.ray.direction, st.ray.time) } else { None },
             delta: false,
             infinite,
             pdf_li: scene.lights[light].pdf_li_at(st.prev_p, st.ray.direction, distance, st.ray.time),
@@ -370,12 +377,16 @@ impl<T: Throughput> PathHooks<T> for MisLightPath<'_> {
         let first = self.path.first().map_or(v.si.p, |x| x.p);
         let to_light = self.origin - first;
         let dist = to_light.length();
+        // A light at infinity (environment, sun with an angle): its end stays in solid
+        // angle; the start disk's origin lies on the path's first ray, so the direction
+        // from x(k−1) to it is the ray's, reversed.
+        let infinite = self.dens.is_some_and(|d| d.directional) && !self.delta_position;
         let end = LightEnd {
             p: self.origin,
             pmf: self.pmf,
             le: self.dens,
             delta: self.delta_position,
-            infinite: false,
+            infinite,
             pdf_li: if self.delta_position {
                 1.0
             } else {

@@ -19,8 +19,15 @@
 //!   path arrives from, the exit is a plain cosine): light tracing estimates the same
 //!   model with the roles of light and view swapped, equal to BACKWARD where the light
 //!   and the view see the surface at similar angles (docs/materials.md).
-//! - Environment lights and orthographic cameras are not reachable this way (their
-//!   light has no `sample_le`, the camera no pinhole to connect to).
+//! - Lights at infinity (uniform and image environments, suns) start their paths as
+//!   pbrt-v4's infinite lights: a direction from the light's own distribution, the
+//!   origin on a disk of the scene's bounding radius perpendicular to it
+//!   (`light::infinite_light_origin`). What the camera sees of them directly — the
+//!   environment, or a sun's disk visible to the camera, behind its pixel — no light
+//!   path can reach (the pinhole is a point): each pixel sample traces its camera ray
+//!   up to the first surface for it ([`AlphaPath`]); a path of one segment, which no
+//!   light path produces, so nothing is counted twice.
+//! - Orthographic cameras are not reachable this way (no pinhole to connect to).
 
 use super::throughput::Throughput;
 use super::walk::{russian_roulette, End, PathHooks, PathState, Vertex, Walk};
@@ -268,20 +275,62 @@ impl<T: Throughput> PathHooks<T> for LightPath<'_> {
     }
 }
 
-/// FORWARD's pixel samples when the scene has holdouts or a transparent film: the camera
-/// ray alone, through see-through lights, up to the first surface, taking the alpha as
-/// camera paths do (Holdout closures and holdout objects at depth 0, the background
-/// with Film > Transparent; `CameraPath::holdout`, `escaped`). It adds no radiance: the
-/// light paths' splats are the image, black on a full holdout since its closure
-/// reflects nothing and a holdout object is connected to no camera.
-struct AlphaPath {
+/// FORWARD's pixel samples when the scene has holdouts, a transparent film or lights at
+/// infinity: the camera ray alone, through see-through lights, up to the first surface.
+/// It takes the alpha as camera paths do (Holdout closures and holdout objects at depth
+/// 0, the background with Film > Transparent; `CameraPath::holdout`, `escaped`) and
+/// gathers what the ray sees at infinity when it leaves the scene: the environment (as
+/// BACKWARD's camera ray, weight 1) and a sun's disk when the sun is visible to the
+/// camera. The light paths' splats are the rest of the image, black on a full holdout
+/// since its closure reflects nothing and a holdout object is connected to no camera.
+struct AlphaPath<'a, T> {
     transparent: f32,
+    gathered: &'a mut T,
 }
 
-impl<T: Throughput> PathHooks<T> for AlphaPath {
-    fn escaped(&mut self, scene: &Scene, st: &PathState, beta: &T, _scratch: &mut Scratch) {
-        if scene.film_transparent && st.depth == 0 {
+impl<T: Throughput> PathHooks<T> for AlphaPath<'_, T> {
+    fn escaped(&mut self, scene: &Scene, st: &PathState, beta: &T, scratch: &mut Scratch) {
+        if st.depth != 0 {
+            return;
+        }
+        if scene.film_transparent {
             self.transparent += super::path::mean_throughput(beta);
+            return;
+        }
+        if let Some(env) = &scene.environment {
+            let l = env.radiance_along(st.ray.direction, &mut scratch.le);
+            self.gathered.add_emitted(beta, l, 1.0);
+        }
+    }
+    /// A sun's disk the camera ray leaves the scene in (sphere lights, at a finite
+    /// distance, are the light paths' own vertices: not gathered here).
+    fn segment_lights(
+        &mut self,
+        scene: &Scene,
+        st: &PathState,
+        end: f32,
+        beta: &T,
+        rng: &mut Rng,
+        scratch: &mut Scratch,
+    ) {
+        if st.depth != 0 || end.is_finite() {
+            return;
+        }
+        for &l in &scene.hit_lights {
+            if !visibility::sees(scene.light_visibility[l], st.ray.kind) {
+                continue;
+            }
+            let Some(t) = scene.lights[l].hit_at(st.ray.origin, st.ray.direction, st.ray.time, &mut scratch.le) else {
+                continue;
+            };
+            if t.is_finite() || !beta.carries(&scratch.le) {
+                continue;
+            }
+            // As camera paths do (path.rs): the media the ray crosses on its way out.
+            if !st.media.is_empty() && scene.coefficients(&st.media, &mut scratch.shadow) {
+                scene.segment_transmittance(&st.ray, &scratch.shadow, t, &mut scratch.le, rng);
+            }
+            self.gathered.add_emitted(beta, &scratch.le, 1.0);
         }
     }
     fn holdout(&mut self, weight: f32, beta: &T) -> bool {
@@ -319,12 +368,18 @@ impl<P: WavelengthPolicy> Technique for LightTracing<P> {
         scratch: &mut Scratch,
     ) {
         let Some(ray) = scene.camera.generate_pixel_ray(cs.film.x, cs.film.y, cs.row, rng) else { return };
+        let wl = self.wavelengths.camera(cs.pixel, cs.pass);
         let mut ctx = ShadingContext::new(&scene.grid);
-        let mut beta = super::throughput::SingleWavelength { index: 0, value: 1.0 };
-        let mut hooks = AlphaPath { transparent: 0.0 };
+        ctx.single_wavelength = wl.single();
+        let mut beta = wl.unit(scene.grid.len(), &mut scratch.spare);
+        let mut gathered = beta.zero_like_in(&mut scratch.spare);
+        let mut hooks = AlphaPath { transparent: 0.0, gathered: &mut gathered };
         let walk = Walk::camera(0, false);
         walk.run(scene, &mut ctx, PathState::start_in(ray, scene.camera_media), &mut beta, rng, &mut hooks, scratch);
         out.transparent = hooks.transparent;
+        wl.resolve(&gathered, &mut out.radiance);
+        gathered.recycle(&mut scratch.spare);
+        beta.recycle(&mut scratch.spare);
     }
     fn light_path(&self, scene: &Scene, pass: u32, rng: &mut Rng, splats: &mut Vec<Splat>, scratch: &mut Scratch) {
         let wl = self.wavelengths.light(pass, rng);

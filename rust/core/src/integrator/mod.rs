@@ -218,7 +218,8 @@ impl Scratch {
 pub struct Integrator {
     pub technique: Box<dyn Technique>,
     /// Pixel samples trace camera paths (BACKWARD, BIDIRECTIONAL; FORWARD: camera rays
-    /// for the alpha of holdouts and a transparent film, when the scene has them).
+    /// for the alpha of holdouts and a transparent film, and for the environment and
+    /// a sun's disk seen directly, when the scene has them).
     pub camera_paths: bool,
     /// Every sample pass also traces one light path per pixel, splatted onto the film
     /// (FORWARD, BIDIRECTIONAL).
@@ -275,9 +276,11 @@ pub fn from_settings(scene: &Scene, settings: &ResolvedSettings) -> crate::Resul
         Method::MonochromaticScenes => with_policy(settings, OnePerPass::new(scene.grid.len(), settings.samples)),
         Method::Hero => with_policy(settings, hero::HeroWavelengths::new(&scene.grid, settings.seed)),
     };
-    if settings.direction == Direction::Forward && scene.has_holdouts() {
-        // Light tracing has no camera paths to take the alpha from: each pixel sample
-        // traces its camera ray up to the first surface for it (forward::AlphaPath).
+    if settings.direction == Direction::Forward && (scene.has_holdouts() || scene.sees_infinity()) {
+        // Light tracing has no camera paths to take the alpha from, nor any that reach
+        // what the camera sees at infinity (the environment, a sun's disk): each pixel
+        // sample traces its camera ray up to the first surface for them
+        // (forward::AlphaPath).
         integrator.camera_paths = true;
     }
     Ok(integrator)

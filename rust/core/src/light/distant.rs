@@ -13,7 +13,6 @@
 
 use super::{EmissionSample, Light, LightSample};
 use crate::geometry::Frame;
-use crate::sampling::concentric_disk;
 use crate::spectrum::SampledSpectrum;
 use glam::{Vec2, Vec3A};
 use std::f32::consts::PI;
@@ -53,9 +52,13 @@ impl DistantLight {
 }
 
 impl Light for DistantLight {
+    fn preprocess(&mut self, center: Vec3A, radius: f32) {
+        self.scene_center = center;
+        self.scene_radius = radius;
+    }
     fn power(&self, weights: &[f32]) -> f64 {
         // Flux through the disk the scene presents to the rays: π r² ∫E dλ.
-        let r = self.scene_radius.max(1e-3) as f64;
+        let r = super::infinite_light_radius(self.scene_radius) as f64;
         std::f64::consts::PI * r * r * self.irradiance.dot(weights) as f64
     }
     fn sample_li(&self, _p: Vec3A, u: Vec2, le: &mut SampledSpectrum) -> Option<LightSample> {
@@ -88,31 +91,30 @@ impl Light for DistantLight {
         le.scale(self.radiance_scale());
         Some(f32::INFINITY)
     }
-    /// Light paths start on the disk of the bounding sphere facing the light; the
-    /// direction is a delta (pdf_dir = 1), `le` is the irradiance, so `le/pdf_pos` is
-    /// the flux through the disk. No normal (the start disk is not a surface a camera
-    /// could see). `delta_position` for parallel rays: like a point light, no camera or
-    /// BSDF ray can reach them, so their caustics belong to forward tracing; a sun with
-    /// an angle is reached by rays that escape in its cone ([`Light::hit`]).
+    /// Light paths start on the disk of the bounding sphere facing the ray's direction
+    /// ([`super::infinite_light_origin`]), `le/(pdf_pos·pdf_dir)` is the flux through
+    /// the disk. Parallel rays: the direction is a delta (pdf_dir = 1) and `le` the
+    /// irradiance. With an angle: a direction uniform in the cone (as `sample_li`
+    /// draws it), `le` the disk's radiance, the start disk perpendicular to that
+    /// direction (pbrt-v4's infinite lights), so every direction's rays cover the whole
+    /// bounding sphere. No normal (the start disk is not a surface a camera could
+    /// see). `delta_position` for parallel rays: like a point light, no camera or BSDF
+    /// ray can reach them, so their caustics belong to forward tracing; a sun with an
+    /// angle is reached by rays that escape in its cone ([`Light::hit`]).
     fn sample_le(&self, u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
-        let r = self.scene_radius.max(1e-3);
-        let d = concentric_disk(u_pos) * r;
-        let f = Frame::from_normal(self.direction);
-        let origin = self.scene_center - self.direction * r + f.s * d.x + f.t * d.y;
+        let r = super::infinite_light_radius(self.scene_radius);
         le.copy_from(&self.irradiance);
         let cone = self.cone();
         let (direction, pdf_dir) = match cone {
-            // A direction in the cone through the disk: the flux per area and solid
-            // angle crossing it is L·cos θ (θ from the axis).
             Some(omc) => {
                 let (local, pdf) = super::sample_uniform_cone(u_dir, omc);
-                le.scale(self.radiance_scale() * local.z);
-                (f.to_world(local), pdf)
+                le.scale(self.radiance_scale());
+                (Frame::from_normal(self.direction).to_world(local), pdf)
             }
             None => (self.direction, 1.0),
         };
         Some(EmissionSample {
-            origin,
+            origin: super::infinite_light_origin(self.scene_center, r, direction, u_pos),
             direction,
             normal: None,
             pdf_pos: 1.0 / (PI * r * r),
@@ -121,14 +123,19 @@ impl Light for DistantLight {
             part: 0,
         })
     }
-    fn pdf_le(&self, _origin: Vec3A, _dir: Vec3A) -> Option<super::LeDensity> {
-        // With an angle its light paths are no strategy of the bidirectional MIS: it
-        // reaches camera paths through light sampling and rays escaping in its cone.
-        if self.cone().is_some() {
-            return None;
+    /// Per unit area perpendicular to `dir` on the start disk; the direction's density
+    /// is 1 for parallel rays (a delta) and the cone's uniform pdf with an angle (0
+    /// outside the disk of directions: None).
+    fn pdf_le(&self, _origin: Vec3A, dir: Vec3A) -> Option<super::LeDensity> {
+        let r = super::infinite_light_radius(self.scene_radius);
+        let pos = 1.0 / (PI * r * r);
+        match self.cone() {
+            None => Some(super::LeDensity { pos, dir: 1.0, cos: 1.0, directional: true }),
+            Some(omc) if self.in_cone(-dir) => {
+                Some(super::LeDensity { pos, dir: 1.0 / (2.0 * PI * omc), cos: 1.0, directional: true })
+            }
+            Some(_) => None,
         }
-        let r = self.scene_radius.max(1e-3);
-        Some(super::LeDensity { pos: 1.0 / (PI * r * r), dir: 1.0, cos: 1.0, directional: true })
     }
 }
 

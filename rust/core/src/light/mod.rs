@@ -74,6 +74,11 @@ pub struct LeDensity {
 }
 
 pub trait Light: Send + Sync {
+    /// Called once the scene is built, with a sphere (`center`, `radius` > 0) bounding
+    /// all its geometry over the shutter (pbrt-v4's `Light::Preprocess(sceneBounds)`):
+    /// lights at infinity (environments, suns) start their light paths on a disk of
+    /// that radius and count their power through it. Other lights ignore it.
+    fn preprocess(&mut self, _center: Vec3A, _radius: f32) {}
     /// Total emitted power integrated over the grid with its quadrature weights (eq. 7):
     /// the light-selection weight.
     fn power(&self, weights: &[f32]) -> f64;
@@ -142,6 +147,29 @@ pub trait Light: Send + Sync {
     }
     fn pdf_le_part_at(&self, part: u32, origin: Vec3A, dir: Vec3A, _time: f32) -> Option<LeDensity> {
         self.pdf_le_part(part, origin, dir)
+    }
+}
+
+/// The start of a light path from a light at infinity arriving along unit `direction`
+/// (the way the light travels), as pbrt-v4's infinite lights (`UniformInfiniteLight::
+/// SampleLe`): a point uniform on the disk of radius `radius` perpendicular to it,
+/// tangent to the bounding sphere (`center`, `radius`) on the side the light comes
+/// from. Its rays cover the whole sphere; the position density is 1/(π r²) per unit
+/// area perpendicular to the direction ([`LeDensity::directional`]).
+pub fn infinite_light_origin(center: Vec3A, radius: f32, direction: Vec3A, u: Vec2) -> Vec3A {
+    let d = crate::sampling::concentric_disk(u) * radius;
+    let f = crate::geometry::Frame::from_normal(direction);
+    center - direction * radius + f.s * d.x + f.t * d.y
+}
+
+/// The radius a light at infinity uses for the scene's bounding sphere (a degenerate
+/// scene, a single point, still gets a disk).
+#[inline]
+pub fn infinite_light_radius(radius: f32) -> f32 {
+    if radius.is_finite() {
+        radius.max(1e-3)
+    } else {
+        1e-3
     }
 }
 

@@ -47,6 +47,9 @@ impl MovingLight {
 }
 
 impl Light for MovingLight {
+    fn preprocess(&mut self, center: Vec3A, radius: f32) {
+        self.inner.preprocess(center, radius);
+    }
     fn power(&self, weights: &[f32]) -> f64 {
         self.inner.power(weights)
     }

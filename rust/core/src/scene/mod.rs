@@ -154,6 +154,15 @@ impl Scene {
     pub fn has_holdouts(&self) -> bool {
         self.film_transparent || self.holdout.iter().any(Option::is_some) || self.instances.iter().any(|i| i.holdout)
     }
+
+    /// Camera rays that leave the scene can see light: an environment, or a hittable
+    /// light at infinity (a sun with an angle) visible to the camera.
+    pub fn sees_infinity(&self) -> bool {
+        self.environment.is_some()
+            || self.hit_lights.iter().any(|&l| {
+                crate::geometry::visibility::sees(self.light_visibility[l], crate::geometry::visibility::CAMERA)
+            })
+    }
 }
 
 /// The ray visibility of an emitter on `inst`: a held-out object's light is never seen by
@@ -897,8 +906,6 @@ impl Scene {
                         name,
                         *direction,
                         SampledSpectrum::from_slice(&irradiance),
-                        bounds_center,
-                        bounds_radius,
                         *angle,
                     )?);
                 }
@@ -935,14 +942,16 @@ impl Scene {
                             ),
                         ));
                     }
-                    let img = Arc::new(ImageEnvironment::new(
+                    let mut img = ImageEnvironment::new(
                         texture.clone(),
                         up.clone(),
                         w.strength,
                         w.rotation,
-                        bounds_radius,
                         w.importance_sampling,
-                    ));
+                    );
+                    // Before it is shared with the lookups of escaped rays.
+                    img.preprocess(bounds_center, bounds_radius);
+                    let img = Arc::new(img);
                     if w.strength == 0.0 {
                         None
                     } else {
@@ -969,7 +978,8 @@ impl Scene {
                     } else {
                         lights.push(Box::new(UniformEnvironment {
                             radiance: radiance.clone(),
-                            scene_radius: bounds_radius,
+                            scene_center: Vec3A::ZERO,
+                            scene_radius: 1.0,
                         }));
                         Some(EnvironmentRef { light: lights.len() - 1, radiance, image: None })
                     }
@@ -977,6 +987,11 @@ impl Scene {
             },
         };
         light_visibility.resize(lights.len(), crate::geometry::visibility::ALL);
+        // Every light learns the scene's bounding sphere (lights at infinity start their
+        // light paths on a disk of its radius and count their power through it).
+        for l in lights.iter_mut() {
+            l.preprocess(bounds_center, bounds_radius);
+        }
         // The world's medium (Blender's World > Volume), validated as a material's.
         let world_medium = match desc.world.as_ref().and_then(|w| w.volume.as_ref()) {
             Some(v) => media::build_medium("world", "World", v, |d, role, what| {

@@ -201,13 +201,12 @@ pub fn build_spot(
     Ok(Box::new(SpotLight::new(p, d, intensity, spot_size, spot_blend).with_radius(radius).with_profile(profile)))
 }
 
-/// A distant (sun) light; `irradiance` already evaluated on the grid.
+/// A distant (sun) light; `irradiance` already evaluated on the grid. The scene's
+/// bounding sphere comes later ([`Light::preprocess`]).
 pub fn build_distant(
     name: &str,
     direction: [f32; 3],
     irradiance: SampledSpectrum,
-    scene_center: Vec3A,
-    scene_radius: f32,
     angle: f32,
 ) -> Result<Box<dyn Light>> {
     let direction = unit_direction(name, direction)?;
@@ -215,7 +214,7 @@ pub fn build_distant(
         return Err(Error::object("light", name, format!("angle {angle} rad must be in [0, π]")));
     }
     let half_angle = (0.5 * angle).min(std::f32::consts::FRAC_PI_2);
-    Ok(Box::new(DistantLight { direction, irradiance, scene_center, scene_radius, half_angle }))
+    Ok(Box::new(DistantLight { direction, irradiance, scene_center: Vec3A::ZERO, scene_radius: 1.0, half_angle }))
 }
 
 /// A point or spot light's sphere radius: finite and ≥ 0.
