@@ -93,3 +93,46 @@ fn bad_layered_parameters_name_the_material() {
         assert!(err.contains(&format!("material '{name}'")), "{err}");
     }
 }
+
+/// One builder (scene/layered.rs): a BSDF description is validated alike whether it is
+/// the material's own or nested inside a Mix — the top level once had its own copy of
+/// the leaf arms, which accepted a negative diffuse reflectance the nested builder
+/// refused. Bad leaves fail in both places with the same message; good ones build in
+/// both.
+#[test]
+fn top_level_and_nested_bsdfs_are_validated_alike() {
+    let build = |bsdf: &str| -> Result<(), String> {
+        let json = format!(r#"{{"name": "leaf", "bsdf": {bsdf}}}"#);
+        let mut desc = SceneDesc::default();
+        let mut buffers: Vec<Buffer> = Vec::new();
+        desc.materials.push(material(&json));
+        let (v, tri) = uv_sphere([0.0; 3], 1.0, 4, 8);
+        add_mesh(&mut desc, &mut buffers, "s", v, tri, 0);
+        let settings = ResolvedSettings { width: 2, height: 2, samples: 1, ..Default::default() };
+        render(&desc, &buffers, &settings, &RenderControl::new()).map(|_| ()).map_err(|e| e.to_string())
+    };
+    let bad = [
+        r#"{"type": "diffuse", "reflectance": {"type": "constant", "value": -0.2}}"#,
+        r#"{"type": "diffuse", "reflectance": {"type": "constant", "value": 1.2}}"#,
+        r#"{"type": "glossy", "reflectance": {"type": "constant", "value": 0.5}, "roughness": 3.0}"#,
+        r#"{"type": "conductor", "metal": "unobtainium"}"#,
+        r#"{"type": "dielectric", "roughness": -1.0}"#,
+    ];
+    let good = [
+        r#"{"type": "diffuse", "reflectance": {"type": "constant", "value": 0.5}}"#,
+        r#"{"type": "glossy", "reflectance": {"type": "constant", "value": 0.5}, "roughness": 0.3}"#,
+        r#"{"type": "conductor", "metal": "gold", "roughness": 0.2}"#,
+        r#"{"type": "dielectric", "roughness": 0.1}"#,
+    ];
+    let nested = |leaf: &str| format!(r#"{{"type": "mix", "factor": 0.5, "a": {leaf}, "b": {{"type": "none"}}}}"#);
+    for leaf in bad {
+        let (top, mix) = (build(leaf), build(&nested(leaf)));
+        let (Err(a), Err(b)) = (&top, &mix) else { panic!("{leaf}: top level {top:?}, nested {mix:?}") };
+        assert!(a.contains("material 'leaf'"), "{a}");
+        assert_eq!(a, b, "{leaf}");
+    }
+    for leaf in good {
+        assert_eq!(build(leaf), Ok(()), "{leaf}");
+        assert_eq!(build(&nested(leaf)), Ok(()), "{leaf} nested");
+    }
+}

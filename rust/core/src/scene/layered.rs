@@ -1,6 +1,9 @@
-//! Building the layered and combined BSDFs (Principled, Mix, Add) from their
-//! descriptions, recursively: a Mix or Add may hold any BSDF description, including
-//! another Mix or a Principled.
+//! The one BSDF builder: every material's BSDF is built here from its description —
+//! a fixed description from the scene, a node graph folded to constants at load
+//! (`CompiledMaterial::constant_surface`), and the description a varying graph
+//! instantiates at each hit (`shading::bsdf::GraphBsdf`) — recursively: a Mix or Add
+//! may hold any BSDF description, including another Mix or a Principled
+//! (docs/shading.md, "One builder").
 
 use super::{BsdfDesc, BuildUplift, MixFactorDesc};
 use crate::color::uplift::Uplift;
@@ -163,8 +166,8 @@ fn subsurface_lobe(
     Ok(SubsurfaceLobe::new(weight, radius, d.anisotropy, entry_ior, method))
 }
 
-/// Builds any BSDF description (the Principled, Mix and Add arms of `Scene::build`,
-/// and every BSDF nested inside a Mix or Add).
+/// Builds any BSDF description: every material of `Scene::build` (fixed or folded)
+/// and every per-hit BSDF of a varying graph, with the same validation for all.
 pub(super) fn build_bsdf(b: &BsdfBuild, material: &str, d: &BsdfDesc) -> Result<Box<dyn Bsdf>> {
     build_at(b, material, d, 0)
 }

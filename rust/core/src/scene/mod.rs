@@ -14,9 +14,9 @@ use crate::color::uplift::{Uplift, UpliftMethod};
 use crate::color::{Observer, RgbSpace};
 use crate::geometry::{Instance, Mesh, Ray};
 use crate::light::{AreaTriangle, ImageEnvironment, Light, PointLight, UniformEnvironment};
-use crate::material::{Black, Bsdf, Diffuse, Material, SpectralParam, Texture};
+use crate::material::{Bsdf, Diffuse, Material, SpectralParam, Texture};
 use crate::sampling::Distribution1D;
-use crate::spectrum::named::{evaluate_for, RgbToSpectrum, SpectrumKind, SpectrumRole};
+use crate::spectrum::named::{evaluate_for, RgbToSpectrum, SpectrumRole};
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 use crate::{Error, Result};
 pub use desc::*;
@@ -514,73 +514,12 @@ impl Scene {
                 }),
                 _ => None,
             });
-            let bsdf: Box<dyn Bsdf> = match bsdf_desc {
-                _ if per_hit.is_some() => Box::new(per_hit.take().expect("checked")),
-                BsdfDesc::Diffuse { reflectance } if matches!(reflectance.kind, SpectrumKind::Texture { .. }) => {
-                    let SpectrumKind::Texture { texture: t } = reflectance.kind else { unreachable!() };
-                    let texture = textures.get(t).ok_or_else(|| {
-                        Error::object(
-                            "material",
-                            &m.name,
-                            format!("reflectance: texture {t} does not exist ({} textures)", textures.len()),
-                        )
-                    })?;
-                    let Some(up) = &uplift else {
-                        return Err(Error::object("material", &m.name, format!("reflectance: texture '{}' cannot be used on this wavelength grid (no RGB → spectrum map)", texture.name)));
-                    };
-                    let scale = reflectance.scale;
-                    if !(scale.is_finite() && (0.0..=1.0).contains(&scale)) {
-                        return Err(Error::object(
-                            "material",
-                            &m.name,
-                            format!("reflectance: texture scale {scale} must be in 0..1 (energy conserving)"),
-                        ));
-                    }
-                    Box::new(Diffuse {
-                        reflectance: SpectralParam::Texture { texture: texture.clone(), uplift: up.clone(), scale },
-                    })
-                }
-                BsdfDesc::Diffuse { reflectance } => {
-                    let r = spectrum(reflectance, SpectrumRole::Reflectance, "reflectance")?;
-                    if r.max_value() > 1.0 {
-                        return Err(Error::object(
-                            "material",
-                            &m.name,
-                            format!("reflectance {} exceeds 1 (not energy conserving)", r.max_value()),
-                        ));
-                    }
-                    Box::new(Diffuse { reflectance: SpectralParam::Constant(r) })
-                }
-                BsdfDesc::None | BsdfDesc::Null | BsdfDesc::Transparent { .. } => Box::new(Black),
-                BsdfDesc::Dielectric { ior, roughness } => optics::build_dielectric(&m.name, ior, *roughness, &grid)?,
-                BsdfDesc::Refraction { ior, roughness, beckmann } => {
-                    optics::build_refraction(&m.name, ior, *roughness, *beckmann, &grid)?
-                }
-                BsdfDesc::Conductor { metal, eta, k, roughness } => {
-                    let eta = eta.as_ref().map(|d| spectrum(d, SpectrumRole::Unbounded, "eta")).transpose()?;
-                    let k = k.as_ref().map(|d| spectrum(d, SpectrumRole::Unbounded, "k")).transpose()?;
-                    optics::build_conductor(&m.name, metal.as_deref(), eta, k, *roughness, &grid)?
-                }
-                BsdfDesc::Glossy { reflectance, roughness, anisotropy, rotation, tangent } => {
-                    optics::build_glossy_anisotropic(
-                        &m.name,
-                        spectrum(reflectance, SpectrumRole::Reflectance, "reflectance")?,
-                        *roughness,
-                        *anisotropy,
-                        *rotation,
-                        *tangent,
-                    )?
-                }
-                BsdfDesc::Principled { .. }
-                | BsdfDesc::Mix { .. }
-                | BsdfDesc::Add { .. }
-                | BsdfDesc::RoughDiffuse { .. }
-                | BsdfDesc::Translucent { .. }
-                | BsdfDesc::Metallic { .. }
-                | BsdfDesc::Tint { .. }
-                | BsdfDesc::Sheen { .. }
-                | BsdfDesc::Oriented { .. }
-                | BsdfDesc::Graph(_) => {
+            // One builder for every material: a fixed description, a graph folded to
+            // constants at load, and (per hit, through `GraphBsdf`) a varying graph's
+            // instantiated description all go through `layered::build_bsdf`.
+            let bsdf: Box<dyn Bsdf> = match per_hit.take() {
+                Some(g) => Box::new(g),
+                None => {
                     let b = layered::BsdfBuild { grid: &grid, rgb: &rgb, textures: &textures, uplift: uplift.as_ref() };
                     layered::build_bsdf(&b, &m.name, bsdf_desc)?
                 }
