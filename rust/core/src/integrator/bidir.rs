@@ -254,23 +254,40 @@ impl CameraMis for BidirectionalMis {
         weights(&self.cam, &self.verts, &light, self.legacy)[0] as f32
     }
     /// A sun's disk (at infinity, as the environment: strategy A against B and its
-    /// light paths, C) or a sphere light (A against B: its light paths are no strategy
-    /// C, no `pdf_le`). |cos| at the light is 1 on both sides (`direct` uses the same),
-    /// so it cancels.
+    /// light paths, C) or a sphere light (A against B and C, as an area light: its
+    /// `pdf_le` is uniform on the sphere and cosine about the normal). A sun's |cos| at
+    /// the light is 1 on both sides (`direct` uses the same), a sphere's the true one
+    /// (C's densities are per unit area of the sphere).
     fn reached_light(&mut self, scene: &Scene, st: &PathState, light: usize, distance: f32) -> f32 {
-        if st.depth == 0 {
-            return 1.0;
-        }
         let infinite = distance.is_infinite();
         let end_p = st.prev_p + st.ray.direction * if infinite { 1.0 } else { distance };
+        let le = scene.lights[light].pdf_le_at(end_p, -st.ray.direction, st.ray.time);
+        if st.depth == 0 {
+            // Seen by the camera: only a sphere's light paths also reach the camera
+            // from that point (k = 1, `light_seen_by_camera`); a light at infinity
+            // has no other strategy.
+            let (Some(dens), false) = (le, infinite) else { return 1.0 };
+            let Some(c) = scene.camera.connect_through(st.ray.origin, end_p, st.ray.time) else { return 1.0 };
+            let cam = cam_end(end_p, &c);
+            let end = LightEnd {
+                p: end_p,
+                pmf: scene.light_distribution.pmf(light),
+                le: Some(dens),
+                delta: false,
+                infinite: false,
+                pdf_li: 0.0,
+                cos: dens.cos,
+            };
+            return weights(&cam, &[], &end, false)[0] as f32;
+        }
         let end = LightEnd {
             p: end_p,
             pmf: scene.light_distribution.pmf(light),
-            le: if infinite { scene.lights[light].pdf_le_at(end_p, -st.ray.direction, st.ray.time) } else { None },
+            le,
             delta: false,
             infinite,
             pdf_li: scene.lights[light].pdf_li_at(st.prev_p, st.ray.direction, distance, st.ray.time),
-            cos: 1.0,
+            cos: if infinite { 1.0 } else { le.map_or(1.0, |d| d.cos) },
         };
         weights(&self.cam, &self.verts, &end, self.legacy)[0] as f32
     }

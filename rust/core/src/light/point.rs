@@ -118,6 +118,20 @@ pub(crate) fn sphere_le(
     })
 }
 
+/// The densities with which [`sphere_le`] starts the ray from `origin` (a point of the
+/// sphere) along `dir`: uniform on the sphere, cosine about the outward normal. None
+/// behind the surface (no such ray).
+pub(crate) fn sphere_le_density(center: Vec3A, radius: f32, origin: Vec3A, dir: Vec3A) -> Option<super::LeDensity> {
+    let n = (origin - center).normalize_or_zero();
+    let cos = n.dot(dir);
+    (cos > 0.0 && radius > 0.0).then(|| super::LeDensity {
+        pos: 1.0 / (4.0 * PI * radius * radius),
+        dir: cos / PI,
+        cos,
+        directional: false,
+    })
+}
+
 impl Light for PointLight {
     fn power(&self, weights: &[f32]) -> f64 {
         let mean = self.profile.as_ref().map_or(1.0, |p| p.mean()) as f64;
@@ -159,15 +173,20 @@ impl Light for PointLight {
             part: 0,
         })
     }
-    fn pdf_le(&self, _origin: Vec3A, _dir: Vec3A) -> Option<super::LeDensity> {
-        // A sphere's light paths are no strategy of the bidirectional MIS (None): its
-        // light reaches camera paths through light sampling and BSDF rays that hit it.
-        (self.radius <= 0.0).then_some(super::LeDensity {
-            pos: 1.0,
-            dir: 1.0 / (4.0 * PI),
-            cos: 1.0,
-            directional: false,
-        })
+    /// A point: its uniform direction. A sphere: [`sphere_le_density`] (its light
+    /// paths are a strategy of the bidirectional MIS like an area light's) — unless it
+    /// has a profile: camera paths take the profile towards the shading point seen from
+    /// the centre (`hit`, `sample_li`), light paths along their own direction from a
+    /// point of the sphere, two slightly different lights that must not be mixed (None).
+    fn pdf_le(&self, origin: Vec3A, dir: Vec3A) -> Option<super::LeDensity> {
+        if self.radius > 0.0 {
+            return if self.profile.is_some() {
+                None
+            } else {
+                sphere_le_density(self.position, self.radius, origin, dir)
+            };
+        }
+        Some(super::LeDensity { pos: 1.0, dir: 1.0 / (4.0 * PI), cos: 1.0, directional: false })
     }
 }
 
@@ -219,7 +238,9 @@ mod tests {
         let cos = es.normal.unwrap().dot(es.direction);
         let flux = le.get(0) * cos / (es.pdf_pos * es.pdf_dir);
         assert!((flux - 4.0 * PI).abs() < 1e-3, "{flux}");
-        assert!(light.pdf_le(es.origin, es.direction).is_none());
+        // Its light paths are a bidirectional strategy, with the densities it drew.
+        let d = light.pdf_le(es.origin, es.direction).unwrap();
+        assert!((d.pos - es.pdf_pos).abs() < 1e-6 && (d.dir - es.pdf_dir).abs() < 1e-5);
     }
 
     /// A sphere light's cone samples are the directions a ray from the point reaches
@@ -253,5 +274,48 @@ mod tests {
         let point = PointLight { radius: 0.0, ..light };
         assert!(!point.hittable() && point.hit(p, axis, &mut hit).is_none());
         assert!(point.sample_li(p, Vec2::splat(0.5), &mut le).unwrap().delta);
+    }
+
+    /// A sphere light's `pdf_le` is the density `sample_le` reports for its own rays
+    /// (uniform on the sphere: 1/(4π r²); cosine about the normal: cos/π), None for a
+    /// ray into the sphere; its light paths carry the power: the mean of le·cos/(pdf_pos
+    /// ·pdf_dir) is 4π I, the closed form. A profiled sphere starts no MIS strategy.
+    #[test]
+    fn sphere_light_path_densities_match_and_carry_the_power() {
+        let light = PointLight {
+            position: Vec3A::new(1.0, -2.0, 0.5),
+            intensity: SampledSpectrum::splat(1, 3.0),
+            radius: 0.4,
+            profile: None,
+        };
+        let mut rng = Rng::new(3, 5);
+        let mut le = SampledSpectrum::zeros(1);
+        let n = 20_000;
+        let mut flux = 0.0f64;
+        for _ in 0..n {
+            let es = light.sample_le(rng.uniform2(), rng.uniform2(), &mut le).unwrap();
+            let d = light.pdf_le(es.origin, es.direction).expect("its own ray");
+            assert!((d.pos - es.pdf_pos).abs() <= 1e-6 * es.pdf_pos && (d.dir - es.pdf_dir).abs() <= 1e-4 * es.pdf_dir);
+            let nl = es.normal.unwrap();
+            assert!((d.cos - nl.dot(es.direction)).abs() < 1e-5 && !d.directional);
+            assert!(light.pdf_le(es.origin, -es.direction).is_none());
+            flux += (le.get(0) * d.cos / (es.pdf_pos * es.pdf_dir)) as f64;
+        }
+        let power = 4.0 * std::f64::consts::PI * 3.0;
+        assert!((flux / n as f64 / power - 1.0).abs() < 1e-4, "{} vs {power}", flux / n as f64);
+        let profiled = PointLight {
+            profile: Some(
+                crate::light::profile::Profile::new(
+                    vec![0.0, 6.0],
+                    vec![0.0, 3.0],
+                    vec![1.0; 4],
+                    glam::Mat3A::IDENTITY,
+                )
+                .unwrap(),
+            ),
+            ..light
+        };
+        let es = profiled.sample_le(Vec2::splat(0.3), Vec2::splat(0.6), &mut le).unwrap();
+        assert!(profiled.pdf_le(es.origin, es.direction).is_none());
     }
 }

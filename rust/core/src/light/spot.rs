@@ -144,6 +144,14 @@ impl Light for SpotLight {
         })
     }
     fn pdf_le(&self, _origin: Vec3A, dir: Vec3A) -> Option<super::LeDensity> {
+        // A sphere's light paths are no strategy of the bidirectional MIS (None): camera
+        // paths take the cone's falloff towards the shading point seen from the centre
+        // (`hit`, `sample_li`, as Cycles), a light path along its own direction from a
+        // point of the sphere (`sample_le`), so the two estimate slightly different
+        // lights and must not be mixed.
+        if self.radius > 0.0 {
+            return None;
+        }
         // Uniform in the cone (sample_le).
         let one_minus = 1.0 - self.cos_half_angle;
         (self.radius <= 0.0 && one_minus > 0.0 && self.direction.dot(dir) >= self.cos_half_angle)

@@ -140,3 +140,48 @@ pub fn look_at(eye: [f32; 3], target: [f32; 3]) -> [[f32; 4]; 4] {
     let z = -f;
     [[r.x, u.x, z.x, eye.x], [r.y, u.y, z.y, eye.y], [r.z, u.z, z.z, eye.z], [0.0, 0.0, 0.0, 1.0]]
 }
+
+/// Mean over seeds of each k×k block's mean of `w`×`h` per-seed images, with its
+/// standard error (from the spread over seeds).
+pub fn block_means(images: &[Vec<f64>], w: usize, h: usize, k: usize) -> Vec<(f64, f64)> {
+    let mut out = Vec::new();
+    for by in 0..h / k {
+        for bx in 0..w / k {
+            let per_seed: Vec<f64> = images
+                .iter()
+                .map(|img| {
+                    let mut s = 0.0;
+                    for y in by * k..(by + 1) * k {
+                        for x in bx * k..(bx + 1) * k {
+                            s += img[y * w + x];
+                        }
+                    }
+                    s / (k * k) as f64
+                })
+                .collect();
+            let n = per_seed.len() as f64;
+            let m = per_seed.iter().sum::<f64>() / n;
+            let var = per_seed.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (n - 1.0);
+            out.push((m, (var / n).sqrt()));
+        }
+    }
+    out
+}
+
+/// Two sets of per-seed `w`×`h` images estimate the same image: every 6×6 block within 5
+/// standard errors, the whole image within 4 (plus `total_rel` of it).
+pub fn assert_same_image(a: &[Vec<f64>], b: &[Vec<f64>], w: usize, h: usize, total_rel: f64, what: &str) {
+    let (ma, mb) = (block_means(a, w, h, 6), block_means(b, w, h, 6));
+    let mut worst = 0.0f64;
+    for (i, (&(x, sx), &(y, sy))) in ma.iter().zip(&mb).enumerate() {
+        let se = (sx * sx + sy * sy).sqrt();
+        let z = (x - y).abs() / (se + 1e-3 * y.abs().max(1e-4));
+        worst = worst.max(z);
+        assert!(z < 5.0, "{what}: block {i}: {x} vs {y} (se {se})");
+    }
+    let total =
+        |m: &[(f64, f64)]| (m.iter().map(|v| v.0).sum::<f64>(), m.iter().map(|v| v.1 * v.1).sum::<f64>().sqrt());
+    let ((ta, sa), (tb, sb)) = (total(&ma), total(&mb));
+    assert!((ta - tb).abs() < 4.0 * (sa * sa + sb * sb).sqrt() + total_rel * tb, "{what}: image {ta} vs {tb}");
+    eprintln!("{what}: worst block z {worst:.2}, image {ta:.4} vs {tb:.4}");
+}
