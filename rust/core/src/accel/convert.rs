@@ -47,6 +47,7 @@ pub(super) struct Converter {
     decisions: Vec<Decision>,
     nodes: Vec<CwBvhNode>,
     primitive_indices: Vec<u32>,
+    depth: u32,
 }
 
 impl Converter {
@@ -73,7 +74,17 @@ impl Converter {
             self.cost_recursive(bvh2, 0, max_prims_per_leaf);
         }
         self.nodes.push(CwBvhNode::default());
-        self.emit(bvh2, 0, 0);
+        // Depth-first from the root, children in slot order (a recursion's order, which
+        // obvhs's is): an explicit stack, as a degenerate tree (10k triangles at one
+        // point) is thousands of wide nodes deep and overflowed the thread's stack.
+        self.depth = 0;
+        let mut todo = vec![(0usize, 0usize, 1u32)];
+        while let Some((wide, node, depth)) = todo.pop() {
+            self.depth = self.depth.max(depth);
+            let base = todo.len();
+            self.emit(bvh2, wide, node, |w, n| todo.push((w, n, depth + 1)));
+            todo[base..].reverse();
+        }
         CwBvh {
             nodes: self.nodes.to_vec(),
             primitive_indices: self.primitive_indices.to_vec(),
@@ -83,13 +94,25 @@ impl Converter {
         }
     }
 
-    fn cost_recursive(&mut self, bvh2: &Bvh2, node: usize, max_prims_per_leaf: u32) {
-        let n = &bvh2.nodes[node];
-        if !n.is_leaf() {
-            self.cost_recursive(bvh2, n.first_index as usize, max_prims_per_leaf);
-            self.cost_recursive(bvh2, n.first_index as usize + 1, max_prims_per_leaf);
+    /// The cost table in post order (children before their parent) for trees whose
+    /// children may come before their parents (after reinsertion): an explicit stack, as
+    /// the binary tree of a degenerate mesh is a chain as deep as its triangle count.
+    fn cost_recursive(&mut self, bvh2: &Bvh2, root: usize, max_prims_per_leaf: u32) {
+        let mut todo = vec![(root, false)];
+        while let Some((node, children_done)) = todo.pop() {
+            let n = &bvh2.nodes[node];
+            if children_done || n.is_leaf() {
+                self.cost(bvh2, node, max_prims_per_leaf);
+            } else {
+                todo.extend([(node, true), (n.first_index as usize + 1, false), (n.first_index as usize, false)]);
+            }
         }
-        self.cost(bvh2, node, max_prims_per_leaf);
+    }
+
+    /// Depth of the last converted tree in wide nodes (1: a root whose children are all
+    /// leaves).
+    pub fn depth(&self) -> u32 {
+        self.depth
     }
 
     /// Fills node `node`'s 7 entries; its children's must be filled.
@@ -173,8 +196,9 @@ impl Converter {
         self.collect_primitives(bvh2, first) + self.collect_primitives(bvh2, first + 1)
     }
 
-    /// Writes wide node `wide` from binary node `node` and, recursively, its subtree.
-    fn emit(&mut self, bvh2: &Bvh2, wide: usize, node: usize) {
+    /// Writes wide node `wide` from binary node `node`; `child(wide, node)` gets each of
+    /// its internal children in slot order, to be written next (depth first).
+    fn emit(&mut self, bvh2: &Bvh2, wide: usize, node: usize, mut child: impl FnMut(usize, usize)) {
         let aabb = *bvh2.nodes[node].aabb();
         let mut out = CwBvhNode { p: aabb.min.into(), ..Default::default() };
         // The quantization step per axis: the least power of two e with 255 e ≥ the
@@ -227,9 +251,9 @@ impl Converter {
         self.nodes.resize(self.nodes.len() + internal, CwBvhNode::default());
         self.nodes[wide] = out;
         let mut offset = 0;
-        for (i, &child) in children.iter().enumerate() {
-            if child != INVALID && out.imask & (1 << i) != 0 {
-                self.emit(bvh2, (out.child_base_idx + offset) as usize, child as usize);
+        for (i, &c) in children.iter().enumerate() {
+            if c != INVALID && out.imask & (1 << i) != 0 {
+                child((out.child_base_idx + offset) as usize, c as usize);
                 offset += 1;
             }
         }

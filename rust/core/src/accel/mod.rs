@@ -15,16 +15,18 @@ use glam::Vec3A;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::bvh2::Bvh2;
-use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ploc::PlocBuilder;
 use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 use std::sync::Mutex;
-use std::time::Duration;
 
+mod balanced;
 mod convert;
 mod traverse;
+
+#[cfg(test)]
+mod degenerate_tests;
 
 use traverse::TRay;
 
@@ -67,30 +69,50 @@ impl MeshBvh {
             }
             bb
         }));
-        // What obvhs's `build_cwbvh` does (PLOC, reinsertion, wide conversion), with
-        // the builder's, binary BVH's and conversion's buffers reused across builds.
-        ws.ploc.build_with_bvh(
-            &mut ws.bvh2,
-            params.ploc_search_distance,
-            &ws.aabbs,
-            (0..count as u32).collect(),
-            params.sort_precision,
-            params.search_depth_threshold,
-        );
-        ws.reinsertion.run(&mut ws.bvh2, params.reinsertion_batch_ratio, None);
-        let mut bvh = ws.convert.convert(&ws.bvh2, params.max_prims_per_leaf);
-        // obvhs's own checks, which its `build_cwbvh` runs in debug builds.
-        #[cfg(debug_assertions)]
-        {
-            ws.bvh2.validate(&ws.aabbs, false, false);
-            bvh.validate(&ws.aabbs, false);
-        }
+        let mut bvh = ws.build(count, params);
         if ids.is_some() {
             for p in &mut bvh.primitive_indices {
                 *p = mesh_index(*p as usize) as u32;
             }
         }
         MeshBvh { bvh }
+    }
+}
+
+/// Deepest wide BVH the traversal's stack holds (`traverse::STACK` entries; a wide BVH
+/// n levels deep pushes at most n − 1 node groups), obvhs's own limit.
+const MAX_DEPTH: u32 = 31;
+
+impl Workspace {
+    /// The wide BVH over the first `count` boxes of `self.aabbs`: what obvhs's
+    /// `build_cwbvh` does (PLOC, reinsertion, wide conversion), with the builder's, binary
+    /// BVH's and conversion's buffers reused across builds, and a balanced tree of median
+    /// splits instead when PLOC's is deeper than the traversal can walk ([`balanced`]:
+    /// coincident or collapsed triangles).
+    fn build(&mut self, count: usize, params: BvhBuildParams) -> CwBvh {
+        self.ploc.build_with_bvh(
+            &mut self.bvh2,
+            params.ploc_search_distance,
+            &self.aabbs,
+            (0..count as u32).collect(),
+            params.sort_precision,
+            params.search_depth_threshold,
+        );
+        self.reinsertion.run(&mut self.bvh2, params.reinsertion_batch_ratio, None);
+        let mut bvh = self.convert.convert(&self.bvh2, params.max_prims_per_leaf);
+        if self.convert.depth() > MAX_DEPTH {
+            balanced::build(&mut self.bvh2, &self.aabbs);
+            bvh = self.convert.convert(&self.bvh2, params.max_prims_per_leaf);
+            // ceil(log2 n) + 1 binary levels, at most as many wide ones.
+            assert!(self.convert.depth() <= MAX_DEPTH, "BVH {} levels deep over {count} boxes", self.convert.depth());
+        }
+        // obvhs's own checks, which its `build_cwbvh` runs in debug builds.
+        #[cfg(debug_assertions)]
+        {
+            self.bvh2.validate(&self.aabbs, false, false);
+            bvh.validate(&self.aabbs, false);
+        }
+        bvh
     }
 }
 
@@ -235,7 +257,8 @@ impl Accel {
         let tlas = if boxes.is_empty() {
             None
         } else {
-            Some(build_cwbvh(&boxes, build_params_for(boxes.len()), &mut Duration::default()))
+            let mut ws = Workspace { aabbs: boxes, ..Workspace::default() };
+            Some(ws.build(ws.aabbs.len(), build_params_for(ws.aabbs.len())))
         };
         let tlas_instances = match &tlas {
             Some(t) => t.primitive_indices.iter().map(|&i| tlas_instances[i as usize]).collect(),

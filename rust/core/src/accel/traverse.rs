@@ -164,7 +164,9 @@ impl<'s> Walk<'s> {
 }
 
 /// obvhs's traversal stack depth (`TRAVERSAL_STACK_SIZE`; its `CwBvh::validate` checks
-/// the tree is shallower).
+/// the tree is shallower). A tree n levels deep pushes at most n − 1 groups; the build
+/// keeps every tree within `super::MAX_DEPTH` = 31 levels (a balanced tree replaces a
+/// deeper one: `super::balanced`), so the clamp in `push` never drops a group.
 const STACK: usize = 32;
 
 /// Stack storage, left uninitialised.
