@@ -259,3 +259,47 @@ fn coincident_instances() {
     let (hits, blocked) = agrees_with_brute_force(&meshes, &instances, Vec3A::splat(-1.0), Vec3A::ONE, 300);
     assert!(hits > 100 && blocked > 50, "{hits} hits, {blocked} blocked");
 }
+
+/// The public scene builder refuses non-finite and out-of-range vertices with an error
+/// naming the mesh (or the instance whose transform carries them out of range), before
+/// the BVH sees them.
+#[test]
+fn scene_builder_refuses_non_finite_vertices_naming_the_mesh() {
+    use crate::color::RgbSpace;
+    use crate::scene::{Buffer, BuildOptions, InstanceDesc, MeshDesc, Scene, SceneDesc};
+    use crate::spectrum::WavelengthGrid;
+    let build = |bad: f32, scale: f32| {
+        let mut desc = SceneDesc::default();
+        desc.materials.push(serde_json::from_str(r#"{"name": "m0"}"#).unwrap());
+        desc.meshes.push(MeshDesc {
+            name: "bad mesh".into(),
+            vertices: 0,
+            triangles: 1,
+            material: Some(0),
+            ..Default::default()
+        });
+        let s = [scale, 0.0, 0.0, 0.0];
+        desc.instances = Some(vec![InstanceDesc {
+            name: "bad instance".into(),
+            mesh: 0,
+            transform: [s, [0.0, scale, 0.0, 0.0], [0.0, 0.0, scale, 0.0], [0.0, 0.0, 0.0, 1.0]],
+            ..Default::default()
+        }]);
+        let buffers = [Buffer::F32(vec![0.0, 0.0, 0.0, 1.0, 0.0, bad, 0.0, 1.0, 0.0]), Buffer::U32(vec![0, 1, 2])];
+        let opts = BuildOptions {
+            grid: WavelengthGrid::uniform(8, 380.0, 780.0).unwrap(),
+            space: RgbSpace::rec709(),
+            uplift: Default::default(),
+            width: 4,
+            height: 3,
+        };
+        Scene::build(&desc, &buffers, &opts).err().map(|e| e.to_string())
+    };
+    assert_eq!(build(0.0, 1.0), None);
+    for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 1e30, -1e30] {
+        let e = build(bad, 1.0).expect("an error");
+        assert!(e.contains("bad mesh") && e.contains("vertex 1"), "{bad}: {e}");
+    }
+    let e = build(0.0, 1e20).expect("an error");
+    assert!(e.contains("bad instance"), "{e}");
+}
