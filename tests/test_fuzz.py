@@ -101,3 +101,36 @@ def test_garbage_json_and_buffers_are_clear_errors():
         _core.render(
             '{"meshes": [{"name": "m", "vertices": 0, "triangles": 1}]}', [np.zeros(3, np.uint32), np.zeros(3, np.uint32)], settings
         )
+
+
+def test_degenerate_meshes_render():
+    """Meshes PLOC makes a chain of (10k triangles at one point, 2000 copies of one
+    triangle) build and render: the point mesh overflowed the wide-BVH conversion's
+    recursion (a stack overflow aborts the whole process), the copies made a tree deeper
+    than the traversal's 32-entry stack. The copies cover the view: the image is lit."""
+    scene = pc.Scene()
+    scene.add_mesh("speck", [[0.1, 0.2, 0.3]], [[0, 0, 0]] * 10_000)
+    lamp = scene.add_material(pc.Emitter((1, 1, 1), strength=2.0, name="lamp"))
+    quad = [[-9, -9, -1], [9, -9, -1], [0, 9, -1]]
+    scene.add_mesh("copies", quad, [[0, 1, 2]] * 2000, material=lamp)
+    r = pc.render(scene, width=4, height=3, samples=1, wavelength_count=41)
+    assert np.isfinite(r.rgba).all()
+    assert (r.rgba[..., :3] > 0.1).all(), r.rgba[..., :3]
+
+
+def test_pass_count_overflow_is_a_value_error():
+    """PassRenderer.end_group past 2^32 - 1 passes: a ValueError (it was an integer
+    overflow: pyo3's PanicException, a BaseException, in debug builds; a count wrapped to
+    a few passes in release ones)."""
+    from polychrome.render import RenderSettings, description_json
+
+    scene = pc.Scene()
+    scene.set_world(0.5)
+    desc, buffers = scene.description()
+    settings = RenderSettings(width=4, height=3, samples=1, wavelength_count=41)
+    r = _core.PassRenderer(description_json(desc), buffers, settings.to_json())
+    r.end_group(2**32 - 2)
+    with pytest.raises(ValueError, match="end_group"):
+        r.end_group(2)
+    r.end_group(1)
+    assert r.passes() == 2**32 - 1

@@ -376,11 +376,21 @@ impl PassRenderer {
         Driver::new(&self.scene, &self.settings).map_err(to_py_err)
     }
 
+    /// `f` on the merge state, a panic in it (core code) turned into a RuntimeError as by
+    /// [`guarded`] (not pyo3's PanicException, a BaseException `except Exception` misses).
     fn with_merge<T>(&self, f: impl FnOnce(&Driver, &mut Merge) -> PyResult<T>) -> PyResult<T> {
         let driver = self.driver()?;
         let mut slot = lock(&self.merge);
-        let merge = slot.get_or_insert_with(|| Merge::new(&driver));
-        f(&driver, merge)
+        catch_unwind(AssertUnwindSafe(|| {
+            let merge = slot.get_or_insert_with(|| Merge::new(&driver));
+            f(&driver, merge)
+        }))
+        .unwrap_or_else(|p| {
+            Err(PyRuntimeError::new_err(format!(
+                "internal error in PassRenderer (please report): {}",
+                panic_message(p)
+            )))
+        })
     }
 
     fn pixels(&self) -> usize {
@@ -660,6 +670,14 @@ impl PassRenderer {
     /// After every task of a group of `passes` passes was added.
     fn end_group(&self, passes: u32) -> PyResult<()> {
         self.with_merge(|d, m| {
+            // The count is a u32: past it, debug builds panicked and release ones wrapped.
+            if m.passes().checked_add(passes).is_none() {
+                return Err(PyValueError::new_err(format!(
+                    "end_group({passes}): {} passes already ended, the total would exceed {}",
+                    m.passes(),
+                    u32::MAX
+                )));
+            }
             m.end_group(d, passes);
             Ok(())
         })
