@@ -124,17 +124,51 @@ fn albedo_weights(j: usize) -> &'static [f32] {
     })
 }
 
+/// One Fresnel function's albedo rows, per thread: `f` at the weight table's nodes and
+/// E(μ) = W[j]·f for each roughness row j read so far.
+struct FresnelRows {
+    fk: Vec<f32>,
+    rows: Vec<Option<Box<[f32; ALBEDO_MU]>>>,
+}
+
+thread_local! {
+    // Keyed by `f` at KEY_COSINES. A texture on Base Color or Roughness builds a
+    // Principled at every hit with the same Fresnel: its rows are computed once per
+    // thread instead of WEIGHT_COS Fresnel evaluations and two 33×129 dot products per hit.
+    static FRESNEL_ROWS: std::cell::RefCell<std::collections::HashMap<[u64; 8], FresnelRows>> =
+        std::cell::RefCell::new(std::collections::HashMap::new());
+}
+
 /// `compute_albedo_table` of an isotropic rough lobe through `albedo_weights`, linear
-/// between the two neighbouring roughness rows (α = r²).
+/// between the two neighbouring roughness rows (α = r²). The rows W[j]·f are memoised
+/// per Fresnel function ([`FRESNEL_ROWS`]); the result is the same to the bit.
 fn albedo_table_from_weights(alpha: f32, f: &dyn Fn(f64) -> f64) -> Vec<f32> {
-    let fk: Vec<f32> = (0..WEIGHT_COS).map(|k| f(k as f64 / (WEIGHT_COS - 1) as f64) as f32).collect();
     let x = alpha.max(0.0).sqrt().min(1.0) * (WEIGHT_ROUGH - 1) as f32;
     let j = (x.floor() as usize).min(WEIGHT_ROUGH - 2);
     let t = x - j as f32;
-    let (w0, w1) = (albedo_weights(j), albedo_weights(j + 1));
-    let dot =
-        |w: &[f32], i: usize| -> f32 { w[i * WEIGHT_COS..][..WEIGHT_COS].iter().zip(&fk).map(|(a, b)| a * b).sum() };
-    (0..ALBEDO_MU).map(|i| ((1.0 - t) * dot(w0, i) + t * dot(w1, i)).clamp(0.0, 1.0)).collect()
+    let key = KEY_COSINES.map(|c| f(c).to_bits());
+    FRESNEL_ROWS.with(|memo| {
+        let mut memo = memo.borrow_mut();
+        if memo.len() >= MEMO_TABLES && !memo.contains_key(&key) {
+            memo.clear();
+        }
+        let entry = memo.entry(key).or_insert_with(|| FresnelRows {
+            fk: (0..WEIGHT_COS).map(|k| f(k as f64 / (WEIGHT_COS - 1) as f64) as f32).collect(),
+            rows: vec![None; WEIGHT_ROUGH],
+        });
+        for r in [j, j + 1] {
+            if entry.rows[r].is_none() {
+                let w = albedo_weights(r);
+                let mut row = [0.0f32; ALBEDO_MU];
+                for (i, e) in row.iter_mut().enumerate() {
+                    *e = w[i * WEIGHT_COS..][..WEIGHT_COS].iter().zip(&entry.fk).map(|(a, b)| a * b).sum();
+                }
+                entry.rows[r] = Some(Box::new(row));
+            }
+        }
+        let (r0, r1) = (entry.rows[j].as_deref().expect("built"), entry.rows[j + 1].as_deref().expect("built"));
+        r0.iter().zip(r1).map(|(&a, &b)| ((1.0 - t) * a + t * b).clamp(0.0, 1.0)).collect()
+    })
 }
 
 /// The directional albedo E(μ) of a GGX reflection lobe with Fresnel `f(cos θ_h)`, for
@@ -1082,6 +1116,32 @@ mod tests {
                 let (ea, eb) = (albedo_average(&lut), albedo_average(&direct));
                 assert!((ea - eb).abs() < 1e-3, "roughness {r}, {what}: E_avg {ea} vs {eb}");
             }
+        }
+    }
+
+    /// The per-thread rows of [`FRESNEL_ROWS`] give the table the weight rows give
+    /// without a memo, to the bit, whatever was read before (other Fresnels and
+    /// roughnesses interleaved, the memo cleared when full).
+    #[test]
+    fn memoised_fresnel_rows_equal_the_unmemoised_table() {
+        let unmemoised = |alpha: f32, f: &dyn Fn(f64) -> f64| -> Vec<f32> {
+            let fk: Vec<f32> = (0..WEIGHT_COS).map(|k| f(k as f64 / (WEIGHT_COS - 1) as f64) as f32).collect();
+            let x = alpha.max(0.0).sqrt().min(1.0) * (WEIGHT_ROUGH - 1) as f32;
+            let j = (x.floor() as usize).min(WEIGHT_ROUGH - 2);
+            let t = x - j as f32;
+            let (w0, w1) = (albedo_weights(j), albedo_weights(j + 1));
+            let dot = |w: &[f32], i: usize| -> f32 {
+                w[i * WEIGHT_COS..][..WEIGHT_COS].iter().zip(&fk).map(|(a, b)| a * b).sum()
+            };
+            (0..ALBEDO_MU).map(|i| ((1.0 - t) * dot(w0, i) + t * dot(w1, i)).clamp(0.0, 1.0)).collect()
+        };
+        let mut rng = crate::sampling::Rng::new(5, 2);
+        for k in 0..(2 * MEMO_TABLES + 40) {
+            // Mostly a few indices (memo hits), sometimes a new one (a miss, and a clear).
+            let n = if k % 2 == 0 { 1.0 + rng.uniform() as f64 } else { [1.33, 1.5, 2.0][k % 3] };
+            let alpha = rng.uniform() * rng.uniform();
+            let f = |c: f64| fresnel_dielectric_f64(c, n);
+            assert_eq!(albedo_table_from_weights(alpha, &f), unmemoised(alpha, &f), "n {n}, alpha {alpha}");
         }
     }
 
