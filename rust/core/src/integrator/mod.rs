@@ -305,6 +305,7 @@ fn with_policy<P: WavelengthPolicy>(settings: &ResolvedSettings, policy: P) -> I
         // Subsurface random walks on camera and light paths (bidirectional MIS weighs
         // walked paths by the 0/1 partition: `PathHooks::walked`).
         subsurface: true,
+        light_tree: settings.light_tree,
         ..Walk::camera(settings.max_bounces, split)
     };
     let light = Walk {

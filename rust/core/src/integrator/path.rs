@@ -14,9 +14,9 @@ use super::wavelengths::{WavelengthPolicy, Wavelengths};
 use super::{CameraSample, Scatter, Scratch, Technique};
 use crate::film::PixelSample;
 use crate::geometry::{offset_ray_origin, shadow_ray, visibility};
-use crate::light::LightSample;
+use crate::light::{LightChoice, LightSample};
 use crate::material::ShadingContext;
-use crate::sampling::{power_heuristic, Distribution1D, Rng};
+use crate::sampling::{power_heuristic, Rng};
 use crate::scene::Scene;
 use crate::spectrum::SampledSpectrum;
 use glam::{Vec2, Vec3A};
@@ -48,8 +48,8 @@ pub trait CameraMis {
     /// At `v`, before it connects and scatters.
     fn vertex(&mut self, _v: &Vertex) {}
     /// Where light samples come from (eq. 7's choice ∝ power), as the weights count them.
-    fn nee_lights<'s>(&self, scene: &'s Scene) -> &'s Distribution1D {
-        &scene.light_distribution
+    fn nee_lights<'s>(&self, scene: &'s Scene) -> LightChoice<'s> {
+        LightChoice::Power(&scene.light_distribution)
     }
     /// Weight of light sample `d` taken at `v`.
     fn direct(&mut self, scene: &Scene, ctx: &mut ShadingContext, v: &Vertex, d: &DirectSample) -> f32;
@@ -59,9 +59,24 @@ pub trait CameraMis {
     fn walked(&mut self) {}
 }
 
-/// Veach's power heuristic between BSDF sampling and light sampling.
+/// Veach's power heuristic between BSDF sampling and light sampling, the light chosen
+/// ∝ power or by the light tree ([`Walk::light_tree`]).
 #[derive(Clone, Copy, Debug, Default)]
-pub struct PowerHeuristic;
+pub struct PowerHeuristic {
+    pub light_tree: bool,
+}
+
+impl PowerHeuristic {
+    /// For paths of `walk`.
+    pub fn of(walk: &Walk) -> Self {
+        Self { light_tree: walk.light_tree }
+    }
+    /// The probability that a light sample taken at `p` chooses light `l`.
+    #[inline]
+    fn light_pmf(&self, scene: &Scene, p: Vec3A, l: usize) -> f32 {
+        self.nee_lights(scene).pmf(p, l)
+    }
+}
 
 impl CameraMis for PowerHeuristic {
     fn emission(&mut self, scene: &Scene, v: &Vertex, st: &PathState) -> f32 {
@@ -70,7 +85,7 @@ impl CameraMis for PowerHeuristic {
         }
         match scene.triangle_light(v.si.instance, v.si.triangle) {
             Some(l) => {
-                let pl = scene.nee_distribution.pmf(l)
+                let pl = self.light_pmf(scene, st.prev_p, l)
                     * scene.lights[l].pdf_li_part_at(
                         v.si.triangle,
                         st.prev_p,
@@ -94,12 +109,16 @@ impl CameraMis for PowerHeuristic {
         if st.specular {
             return 1.0;
         }
-        let pl = scene.nee_distribution.pmf(light)
+        let pl = self.light_pmf(scene, st.prev_p, light)
             * scene.lights[light].pdf_li_at(st.prev_p, st.ray.direction, distance, st.ray.time);
         power_heuristic(st.prev_pdf, pl)
     }
-    fn nee_lights<'s>(&self, scene: &'s Scene) -> &'s Distribution1D {
-        &scene.nee_distribution
+    fn nee_lights<'s>(&self, scene: &'s Scene) -> LightChoice<'s> {
+        if self.light_tree {
+            LightChoice::Tree(&scene.light_tree)
+        } else {
+            LightChoice::Power(&scene.nee_distribution)
+        }
     }
     fn direct(&mut self, _scene: &Scene, _ctx: &mut ShadingContext, _v: &Vertex, d: &DirectSample) -> f32 {
         if d.ls.delta {
@@ -362,11 +381,9 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
             return;
         }
         // Next-event estimation: one light chosen ∝ its spectral power (eq. 7).
-        let lights = self.mis.nee_lights(scene);
-        let Some(l) = lights.sample(rng.uniform()) else {
+        let Some((l, pmf)) = self.mis.nee_lights(scene).sample(v.si.p, rng.uniform()) else {
             return;
         };
-        let pmf = lights.pmf(l);
         let u = rng.uniform2();
         let Some(ls) = scene.lights[l].sample_li_at(v.si.p, v.si.time, u, &mut scratch.le) else {
             return;
@@ -462,11 +479,9 @@ impl<T: Throughput, M: CameraMis> PathHooks<T> for CameraPath<'_, '_, T, M> {
         rng: &mut Rng,
         scratch: &mut Scratch,
     ) {
-        let lights = self.mis.nee_lights(scene);
-        let Some(l) = lights.sample(rng.uniform()) else {
+        let Some((l, pmf)) = self.mis.nee_lights(scene).sample(mv.p, rng.uniform()) else {
             return;
         };
-        let pmf = lights.pmf(l);
         let u = rng.uniform2();
         let Some(ls) = scene.lights[l].sample_li_at(mv.p, mv.time, u, &mut scratch.le) else {
             return;
@@ -726,7 +741,7 @@ fn trace_single<'s>(
     ctx.single_wavelength = Some(beta.index);
     ctx.subsurface_walk = walking && walk.subsurface;
     let mut gathered = beta.zero_like();
-    let mut hooks = CameraPath { mis: PowerHeuristic, gathered: &mut gathered, first_hit, transparent: 0.0 };
+    let mut hooks = CameraPath { mis: PowerHeuristic::of(walk), gathered: &mut gathered, first_hit, transparent: 0.0 };
     match exit {
         Some(v) => {
             ctx.uv = v.si.uv;
@@ -754,6 +769,6 @@ impl<P: WavelengthPolicy> Technique for PathTracing<P> {
         scratch: &mut Scratch,
     ) {
         let wl = self.wavelengths.camera(cs.pixel, cs.pass);
-        trace_camera(scene, &self.walk, cs.film, cs.row, wl, PowerHeuristic, rng, out, scratch);
+        trace_camera(scene, &self.walk, cs.film, cs.row, wl, PowerHeuristic::of(&self.walk), rng, out, scratch);
     }
 }

@@ -250,6 +250,9 @@ pub struct Walk {
     /// alike, until a path has left one walk; else they act as a diffuse of their base
     /// colour.
     pub subsurface: bool,
+    /// Camera paths take their light samples from the light tree (the point's own
+    /// choice) instead of eq. 7's choice ∝ power alone (`light::tree`).
+    pub light_tree: bool,
 }
 
 /// Bounces before Russian roulette may end a path.
@@ -267,6 +270,7 @@ impl Walk {
             stratified_collapse: false,
             medium_sampling: MediumSampling::default(),
             subsurface: false,
+            light_tree: true,
         }
     }
     /// Light paths whose camera connections have at most `max_bounces` scattering events.
@@ -280,6 +284,7 @@ impl Walk {
             stratified_collapse: false,
             medium_sampling: MediumSampling::default(),
             subsurface: false,
+            light_tree: true,
         }
     }
 

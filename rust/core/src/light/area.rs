@@ -1,7 +1,7 @@
 //! One emissive triangle of a mesh (in world space), emitting from both faces or, for
 //! a one-sided emitter (Cycles' and UsdLux's area lights), from its front face only.
 
-use super::{EmissionSample, Light, LightSample};
+use super::{EmissionSample, Light, LightBounds, LightSample};
 use crate::geometry::Frame;
 use crate::sampling::cosine_hemisphere;
 use crate::sampling::uniform_triangle_point;
@@ -58,6 +58,13 @@ impl AreaTriangle {
 }
 
 impl Light for AreaTriangle {
+    /// The triangle's box and its normal; emission spreads over the hemisphere about
+    /// it (both hemispheres for a two-sided emitter).
+    fn bounds(&self) -> Option<LightBounds> {
+        let lo = self.p[0].min(self.p[1]).min(self.p[2]);
+        let hi = self.p[0].max(self.p[1]).max(self.p[2]);
+        Some(LightBounds { w: self.normal, cos_theta_o: 1.0, two_sided: !self.one_sided, ..LightBounds::omni(lo, hi) })
+    }
     fn power(&self, weights: &[f32]) -> f64 {
         // Lambertian from each emitting face: Φ = π A ∫ L dλ per face.
         let faces = if self.one_sided { 1.0 } else { 2.0 };

@@ -6,7 +6,7 @@
 //! whatever the estimate is; the build costs O(triangles) evaluations with a small
 //! constant (`MeshLight::ESTIMATE_BUDGET`).
 
-use super::{EmissionSample, LeDensity, Light, LightSample};
+use super::{EmissionSample, LeDensity, Light, LightBounds, LightSample};
 use crate::geometry::Frame;
 use crate::sampling::{cosine_hemisphere, uniform_triangle_point, Distribution1D};
 use crate::spectrum::SampledSpectrum;
@@ -110,6 +110,18 @@ impl MeshLight {
 }
 
 impl Light for MeshLight {
+    /// The mesh's box, emitting every way (its triangles face anywhere).
+    fn bounds(&self) -> Option<LightBounds> {
+        let mut lo = Vec3A::splat(f32::INFINITY);
+        let mut hi = Vec3A::splat(f32::NEG_INFINITY);
+        for t in &self.p {
+            for &q in t {
+                lo = lo.min(q);
+                hi = hi.max(q);
+            }
+        }
+        Some(LightBounds::omni(lo, hi))
+    }
     fn power(&self, weights: &[f32]) -> f64 {
         // Both faces, Lambertian: Φ = 2 π Σ A ∫ L dλ (with the estimated L).
         2.0 * PI as f64 * self.area_radiance.dot(weights) as f64

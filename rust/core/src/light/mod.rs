@@ -9,6 +9,7 @@ pub mod moving;
 pub mod point;
 pub mod profile;
 pub mod spot;
+pub mod tree;
 
 use crate::spectrum::SampledSpectrum;
 use glam::{Vec2, Vec3A};
@@ -21,6 +22,7 @@ pub use moving::MovingLight;
 pub use point::PointLight;
 pub use profile::Profile;
 pub use spot::SpotLight;
+pub use tree::{LightBounds, LightChoice, LightTree};
 
 /// Incident radiance sampled from a light towards a shading point.
 #[derive(Clone, Copy, Debug)]
@@ -82,6 +84,14 @@ pub trait Light: Send + Sync {
     /// Total emitted power integrated over the grid with its quadrature weights (eq. 7):
     /// the light-selection weight.
     fn power(&self, weights: &[f32]) -> f64;
+    /// Where the light is and where it emits, for the light tree (its `phi` is set by
+    /// the tree from [`Light::power`]). None: chosen by power alone, beside the tree
+    /// (lights at infinity, moving lights). Bounds must hold every point and direction
+    /// the light emits from and along: a light the bounds give no importance at a
+    /// point is never sampled there.
+    fn bounds(&self) -> Option<LightBounds> {
+        None
+    }
     /// Samples a direction from `p` towards the light; `le` receives the radiance
     /// (intensity / distance² for point lights) arriving at `p`.
     fn sample_li(&self, p: Vec3A, u: Vec2, le: &mut SampledSpectrum) -> Option<LightSample>;

@@ -12,7 +12,7 @@
 //! blocks nothing (a ray goes on behind it, as Cycles' lights are transparent bounces).
 //! Radius 0 stays a delta light, reached by light sampling only.
 
-use super::{EmissionSample, Light, LightSample, Profile};
+use super::{EmissionSample, Light, LightBounds, LightSample, Profile};
 use crate::geometry::Frame;
 use crate::sampling::{cosine_hemisphere, uniform_sphere};
 use crate::spectrum::SampledSpectrum;
@@ -133,6 +133,11 @@ pub(crate) fn sphere_le_density(center: Vec3A, radius: f32, origin: Vec3A, dir: 
 }
 
 impl Light for PointLight {
+    /// The sphere's box, emitting every way (a profile too: it may light any direction).
+    fn bounds(&self) -> Option<LightBounds> {
+        let r = Vec3A::splat(self.radius.max(0.0));
+        Some(LightBounds::omni(self.position - r, self.position + r))
+    }
     fn power(&self, weights: &[f32]) -> f64 {
         let mean = self.profile.as_ref().map_or(1.0, |p| p.mean()) as f64;
         4.0 * PI as f64 * self.intensity.dot(weights) as f64 * mean

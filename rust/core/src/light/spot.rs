@@ -7,7 +7,7 @@
 //! point seen from the centre (Cycles' spot lights are spheres too, Blender 4.x),
 //! reached by camera and BSDF rays as a sphere light is.
 
-use super::{EmissionSample, Light, LightSample, Profile};
+use super::{EmissionSample, Light, LightBounds, LightSample, Profile};
 use crate::geometry::Frame;
 use crate::spectrum::SampledSpectrum;
 use glam::{Vec2, Vec3A};
@@ -82,6 +82,17 @@ impl SpotLight {
 }
 
 impl Light for SpotLight {
+    /// The sphere's box and the cone: `sample_li` weighs by the falloff of the
+    /// direction from the centre, zero outside the cone (with a radius or a profile too).
+    fn bounds(&self) -> Option<LightBounds> {
+        let r = Vec3A::splat(self.radius.max(0.0));
+        Some(LightBounds {
+            w: self.direction,
+            cos_theta_o: 1.0,
+            cos_theta_e: self.cos_half_angle,
+            ..LightBounds::omni(self.position - r, self.position + r)
+        })
+    }
     fn power(&self, weights: &[f32]) -> f64 {
         // The cone's solid angle (the blended edge counted in full: an upper bound
         // that is only used to choose lights).

@@ -295,6 +295,13 @@ settings! {
             item(Sampler::Independent, "Independent", "Independent random numbers for every draw, for comparison"),
         ]},
     ).see("methods.md");
+    /// Camera paths choose the light they sample by a light tree.
+    light_tree: copy bool = true => Spec::new(
+        "Sampling",
+        "Light Tree",
+        "Camera paths choose the light to sample by what it can contribute at the shading point (its power, distance and orientation: a light tree, as Cycles) instead of by its power alone; many-light scenes get less noise",
+        Kind::Bool,
+    ).see("methods.md");
     /// How spectra are traced.
     method: copy Method = Method::Polychromatic => Spec::new(
         "Spectrum",

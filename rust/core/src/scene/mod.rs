@@ -228,6 +228,9 @@ pub struct Scene {
     /// not sample a solid-colour world as a light either (a diffuse plane under one
     /// renders without noise there).
     pub nee_distribution: Distribution1D,
+    /// The light choice of `nee_distribution`'s lights by the shading point: a tree
+    /// over their bounds (`light::tree`, the `light_tree` setting).
+    pub light_tree: crate::light::LightTree,
     /// For instances with emissive triangles: the light index of each triangle
     /// (u32::MAX where the triangle does not emit), for MIS on BSDF-sampled hits.
     pub triangle_lights: Vec<Option<Vec<u32>>>,
@@ -952,6 +955,8 @@ impl Scene {
             nee_powers[env.light] = 0.0;
         }
         let nee_distribution = Distribution1D::new(&nee_powers);
+        let light_bounds: Vec<_> = lights.iter().map(|l| l.bounds()).collect();
+        let light_tree = crate::light::LightTree::new(&light_bounds, &nee_powers);
         let hit_lights = (0..lights.len()).filter(|&l| lights[l].hittable()).collect();
 
         let has_media =
@@ -969,6 +974,7 @@ impl Scene {
             lights,
             light_distribution,
             nee_distribution,
+            light_tree,
             triangle_lights,
             environment,
             texture_bytes,
