@@ -9,6 +9,8 @@ The Cycles comparisons are in tests/blender/test_motion.py."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -165,3 +167,31 @@ def test_a_moving_point_light_lights_the_time_average_of_the_inverse_square_law(
         * ((h / ((x[:, None] - xs[keys // 2]) ** 2 + y[None, :] ** 2 + h * h) ** 1.5).mean(axis=1).reshape(W, 4).mean(axis=1))
     )
     assert np.abs(still[lit] / want[lit] - 1).max() > 0.3
+
+
+def test_a_turning_sun_lights_the_time_average_of_its_cosine():
+    """``SunLight(motion=…)``: a sun turning uniformly by θ from −0.2 to 1.4 rad from the
+    vertical over the shutter lights a diffuse floor with ⟨cos θ⟩ = (sin 1.4 + sin 0.2) / 1.6
+    of the overhead sun's radiance."""
+
+    def key(theta):
+        s, c = math.sin(theta), math.cos(theta)
+        return np.array([[1, 0, 0, 0], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1]], float)
+
+    def mean(sun):
+        scene = pc.Scene()
+        floor = scene.add_material(pc.Diffuse(0.5))
+        v = np.array([[-3, -3, 0], [3, -3, 0], [3, 3, 0], [-3, 3, 0]], np.float32)
+        scene.add_mesh("floor", v, np.array([[0, 1, 2], [0, 2, 3]]), material=floor)
+        scene.add_light(sun)
+        scene.camera = pc.Camera(projection="ORTHOGRAPHIC", ortho_scale=4.0, to_world=translation(0.0, 5.0))
+        out = pc.render(scene, width=8, height=8, samples=64, wavelength_count=8, max_bounces=1)
+        return float((out.rgba[..., :3] @ np.array([0.2126, 0.7152, 0.0722])).mean())
+
+    overhead = mean(pc.SunLight((0, 0, -1), strength=3.0))
+    frame_dir = (0.0, math.sin(0.6), -math.cos(0.6))
+    turning = mean(pc.SunLight(frame_dir, strength=3.0, motion=[key(-0.2), key(1.4)]))
+    want = (math.sin(1.4) + math.sin(0.2)) / 1.6
+    assert abs(turning / overhead - want) < 0.01 * want, (turning / overhead, want)
+    at_frame = mean(pc.SunLight(frame_dir, strength=3.0)) / overhead
+    assert abs(at_frame - want) > 0.08 * want

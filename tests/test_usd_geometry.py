@@ -496,3 +496,64 @@ def test_deforming_mesh_round_trips_through_write_stage(tmp_path, with_normals):
     flag = by_name["flag"]
     np.testing.assert_array_equal(arrays(flag, "motion_vertices"), keys[:3][::-1])
     assert sorted(i["name"] for i in desc["instances"] if i["mesh"] == desc["meshes"].index(flag)) == ["flag2", "flag4"]
+
+
+def test_moving_lights_read_their_motion(tmp_path):
+    """UsdLux lights whose transforms are time-sampled move over the shutter: a
+    DistantLight turning about X (its keys' −Z the direction at each time, matching
+    pxr's ComputeLocalToWorldTransform), a SphereLight sliding along X (its keys'
+    translation), a RectLight (its emitter polygon an instance with keys); a textured
+    DomeLight turning is one warning naming it (it stays at the frame); lights that
+    stand still get no keys. The lit floor's time average is the closed form of
+    rust/core/tests/motion.rs and tests/test_motion.py."""
+    from pxr import UsdLux
+
+    from polychrome import imageio
+
+    imageio.write_exr(tmp_path / "env.exr", np.full((4, 8, 3), 0.1, np.float32))
+    path = tmp_path / "lights.usda"
+    stage = new_stage(path)
+    cam = top_camera(stage, "/cam", 5.0, 2.0)
+    cam.CreateShutterOpenAttr(0.0)
+    cam.CreateShutterCloseAttr(1.0)
+    sun = UsdLux.DistantLight.Define(stage, "/sun")
+    op = sun.AddRotateXOp()
+    op.Set(-10.0, 0.0)
+    op.Set(60.0, 1.0)
+    lamp = UsdLux.SphereLight.Define(stage, "/lamp")
+    op = lamp.AddTranslateOp()
+    op.Set(Gf.Vec3d(-1, 0, 2), 0.0)
+    op.Set(Gf.Vec3d(1, 0, 2), 1.0)
+    UsdLux.SphereLight.Define(stage, "/still").AddTranslateOp().Set(Gf.Vec3d(0, 1, 2))
+    rect = UsdLux.RectLight.Define(stage, "/panel")
+    op = rect.AddTranslateOp()
+    op.Set(Gf.Vec3d(0, -1, 2), 0.0)
+    op.Set(Gf.Vec3d(0, 1, 2), 1.0)
+    dome = UsdLux.DomeLight.Define(stage, "/sky")
+    dome.CreateTextureFileAttr("./env.exr")
+    op = dome.AddRotateZOp()
+    op.Set(0.0, 0.0)
+    op.Set(90.0, 1.0)
+    stage.Save()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scene = usd.read_stage(path)
+    messages = [str(w.message) for w in caught]
+    assert [m for m in messages if "/sky" in m and "turn" in m], messages
+    assert not [m for m in messages if "/sun" in m or "/lamp" in m or "/panel" in m], messages
+    desc, _ = scene.description()
+    lights = {d["name"]: d for d in desc["lights"]}
+    st = Usd.Stage.Open(str(path))
+
+    def world(prim, t):
+        return np.asarray(UsdGeom.Xformable(st.GetPrimAtPath(prim)).ComputeLocalToWorldTransform(t), float).T
+
+    sun_keys = np.asarray(lights["/sun"]["motion"])
+    assert len(sun_keys) >= 2
+    for k, t in ((sun_keys[0], 0.0), (sun_keys[-1], 1.0)):
+        assert np.allclose(-k[:3, 2], -world("/sun", t)[:3, 2], atol=1e-6)
+    lamp_keys = np.asarray(lights["/lamp"]["motion"])
+    assert np.allclose(lamp_keys[0][:3, 3], [-1, 0, 2]) and np.allclose(lamp_keys[-1][:3, 3], [1, 0, 2])
+    assert "motion" not in lights["/still"]
+    panel = [i for i in desc["instances"] if i["name"] == "/panel"][0]
+    assert np.allclose(np.asarray(panel["motion"])[[0, -1]][:, :3, 3], [[0, -1, 2], [0, 1, 2]])

@@ -594,6 +594,9 @@ class SunLight:
     angle: float = 0.0
     #: the kinds of rays that see it, e.g. ``{"diffuse": False}``, ``{"camera": True}`` (``LIGHT_RAY_KINDS``)
     visibility: Any = None
+    #: motion blur: K ≥ 2 light → world 4×4 keys evenly spaced over the shutter; at each time the sun shines
+    #: along its key's −Z (it turns; translation does nothing to it), ``direction`` is the one at the frame
+    motion: Any = None
 
     def to_dict(self) -> dict[str, Any]:
         d = _finite_floats(self.direction, f"light '{self.name}': direction")
@@ -607,6 +610,7 @@ class SunLight:
             raise ValueError(f"light '{self.name}': angle {self.angle} rad must be in [0, π]")
         if a > 0.0:
             out["angle"] = a
+        _with_light_motion(out, self.motion, self.name)
         return _with_light_visibility(out, self.visibility, self.name)
 
 

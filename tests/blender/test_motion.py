@@ -8,6 +8,7 @@ tests/test_motion.py and rust/core/tests/motion.rs."""
 
 import textwrap
 
+import numpy as np
 import pytest
 
 from .bhelper import check, run_bpy
@@ -159,3 +160,47 @@ def test_render_border_matches_cycles(tmp_path):
         assert v["de"] <= 1.5, (name, v)
         # 24 × 20 pixels of the border (Blender truncates its corners to pixels).
         assert v["samples"] == 24 * 20 * 128, (name, v)
+
+
+def test_a_turning_sun_exports_its_keys(tmp_path):
+    """A sun whose rotation is animated over the shutter exports motion keys whose −Z
+    axes are the sun's direction at the shutter's opening and closing (Blender's own
+    matrix_world there), without a warning; Polychrome turns the sun with them (closed
+    form of the lit floor in rust/core/tests/motion.rs). Cycles keeps its lights at the
+    frame, so there is no Cycles comparison."""
+    proc, res = run_bpy(
+        tmp_path,
+        """
+    import mathutils
+    from polychrome_blender.export import export_scene
+    sc = empty_scene(8, 8)
+    add_camera(sc, (0, -10, 3))
+    sc.render.use_motion_blur = True; sc.render.motion_blur_shutter = 1.0
+    ld = bpy.data.lights.new('Sun', 'SUN'); ld.energy = 3.0
+    sun = bpy.data.objects.new('Sun', ld); sc.collection.objects.link(sun)
+    sun.rotation_euler.x = -0.4; sun.keyframe_insert('rotation_euler', frame=9)
+    sun.rotation_euler.x = 1.0; sun.keyframe_insert('rotation_euler', frame=11)
+    for a in bpy.data.actions:
+        fcs = getattr(a, 'fcurves', None)
+        if fcs is None:  # Blender 5: layered actions
+            fcs = [fc for layer in a.layers for strip in layer.strips for bag in strip.channelbags for fc in bag.fcurves]
+        for fc in fcs:
+            for k in fc.keyframe_points:
+                k.interpolation = 'LINEAR'
+    def axis_at(frame, sub):
+        sc.frame_set(frame, subframe=sub)
+        return list(sun.matrix_world.to_3x3() @ mathutils.Vector((0, 0, -1)))
+    want = [axis_at(9, 0.5), axis_at(10, 0.5)]
+    sc.frame_set(10)
+    scene, warns = export_scene(bpy.context.evaluated_depsgraph_get(), frame_set=lambda f, s: sc.frame_set(f, subframe=s))
+    desc, _ = scene.description()
+    (light,) = desc['lights']
+    keys = [[-row[2] for row in k[:3]] for k in light.get('motion', [])]
+    emit(keys=keys, want=want, direction=light['direction'], warns=[str(w) for w in warns])
+    """,
+    )
+    r = check(proc, res)[0]
+    assert len(r["keys"]) >= 2, r
+    assert not [w for w in r["warns"] if "Sun" in w], r["warns"]
+    assert np.allclose(r["keys"][0], r["want"][0], atol=1e-4) and np.allclose(r["keys"][-1], r["want"][1], atol=1e-4), r
+    assert not np.allclose(r["keys"][0], r["keys"][-1], atol=0.1)

@@ -310,6 +310,7 @@ class _Reader:
         # The time PointInstancer positions are sampled at (velocities extrapolate from it).
         self.base_time = self.time
         self.lights: list[Any] = []
+        self.light_prims: dict[int, Any] = {}  # index in lights → the prim it was read from
         # DomeLights read: (prim path, ("uniform", spectrum) or ("texture", set_world kwargs)).
         self.domes: list[tuple[str, tuple[str, Any]]] = []
         self.cameras: list[Any] = []
@@ -1899,7 +1900,7 @@ class _Reader:
             "material_ids": None,
             "material": emitter,
         }
-        self.instances.append((key, m, name, vis))
+        self.instances.append((key, m, name, vis, prim))  # the prim: its motion over the shutter
 
     def read_rect_light(self, prim) -> None:
         light = self.UsdLux.RectLight(prim)
@@ -2532,7 +2533,10 @@ class _Reader:
                 "DomeLight_1": self.read_dome_light,
             }.get(t, self.read_mesh if t in GEOMETRY_TYPES else None)
             if reader is not None:
+                n_lights = len(self.lights)
                 self.guarded(prim, lambda: reader(prim))
+                for i in range(n_lights, len(self.lights)):  # its motion is read with the shutter
+                    self.light_prims[i] = prim
                 if t == "PointInstancer":
                     it.PruneChildren()
             elif t == "Camera":
@@ -2654,12 +2658,21 @@ class _Reader:
         for first, problem, count in refused.values():
             more = f" (and {count - 1} more of its instances)" if count > 1 else ""
             self.warn(f"bad:instance:{first}", f"prim {first}: {problem}; it is skipped{more}")
-        for light in self.lights:
+        for i, light in enumerate(self.lights):
+            prim = self.light_prims.get(i)
+            if shutter is not None and prim is not None:
+                keys = self.guarded_motion(prim, shutter)
+                if keys is not None and len(keys) > 1:
+                    light.motion = keys  # point, spot and distant lights move (docs/usd.md, "Motion")
             d = light.to_dict()
             if not _f32_finite(d):  # e.g. a normalized light of a tiny area: the core's float32 overflows
                 self.warn(f"bad:light:{d.get('name')}", f"prim {d.get('name')}: its emission is too large for the renderer; it is skipped")
                 continue
             scene.add_light(light)
+        for path, (kind, _) in self.domes if shutter is not None else []:
+            keys = self.guarded_motion(self.stage.GetPrimAtPath(path), shutter) if kind == "texture" else None
+            if keys is not None and len(keys) > 1 and not all(np.allclose(k[:3, :3], keys[0][:3, :3]) for k in keys):
+                self.warn(f"domemotion:{path}", f"prim {path}: a DomeLight does not turn over the shutter; it is rendered at the frame")
         world = self.combined_world()
         if world is not None:
             scene.set_world(**world)

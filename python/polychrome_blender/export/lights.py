@@ -324,11 +324,6 @@ def export_lights(depsgraph, scene, warnings, motion=None):
                 )
             )
         elif ld.type == "SUN":
-            if keys is not None:
-                warnings.add(
-                    ("moving sun", name),
-                    f"light '{name}': a sun does not move over the shutter; rendered at the current frame",
-                )
             spec = light_colour(ld, name, warnings)
             angle = min(max(float(ld.angle), 0.0), math.pi)
             scene.add_light(
@@ -339,6 +334,7 @@ def export_lights(depsgraph, scene, warnings, motion=None):
                     name=name,
                     angle=angle,
                     visibility=point_light_visibility(ob, name, warnings),
+                    motion=keys,
                 )
             )
         else:

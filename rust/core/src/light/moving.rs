@@ -7,6 +7,10 @@
 //! translation, so distances, solid angles and their pdfs, radiance and power are the
 //! built light's. A query at time t asks the built light from D(t)⁻¹ p and turns the
 //! answer back by D(t).
+//!
+//! A light at infinity (a sun) only turns: D(t) is the keys' rotation about the centre
+//! of the scene's bounding sphere ([`MovingLight::turning_only`]), which maps that
+//! sphere onto itself, so the disk its light paths start on still covers the scene.
 
 use super::{EmissionSample, LeDensity, Light, LightSample};
 use crate::geometry::motion::TransformMotion;
@@ -18,6 +22,8 @@ pub struct MovingLight {
     inner: Box<dyn Light>,
     motion: TransformMotion,
     frame_inverse: Affine3A,
+    /// Rotation only, about this point (the scene's centre, from `preprocess`).
+    turn_about: Option<Vec3A>,
 }
 
 /// The rotation and translation of a transform whose columns may be scaled (Blender's
@@ -37,17 +43,33 @@ impl MovingLight {
         }
         let keys: Vec<Affine3A> = keys.iter().map(rigid).collect();
         let motion = TransformMotion::new("light", name, &keys)?;
-        Ok(Self { inner, motion, frame_inverse: rigid(&frame).inverse() })
+        Ok(Self { inner, motion, frame_inverse: rigid(&frame).inverse(), turn_about: None })
+    }
+
+    /// The keys' rotation only, about the scene's centre: for lights at infinity.
+    pub fn turning_only(mut self) -> Self {
+        self.turn_about = Some(Vec3A::ZERO);
+        self
     }
 
     /// D(t): where the built light is carried at shutter time `time`.
     fn at(&self, time: f32) -> Affine3A {
-        self.motion.at(time) * self.frame_inverse
+        let d = self.motion.at(time) * self.frame_inverse;
+        match self.turn_about {
+            Some(c) => {
+                let r = Affine3A { matrix3: d.matrix3, translation: Vec3A::ZERO };
+                Affine3A::from_translation(c.into()) * r * Affine3A::from_translation((-c).into())
+            }
+            None => d,
+        }
     }
 }
 
 impl Light for MovingLight {
     fn preprocess(&mut self, center: Vec3A, radius: f32) {
+        if self.turn_about.is_some() {
+            self.turn_about = Some(center);
+        }
         self.inner.preprocess(center, radius);
     }
     fn power(&self, weights: &[f32]) -> f64 {

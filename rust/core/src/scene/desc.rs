@@ -730,6 +730,11 @@ pub enum LightDesc {
         /// it); shadow does not apply.
         #[serde(default)]
         visibility: crate::geometry::visibility::LightVisibilityDesc,
+        /// Light → world keys evenly spaced over the shutter, as a point light's: the
+        /// sun turns with their rotation (its −Z axis the direction at each time; the
+        /// translation does nothing to a light at infinity).
+        #[serde(default)]
+        motion: Vec<[[f32; 4]; 4]>,
     },
 }
 
@@ -777,11 +782,12 @@ impl LightDesc {
         }
     }
 
-    /// The light's motion keys over the shutter (none for a sun).
+    /// The light's motion keys over the shutter (empty: it stands still).
     pub fn motion(&self) -> &[[[f32; 4]; 4]] {
         match self {
-            LightDesc::Point { motion, .. } | LightDesc::Spot { motion, .. } => motion,
-            LightDesc::Distant { .. } => &[],
+            LightDesc::Point { motion, .. } | LightDesc::Spot { motion, .. } | LightDesc::Distant { motion, .. } => {
+                motion
+            }
         }
     }
 
@@ -793,7 +799,7 @@ impl LightDesc {
         let (position, direction, profile) = match self {
             LightDesc::Point { position, profile, .. } => (*position, None, profile),
             LightDesc::Spot { position, direction, profile, .. } => (*position, Some(*direction), profile),
-            LightDesc::Distant { .. } => ([0.0; 3], None, &None),
+            LightDesc::Distant { direction, .. } => ([0.0; 3], Some(*direction), &None),
         };
         // `to_local`'s rows are the light's axes in world space.
         let rotation = match (profile, direction) {

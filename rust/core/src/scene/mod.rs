@@ -852,12 +852,14 @@ impl Scene {
                     )?);
                 }
             }
-            // A moving point or spot light: the light as built (at the frame) carried
-            // over the shutter by its keys (light/moving.rs).
+            // A moving light: the light as built (at the frame) carried over the shutter
+            // by its keys (light/moving.rs); a sun only turns, about the scene's centre.
             if !l.motion().is_empty() {
                 let inner = lights.pop().expect("the light just built");
                 let keys: Vec<glam::Affine3A> = l.motion().iter().map(affine_from_rows).collect();
-                lights.push(Box::new(crate::light::MovingLight::new(l.name(), inner, l.frame(), &keys)?));
+                let moving = crate::light::MovingLight::new(l.name(), inner, l.frame(), &keys)?;
+                let moving = if matches!(l, LightDesc::Distant { .. }) { moving.turning_only() } else { moving };
+                lights.push(Box::new(moving));
             }
         }
         let environment = match &desc.world {

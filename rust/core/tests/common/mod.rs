@@ -118,6 +118,7 @@ pub fn sun(direction: [f32; 3], e: f32, angle: f32) -> LightDesc {
         irradiance: SpectrumDesc::constant(e),
         angle,
         visibility: Default::default(),
+        motion: Vec::new(),
     }
 }
 
