@@ -7,7 +7,7 @@ mod common;
 use common::*;
 use glam::{Vec2, Vec3A};
 use polychrome_core::color::RgbSpace;
-use polychrome_core::light::{EmissionSample, Light, LightSample};
+use polychrome_core::light::{EmissionSample, Light, LightSample, LightTree};
 use polychrome_core::render::{render_scene, Direction, Method, RenderControl, ResolvedSettings};
 use polychrome_core::sampling::{uniform_sphere, Distribution1D};
 use polychrome_core::scene::{BsdfDesc, Buffer, BuildOptions, MaterialDesc, Scene, SceneDesc};
@@ -95,6 +95,7 @@ fn every_method_and_direction_drops_non_finite_samples() {
             scene.lights = vec![Box::new(PoisonLight { n: g.len() })];
             scene.light_distribution = Distribution1D::new(&[1.0]);
             scene.nee_distribution = Distribution1D::new(&[1.0]);
+            scene.light_tree = LightTree::new(&[None], &[1.0]);
             let settings = ResolvedSettings {
                 width: w,
                 height: h,

@@ -301,3 +301,84 @@ fn a_turning_sun_lights_the_floor_with_its_time_average() {
         assert!((at_frame - want_ratio).abs() > 0.08 * want_ratio, "the frame's sun {at_frame} is told apart");
     }
 }
+
+/// A small emissive square sliding 2 units at height 1 over a diffuse floor (its
+/// instance keys translate and turn it: a rigid motion) is a light carried by its keys:
+/// next-event estimation and light paths find it where it is at their time. The
+/// motion-blurred image equals the mean of 8 still renders with the square where it
+/// stands at the middle of each eighth of the shutter (the time average, by the
+/// midpoint rule; these use the still emitter's well-tested light), in BACKWARD and
+/// FORWARD (which renders it now, with no warning).
+#[test]
+fn a_rigidly_moving_emitter_is_a_light_at_its_time() {
+    let place = |x: f32, turn: f32| {
+        let (s, c) = turn.sin_cos();
+        [[c, -s, 0.0, x], [s, c, 0.0, 0.0], [0.0, 0.0, 1.0, 1.0], [0.0, 0.0, 0.0, 1.0]]
+    };
+    let scene = |motion: Vec<[[f32; 4]; 4]>, at: [[f32; 4]; 4]| {
+        let mut desc = SceneDesc::default();
+        let mut buffers = Vec::new();
+        desc.materials.push(material("floor", BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(0.5) }));
+        let mut glow = material("glow", BsdfDesc::None);
+        glow.emission = Some(SpectrumDesc::constant(4.0));
+        desc.materials.push(glow);
+        let v = vec![-3.0, -3.0, 0.0, 3.0, -3.0, 0.0, 3.0, 3.0, 0.0, -3.0, 3.0, 0.0];
+        add_mesh(&mut desc, &mut buffers, "floor", v, vec![0, 1, 2, 0, 2, 3], 0);
+        let h = 0.25;
+        let v = vec![-h, -h, 0.0, h, -h, 0.0, h, h, 0.0, -h, h, 0.0];
+        add_mesh(&mut desc, &mut buffers, "glow", v, vec![0, 1, 2, 0, 2, 3], 1);
+        let identity = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
+        desc.instances = Some(vec![
+            InstanceDesc { name: "floor".into(), mesh: 0, transform: identity, ..Default::default() },
+            InstanceDesc { name: "glow".into(), mesh: 1, transform: at, motion, ..Default::default() },
+        ]);
+        // Looking straight down from z = 6 (light paths need a perspective camera).
+        desc.camera.to_world = translation(0.0, 6.0);
+        (desc, buffers)
+    };
+    let image = |desc: &SceneDesc, buffers: &[Buffer], direction, samples| {
+        let s = ResolvedSettings {
+            width: 16,
+            height: 16,
+            samples,
+            grid: grid8(),
+            direction,
+            max_bounces: 1,
+            ..Default::default()
+        };
+        let out = render(desc, buffers, &s, &RenderControl::new()).expect("render");
+        assert!(out.stats.warnings.is_empty(), "{:?}", out.stats.warnings);
+        out.images.rgba.chunks_exact(4).map(luminance).collect::<Vec<f64>>()
+    };
+    // 4 × 4 blocks of 16 × 16 pixels.
+    let blocks = |img: &[f64]| -> Vec<f64> {
+        (0..16)
+            .map(|b| (0..16).map(|i| img[((b / 4) * 4 + i / 4) * 16 + (b % 4) * 4 + i % 4]).sum::<f64>() / 16.0)
+            .collect()
+    };
+    let keys = vec![place(-1.0, 0.0), place(0.0, 0.4), place(1.0, 0.8)];
+    let (moving, b) = scene(keys, place(0.0, 0.4));
+    let mut still = vec![0.0; 16];
+    let nstill = 8;
+    for i in 0..nstill {
+        // Where the keys put it at t = (i + 0.5)/8: x and the turn lerp linearly.
+        let t = (i as f32 + 0.5) / nstill as f32;
+        let (desc, b) = scene(Vec::new(), place(-1.0 + 2.0 * t, 0.8 * t));
+        for (s, v) in still.iter_mut().zip(blocks(&image(&desc, &b, Direction::Backward, 64))) {
+            *s += v / nstill as f64;
+        }
+    }
+    let peak = still.iter().cloned().fold(0.0, f64::max);
+    assert!(peak > 0.05, "{still:?}");
+    for (direction, samples) in [(Direction::Backward, 2048), (Direction::Forward, 2048)] {
+        let got = blocks(&image(&moving, &b, direction, samples));
+        for (k, (g, w)) in got.iter().zip(&still).enumerate() {
+            assert!(
+                (g - w).abs() < 0.03 * peak,
+                "{direction:?} block {k}: {g} vs the still renders' mean {w}\n{got:?}\n{still:?}"
+            );
+        }
+        let (tg, tw) = (got.iter().sum::<f64>(), still.iter().sum::<f64>());
+        assert!((tg - tw).abs() < 0.01 * tw, "{direction:?}: image {tg} vs {tw}");
+    }
+}

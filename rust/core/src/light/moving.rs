@@ -46,6 +46,25 @@ impl MovingLight {
         Ok(Self { inner, motion, frame_inverse: rigid(&frame).inverse(), turn_about: None })
     }
 
+    /// An emitter built in world space at `frame` that moves with an instance's
+    /// `motion`, which must carry it rigidly (`moves_rigidly`): D(t) = M(t) · frame⁻¹.
+    pub fn carried(inner: Box<dyn Light>, motion: TransformMotion, frame: Affine3A) -> Self {
+        Self { inner, motion, frame_inverse: frame.inverse(), turn_about: None }
+    }
+
+    /// Whether `motion` moves what `frame` placed by rotations and translations only
+    /// (D(t) = M(t) · frame⁻¹ orthonormal at every key, to 1e-3): then distances, areas
+    /// and solid angles of a light built at the frame hold at every time.
+    pub fn moves_rigidly(motion: &TransformMotion, frame: &Affine3A) -> bool {
+        let inv = frame.inverse();
+        let n = motion.key_count();
+        (0..n).all(|k| {
+            let d = (motion.at(k as f32 / (n - 1).max(1) as f32) * inv).matrix3;
+            let gram = d.transpose() * d;
+            d.determinant() > 0.0 && (gram - Mat3A::IDENTITY).to_cols_array().iter().all(|e| e.abs() < 1e-3)
+        })
+    }
+
     /// The keys' rotation only, about the scene's centre: for lights at infinity.
     pub fn turning_only(mut self) -> Self {
         self.turn_about = Some(Vec3A::ZERO);

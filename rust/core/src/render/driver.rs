@@ -318,8 +318,9 @@ impl<'a> Driver<'a> {
         if self.settings.direction == super::Direction::Forward {
             for name in &scene.moving_emitters {
                 out.push(format!(
-                    "instance '{name}': a moving emitter is not a light that light paths start from, so FORWARD \
-                     renders without its light (BACKWARD and BIDIRECTIONAL see it)"
+                    "instance '{name}': an emitter that deforms or changes scale over the shutter is not a light \
+                     that light paths start from, so FORWARD renders without its light (BACKWARD and \
+                     BIDIRECTIONAL see it)"
                 ));
             }
         }

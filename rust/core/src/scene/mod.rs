@@ -240,8 +240,9 @@ pub struct Scene {
     /// Centre and radius of a sphere bounding all geometry.
     pub bounds_center: Vec3A,
     pub bounds_radius: f32,
-    /// Instances whose emissive triangles move over the shutter: they are not sampled
-    /// as lights (next-event estimation, light paths), only found by paths that hit them.
+    /// Instances whose emissive triangles deform or change scale over the shutter: they
+    /// are not sampled as lights (next-event estimation, light paths), only found by
+    /// paths that hit them. Emitters moved rigidly are lights carried by their keys.
     pub moving_emitters: Vec<String>,
     /// What the scene's description asked for and the build left out or approximated
     /// (unsupported nodes and node options), one line each.
@@ -732,13 +733,21 @@ impl Scene {
             if !mesh.material_ids.iter().any(|&m| emits(m)) {
                 continue;
             }
-            // A moving emitter is no light to sample: its triangles are elsewhere at
-            // each path's time. Paths that hit it still see its emission (with MIS
-            // weight 1, as for any emitter without a light).
-            if inst.motion.is_some() || mesh.motion.is_some() {
-                moving_emitters.push(inst.name.clone());
-                continue;
-            }
+            // An emitter moved rigidly by its instance's keys: its lights are built at the
+            // frame and carried over the shutter (light/moving.rs), as moving lights. One
+            // that deforms or changes scale is no light to sample: its triangles are
+            // elsewhere at each path's time in ways no rigid motion follows. Paths that
+            // hit it still see its emission (MIS weight 1, as for any emitter without a
+            // light).
+            let carried = match (&inst.motion, &mesh.motion) {
+                (None, None) => None,
+                (Some(m), None) if crate::light::MovingLight::moves_rigidly(m, &inst.to_world) => Some(m.clone()),
+                _ => {
+                    moving_emitters.push(inst.name.clone());
+                    continue;
+                }
+            };
+            let first_light = lights.len();
             let mut map = vec![u32::MAX; mesh.indices.len()];
             // Varying emitters: one light per (instance, material) over its triangles,
             // which samples a triangle by a cdf of cheap power estimates (docs/shading.md).
@@ -789,6 +798,12 @@ impl Scene {
                     }
                     lights.push(Box::new(light));
                     light_visibility.push(seen_unless_held_out(inst));
+                }
+            }
+            if let Some(motion) = carried {
+                let built: Vec<Box<dyn Light>> = lights.drain(first_light..).collect();
+                for l in built {
+                    lights.push(Box::new(crate::light::MovingLight::carried(l, motion.clone(), inst.to_world)));
                 }
             }
             triangle_lights[k] = Some(map);
