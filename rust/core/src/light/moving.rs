@@ -12,7 +12,7 @@
 //! of the scene's bounding sphere ([`MovingLight::turning_only`]), which maps that
 //! sphere onto itself, so the disk its light paths start on still covers the scene.
 
-use super::{EmissionSample, LeDensity, Light, LightSample};
+use super::{EmissionSample, LeDensity, Light, LightBounds, LightSample};
 use crate::geometry::motion::TransformMotion;
 use crate::spectrum::SampledSpectrum;
 use crate::Result;
@@ -94,6 +94,29 @@ impl Light for MovingLight {
     fn power(&self, weights: &[f32]) -> f64 {
         self.inner.power(weights)
     }
+    /// The built light's box carried over the whole shutter, emitting every way (the
+    /// motion turns its emission cone): the light tree still finds it near where it
+    /// moves. A turning sun has none.
+    fn bounds(&self) -> Option<LightBounds> {
+        if self.turn_about.is_some() {
+            return None;
+        }
+        let b = self.inner.bounds()?;
+        // D(t) x = M(t) (frame⁻¹ x): the box in the keys' object space, then over the shutter.
+        let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
+        for c in 0..8 {
+            let p = Vec3A::new(
+                if c & 1 == 0 { b.lo.x } else { b.hi.x },
+                if c & 2 == 0 { b.lo.y } else { b.hi.y },
+                if c & 4 == 0 { b.lo.z } else { b.hi.z },
+            );
+            let q = self.frame_inverse.transform_point3a(p);
+            lo = lo.min(q);
+            hi = hi.max(q);
+        }
+        let (lo, hi) = self.motion.bounds(lo, hi);
+        Some(LightBounds::omni(lo, hi))
+    }
     fn sample_li(&self, p: Vec3A, u: Vec2, le: &mut SampledSpectrum) -> Option<LightSample> {
         self.sample_li_at(p, 0.5, u, le)
     }
@@ -152,6 +175,28 @@ impl Light for MovingLight {
 mod tests {
     use super::*;
     use crate::light::PointLight;
+
+    /// The light tree's bounds of a moving light hold it at every time of the shutter.
+    #[test]
+    fn bounds_hold_the_light_over_the_shutter() {
+        let inner =
+            PointLight { position: Vec3A::X, intensity: SampledSpectrum::splat(1, 2.0), radius: 0.1, profile: None };
+        let key =
+            |a: f32| Affine3A::from_rotation_translation(glam::Quat::from_rotation_z(a), glam::Vec3::new(a, 1.0, 0.0));
+        let light = MovingLight::new("l", Box::new(inner), key(1.0), &[key(0.0), key(1.0), key(2.0)]).unwrap();
+        let b = light.bounds().expect("bounds");
+        assert_eq!(b.cos_theta_o, -1.0, "emits every way");
+        for i in 0..=64 {
+            let t = i as f32 / 64.0;
+            // Where the centre is at t: the built light's position carried by D(t).
+            let c = light.at(t).transform_point3a(Vec3A::X);
+            for d in [Vec3A::X, Vec3A::Y, Vec3A::Z, -Vec3A::X, -Vec3A::Y, -Vec3A::Z] {
+                let p = c + 0.1 * d;
+                assert!(p.cmpge(b.lo - 1e-5).all() && p.cmple(b.hi + 1e-5).all(), "{p} at t {t} outside {b:?}");
+            }
+        }
+        assert!(light.turning_only().bounds().is_none());
+    }
 
     #[test]
     fn a_point_light_is_where_its_keys_put_it() {
