@@ -129,12 +129,27 @@ pub fn start_light_path<W: Wavelengths>(scene: &Scene, wl: &W, rng: &mut Rng) ->
     }
     let le = wl.emitted(le);
     let cos0 = es.normal.map_or(1.0, |nl| nl.dot(es.direction).abs());
-    let mut beta = le.clone();
-    beta.scale(cos0 / (pmf * es.pdf_pos * es.pdf_dir));
     let origin = match es.normal {
         Some(nl) => offset_ray_origin(es.origin, if nl.dot(es.direction) > 0.0 { nl } else { -nl }),
         None => es.origin,
     };
+    // A light whose radiance depends on the receiver (a spot sphere's falloff from its
+    // centre, as Cycles): the factor at the surface the first segment reaches. (A
+    // see-through surface or a medium boundary on the way counts as that surface.)
+    let first = if scene.lights[light].receiver_dependent() {
+        let ray = Ray::new(origin, es.direction).with_time(time);
+        let f = scene
+            .intersect(&ray)
+            .map_or(0.0, |h| scene.lights[light].receiver_factor_at(ray.origin + ray.direction * h.t, time));
+        if !(f > 0.0) {
+            return None;
+        }
+        f
+    } else {
+        1.0
+    };
+    let mut beta = le.clone();
+    beta.scale(first * cos0 / (pmf * es.pdf_pos * es.pdf_dir));
     Some(LightStart {
         light,
         pmf,

@@ -158,6 +158,21 @@ pub trait Light: Send + Sync {
     fn pdf_le_part_at(&self, part: u32, origin: Vec3A, dir: Vec3A, _time: f32) -> Option<LeDensity> {
         self.pdf_le_part(part, origin, dir)
     }
+
+    /// A light whose radiance depends on where it lands, as Cycles' spot falloff and
+    /// IES profile of a sphere light, taken along the direction from the light's centre
+    /// to the shading point (kernel/light/spot.h, point.h) rather than along the ray
+    /// that leaves the sphere: `sample_le`'s radiance leaves that factor out and a light
+    /// path scales by [`Light::receiver_factor_at`] of the point its first segment
+    /// reaches.
+    fn receiver_dependent(&self) -> bool {
+        false
+    }
+    /// For a [`Light::receiver_dependent`] light: the factor on `sample_le`'s radiance
+    /// for light landing at `receiver` (at shutter time `time`); 1 for other lights.
+    fn receiver_factor_at(&self, _receiver: Vec3A, _time: f32) -> f32 {
+        1.0
+    }
 }
 
 /// The start of a light path from a light at infinity arriving along unit `direction`

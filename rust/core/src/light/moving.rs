@@ -161,6 +161,12 @@ impl Light for MovingLight {
     fn pdf_le(&self, origin: Vec3A, dir: Vec3A) -> Option<LeDensity> {
         self.pdf_le_at(origin, dir, 0.5)
     }
+    fn receiver_dependent(&self) -> bool {
+        self.inner.receiver_dependent()
+    }
+    fn receiver_factor_at(&self, receiver: Vec3A, time: f32) -> f32 {
+        self.inner.receiver_factor_at(self.at(time).inverse().transform_point3a(receiver), time)
+    }
     fn pdf_le_at(&self, origin: Vec3A, dir: Vec3A, time: f32) -> Option<LeDensity> {
         let inv = self.at(time).inverse();
         self.inner.pdf_le(inv.transform_point3a(origin), inv.transform_vector3a(dir).normalize())

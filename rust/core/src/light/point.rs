@@ -158,12 +158,22 @@ impl Light for PointLight {
     fn hit(&self, p: Vec3A, wi: Vec3A, le: &mut SampledSpectrum) -> Option<f32> {
         sphere_hit(self.position, self.radius, &self.intensity, self.toward(p), p, wi, le)
     }
+    fn receiver_dependent(&self) -> bool {
+        self.radius > 0.0 && self.profile.is_some()
+    }
+    /// A profiled sphere: the profile towards `receiver` seen from the centre.
+    fn receiver_factor_at(&self, receiver: Vec3A, _time: f32) -> f32 {
+        if self.receiver_dependent() {
+            self.toward(receiver)
+        } else {
+            1.0
+        }
+    }
     fn sample_le(&self, u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
         let along = |w: Vec3A| self.profile.as_ref().map_or(1.0, |p| p.eval(w));
         if self.radius > 0.0 {
-            let es = sphere_le(self.position, self.radius, &self.intensity, u_pos, u_dir, le)?;
-            le.scale(along(es.direction));
-            return Some(es);
+            // Uniform: a profile is the receiver's (`receiver_factor_at`).
+            return sphere_le(self.position, self.radius, &self.intensity, u_pos, u_dir, le);
         }
         let direction = uniform_sphere(u_dir);
         le.copy_from(&self.intensity);

@@ -127,10 +127,8 @@ impl Light for SpotLight {
     }
     fn sample_le(&self, u_pos: Vec2, u_dir: Vec2, le: &mut SampledSpectrum) -> Option<EmissionSample> {
         if self.radius > 0.0 {
-            // From the sphere, the falloff of the emitted direction.
-            let es = super::point::sphere_le(self.position, self.radius, &self.intensity, u_pos, u_dir, le)?;
-            le.scale(self.emitted(es.direction));
-            return Some(es);
+            // From the sphere, uniform: the falloff is the receiver's (`receiver_factor_at`).
+            return super::point::sphere_le(self.position, self.radius, &self.intensity, u_pos, u_dir, le);
         }
         // Uniform in the cone.
         let one_minus = 1.0 - self.cos_half_angle;
@@ -154,12 +152,20 @@ impl Light for SpotLight {
             part: 0,
         })
     }
+    fn receiver_dependent(&self) -> bool {
+        self.radius > 0.0
+    }
+    /// The falloff (and profile) towards `receiver` seen from the centre, as `sample_li`.
+    fn receiver_factor_at(&self, receiver: Vec3A, _time: f32) -> f32 {
+        if self.radius <= 0.0 {
+            return 1.0;
+        }
+        super::direction_to(self.position, receiver).map_or(0.0, |(w, _, _)| self.emitted(w))
+    }
     fn pdf_le(&self, _origin: Vec3A, dir: Vec3A) -> Option<super::LeDensity> {
-        // A sphere's light paths are no strategy of the bidirectional MIS (None): camera
-        // paths take the cone's falloff towards the shading point seen from the centre
-        // (`hit`, `sample_li`, as Cycles), a light path along its own direction from a
-        // point of the sphere (`sample_le`), so the two estimate slightly different
-        // lights and must not be mixed.
+        // A sphere's light paths are no strategy of the bidirectional MIS (None): their
+        // radiance depends on the receiver (`receiver_factor_at`), which the densities
+        // of a light vertex cannot express.
         if self.radius > 0.0 {
             return None;
         }
