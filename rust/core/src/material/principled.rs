@@ -631,9 +631,10 @@ impl Principled {
     /// averaged over the lanes (or the path's single lane).
     fn lobes(&self, ctx: &ShadingContext, mu_o: f32, h: &HitSpectra) -> Lobes {
         let (rho, metal_f) = (&h.rho, &h.metal_f);
-        let lanes: Box<dyn Iterator<Item = usize>> = match ctx.single_wavelength {
-            Some(i) => Box::new(std::iter::once(i)),
-            None => Box::new(0..rho.len()),
+        // One wavelength, or all of them (a range: no boxed iterator to allocate per call).
+        let lanes = match ctx.single_wavelength {
+            Some(i) => i..i + 1,
+            None => 0..rho.len(),
         };
         let (mut e, mut d, mut m, mut ms, mut count) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
         for i in lanes {
