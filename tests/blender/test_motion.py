@@ -16,7 +16,8 @@ from .test_camera import COMMON
 
 pytestmark = pytest.mark.blender
 
-SCENE = """
+# Every keyframe linear (uniform motion between keys), for the bpy scripts below.
+ALL_LINEAR = """
 def all_linear():
     for a in bpy.data.actions:
         fcs = getattr(a, 'fcurves', None)
@@ -25,6 +26,11 @@ def all_linear():
         for fc in fcs:
             for k in fc.keyframe_points:
                 k.interpolation = 'LINEAR'
+"""
+
+SCENE = (
+    ALL_LINEAR
+    + """
 sc = empty_scene(48, 32); sc.world = None
 cd_ = bpy.data.cameras.new('Cam'); cd_.type = 'ORTHO'; cd_.ortho_scale = 6.0
 cam = bpy.data.objects.new('Cam', cd_); sc.collection.objects.link(cam); sc.camera = cam
@@ -51,6 +57,7 @@ sc.frame_set(10)
 setup_engines(sc, 128)
 sc.render.use_motion_blur = True; sc.render.motion_blur_shutter = 0.5; sc.render.motion_blur_position = 'CENTER'
 """
+)
 
 
 def script(body):
@@ -170,7 +177,9 @@ def test_a_turning_sun_exports_its_keys(tmp_path):
     frame, so there is no Cycles comparison."""
     proc, res = run_bpy(
         tmp_path,
-        """
+        ALL_LINEAR
+        + textwrap.dedent(
+            """
     import mathutils
     from polychrome_blender.export import export_scene
     sc = empty_scene(8, 8)
@@ -180,13 +189,7 @@ def test_a_turning_sun_exports_its_keys(tmp_path):
     sun = bpy.data.objects.new('Sun', ld); sc.collection.objects.link(sun)
     sun.rotation_euler.x = -0.4; sun.keyframe_insert('rotation_euler', frame=9)
     sun.rotation_euler.x = 1.0; sun.keyframe_insert('rotation_euler', frame=11)
-    for a in bpy.data.actions:
-        fcs = getattr(a, 'fcurves', None)
-        if fcs is None:  # Blender 5: layered actions
-            fcs = [fc for layer in a.layers for strip in layer.strips for bag in strip.channelbags for fc in bag.fcurves]
-        for fc in fcs:
-            for k in fc.keyframe_points:
-                k.interpolation = 'LINEAR'
+    all_linear()
     def axis_at(frame, sub):
         sc.frame_set(frame, subframe=sub)
         return list(sun.matrix_world.to_3x3() @ mathutils.Vector((0, 0, -1)))
@@ -197,7 +200,8 @@ def test_a_turning_sun_exports_its_keys(tmp_path):
     (light,) = desc['lights']
     keys = [[-row[2] for row in k[:3]] for k in light.get('motion', [])]
     emit(keys=keys, want=want, direction=light['direction'], warns=[str(w) for w in warns])
-    """,
+    """
+        ),
     )
     r = check(proc, res)[0]
     assert len(r["keys"]) >= 2, r

@@ -7,7 +7,7 @@
 mod common;
 
 use common::*;
-use polychrome_core::render::{render, Direction, RenderControl, ResolvedSettings};
+use polychrome_core::render::{Direction, ResolvedSettings};
 use polychrome_core::scene::{BsdfDesc, Buffer, MaterialDesc, SceneDesc};
 use polychrome_core::spectrum::named::SpectrumKind;
 use polychrome_core::spectrum::SpectrumDesc;
@@ -106,35 +106,16 @@ fn mirror_scene() -> (SceneDesc, Vec<Buffer>) {
 
 /// Per-seed luminance images of one direction.
 fn renders(scene: &(SceneDesc, Vec<Buffer>), direction: Direction, samples: u32, max_bounces: u32) -> Vec<Vec<f64>> {
-    (0..SEEDS)
-        .map(|seed| {
-            let s = ResolvedSettings {
-                width: W as u32,
-                height: H as u32,
-                samples,
-                max_bounces,
-                grid: WavelengthGrid::uniform(16, 380.0, 780.0).unwrap(),
-                direction,
-                seed,
-                ..Default::default()
-            };
-            let r = render(&scene.0, &scene.1, &s, &RenderControl::new()).expect("render");
-            assert_eq!(r.stats.nonfinite_samples, 0);
-            r.images.rgba.chunks_exact(4).map(luminance).collect()
-        })
-        .collect()
-}
-
-/// Mean over pixels of the per-pixel variance over seeds.
-fn mean_pixel_variance(images: &[Vec<f64>]) -> f64 {
-    let n = images.len() as f64;
-    (0..W * H)
-        .map(|i| {
-            let m = images.iter().map(|img| img[i]).sum::<f64>() / n;
-            images.iter().map(|img| (img[i] - m).powi(2)).sum::<f64>() / (n - 1.0)
-        })
-        .sum::<f64>()
-        / (W * H) as f64
+    luminance_renders(scene, SEEDS, |seed| ResolvedSettings {
+        width: W as u32,
+        height: H as u32,
+        samples,
+        max_bounces,
+        grid: WavelengthGrid::uniform(16, 380.0, 780.0).unwrap(),
+        direction,
+        seed,
+        ..Default::default()
+    })
 }
 
 #[test]

@@ -9,7 +9,7 @@
 mod common;
 
 use common::*;
-use polychrome_core::render::{render, Direction, RenderControl, ResolvedSettings};
+use polychrome_core::render::{Direction, ResolvedSettings};
 use polychrome_core::scene::{BsdfDesc, Buffer, SceneDesc, TextureDesc, TextureEncoding, WorldDesc};
 use polychrome_core::spectrum::named::SpectrumKind;
 use polychrome_core::spectrum::{SpectrumDesc, WavelengthGrid};
@@ -82,23 +82,16 @@ fn hdri(desc: &mut SceneDesc, b: &mut Vec<Buffer>) {
 
 /// Per-seed luminance images of one direction.
 fn renders(scene: &(SceneDesc, Vec<Buffer>), direction: Direction, samples: u32) -> Vec<Vec<f64>> {
-    (0..SEEDS)
-        .map(|seed| {
-            let s = ResolvedSettings {
-                width: W as u32,
-                height: H as u32,
-                samples,
-                max_bounces: 3,
-                grid: WavelengthGrid::uniform(16, 380.0, 780.0).unwrap(),
-                direction,
-                seed,
-                ..Default::default()
-            };
-            let r = render(&scene.0, &scene.1, &s, &RenderControl::new()).expect("render");
-            assert_eq!(r.stats.nonfinite_samples, 0);
-            r.images.rgba.chunks_exact(4).map(luminance).collect()
-        })
-        .collect()
+    luminance_renders(scene, SEEDS, |seed| ResolvedSettings {
+        width: W as u32,
+        height: H as u32,
+        samples,
+        max_bounces: 3,
+        grid: WavelengthGrid::uniform(16, 380.0, 780.0).unwrap(),
+        direction,
+        seed,
+        ..Default::default()
+    })
 }
 
 fn check(scene: (SceneDesc, Vec<Buffer>), what: &str) {

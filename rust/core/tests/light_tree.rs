@@ -7,7 +7,7 @@
 mod common;
 
 use common::*;
-use polychrome_core::render::{render, RenderControl, ResolvedSettings};
+use polychrome_core::render::ResolvedSettings;
 use polychrome_core::scene::{BsdfDesc, Buffer, SceneDesc};
 use polychrome_core::spectrum::{SpectrumDesc, WavelengthGrid};
 
@@ -75,37 +75,17 @@ fn stage() -> (SceneDesc, Vec<Buffer>) {
 
 /// Per-seed luminance images with the light tree on or off.
 fn renders(scene: &(SceneDesc, Vec<Buffer>), light_tree: bool) -> Vec<Vec<f64>> {
-    (0..SEEDS)
-        .map(|seed| {
-            let s = ResolvedSettings {
-                width: W as u32,
-                height: H as u32,
-                // LT_SPP: more samples per pixel for the check in docs/BENCHMARKS.md.
-                samples: std::env::var("LT_SPP").ok().and_then(|v| v.parse().ok()).unwrap_or(16),
-                max_bounces: 2,
-                grid: WavelengthGrid::uniform(8, 380.0, 780.0).unwrap(),
-                light_tree,
-                seed,
-                ..Default::default()
-            };
-            let r = render(&scene.0, &scene.1, &s, &RenderControl::new()).expect("render");
-            assert_eq!(r.stats.nonfinite_samples, 0);
-            r.images.rgba.chunks_exact(4).map(luminance).collect()
-        })
-        .collect()
-}
-
-/// Mean over pixels of the per-pixel variance over seeds.
-fn pixel_variance(images: &[Vec<f64>]) -> f64 {
-    let n = images.len() as f64;
-    let pixels = images[0].len();
-    (0..pixels)
-        .map(|i| {
-            let m = images.iter().map(|img| img[i]).sum::<f64>() / n;
-            images.iter().map(|img| (img[i] - m).powi(2)).sum::<f64>() / (n - 1.0)
-        })
-        .sum::<f64>()
-        / pixels as f64
+    luminance_renders(scene, SEEDS, |seed| ResolvedSettings {
+        width: W as u32,
+        height: H as u32,
+        // LT_SPP: more samples per pixel for the check in docs/BENCHMARKS.md.
+        samples: std::env::var("LT_SPP").ok().and_then(|v| v.parse().ok()).unwrap_or(16),
+        max_bounces: 2,
+        grid: WavelengthGrid::uniform(8, 380.0, 780.0).unwrap(),
+        light_tree,
+        seed,
+        ..Default::default()
+    })
 }
 
 #[test]
@@ -114,7 +94,7 @@ fn light_tree_renders_the_same_image_with_less_noise() {
     let tree = renders(&scene, true);
     let power = renders(&scene, false);
     assert_same_image(&tree, &power, W, H, 2e-3, "light tree vs power");
-    let (vt, vp) = (pixel_variance(&tree), pixel_variance(&power));
+    let (vt, vp) = (mean_pixel_variance(&tree), mean_pixel_variance(&power));
     eprintln!("per-pixel variance: tree {vt:.3e}, power {vp:.3e}, ratio {:.3}", vt / vp);
     assert!(vt < 0.7 * vp, "the tree's variance {vt} is not below 0.7 x the power choice's {vp}");
 }

@@ -12,7 +12,7 @@ use common::*;
 use glam::{Vec2, Vec3A};
 use polychrome_core::color::uplift::UpliftMethod;
 use polychrome_core::color::RgbSpace;
-use polychrome_core::render::{render, Direction, RenderControl, ResolvedSettings};
+use polychrome_core::render::{Direction, ResolvedSettings};
 use polychrome_core::scene::{BsdfDesc, Buffer, BuildOptions, MaterialDesc, Scene, SceneDesc, TextureDesc};
 use polychrome_core::spectrum::{SampledSpectrum, SpectrumDesc, WavelengthGrid};
 use serde_json::json;
@@ -226,23 +226,16 @@ fn lamp_scene(split: bool) -> (SceneDesc, Vec<Buffer>) {
 }
 
 fn renders(scene: &(SceneDesc, Vec<Buffer>), direction: Direction, samples: u32) -> Vec<Vec<f64>> {
-    (0..SEEDS)
-        .map(|seed| {
-            let s = ResolvedSettings {
-                width: W as u32,
-                height: H as u32,
-                samples,
-                max_bounces: 3,
-                grid: WavelengthGrid::uniform(16, 380.0, 780.0).unwrap(),
-                direction,
-                seed,
-                ..Default::default()
-            };
-            let r = render(&scene.0, &scene.1, &s, &RenderControl::new()).expect("render");
-            assert_eq!(r.stats.nonfinite_samples, 0);
-            r.images.rgba.chunks_exact(4).map(luminance).collect()
-        })
-        .collect()
+    luminance_renders(scene, SEEDS, |seed| ResolvedSettings {
+        width: W as u32,
+        height: H as u32,
+        samples,
+        max_bounces: 3,
+        grid: WavelengthGrid::uniform(16, 380.0, 780.0).unwrap(),
+        direction,
+        seed,
+        ..Default::default()
+    })
 }
 
 /// Mean over seeds of each 5×5 block's luminance and its standard error.

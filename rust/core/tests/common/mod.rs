@@ -3,6 +3,7 @@
 
 use glam::Vec3A;
 use polychrome_core::camera::{CameraDesc, Projection};
+use polychrome_core::render::{render, RenderControl, ResolvedSettings};
 use polychrome_core::scene::{BsdfDesc, Buffer, LightDesc, MaterialDesc, MeshDesc, SceneDesc, WorldDesc};
 use polychrome_core::spectrum::SpectrumDesc;
 
@@ -185,4 +186,33 @@ pub fn assert_same_image(a: &[Vec<f64>], b: &[Vec<f64>], w: usize, h: usize, tot
     let ((ta, sa), (tb, sb)) = (total(&ma), total(&mb));
     assert!((ta - tb).abs() < 4.0 * (sa * sa + sb * sb).sqrt() + total_rel * tb, "{what}: image {ta} vs {tb}");
     eprintln!("{what}: worst block z {worst:.2}, image {ta:.4} vs {tb:.4}");
+}
+
+/// Luminance images of `scene` rendered with `settings(seed)` for each seed in
+/// 0..`seeds`, each render checked free of non-finite samples.
+pub fn luminance_renders(
+    scene: &(SceneDesc, Vec<Buffer>),
+    seeds: u64,
+    settings: impl Fn(u64) -> ResolvedSettings,
+) -> Vec<Vec<f64>> {
+    (0..seeds)
+        .map(|seed| {
+            let r = render(&scene.0, &scene.1, &settings(seed), &RenderControl::new()).expect("render");
+            assert_eq!(r.stats.nonfinite_samples, 0);
+            r.images.rgba.chunks_exact(4).map(luminance).collect()
+        })
+        .collect()
+}
+
+/// Mean over pixels of the per-pixel variance over seeds.
+pub fn mean_pixel_variance(images: &[Vec<f64>]) -> f64 {
+    let n = images.len() as f64;
+    let pixels = images[0].len();
+    (0..pixels)
+        .map(|i| {
+            let m = images.iter().map(|img| img[i]).sum::<f64>() / n;
+            images.iter().map(|img| (img[i] - m).powi(2)).sum::<f64>() / (n - 1.0)
+        })
+        .sum::<f64>()
+        / pixels as f64
 }
