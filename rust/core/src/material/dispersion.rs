@@ -132,9 +132,34 @@ pub struct IndexOfRefraction {
     pub dispersive: bool,
 }
 
+/// An index a material may have: finite, at least 1, at most 10 (errors name the
+/// material and the wavelength).
+fn check_index(material: &str, n: f64, lambda: f32) -> Result<()> {
+    if !n.is_finite() {
+        return Err(Error::object("material", material, format!("index {n} at λ {lambda} nm is not finite")));
+    }
+    if n < 1.0 {
+        return Err(Error::object("material", material, format!("index {n:.6} at λ {lambda} nm is below 1")));
+    }
+    if n > 10.0 {
+        return Err(Error::object(
+            "material",
+            material,
+            format!("index {n:.6} at λ {lambda} nm is above 10 (near a pole?)"),
+        ));
+    }
+    Ok(())
+}
+
 impl IndexOfRefraction {
     /// Evaluates `desc` on `grid` for material `material` (named in errors).
     pub fn build(desc: &IorDesc, grid: &WavelengthGrid, material: &str) -> Result<Self> {
+        // A constant index (every Principled and glass of a Blender scene): one check and
+        // a splat, no per-wavelength evaluation (graph materials build it at every hit).
+        if let IorDesc::Constant { ior } = desc {
+            check_index(material, *ior, grid.lambdas().first().copied().unwrap_or(0.0))?;
+            return Ok(Self::constant(grid.len(), *ior as f32));
+        }
         // Poles first, over the whole grid (the index is nonsense on both sides of
         // one), then other model errors, then the values.
         if let IorDesc::Sellmeier { b, c } = desc {
@@ -153,19 +178,7 @@ impl IndexOfRefraction {
             .map_err(|p| Error::object("material", material, p))?;
         let mut values = Vec::with_capacity(grid.len());
         for (&lambda, &n) in grid.lambdas().iter().zip(&raw) {
-            if !n.is_finite() {
-                return Err(Error::object("material", material, format!("index {n} at λ {lambda} nm is not finite")));
-            }
-            if n < 1.0 {
-                return Err(Error::object("material", material, format!("index {n:.6} at λ {lambda} nm is below 1")));
-            }
-            if n > 10.0 {
-                return Err(Error::object(
-                    "material",
-                    material,
-                    format!("index {n:.6} at λ {lambda} nm is above 10 (near a pole?)"),
-                ));
-            }
+            check_index(material, n, lambda)?;
             values.push(n as f32);
         }
         let (lo, hi) = values.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
