@@ -237,6 +237,22 @@ fn light_tracing_through_a_moving_camera_agrees_with_camera_paths() {
     assert!(sharp.iter().zip(&back).any(|(a, b)| (a - b).abs() > 0.3 * peak), "{sharp:?}");
 }
 
+/// The luminance image (`size` × `size`, one bounce, no warning) of a lit-floor scene.
+fn lit_floor(desc: &SceneDesc, buffers: &[Buffer], direction: Direction, samples: u32, size: u32) -> Vec<f64> {
+    let s = ResolvedSettings {
+        width: size,
+        height: size,
+        samples,
+        grid: grid8(),
+        direction,
+        max_bounces: 1,
+        ..Default::default()
+    };
+    let out = render(desc, buffers, &s, &RenderControl::new()).expect("render");
+    assert!(out.stats.warnings.is_empty(), "{:?}", out.stats.warnings);
+    out.images.rgba.chunks_exact(4).map(luminance).collect()
+}
+
 /// Light → world rows of a sun turned by `theta` about +x from pointing down (its −Z
 /// then travels along (0, sin θ, −cos θ)).
 fn sun_key(theta: f32) -> [[f32; 4]; 4] {
@@ -264,17 +280,7 @@ fn a_turning_sun_lights_the_floor_with_its_time_average() {
     };
     // Light paths (FORWARD) find the 64 pixels with more noise: more samples.
     let mean = |desc: &SceneDesc, buffers: &[Buffer], direction, samples| {
-        let s = ResolvedSettings {
-            width: 8,
-            height: 8,
-            samples,
-            grid: grid8(),
-            direction,
-            max_bounces: 1,
-            ..Default::default()
-        };
-        let out = render(desc, buffers, &s, &RenderControl::new()).expect("render");
-        out.images.rgba.chunks_exact(4).map(luminance).sum::<f64>() / 64.0
+        lit_floor(desc, buffers, direction, samples, 8).iter().sum::<f64>() / 64.0
     };
     let (t0, t1) = (-0.2f32, 1.4f32);
     let want_ratio = ((t1.sin() - t0.sin()) / (t1 - t0)) as f64;
@@ -336,20 +342,8 @@ fn a_rigidly_moving_emitter_is_a_light_at_its_time() {
         desc.camera.to_world = translation(0.0, 6.0);
         (desc, buffers)
     };
-    let image = |desc: &SceneDesc, buffers: &[Buffer], direction, samples| {
-        let s = ResolvedSettings {
-            width: 16,
-            height: 16,
-            samples,
-            grid: grid8(),
-            direction,
-            max_bounces: 1,
-            ..Default::default()
-        };
-        let out = render(desc, buffers, &s, &RenderControl::new()).expect("render");
-        assert!(out.stats.warnings.is_empty(), "{:?}", out.stats.warnings);
-        out.images.rgba.chunks_exact(4).map(luminance).collect::<Vec<f64>>()
-    };
+    let image =
+        |desc: &SceneDesc, buffers: &[Buffer], direction, samples| lit_floor(desc, buffers, direction, samples, 16);
     // 4 × 4 blocks of 16 × 16 pixels.
     let blocks = |img: &[f64]| -> Vec<f64> {
         (0..16)
