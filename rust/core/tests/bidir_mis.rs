@@ -7,11 +7,10 @@
 mod common;
 
 use common::*;
-use polychrome_core::render::{Direction, ResolvedSettings};
+use polychrome_core::render::Direction;
 use polychrome_core::scene::{BsdfDesc, Buffer, MaterialDesc, SceneDesc};
 use polychrome_core::spectrum::named::SpectrumKind;
 use polychrome_core::spectrum::SpectrumDesc;
-use polychrome_core::spectrum::WavelengthGrid;
 
 const W: usize = 24;
 const H: usize = 24;
@@ -106,16 +105,7 @@ fn mirror_scene() -> (SceneDesc, Vec<Buffer>) {
 
 /// Per-seed luminance images of one direction.
 fn renders(scene: &(SceneDesc, Vec<Buffer>), direction: Direction, samples: u32, max_bounces: u32) -> Vec<Vec<f64>> {
-    luminance_renders(scene, SEEDS, |seed| ResolvedSettings {
-        width: W as u32,
-        height: H as u32,
-        samples,
-        max_bounces,
-        grid: WavelengthGrid::uniform(16, 380.0, 780.0).unwrap(),
-        direction,
-        seed,
-        ..Default::default()
-    })
+    direction_renders(scene, (W, H), SEEDS, direction, samples, max_bounces)
 }
 
 #[test]

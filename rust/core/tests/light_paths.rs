@@ -9,10 +9,10 @@
 mod common;
 
 use common::*;
-use polychrome_core::render::{Direction, ResolvedSettings};
+use polychrome_core::render::Direction;
 use polychrome_core::scene::{BsdfDesc, Buffer, SceneDesc, TextureDesc, TextureEncoding, WorldDesc};
 use polychrome_core::spectrum::named::SpectrumKind;
-use polychrome_core::spectrum::{SpectrumDesc, WavelengthGrid};
+use polychrome_core::spectrum::SpectrumDesc;
 
 const W: usize = 24;
 const H: usize = 24;
@@ -36,14 +36,7 @@ fn stage() -> (SceneDesc, Vec<Buffer>) {
             },
         },
     ));
-    add_mesh(
-        &mut desc,
-        &mut b,
-        "floor",
-        vec![-3.0, -3.0, 0.0, 3.0, -3.0, 0.0, 3.0, 3.0, 0.0, -3.0, 3.0, 0.0],
-        vec![0, 1, 2, 0, 2, 3],
-        0,
-    );
+    add_square(&mut desc, &mut b, "floor", 3.0, 0);
     add_box(&mut desc, &mut b, "box", [-0.6, -0.4, 0.0], [0.6, 0.4, 0.9], 1);
     desc.camera.to_world = look_at([0.5, -5.0, 2.5], [0.0, 0.0, 0.4]);
     (desc, b)
@@ -82,16 +75,7 @@ fn hdri(desc: &mut SceneDesc, b: &mut Vec<Buffer>) {
 
 /// Per-seed luminance images of one direction.
 fn renders(scene: &(SceneDesc, Vec<Buffer>), direction: Direction, samples: u32) -> Vec<Vec<f64>> {
-    luminance_renders(scene, SEEDS, |seed| ResolvedSettings {
-        width: W as u32,
-        height: H as u32,
-        samples,
-        max_bounces: 3,
-        grid: WavelengthGrid::uniform(16, 380.0, 780.0).unwrap(),
-        direction,
-        seed,
-        ..Default::default()
-    })
+    direction_renders(scene, (W, H), SEEDS, direction, samples, 3)
 }
 
 fn check(scene: (SceneDesc, Vec<Buffer>), what: &str) {

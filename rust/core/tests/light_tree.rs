@@ -25,14 +25,7 @@ fn stage() -> (SceneDesc, Vec<Buffer>) {
     let mut desc = SceneDesc::default();
     let mut b = Vec::new();
     desc.materials.push(material("grey", BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(0.6) }));
-    add_mesh(
-        &mut desc,
-        &mut b,
-        "floor",
-        vec![-4.0, -4.0, 0.0, 4.0, -4.0, 0.0, 4.0, 4.0, 0.0, -4.0, 4.0, 0.0],
-        vec![0, 1, 2, 0, 2, 3],
-        0,
-    );
+    add_square(&mut desc, &mut b, "floor", 4.0, 0);
     for i in 0..6 {
         for j in 0..6 {
             let (x, y) = (-3.5 + 1.4 * i as f32, -3.5 + 1.4 * j as f32);

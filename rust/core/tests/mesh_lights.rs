@@ -12,7 +12,7 @@ use common::*;
 use glam::{Vec2, Vec3A};
 use polychrome_core::color::uplift::UpliftMethod;
 use polychrome_core::color::RgbSpace;
-use polychrome_core::render::{Direction, ResolvedSettings};
+use polychrome_core::render::Direction;
 use polychrome_core::scene::{BsdfDesc, Buffer, BuildOptions, MaterialDesc, Scene, SceneDesc, TextureDesc};
 use polychrome_core::spectrum::{SampledSpectrum, SpectrumDesc, WavelengthGrid};
 use serde_json::json;
@@ -226,16 +226,7 @@ fn lamp_scene(split: bool) -> (SceneDesc, Vec<Buffer>) {
 }
 
 fn renders(scene: &(SceneDesc, Vec<Buffer>), direction: Direction, samples: u32) -> Vec<Vec<f64>> {
-    luminance_renders(scene, SEEDS, |seed| ResolvedSettings {
-        width: W as u32,
-        height: H as u32,
-        samples,
-        max_bounces: 3,
-        grid: WavelengthGrid::uniform(16, 380.0, 780.0).unwrap(),
-        direction,
-        seed,
-        ..Default::default()
-    })
+    direction_renders(scene, (W, H), SEEDS, direction, samples, 3)
 }
 
 /// Mean over seeds of each 5×5 block's luminance and its standard error.

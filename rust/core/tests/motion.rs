@@ -271,8 +271,7 @@ fn a_turning_sun_lights_the_floor_with_its_time_average() {
         let mut desc = SceneDesc::default();
         let mut buffers = Vec::new();
         desc.materials.push(material("floor", BsdfDesc::Diffuse { reflectance: SpectrumDesc::constant(0.5) }));
-        let v = vec![-3.0, -3.0, 0.0, 3.0, -3.0, 0.0, 3.0, 3.0, 0.0, -3.0, 3.0, 0.0];
-        add_mesh(&mut desc, &mut buffers, "floor", v, vec![0, 1, 2, 0, 2, 3], 0);
+        add_square(&mut desc, &mut buffers, "floor", 3.0, 0);
         desc.lights.push(sun);
         // Looking straight down from z = 6 (light paths need a perspective camera).
         desc.camera.to_world = translation(0.0, 6.0);
@@ -328,11 +327,8 @@ fn a_rigidly_moving_emitter_is_a_light_at_its_time() {
         let mut glow = material("glow", BsdfDesc::None);
         glow.emission = Some(SpectrumDesc::constant(4.0));
         desc.materials.push(glow);
-        let v = vec![-3.0, -3.0, 0.0, 3.0, -3.0, 0.0, 3.0, 3.0, 0.0, -3.0, 3.0, 0.0];
-        add_mesh(&mut desc, &mut buffers, "floor", v, vec![0, 1, 2, 0, 2, 3], 0);
-        let h = 0.25;
-        let v = vec![-h, -h, 0.0, h, -h, 0.0, h, h, 0.0, -h, h, 0.0];
-        add_mesh(&mut desc, &mut buffers, "glow", v, vec![0, 1, 2, 0, 2, 3], 1);
+        add_square(&mut desc, &mut buffers, "floor", 3.0, 0);
+        add_square(&mut desc, &mut buffers, "glow", 0.25, 1);
         let identity = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
         desc.instances = Some(vec![
             InstanceDesc { name: "floor".into(), mesh: 0, transform: identity, ..Default::default() },

@@ -204,6 +204,28 @@ pub fn luminance_renders(
         .collect()
 }
 
+/// [`luminance_renders`] of a `w`×`h` image in `direction` with `samples` per pixel,
+/// `max_bounces` and 16 wavelengths.
+pub fn direction_renders(
+    scene: &(SceneDesc, Vec<Buffer>),
+    (w, h): (usize, usize),
+    seeds: u64,
+    direction: polychrome_core::render::Direction,
+    samples: u32,
+    max_bounces: u32,
+) -> Vec<Vec<f64>> {
+    luminance_renders(scene, seeds, |seed| ResolvedSettings {
+        width: w as u32,
+        height: h as u32,
+        samples,
+        max_bounces,
+        grid: polychrome_core::spectrum::WavelengthGrid::uniform(16, 380.0, 780.0).unwrap(),
+        direction,
+        seed,
+        ..Default::default()
+    })
+}
+
 /// Mean over pixels of the per-pixel variance over seeds.
 pub fn mean_pixel_variance(images: &[Vec<f64>]) -> f64 {
     let n = images.len() as f64;
